@@ -1,0 +1,235 @@
+"""Bearing catalog: geometry and material of deep-groove ball bearings, and what follows from them.
+
+The typed-in numbers live in ``config/bearings.yaml``; everything derived (fault frequencies,
+Hertz load-deflection constants, ball inertia) is computed here.  SI units throughout: m, kg,
+N, Pa, rad, s.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from functools import lru_cache
+
+from .errors import SceneError
+from .paths import config_dir
+
+G = 9.80665  # standard gravity, m/s^2
+
+
+@dataclass(frozen=True)
+class HertzContact:
+    """Hamrock-Brewe point contact between a ball and one race.
+
+    ``stiffness`` K gives the load Q = K * delta**1.5 (N, m).  ``rx``, ``ry`` are the effective
+    radii in rolling and transverse direction (m), ``a``/``b`` factors give the contact
+    semi-axes for a load Q as ``a = a_coeff * Q**(1/3)`` (m).
+    """
+
+    rx: float
+    ry: float
+    ellipticity: float
+    stiffness: float
+    a_coeff: float
+    b_coeff: float
+
+
+def hertz_point_contact(rx: float, ry: float, e_eff: float) -> HertzContact:
+    """Hamrock and Brewe (1983) approximations for an elliptical point contact.
+
+    rx, ry: effective radii of curvature (m), rolling and transverse; e_eff: E' = E/(1-nu^2) (Pa).
+    """
+    r = 1.0 / (1.0 / rx + 1.0 / ry)
+    alpha_r = ry / rx
+    k = 1.0339 * alpha_r ** 0.636              # ellipticity a/b (a transverse)
+    eps = 1.0003 + 0.5968 / alpha_r            # complete elliptic integral of the 2nd kind
+    f = 1.5277 + 0.6023 * math.log(alpha_r)    # complete elliptic integral of the 1st kind
+    # delta = F * [ (9 / (2 eps R)) (Q / (pi k E'))^2 ]^(1/3)  =>  Q = K delta^1.5
+    stiffness = math.pi * k * e_eff * math.sqrt(2.0 * eps * r / (9.0 * f ** 3))
+    # semi-axes: a = (6 k^2 eps Q R / (pi E'))^(1/3), b = (6 eps Q R / (pi k E'))^(1/3)
+    a_coeff = (6.0 * k * k * eps * r / (math.pi * e_eff)) ** (1.0 / 3.0)
+    b_coeff = (6.0 * eps * r / (math.pi * k * e_eff)) ** (1.0 / 3.0)
+    return HertzContact(rx, ry, k, stiffness, a_coeff, b_coeff)
+
+
+@dataclass(frozen=True)
+class Bearing:
+    """A deep-groove ball bearing.  All lengths in m.
+
+    ``radial_clearance`` is the total radial play C_r: with both races centred, the gap between a
+    ball and its races summed over the inner and the outer contact (seed 000 eq. 3 gives each
+    contact half of it; eq. 4 follows).  A negative value is a preload.
+    """
+
+    name: str
+    balls: int
+    ball_diameter: float
+    pitch_diameter: float
+    inner_race_diameter: float
+    outer_race_diameter: float
+    radial_clearance: float
+    contact_angle: float
+    ball_mass: float
+    width: float
+    inner_groove_conformity: float
+    outer_groove_conformity: float
+    elastic_modulus: float
+    poisson_ratio: float
+    density: float
+    source: str = ""
+    extra: dict = field(default_factory=dict, compare=False, repr=False)
+
+    # ---- kinematics -------------------------------------------------------------------------
+    @property
+    def diameter_ratio(self) -> float:
+        """gamma = d cos(alpha) / D_m."""
+        return self.ball_diameter * math.cos(self.contact_angle) / self.pitch_diameter
+
+    def fault_frequencies(self, shaft_hz: float) -> dict:
+        """Kinematic (pure rolling) fault frequencies in Hz at a shaft speed in Hz.
+
+        Returns ``{"ftf", "bpfo", "bpfi", "bsf"}``: cage (fundamental train), ball pass outer
+        and inner race, ball spin.  The ball-defect line in an envelope spectrum sits at 2 x BSF
+        (the defect meets both races once per spin turn).
+        """
+        g = self.diameter_ratio
+        n = self.balls
+        ftf = 0.5 * shaft_hz * (1.0 - g)
+        return {
+            "ftf": ftf,
+            "bpfo": n * ftf,
+            "bpfi": 0.5 * n * shaft_hz * (1.0 + g),
+            "bsf": 0.5 * shaft_hz * self.pitch_diameter / self.ball_diameter * (1.0 - g * g),
+        }
+
+    def cage_speed(self, shaft_speed: float) -> float:
+        """Pure-rolling cage speed (rad/s) for a shaft speed (rad/s), outer race fixed."""
+        return 0.5 * shaft_speed * (1.0 - self.diameter_ratio)
+
+    def ball_spin_speed(self, shaft_speed: float) -> float:
+        """Pure-rolling ball spin speed about its own axis relative to the cage (rad/s)."""
+        g = self.diameter_ratio
+        return 0.5 * shaft_speed * self.pitch_diameter / self.ball_diameter * (1.0 - g * g)
+
+    # ---- contact mechanics ------------------------------------------------------------------
+    @property
+    def effective_modulus(self) -> float:
+        """E' = E / (1 - nu^2) for two bodies of the same steel (Pa)."""
+        return self.elastic_modulus / (1.0 - self.poisson_ratio ** 2)
+
+    @property
+    def inner_contact(self) -> HertzContact:
+        rb = 0.5 * self.ball_diameter
+        rr = 0.5 * self.inner_race_diameter
+        rx = rb * rr / (rb + rr)                                   # convex race
+        ry = 1.0 / (1.0 / rb - 1.0 / (self.inner_groove_conformity * self.ball_diameter))
+        return hertz_point_contact(rx, ry, self.effective_modulus)
+
+    @property
+    def outer_contact(self) -> HertzContact:
+        rb = 0.5 * self.ball_diameter
+        rr = 0.5 * self.outer_race_diameter
+        rx = rb * rr / (rr - rb)                                   # concave race
+        ry = 1.0 / (1.0 / rb - 1.0 / (self.outer_groove_conformity * self.ball_diameter))
+        return hertz_point_contact(rx, ry, self.effective_modulus)
+
+    @property
+    def combined_stiffness(self) -> float:
+        """K of one ball between both races in series: Q = K (delta_i + delta_o)^1.5 (N/m^1.5)."""
+        ki = self.inner_contact.stiffness
+        ko = self.outer_contact.stiffness
+        return (ki ** (-2.0 / 3.0) + ko ** (-2.0 / 3.0)) ** (-1.5)
+
+    @property
+    def ball_inertia(self) -> float:
+        """Moment of inertia of a solid ball about a diameter (kg m^2)."""
+        return 0.1 * self.ball_mass * self.ball_diameter ** 2
+
+    def with_clearance(self, radial_clearance: float) -> "Bearing":
+        return replace(self, radial_clearance=radial_clearance)
+
+
+_MM = 1e-3
+_CATALOG_KEYS = {
+    "source", "balls", "ball_diameter_mm", "pitch_diameter_mm", "inner_race_diameter_mm",
+    "outer_race_diameter_mm", "radial_clearance_um", "contact_angle_deg", "ball_mass_kg",
+    "width_mm", "inner_groove_conformity", "outer_groove_conformity", "elastic_modulus_gpa",
+    "poisson_ratio", "density",
+}
+_REQUIRED = ("balls", "ball_diameter_mm", "pitch_diameter_mm")
+
+
+def bearing_from_mapping(name: str, data: dict, where: str = "bearing") -> Bearing:
+    """Build a :class:`Bearing` from a catalog-style mapping (mm, um, deg, GPa), validating it."""
+    if not isinstance(data, dict):
+        raise SceneError(f"{where}: expected a catalog name or a mapping of geometry, got {data!r}")
+    unknown = sorted(set(data) - _CATALOG_KEYS)
+    if unknown:
+        raise SceneError(
+            f"{where}.{unknown[0]}: unknown key; allowed: {', '.join(sorted(_CATALOG_KEYS))}")
+    for key in _REQUIRED:
+        if key not in data:
+            raise SceneError(f"{where}.{key}: missing; a bearing needs {', '.join(_REQUIRED)}")
+
+    def num(key, default, lo, hi, integer=False):
+        value = data.get(key, default)
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise SceneError(f"{where}.{key} = {value!r}: expected a number in [{lo}, {hi}]")
+        if integer and int(value) != value:
+            raise SceneError(f"{where}.{key} = {value!r}: expected a whole number in [{lo}, {hi}]")
+        if not (lo <= value <= hi) or value != value:
+            raise SceneError(f"{where}.{key} = {value!r}: allowed range is [{lo}, {hi}]")
+        return float(value)
+
+    balls = int(num("balls", None, 3, 40, integer=True))
+    d = num("ball_diameter_mm", None, 0.5, 200.0) * _MM
+    dm = num("pitch_diameter_mm", None, 1.0, 2000.0) * _MM
+    if d >= dm * math.sin(math.pi / balls):
+        raise SceneError(
+            f"{where}.balls = {balls}: {balls} balls of {d / _MM:g} mm do not fit on a pitch "
+            f"circle of {dm / _MM:g} mm (at most {int(math.pi / math.asin(d / dm))})")
+    di = num("inner_race_diameter_mm", (dm - d) / _MM, 0.1, 2000.0) * _MM
+    do = num("outer_race_diameter_mm", (dm + d) / _MM, 0.1, 2000.0) * _MM
+    if abs((do - di) - 2 * d) > 0.05 * d:
+        raise SceneError(
+            f"{where}.outer_race_diameter_mm = {do / _MM:g}: outer minus inner race diameter must "
+            f"be close to twice the ball diameter ({2 * d / _MM:g} mm)")
+    density = num("density", 7850.0, 1000.0, 20000.0)
+    mass_default = density * math.pi * d ** 3 / 6.0
+    return Bearing(
+        name=name,
+        balls=balls,
+        ball_diameter=d,
+        pitch_diameter=dm,
+        inner_race_diameter=di,
+        outer_race_diameter=do,
+        radial_clearance=num("radial_clearance_um", 10.0, -50.0, 500.0) * 1e-6,
+        contact_angle=math.radians(num("contact_angle_deg", 0.0, 0.0, 45.0)),
+        ball_mass=num("ball_mass_kg", mass_default, 1e-6, 100.0),
+        width=num("width_mm", 2 * d / _MM, 0.1, 1000.0) * _MM,
+        inner_groove_conformity=num("inner_groove_conformity", 0.52, 0.505, 0.6),
+        outer_groove_conformity=num("outer_groove_conformity", 0.52, 0.505, 0.6),
+        elastic_modulus=num("elastic_modulus_gpa", 208.0, 1.0, 1000.0) * 1e9,
+        poisson_ratio=num("poisson_ratio", 0.3, 0.0, 0.49),
+        density=density,
+        source=str(data.get("source", "")),
+    )
+
+
+@lru_cache(maxsize=None)
+def _catalog_data() -> dict:
+    from .scene import load_yaml
+
+    with open(config_dir() / "bearings.yaml", encoding="utf-8") as fh:
+        return load_yaml(fh.read())
+
+
+def catalog_names() -> list:
+    return sorted(_catalog_data())
+
+
+def get_bearing(name: str, where: str = "bearing") -> Bearing:
+    """The catalog bearing called ``name`` (e.g. ``"ER-16K"``, ``"6205"``, ``"6307"``)."""
+    data = _catalog_data()
+    if name not in data:
+        raise SceneError(f"{where} = {name!r}: unknown bearing; catalog has {', '.join(sorted(data))}")
+    return bearing_from_mapping(name, data[name], where=f"catalog[{name}]")

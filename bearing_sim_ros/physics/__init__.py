@@ -1,0 +1,60 @@
+"""The physics core: bearing models (tiers) and the accelerometer chain.  No ROS imports here.
+
+Every tier is a class with the interface of :class:`TierModel`: it advances the bearing by a
+number of internal steps while speed and load move linearly from one value to another, and
+returns what happened at the internal rate as a :class:`TierOutput`.  The simulator turns that
+into output samples (anti-aliasing, decimation, sensor).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass
+class TierOutput:
+    """What a tier produced over ``n`` internal steps (arrays at the internal rate).
+
+    accel: (n, 2) acceleration of the sensor mount, x horizontal and y vertical (m/s^2), at the
+    end of each step; inner_force, outer_force: (n, Nb) contact force of each ball on the inner
+    and the outer race (N); cage_speed: (n,) rad/s; extras: further per-step series of a tier
+    (e.g. "ball_skid", "cage_skid" ratios for the skidding tier).
+    """
+
+    accel: np.ndarray
+    inner_force: np.ndarray
+    outer_force: np.ndarray
+    cage_speed: np.ndarray
+    extras: dict = field(default_factory=dict)
+
+
+@dataclass
+class KinematicSnapshot:
+    """Angles (rad) and speeds (rad/s) of the rotating parts for the ``state`` topic."""
+
+    shaft_angle: float
+    shaft_speed: float
+    cage_angle: float
+    cage_speed: float
+    ball_angles: np.ndarray      # revolution angle of each ball about the bearing axis
+    ball_speeds: np.ndarray
+
+
+class TierModel:
+    """Interface of a bearing model tier (documentation; tiers duck-type it).
+
+    Attributes: ``name`` ("kinematic" or "skidding"), ``internal_rate`` (Hz, an integer multiple
+    of the output rate chosen by the simulator).
+    """
+
+    name = "abstract"
+
+    def advance(self, n_steps: int, speed0: float, speed1: float,
+                load0: np.ndarray, load1: np.ndarray) -> TierOutput:  # pragma: no cover
+        """Advance by ``n_steps`` internal steps; shaft speed (rad/s) and load (N, (2,)) move
+        linearly from the first to the second value over the span."""
+        raise NotImplementedError
+
+    def snapshot(self) -> KinematicSnapshot:  # pragma: no cover
+        raise NotImplementedError

@@ -1,0 +1,170 @@
+"""Local defects and race waviness as a loss (or gain) of ball-race interference.
+
+Both tiers use the same tables and the same kernel, so a defect means the same thing in each.
+
+Geometry.  A ball (radius r) rolling into a pit of width w on a race meets the pit's edges.  At
+an arc distance s from the nearer edge the ball centre can drop by
+
+    drop(s) = rho - sqrt(rho^2 - s^2),     rho = R_x = 1 / (1/r +- 1/R_race)
+
+(the effective radius of the contact in the rolling direction: "+" for the convex inner race,
+"-" for the concave outer race), and never deeper than the pit itself.  This is seed 000's H_i /
+H_o (eqs 5-9) written with the effective radius, and it reduces to the flat-race sagitta
+r - sqrt(r^2 - s^2).  The same expression holds for a pit on the ball meeting either race.
+Seed 001 Sec. 3.3 gives simpler depth functions; all are available (``profile``):
+
+    geometric    the expression above (default)
+    rectangular  the largest drop over the whole width (seed 001 H1, "crack")
+    half_sine    largest drop x sin(pi * position) (seed 001 H2)
+    piecewise    linear entry ramp, flat, linear exit (seed 001 H3)
+    auto         seed 001's choice from ball/defect size ratio and the defect's aspect ratio
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+KIND_INNER, KIND_OUTER, KIND_BALL = 0, 1, 2
+PROFILE_CODES = {"geometric": 0, "rectangular": 1, "half_sine": 2, "piecewise": 3}
+KIND_CODES = {"inner": KIND_INNER, "outer": KIND_OUTER, "ball": KIND_BALL}
+
+# columns of the defect table (float64, one row per defect)
+D_KIND, D_HALF, D_DEPTH, D_ANGLE, D_PROFILE, D_BALL, D_RHO_I, D_RHO_O, D_HMAX_I, D_HMAX_O, D_RAMP_I, D_RAMP_O = range(12)
+DEFECT_COLUMNS = 12
+
+
+def resolve_profile(defect, ball_diameter: float) -> str:
+    """Seed 001 Sec. 3.3: the depth function from the ball/defect size ratio eta_bd = d / width
+    and the aspect ratio eta_d = length / width."""
+    if defect.profile != "auto":
+        return defect.profile
+    eta_bd = ball_diameter / defect.width
+    eta_d = defect.length / defect.width
+    if eta_bd >= 10.0:          # a crack: the ball bridges it at once
+        return "rectangular"
+    if eta_bd > 1.0 and eta_d <= 1.0:
+        return "half_sine"
+    return "piecewise"
+
+
+def _sag(rho: float, s: float, depth: float) -> float:
+    if s >= rho:
+        return depth
+    return min(depth, rho - math.sqrt(rho * rho - s * s))
+
+
+def defect_table(defects, bearing) -> np.ndarray:
+    """Pack scene defects into the float table the kernels read.
+
+    Half-span D_HALF is an angle on the defect's own body: on the race (rad about the bearing
+    axis) for race defects, on the ball (rad about the ball centre) for a ball defect.
+    """
+    r = 0.5 * bearing.ball_diameter
+    ri = 0.5 * bearing.inner_race_diameter
+    ro = 0.5 * bearing.outer_race_diameter
+    rho_i = r * ri / (r + ri)
+    rho_o = r * ro / (ro - r)
+    table = np.zeros((len(defects), DEFECT_COLUMNS))
+    for k, d in enumerate(defects):
+        kind = KIND_CODES[d.kind]
+        body_radius = {KIND_INNER: ri, KIND_OUTER: ro, KIND_BALL: r}[kind]
+        half = 0.5 * d.width / body_radius
+        row = table[k]
+        row[D_KIND] = kind
+        row[D_HALF] = half
+        row[D_DEPTH] = d.depth
+        row[D_ANGLE] = d.angle
+        row[D_PROFILE] = PROFILE_CODES[resolve_profile(d, bearing.ball_diameter)]
+        row[D_BALL] = d.ball
+        row[D_RHO_I] = rho_i
+        row[D_RHO_O] = rho_o
+        # largest drop: at the middle of the pit
+        row[D_HMAX_I] = _sag(rho_i, 0.5 * d.width, d.depth)
+        row[D_HMAX_O] = _sag(rho_o, 0.5 * d.width, d.depth)
+        # arc length over which the geometric drop reaches its largest value (piecewise ramps)
+        for col, rho, hmax in ((D_RAMP_I, rho_i, row[D_HMAX_I]), (D_RAMP_O, rho_o, row[D_HMAX_O])):
+            row[col] = min(0.5 * d.width, math.sqrt(max(2.0 * rho * hmax - hmax * hmax, 0.0)))
+    return table
+
+
+def waviness_table(waviness) -> np.ndarray:
+    """Rows (race 0 inner / 1 outer, order, amplitude m, phase rad)."""
+    table = np.zeros((len(waviness), 4))
+    for k, w in enumerate(waviness):
+        table[k] = (0 if w.race == "inner" else 1, w.order, w.amplitude, w.phase)
+    return table
+
+
+@njit(cache=True, inline="always")
+def wrap(angle):
+    """Angle wrapped to [-pi, pi)."""
+    return (angle + math.pi) % (2.0 * math.pi) - math.pi
+
+
+@njit(cache=True, inline="always")
+def _profile_drop(profile, u, half, radius, rho, hmax, ramp, depth):
+    """Drop of a ball at angle u from the defect centre (|u| < half) on a body of ``radius``."""
+    s = (half - abs(u)) * radius                    # arc distance from the nearer edge, m
+    if profile == 0:                                # geometric
+        if s >= rho:
+            return depth
+        g = rho - math.sqrt(rho * rho - s * s)
+        return g if g < depth else depth
+    if profile == 1:                                # rectangular
+        return hmax
+    if profile == 2:                                # half-sine
+        return hmax * math.sin(0.5 * math.pi * (u + half) / half)
+    f = s / ramp if ramp > 0.0 else 1.0            # piecewise: ramp, flat, ramp
+    return hmax * (f if f < 1.0 else 1.0)
+
+
+@njit(cache=True)
+def interference_loss(table, j, theta, shaft_angle, ball_spin, r_inner, r_outer, r_ball):
+    """Total loss of interference (m) of ball ``j`` at revolution angle ``theta`` (rad) from every
+    defect in ``table``; ``shaft_angle`` turns inner-race defects, ``ball_spin`` (rad) turns a
+    ball defect (spin angle of the ball relative to the cage).
+
+    Returns (loss_inner_contact, loss_outer_contact): split so the skidding tier can apply each
+    to its own contact; the kinematic tier adds them.
+    """
+    loss_i = 0.0
+    loss_o = 0.0
+    for k in range(table.shape[0]):
+        kind = int(table[k, D_KIND])
+        half = table[k, D_HALF]
+        prof = int(table[k, D_PROFILE])
+        depth = table[k, D_DEPTH]
+        if kind == 1:                                        # outer race: fixed
+            u = wrap(theta - table[k, D_ANGLE])
+            if abs(u) < half:
+                loss_o += _profile_drop(prof, u, half, r_outer, table[k, D_RHO_O],
+                                        table[k, D_HMAX_O], table[k, D_RAMP_O], depth)
+        elif kind == 0:                                      # inner race: turns with the shaft
+            u = wrap(theta - table[k, D_ANGLE] - shaft_angle)
+            if abs(u) < half:
+                loss_i += _profile_drop(prof, u, half, r_inner, table[k, D_RHO_I],
+                                        table[k, D_HMAX_I], table[k, D_RAMP_I], depth)
+        elif j == int(table[k, D_BALL]):                     # ball: meets outer at 0, inner at pi
+            psi = ball_spin + table[k, D_ANGLE]
+            u = wrap(psi)
+            if abs(u) < half:
+                loss_o += _profile_drop(prof, u, half, r_ball, table[k, D_RHO_O],
+                                        table[k, D_HMAX_O], table[k, D_RAMP_O], depth)
+            u = wrap(psi - math.pi)
+            if abs(u) < half:
+                loss_i += _profile_drop(prof, u, half, r_ball, table[k, D_RHO_I],
+                                        table[k, D_HMAX_I], table[k, D_RAMP_I], depth)
+    return loss_i, loss_o
+
+
+@njit(cache=True)
+def waviness_gain(table, theta, shaft_angle):
+    """Extra interference (m) from race waviness at ball angle ``theta`` (seed 003): positive
+    amplitude moves the race surface towards the ball."""
+    gain = 0.0
+    for k in range(table.shape[0]):
+        phi = theta - shaft_angle if table[k, 0] == 0 else theta
+        gain += table[k, 2] * math.cos(table[k, 1] * phi + table[k, 3])
+    return gain

@@ -1,0 +1,345 @@
+"""Kinematic tier: seed 001's 5-DOF model (inner race/shaft x, y; outer race/pedestal x, y; unit
+resonator on the pedestal, vertical) with Hertz contacts of the balls at kinematic positions.
+
+Balls sit where pure rolling puts them (cage speed from geometry), optionally with seeded
+random slip (seed 001 Sec. 2.2); a ball is massless and carries
+Q = K (delta)^1.5 with delta = (x_s - x_p) cos(theta) + (y_s - y_p) sin(theta) - C_r - loss + gain
+(seed 000 eqs 4 and 10; K of both contacts in series, Hamrock-Brewe).  Gravity on the shaft
+and the radial load act on the shaft; the pedestal's own weight is static and an (AC-coupled,
+piezoelectric) accelerometer does not see it.
+
+Integrator: second-order exponential time differencing (ETD2, Cox & Matthews 2002).  The
+structure plus the bearing stiffness linearised at the static equilibrium form a linear system
+integrated exactly by precomputed propagators (matrix exponentials); only the residual
+(Hertz minus its linearisation: ball passes, defects, clearance) is explicit.  The stiff but
+linear parts (resonator, pedestal, average bearing stiffness) therefore cost nothing in
+stability, and the step is limited only by how fast the residual changes.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from . import KinematicSnapshot, TierOutput
+from .defects import defect_table, interference_loss, waviness_gain, wrap
+from .rng import uniform
+
+G = 9.80665
+NSTATE = 10   # xs, ys, xp, yp, yr, vxs, vys, vxp, vyp, vyr
+NINPUT = 4    # residual bearing force on the pedestal (x, y); external force on the shaft (x, y)
+
+# geometry vector layout
+(P_NB, P_K, P_CR, P_RB, P_RI, P_RO, P_CAGE, P_SPIN, P_SLIP, P_GRAV) = range(10)
+
+
+@njit(cache=True, inline="always")
+def _slip(seed, j, cage_angle, spacing, amplitude):
+    """Random slip of ball j (rad): linear interpolation of uniform(-1, 1) knots one ball
+    spacing apart in cage angle, so it depends only on where the cage is (chunk-invariant)."""
+    q = cage_angle / spacing
+    k = math.floor(q)
+    f = q - k
+    ki = np.int64(k)
+    a = 2.0 * uniform(seed, 1000 + j, np.uint64(ki)) - 1.0
+    b = 2.0 * uniform(seed, 1000 + j, np.uint64(ki + 1)) - 1.0
+    return amplitude * spacing * (a + (b - a) * f)
+
+
+@njit(cache=True)
+def bearing_force(geo, cj, sj, dtab, wtab, seed, dx, dy, shaft_angle, cage_angle, spin_angle, q_out):
+    """Total force of the balls on the pedestal (N, x and y) for a shaft-pedestal offset (dx,
+    dy); ball loads go to ``q_out`` (N)."""
+    nb = int(geo[P_NB])
+    kc = geo[P_K]
+    cr = geo[P_CR]
+    spacing = 2.0 * math.pi / nb
+    slip_amp = geo[P_SLIP]
+    c0 = math.cos(cage_angle)
+    s0 = math.sin(cage_angle)
+    has_defects = dtab.shape[0] > 0
+    has_wav = wtab.shape[0] > 0
+    fx = 0.0
+    fy = 0.0
+    for j in range(nb):
+        c = c0 * cj[j] - s0 * sj[j]
+        s = s0 * cj[j] + c0 * sj[j]
+        theta = 0.0
+        if slip_amp > 0.0:
+            eps = _slip(seed, j, cage_angle, spacing, slip_amp)
+            ce = 1.0 - 0.5 * eps * eps
+            c, s = c * ce - s * eps, s * ce + c * eps
+        delta = dx * c + dy * s - cr
+        if has_defects or has_wav:
+            theta = math.atan2(s, c)
+            if has_defects:
+                li, lo = interference_loss(dtab, j, theta, shaft_angle, spin_angle,
+                                           geo[P_RI], geo[P_RO], geo[P_RB])
+                delta -= li + lo
+            if has_wav:
+                delta += waviness_gain(wtab, theta, shaft_angle)
+        if delta > 0.0:
+            q = kc * delta * math.sqrt(delta)
+            q_out[j] = q
+            fx += q * c
+            fy += q * s
+        else:
+            q_out[j] = 0.0
+    return fx, fy
+
+
+@njit(cache=True)
+def _inputs(geo, cj, sj, dtab, wtab, seed, x, kb, ext_x, ext_y, th_s, th_c, psi, q, u):
+    dx = x[0] - x[2]
+    dy = x[1] - x[3]
+    fx, fy = bearing_force(geo, cj, sj, dtab, wtab, seed, dx, dy, th_s, th_c, psi, q)
+    u[0] = fx - (kb[0, 0] * dx + kb[0, 1] * dy)
+    u[1] = fy - (kb[1, 0] * dx + kb[1, 1] * dy)
+    u[2] = ext_x
+    u[3] = ext_y
+
+
+@njit(cache=True)
+def advance_kernel(x, ang, n, m, s0, s1, l0x, l0y, l1x, l1y, h, geo, cj, sj, dtab, wtab, seed,
+                   kb, phi, g0, g1, cacc, dacc, out_acc, out_q, out_cage):
+    """ETD2 over ``n`` steps of ``h`` s.  x: state (10,), ang: (shaft, cage, ball spin) angles.
+    Speed and load ramp linearly from (s0, l0) to (s1, l1).  Writes the sensor-mount
+    acceleration of every step to out_acc (n, 2) and ball loads / cage speed of every m-th step
+    to out_q (n // m, Nb) and out_cage (n // m,)."""
+    nb = int(geo[P_NB])
+    q = np.zeros(nb)
+    qs = np.zeros(nb)
+    u = np.zeros(NINPUT)
+    us = np.zeros(NINPUT)
+    xs = np.zeros(NSTATE)
+    xn = np.zeros(NSTATE)
+    grav = geo[P_GRAV]
+    r_cage = geo[P_CAGE]
+    r_spin = geo[P_SPIN]
+    inv_n = 1.0 / n
+    for i in range(n):
+        f0 = i * inv_n
+        f1 = (i + 1) * inv_n
+        w0 = s0 + (s1 - s0) * f0
+        w1 = s0 + (s1 - s0) * f1
+        ex0 = l0x + (l1x - l0x) * f0
+        ey0 = l0y + (l1y - l0y) * f0 - grav
+        ex1 = l0x + (l1x - l0x) * f1
+        ey1 = l0y + (l1y - l0y) * f1 - grav
+        _inputs(geo, cj, sj, dtab, wtab, seed, x, kb, ex0, ey0, ang[0], ang[1], ang[2], q, u)
+        # sensor-mount acceleration at the start of the step
+        for r in range(2):
+            acc = 0.0
+            for k in range(NSTATE):
+                acc += cacc[r, k] * x[k]
+            for k in range(NINPUT):
+                acc += dacc[r, k] * u[k]
+            out_acc[i, r] = acc
+        if i % m == 0:
+            o = i // m
+            for j in range(nb):
+                out_q[o, j] = q[j]
+            out_cage[o] = r_cage * w0
+        # predictor: x* = Phi x + G0 u
+        for r in range(NSTATE):
+            acc = 0.0
+            for k in range(NSTATE):
+                acc += phi[r, k] * x[k]
+            for k in range(NINPUT):
+                acc += g0[r, k] * u[k]
+            xs[r] = acc
+        # angles at the end of the step (trapezoid on the linear speed ramp)
+        dth = 0.5 * (w0 + w1) * h
+        ang[0] += dth
+        ang[1] += r_cage * dth
+        ang[2] += r_spin * dth
+        _inputs(geo, cj, sj, dtab, wtab, seed, xs, kb, ex1, ey1, ang[0], ang[1], ang[2], qs, us)
+        # corrector: x_{n+1} = x* + G1 (u* - u)
+        for r in range(NSTATE):
+            acc = xs[r]
+            for k in range(NINPUT):
+                acc += g1[r, k] * (us[k] - u[k])
+            xn[r] = acc
+        for r in range(NSTATE):
+            x[r] = xn[r]
+
+
+class KinematicModel:
+    """The kinematic tier (see module docstring).  ``internal_rate`` in Hz."""
+
+    name = "kinematic"
+
+    def __init__(self, scene, output_rate: float, oversample: int, seed: int, shaft_speed: float,
+                 radial_load):
+        self.scene = scene
+        self.decimation = int(oversample)
+        self.internal_rate = float(output_rate) * self.decimation
+        self.h = 1.0 / self.internal_rate
+        self.seed = int(seed)
+        b = scene.bearing
+        st = scene.structure
+        nb = b.balls
+        gam = b.diameter_ratio
+        self.geo = np.zeros(10)
+        self.geo[P_NB] = nb
+        self.geo[P_K] = b.combined_stiffness
+        self.geo[P_CR] = b.radial_clearance
+        self.geo[P_RB] = 0.5 * b.ball_diameter
+        self.geo[P_RI] = 0.5 * b.inner_race_diameter
+        self.geo[P_RO] = 0.5 * b.outer_race_diameter
+        self.geo[P_CAGE] = 0.5 * (1.0 - gam)
+        self.geo[P_SPIN] = 0.5 * b.pitch_diameter / b.ball_diameter * (1.0 - gam * gam)
+        self.geo[P_SLIP] = scene.random_slip
+        self.geo[P_GRAV] = st.shaft_mass * G if scene.gravity else 0.0
+        a = 2.0 * np.pi * np.arange(nb) / nb
+        self.cj, self.sj = np.cos(a), np.sin(a)
+        self.dtab = defect_table(scene.defects, b)
+        from .defects import waviness_table
+
+        self.wtab = waviness_table(scene.waviness)
+        self.angles = np.zeros(3)   # shaft, cage, ball spin (rad)
+        self.x = np.zeros(NSTATE)
+        self._lin_load = None
+        self._linearise(np.asarray(radial_load, dtype=float), initial=True)
+
+    # ---- linearisation and propagators ---------------------------------------------------------
+    def _mean_force(self, d: np.ndarray) -> np.ndarray:
+        """Bearing force on the pedestal averaged over one ball spacing of cage angle (no
+        defects, no slip): the quasi-static load-deflection law."""
+        nb = int(self.geo[P_NB])
+        cage = np.linspace(0.0, 2 * np.pi / nb, 12, endpoint=False)
+        geo = self.geo.copy()
+        geo[P_SLIP] = 0.0
+        q = np.zeros(nb)
+        empty = np.zeros((0, 12))
+        f = np.zeros(2)
+        for c in cage:
+            fx, fy = bearing_force(geo, self.cj, self.sj, empty, np.zeros((0, 4)), 0, d[0], d[1], 0.0, c, 0.0, q)
+            f += (fx, fy)
+        return f / cage.size
+
+    def _equilibrium(self, load: np.ndarray) -> np.ndarray:
+        """Static positions (xs, ys, xp, yp) under the load (+ shaft weight)."""
+        from scipy.optimize import fsolve
+
+        st = self.scene.structure
+        ext = load + np.array([0.0, -self.geo[P_GRAV]])
+        ks, kp = st.shaft_stiffness, st.pedestal_stiffness
+        scale = max(np.linalg.norm(ext), 1.0)
+
+        def residual(z):
+            xs, xp = z[:2] * 1e-6, z[2:] * 1e-6
+            fb = self._mean_force(xs - xp)
+            return np.concatenate([(ks * xs + fb - ext) / scale, (kp * xp - fb) / scale])
+
+        # guess: the bearing takes the load through its stiffest ball, pedestal spring in series
+        k_guess = self.geo[P_K] * 2.0
+        dmag = (scale / k_guess) ** (2.0 / 3.0) + max(self.geo[P_CR], 0.0)
+        direction = ext / scale if np.linalg.norm(ext) > 0 else np.array([0.0, -1.0])
+        xp0 = ext / kp if kp > 0 else np.zeros(2)
+        z0 = np.concatenate([xp0 + direction * dmag, xp0]) * 1e6
+        z, _info, ier, _msg = fsolve(residual, z0, full_output=True, xtol=1e-12)
+        return z * 1e-6
+
+    def _linearise(self, load: np.ndarray, initial: bool = False):
+        from scipy.linalg import expm
+
+        st = self.scene.structure
+        eq = self._equilibrium(load)
+        d0 = eq[:2] - eq[2:]
+        # secant stiffness of the averaged law (robust where the tangent is zero or steep)
+        kb = np.zeros((2, 2))
+        eps = 2e-7
+        for k in range(2):
+            dp = d0.copy()
+            dm = d0.copy()
+            dp[k] += eps
+            dm[k] -= eps
+            kb[:, k] = (self._mean_force(dp) - self._mean_force(dm)) / (2 * eps)
+        kb = 0.5 * (kb + kb.T)
+        self.kb = kb
+        ms, mp = st.shaft_mass, st.pedestal_mass
+        has_res = st.has_resonator
+        mr = st.resonator_mass if has_res else 1.0
+        kr, cr = (st.resonator_stiffness, st.resonator_damping) if has_res else (0.0, 0.0)
+        mass = np.array([ms, ms, mp, mp, mr])
+        kmat = np.zeros((5, 5))
+        cmat = np.zeros((5, 5))
+        # shaft (0, 1) and pedestal (2, 3) springs to ground, resonator (4) on the pedestal's y
+        kmat[0, 0] = kmat[1, 1] = st.shaft_stiffness
+        kmat[2, 2] = kmat[3, 3] = st.pedestal_stiffness
+        cmat[0, 0] = cmat[1, 1] = st.shaft_damping
+        cmat[2, 2] = cmat[3, 3] = st.pedestal_damping
+        kmat[3, 3] += kr
+        kmat[4, 4] += kr
+        kmat[3, 4] = kmat[4, 3] = -kr
+        cmat[3, 3] += cr
+        cmat[4, 4] += cr
+        cmat[3, 4] = cmat[4, 3] = -cr
+        # linearised bearing between shaft (0,1) and pedestal (2,3): force on pedestal kb (s - p)
+        for a_ in range(2):
+            for b_ in range(2):
+                kmat[a_, b_] += kb[a_, b_]
+                kmat[2 + a_, 2 + b_] += kb[a_, b_]
+                kmat[a_, 2 + b_] -= kb[a_, b_]
+                kmat[2 + a_, b_] -= kb[a_, b_]
+        minv = 1.0 / mass
+        A = np.zeros((NSTATE, NSTATE))
+        A[:5, 5:] = np.eye(5)
+        A[5:, :5] = -minv[:, None] * kmat
+        A[5:, 5:] = -minv[:, None] * cmat
+        B = np.zeros((NSTATE, NINPUT))
+        B[5, 0] = -1.0 / ms     # residual bearing force acts -on the shaft, +on the pedestal
+        B[6, 1] = -1.0 / ms
+        B[7, 0] = 1.0 / mp
+        B[8, 1] = 1.0 / mp
+        B[5, 2] = 1.0 / ms      # external force on the shaft
+        B[6, 3] = 1.0 / ms
+        h = self.h
+        nz = NSTATE + 2 * NINPUT
+        Z = np.zeros((nz, nz))
+        Z[:NSTATE, :NSTATE] = A * h
+        Z[:NSTATE, NSTATE:NSTATE + NINPUT] = B * h
+        Z[NSTATE:NSTATE + NINPUT, NSTATE + NINPUT:] = np.eye(NINPUT)
+        E = expm(Z)
+        self.phi = np.ascontiguousarray(E[:NSTATE, :NSTATE])
+        self.g0 = np.ascontiguousarray(E[:NSTATE, NSTATE:NSTATE + NINPUT])
+        self.g1 = np.ascontiguousarray(E[:NSTATE, NSTATE + NINPUT:])
+        rows = [7, 9 if has_res else 8]
+        self.cacc = np.ascontiguousarray(A[rows])
+        self.dacc = np.ascontiguousarray(B[rows])
+        self._lin_load = load.copy()
+        if initial:
+            self.x[:4] = eq
+            self.x[4] = eq[3]          # the resonator spring carries no static load
+
+    def _needs_relinearising(self, load: np.ndarray) -> bool:
+        ref = self._lin_load
+        scale = max(np.linalg.norm(ref), 10.0)
+        return np.linalg.norm(load - ref) > 0.2 * scale
+
+    # ---- TierModel interface --------------------------------------------------------------------
+    def advance(self, n_steps, speed0, speed1, load0, load1) -> TierOutput:
+        load1 = np.asarray(load1, dtype=float)
+        if self._needs_relinearising(load1):
+            self._linearise(load1)
+        nb = int(self.geo[P_NB])
+        m = self.decimation
+        acc = np.empty((n_steps, 2))
+        q = np.empty((n_steps // m, nb))
+        cage = np.empty(n_steps // m)
+        advance_kernel(self.x, self.angles, n_steps, m, float(speed0), float(speed1),
+                       float(load0[0]), float(load0[1]), float(load1[0]), float(load1[1]),
+                       self.h, self.geo, self.cj, self.sj, self.dtab, self.wtab, self.seed,
+                       self.kb, self.phi, self.g0, self.g1, self.cacc, self.dacc, acc, q, cage)
+        self._last_speed = float(speed1)
+        return TierOutput(accel=acc, inner_force=q, outer_force=q.copy(), cage_speed=cage)
+
+    def snapshot(self) -> KinematicSnapshot:
+        nb = int(self.geo[P_NB])
+        w = getattr(self, "_last_speed", self.scene.shaft_speed)
+        cage = self.angles[1]
+        balls = cage + 2 * np.pi * np.arange(nb) / nb
+        return KinematicSnapshot(self.angles[0], w, cage, self.geo[P_CAGE] * w,
+                                 balls, np.full(nb, self.geo[P_CAGE] * w))

@@ -1,0 +1,493 @@
+"""Scenes: a bearing, its structure, operating point, defects, lubrication and sensor.
+
+A scene is a YAML file (``config/scenes/<name>.yaml`` for the shipped ones).  Keys that carry a
+unit say so in their name (``_mm``, ``_um``, ``_rpm``, ``_hz``, ``_deg``); the rest are SI (N, kg,
+N/m, N s/m, m/s^2).  :func:`load_scene` validates everything and turns it into frozen
+dataclasses in SI units; any mistake is a :class:`~bearing_sim_ros.errors.SceneError` whose one
+line names the key, the value and what is allowed.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from .catalog import Bearing, bearing_from_mapping, get_bearing
+from .errors import SceneError
+from .paths import scenes_dir
+
+RPM = 2.0 * math.pi / 60.0  # rad/s per rpm
+
+DEFECT_KINDS = ("inner", "outer", "ball")
+DEPTH_PROFILES = ("geometric", "rectangular", "half_sine", "piecewise", "auto")
+TIERS = ("auto", "kinematic", "skidding")
+OUTPUTS = ("accel", "contact_forces", "cage_speed", "skid_ratios")
+
+
+@dataclass(frozen=True)
+class Structure:
+    """Lumped masses (kg), stiffnesses (N/m) and dampings (N s/m) around the bearing.
+
+    Shaft = spindle + inner race; pedestal = housing + outer race (seed 000 eq. 33).  The
+    optional unit resonator (seed 001) is a vertical mass-spring on the pedestal that stands for
+    the high-frequency structural/sensor resonance that defect impacts excite; mass 0 = none.
+    """
+
+    shaft_mass: float
+    shaft_stiffness: float
+    shaft_damping: float
+    pedestal_mass: float
+    pedestal_stiffness: float
+    pedestal_damping: float
+    resonator_mass: float = 0.0
+    resonator_stiffness: float = 0.0
+    resonator_damping: float = 0.0
+
+    @property
+    def has_resonator(self) -> bool:
+        return self.resonator_mass > 0.0
+
+
+@dataclass(frozen=True)
+class Defect:
+    """A local defect (spall, EDM pit).
+
+    kind: "inner" (turns with the shaft), "outer" (fixed), "ball" (on ``ball``, spins with it).
+    width: extent along the rolling direction (m); depth (m); length: axial extent (m).
+    angle: centre of the defect (rad, counterclockwise from +x, looking along the shaft; the
+    bottom of the bearing is -pi/2): fixed for "outer", at t = 0 for "inner"; for "ball" the
+    initial spin angle of the defect on the ball.
+    profile: depth seen by a ball crossing the defect (seed 001 Sec. 3.3 / seed 000 eqs 5-6).
+    """
+
+    kind: str
+    width: float
+    depth: float
+    length: float
+    angle: float = -0.5 * math.pi
+    profile: str = "geometric"
+    ball: int = 0
+
+
+@dataclass(frozen=True)
+class Waviness:
+    """One harmonic of race waviness (seed 003 eqs 3.47-3.50): radius change
+    ``amplitude * cos(order * phi + phase)`` around the race (m, rad)."""
+
+    race: str
+    order: int
+    amplitude: float
+    phase: float = 0.0
+
+
+@dataclass(frozen=True)
+class Lubrication:
+    """Lubricant and traction data for the skidding tier (seed 000 eqs 12-30).
+
+    viscosity: dynamic viscosity at the inlet (Pa s); pressure_viscosity: alpha (1/Pa);
+    traction A, B, C, D: the curve mu(dv) = (A + B dv) exp(-C dv) + D of eq. 23 (dv in m/s),
+    regularised near zero slip by ``creep_velocity`` (m/s); drag_coefficient c_v and
+    fluid_density xi of eq. 30; ehl_film: whether the film thickness/stiffness enters.
+    cage_pocket_clearance (m) and cage_stiffness k_c (N/m) of eqs 26-29.
+    """
+
+    viscosity: float = 0.04
+    pressure_viscosity: float = 2.0e-8
+    traction_a: float = -0.1
+    traction_b: float = 0.06
+    traction_c: float = 0.2
+    traction_d: float = 0.1
+    creep_velocity: float = 0.01
+    drag_coefficient: float = 0.5
+    fluid_density: float = 30.0
+    ehl_film: bool = True
+    cage_stiffness: float = 1.0e8
+    cage_pocket_clearance: float = 0.0
+    cage_inertia: float = 0.0         # kg m^2; 0 = from the catalog geometry
+    cage_mass: float = 0.0            # kg; 0 = estimated from the geometry
+
+
+@dataclass(frozen=True)
+class Sensor:
+    """The accelerometer: where it reads, its resonance, noise and range.
+
+    axes: which pedestal axes are output ("x" horizontal, "y" vertical).  The vertical axis reads
+    the unit resonator when the structure has one (seed 001), else the pedestal.
+    resonance_hz: mounted resonance of the sensor (0 = ideal), with ``damping_ratio``;
+    noise_density: white noise (m/s^2/sqrt(Hz)) over the output band; range: clipping (m/s^2).
+    """
+
+    axes: tuple = ("x", "y")
+    resonance_hz: float = 0.0
+    damping_ratio: float = 0.05
+    noise_density: float = 0.0
+    range: float = 490.3
+    frame_id: str = "bearing_accel"
+
+
+@dataclass(frozen=True)
+class ProfilePoint:
+    """A knot of a speed/load profile for offline rendering: time (s), speed (rad/s), load (N)."""
+
+    t: float
+    shaft_speed: float
+    radial_load: tuple
+
+
+@dataclass(frozen=True)
+class Scene:
+    """Everything a simulation needs, in SI units.  Built by :func:`load_scene`."""
+
+    name: str
+    description: str
+    bearing: Bearing
+    structure: Structure
+    shaft_speed: float            # rad/s, the operating point used when no topic says otherwise
+    radial_load: tuple            # (x, y) N on the shaft at the bearing; y up, so (0, -50) pushes down
+    defects: tuple = ()
+    waviness: tuple = ()
+    random_slip: float = 0.0      # fraction of the ball spacing by which ball passes jitter (seed 001: 1-2 %)
+    gravity: bool = True          # the shaft's weight acts on the bearing
+    lubrication: Lubrication = field(default_factory=Lubrication)
+    sensor: Sensor = field(default_factory=Sensor)
+    fidelity: str = "auto"
+    fidelity_tolerance: float = 0.05
+    outputs: tuple = ("accel", "contact_forces", "cage_speed")
+    profile: tuple = ()
+    source_text: str = field(default="", compare=False, repr=False)
+    source_path: str = field(default="", compare=False, repr=False)
+
+    @property
+    def shaft_hz(self) -> float:
+        return self.shaft_speed / (2.0 * math.pi)
+
+    def fault_frequencies(self, shaft_speed: float | None = None) -> dict:
+        """Fault frequencies (Hz) at ``shaft_speed`` (rad/s; default: the scene's)."""
+        w = self.shaft_speed if shaft_speed is None else shaft_speed
+        return self.bearing.fault_frequencies(w / (2.0 * math.pi))
+
+
+# --------------------------------------------------------------------------------------------
+# validation helpers
+class _Section:
+    """Reads one mapping of the YAML, checking keys, types and ranges; every error names the
+    dotted key path, the value and what is allowed."""
+
+    def __init__(self, data: Any, path: str, allowed: tuple, required: tuple = ()):
+        if data is None:
+            data = {}
+        if not isinstance(data, dict):
+            raise SceneError(f"{path} = {data!r}: expected a mapping with keys {', '.join(allowed)}")
+        unknown = sorted(set(map(str, data)) - set(allowed))
+        if unknown:
+            raise SceneError(f"{path}.{unknown[0]}: unknown key; allowed: {', '.join(allowed)}")
+        for key in required:
+            if key not in data:
+                raise SceneError(f"{path}.{key}: missing (required)")
+        self.data = data
+        self.path = path
+
+    def key(self, name: str) -> str:
+        return f"{self.path}.{name}" if self.path else name
+
+    def has(self, name: str) -> bool:
+        return name in self.data
+
+    def number(self, name, default=None, lo=-math.inf, hi=math.inf, integer=False,
+               lo_open=False) -> float:
+        value = self.data.get(name, default)
+        where = self.key(name)
+        rng = f"{'(' if lo_open else '['}{lo:g}, {hi:g}]"
+        if value is None:
+            raise SceneError(f"{where}: missing; expected a number in {rng}")
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise SceneError(f"{where} = {value!r}: expected a number in {rng}")
+        if integer and int(value) != value:
+            raise SceneError(f"{where} = {value!r}: expected a whole number in {rng}")
+        if value != value or not (lo < value if lo_open else lo <= value) or not value <= hi:
+            raise SceneError(f"{where} = {value!r}: allowed range is {rng}")
+        return float(value)
+
+    def choice(self, name, options, default=None) -> str:
+        value = self.data.get(name, default)
+        if value not in options:
+            raise SceneError(f"{self.key(name)} = {value!r}: allowed values are {', '.join(options)}")
+        return value
+
+    def boolean(self, name, default) -> bool:
+        value = self.data.get(name, default)
+        if not isinstance(value, bool):
+            raise SceneError(f"{self.key(name)} = {value!r}: expected true or false")
+        return value
+
+    def string(self, name, default="") -> str:
+        value = self.data.get(name, default)
+        if not isinstance(value, str):
+            raise SceneError(f"{self.key(name)} = {value!r}: expected a string")
+        return value
+
+    def vector(self, name, length, default=None, lo=-math.inf, hi=math.inf) -> tuple:
+        value = self.data.get(name, default)
+        where = self.key(name)
+        if (not isinstance(value, (list, tuple)) or len(value) != length
+                or any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in value)):
+            raise SceneError(f"{where} = {value!r}: expected a list of {length} numbers")
+        for v in value:
+            if v != v or not lo <= v <= hi:
+                raise SceneError(f"{where} = {value!r}: each entry must be in [{lo:g}, {hi:g}]")
+        return tuple(float(v) for v in value)
+
+    def section(self, name, allowed, required=()) -> "_Section":
+        return _Section(self.data.get(name), self.key(name), allowed, required)
+
+    def items(self, name) -> list:
+        value = self.data.get(name, [])
+        if value is None:
+            return []
+        if not isinstance(value, list):
+            raise SceneError(f"{self.key(name)} = {value!r}: expected a list")
+        return value
+
+
+def clock_to_angle(clock: float) -> float:
+    """Clock position (hours, 12 = top, 3 = +x) to angle (rad, counterclockwise from +x)."""
+    return math.pi / 2.0 - clock * math.pi / 6.0
+
+
+MAX_LOAD = 1.0e6        # N: a bound against absurd values; the bearing's own limit is checked later
+MAX_SPEED_RPM = 60000.0
+
+
+def _bearing(top: _Section) -> Bearing:
+    value = top.data.get("bearing")
+    if isinstance(value, str):
+        bearing = get_bearing(value, where="bearing")
+    elif isinstance(value, dict):
+        bearing = bearing_from_mapping(str(value.get("name", "custom")),
+                                       {k: v for k, v in value.items() if k != "name"},
+                                       where="bearing")
+    else:
+        raise SceneError(f"bearing = {value!r}: expected a catalog name or a mapping of geometry")
+    if top.has("radial_clearance_um"):
+        bearing = bearing.with_clearance(top.number("radial_clearance_um", lo=-50, hi=500) * 1e-6)
+    return bearing
+
+
+def _structure(top: _Section) -> Structure:
+    s = top.section("structure", ("shaft", "pedestal", "resonator"), required=("shaft", "pedestal"))
+    parts = {}
+    for part in ("shaft", "pedestal"):
+        p = s.section(part, ("mass", "stiffness", "damping"), required=("mass", "stiffness", "damping"))
+        parts[part] = (p.number("mass", lo=1e-3, hi=1e5),
+                       p.number("stiffness", lo=0.0, hi=1e12),
+                       p.number("damping", lo=0.0, hi=1e8))
+    res = (0.0, 0.0, 0.0)
+    if s.has("resonator") and s.data["resonator"] is not None:
+        r = s.section("resonator", ("mass", "frequency_hz", "damping_ratio"),
+                      required=("mass", "frequency_hz", "damping_ratio"))
+        m = r.number("mass", lo=1e-4, hi=1e3)
+        f = r.number("frequency_hz", lo=10.0, hi=50000.0)
+        z = r.number("damping_ratio", lo=0.0, hi=1.0)
+        w = 2 * math.pi * f
+        res = (m, m * w * w, 2 * z * m * w)
+    return Structure(*parts["shaft"], *parts["pedestal"], *res)
+
+
+def _defects(top: _Section, bearing: Bearing) -> tuple:
+    out = []
+    for i, raw in enumerate(top.items("defects")):
+        d = _Section(raw, f"defects[{i}]",
+                     ("kind", "width_mm", "depth_mm", "length_mm", "clock", "angle_deg", "profile", "ball"),
+                     required=("kind", "width_mm", "depth_mm"))
+        kind = d.choice("kind", DEFECT_KINDS)
+        # a local defect: at most a quarter of the ball spacing wide, so one ball meets it at a time
+        spacing = math.pi * bearing.pitch_diameter / bearing.balls
+        max_width = min(0.5 * spacing, bearing.ball_diameter) / 1e-3
+        width = d.number("width_mm", lo=0.0, hi=max_width, lo_open=True) * 1e-3
+        depth = d.number("depth_mm", lo=0.0, hi=0.5 * bearing.ball_diameter / 1e-3, lo_open=True) * 1e-3
+        length = d.number("length_mm", width / 1e-3, lo=0.0, hi=bearing.width / 1e-3, lo_open=True) * 1e-3
+        if d.has("clock") and d.has("angle_deg"):
+            raise SceneError(f"defects[{i}]: give either clock or angle_deg, not both")
+        if d.has("clock"):
+            angle = clock_to_angle(d.number("clock", lo=0.0, hi=12.0))
+        else:
+            angle = math.radians(d.number("angle_deg", -90.0, lo=-360.0, hi=360.0))
+        ball = int(d.number("ball", 0, lo=0, hi=bearing.balls - 1, integer=True))
+        out.append(Defect(kind, width, depth, length, angle, d.choice("profile", DEPTH_PROFILES, "geometric"), ball))
+    return tuple(out)
+
+
+def _waviness(top: _Section) -> tuple:
+    out = []
+    for i, raw in enumerate(top.items("waviness")):
+        w = _Section(raw, f"waviness[{i}]", ("race", "order", "amplitude_um", "phase_deg"),
+                     required=("race", "order", "amplitude_um"))
+        out.append(Waviness(w.choice("race", ("inner", "outer")),
+                            int(w.number("order", lo=1, hi=200, integer=True)),
+                            w.number("amplitude_um", lo=0.0, hi=20.0) * 1e-6,
+                            math.radians(w.number("phase_deg", 0.0, lo=-360, hi=360))))
+    return tuple(out)
+
+
+def _lubrication(top: _Section) -> Lubrication:
+    keys = ("viscosity", "pressure_viscosity", "traction_a", "traction_b", "traction_c", "traction_d",
+            "creep_velocity", "drag_coefficient", "fluid_density", "ehl_film", "cage_stiffness",
+            "cage_pocket_clearance_um", "cage_inertia", "cage_mass")
+    s = top.section("lubrication", keys)
+    d = Lubrication()
+    return Lubrication(
+        viscosity=s.number("viscosity", d.viscosity, lo=1e-4, hi=10.0),
+        pressure_viscosity=s.number("pressure_viscosity", d.pressure_viscosity, lo=0.0, hi=1e-7),
+        traction_a=s.number("traction_a", d.traction_a, lo=-1.0, hi=1.0),
+        traction_b=s.number("traction_b", d.traction_b, lo=-10.0, hi=10.0),
+        traction_c=s.number("traction_c", d.traction_c, lo=0.0, hi=100.0),
+        traction_d=s.number("traction_d", d.traction_d, lo=0.0, hi=0.5),
+        creep_velocity=s.number("creep_velocity", d.creep_velocity, lo=1e-5, hi=1.0),
+        drag_coefficient=s.number("drag_coefficient", d.drag_coefficient, lo=0.0, hi=10.0),
+        fluid_density=s.number("fluid_density", d.fluid_density, lo=0.0, hi=2000.0),
+        ehl_film=s.boolean("ehl_film", d.ehl_film),
+        cage_stiffness=s.number("cage_stiffness", d.cage_stiffness, lo=1e3, hi=1e10),
+        cage_pocket_clearance=s.number("cage_pocket_clearance_um", 0.0, lo=0.0, hi=2000.0) * 1e-6,
+        cage_inertia=s.number("cage_inertia", 0.0, lo=0.0, hi=10.0),
+        cage_mass=s.number("cage_mass", 0.0, lo=0.0, hi=100.0),
+    )
+
+
+def _sensor(top: _Section) -> Sensor:
+    s = top.section("sensor", ("axes", "resonance_hz", "damping_ratio", "noise_density", "range", "frame_id"))
+    axes = s.data.get("axes", ["x", "y"])
+    if (not isinstance(axes, list) or not axes or len(set(axes)) != len(axes)
+            or any(a not in ("x", "y") for a in axes)):
+        raise SceneError(f"sensor.axes = {axes!r}: expected a list of distinct axes from x, y")
+    return Sensor(
+        axes=tuple(a for a in ("x", "y") if a in axes),
+        resonance_hz=s.number("resonance_hz", 0.0, lo=0.0, hi=200000.0),
+        damping_ratio=s.number("damping_ratio", 0.05, lo=0.001, hi=1.0),
+        noise_density=s.number("noise_density", 0.0, lo=0.0, hi=10.0),
+        range=s.number("range", 490.3, lo=0.0, hi=1e7, lo_open=True),
+        frame_id=s.string("frame_id", "bearing_accel") or "bearing_accel",
+    )
+
+
+def _profile(top: _Section, speed: float, load: tuple) -> tuple:
+    points = []
+    last_t = -math.inf
+    for i, raw in enumerate(top.items("profile")):
+        p = _Section(raw, f"profile[{i}]", ("t", "shaft_speed_rpm", "radial_load"), required=("t",))
+        t = p.number("t", lo=0.0, hi=1e6)
+        if t <= last_t:
+            raise SceneError(f"profile[{i}].t = {t:g}: times must increase (previous {last_t:g})")
+        last_t = t
+        speed = p.number("shaft_speed_rpm", speed / RPM, lo=-MAX_SPEED_RPM, hi=MAX_SPEED_RPM) * RPM
+        load = p.vector("radial_load", 2, list(load), lo=-MAX_LOAD, hi=MAX_LOAD)
+        points.append(ProfilePoint(t, speed, load))
+    return tuple(points)
+
+
+TOP_KEYS = ("name", "description", "bearing", "radial_clearance_um", "structure", "operating_point",
+            "defects", "waviness", "random_slip", "gravity", "lubrication", "sensor", "fidelity",
+            "profile")
+
+
+def scene_from_dict(data: Any, name: str = "scene", source_text: str = "", source_path: str = "") -> Scene:
+    """Validate a parsed scene mapping and build the :class:`Scene`."""
+    top = _Section(data, "", TOP_KEYS, required=("bearing", "structure", "operating_point"))
+    bearing = _bearing(top)
+    op = top.section("operating_point", ("shaft_speed_rpm", "radial_load"), required=("shaft_speed_rpm",))
+    speed = op.number("shaft_speed_rpm", lo=-MAX_SPEED_RPM, hi=MAX_SPEED_RPM) * RPM
+    load = op.vector("radial_load", 2, [0.0, 0.0], lo=-MAX_LOAD, hi=MAX_LOAD)
+    fid = top.section("fidelity", ("tier", "tolerance", "outputs"))
+    outputs = fid.data.get("outputs", ["accel", "contact_forces", "cage_speed"])
+    if not isinstance(outputs, list) or any(o not in OUTPUTS for o in outputs):
+        raise SceneError(f"fidelity.outputs = {outputs!r}: expected a list from {', '.join(OUTPUTS)}")
+    return Scene(
+        name=top.string("name", name) or name,
+        description=top.string("description", ""),
+        bearing=bearing,
+        structure=_structure(top),
+        shaft_speed=speed,
+        radial_load=load,
+        defects=_defects(top, bearing),
+        waviness=_waviness(top),
+        random_slip=top.number("random_slip", 0.0, lo=0.0, hi=0.05),
+        gravity=top.boolean("gravity", True),
+        lubrication=_lubrication(top),
+        sensor=_sensor(top),
+        fidelity=fid.choice("tier", TIERS, "auto"),
+        fidelity_tolerance=fid.number("tolerance", 0.05, lo=1e-4, hi=1.0),
+        outputs=tuple(outputs),
+        profile=_profile(top, speed, load),
+        source_text=source_text,
+        source_path=source_path,
+    )
+
+
+def shipped_scenes() -> list:
+    """Names of the scenes in ``config/scenes``."""
+    return sorted(p.stem for p in scenes_dir().glob("*.yaml"))
+
+
+def resolve_scene_path(name_or_path: str | Path) -> Path:
+    """A shipped scene name or a path to a YAML file -> the file's path."""
+    text = str(name_or_path)
+    path = Path(text)
+    if path.suffix in (".yaml", ".yml") or path.exists() or "/" in text:
+        if not path.is_file():
+            raise SceneError(f"scene = {text!r}: no such file; give a YAML path or one of "
+                             f"{', '.join(shipped_scenes())}")
+        return path
+    shipped = scenes_dir() / f"{text}.yaml"
+    if not shipped.is_file():
+        raise SceneError(f"scene = {text!r}: unknown scene; shipped scenes are {', '.join(shipped_scenes())}")
+    return shipped
+
+
+def _yaml_loader():
+    """A safe YAML loader that also reads ``1e7`` and ``4.24e4`` as floats (YAML 1.2 style;
+    PyYAML's 1.1 rule wants ``1.0e+7``, which surprises everyone)."""
+    import re
+
+    import yaml
+
+    class Loader(yaml.SafeLoader):
+        pass
+
+    Loader.add_implicit_resolver(
+        "tag:yaml.org,2002:float",
+        re.compile(r"""^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?
+                    |[-+]?(?:[0-9][0-9_]*)(?:[eE][-+]?[0-9]+)
+                    |\.[0-9_]+(?:[eE][-+]?[0-9]+)?
+                    |[-+]?\.(?:inf|Inf|INF)
+                    |\.(?:nan|NaN|NAN))$""", re.X),
+        list("-+0123456789."))
+    return Loader
+
+
+def load_yaml(text: str):
+    """Parse YAML text safely (see :func:`_yaml_loader`)."""
+    import yaml
+
+    return yaml.load(text, Loader=_yaml_loader())  # noqa: S506 - a SafeLoader subclass
+
+
+def load_scene(name_or_path: str | Path) -> Scene:
+    """Load and validate a scene: a shipped name (``"er16k_outer_race"``) or a YAML path."""
+    import yaml
+
+    path = resolve_scene_path(name_or_path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SceneError(f"scene = {str(path)!r}: cannot read it ({exc.__class__.__name__}: {exc})") from None
+    try:
+        data = load_yaml(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}" if mark else ""
+        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        raise SceneError(f"scene {path.name}: not valid YAML{where}: {problem}") from None
+    try:
+        return scene_from_dict(data, name=path.stem, source_text=text, source_path=str(path))
+    except SceneError as exc:
+        raise SceneError(f"scene {path.name}: {exc}") from None

@@ -1,0 +1,235 @@
+"""The simulator: a scene advanced in output-rate batches (no ROS here).
+
+    sim = Simulator(load_scene("er16k_outer_race"), sample_rate=15000.0)
+    b = sim.advance(150)                                      # 10 ms at the operating point
+    b = sim.advance(150, shaft_speed=167.55, radial_load=(0.0, -50.0))
+
+A tier (kinematic or skidding) steps the bearing at an internal rate that is an integer multiple
+of the output rate; the accelerometer chain turns the sensor-mount acceleration into output
+samples (sensor resonance, linear-phase anti-aliasing FIR, decimation, noise, clipping).  The
+physics runs ``lookahead`` internal steps ahead of the output so that the FIR's group delay is
+compensated exactly: sample k of the output is the acquisition of time t0 + k / sample_rate.
+
+Speed and load commands take effect from the start of the next ``advance`` and move linearly
+over that call (a ramp, never a step), so the published signal has no unphysical jump.
+Advancing in chunks gives the same samples as one long advance with the same commands and seed.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .errors import UserError
+from .scene import Scene, load_scene
+
+SOLVERS = ("default", "rk4", "reference")
+FIDELITIES = ("auto", "kinematic", "skidding")
+
+
+@dataclass
+class Batch:
+    """``n`` output samples.  Times in s, accelerations m/s^2, forces N, speeds rad/s."""
+
+    t0: float                      # time of sample 0 (s since the start of the simulation)
+    index0: int                    # absolute index of sample 0
+    sample_rate: float             # Hz
+    accel: np.ndarray              # (n, axes) float64
+    accel_channels: tuple
+    contact_forces: np.ndarray     # (n, 2 Nb): inner_00.., outer_00..
+    contact_channels: tuple
+    cage_speed: np.ndarray         # (n,)
+    shaft_speed: np.ndarray        # (n,) shaft speed in use
+    radial_load: np.ndarray        # (n, 2) load in use (x, y)
+    tier: str
+    extras: dict = field(default_factory=dict)   # e.g. ball_skid, cage_skid (n,) for the skidding tier
+
+    @property
+    def n(self) -> int:
+        return self.accel.shape[0]
+
+    @property
+    def times(self) -> np.ndarray:
+        return (self.index0 + np.arange(self.n)) / self.sample_rate
+
+
+def contact_channel_names(balls: int) -> tuple:
+    return tuple(f"inner_{j:02d}" for j in range(balls)) + tuple(f"outer_{j:02d}" for j in range(balls))
+
+
+class Simulator:
+    """Advance a bearing scene in output-rate batches.
+
+    scene: a :class:`~bearing_sim_ros.scene.Scene` or a shipped name / YAML path.
+    sample_rate: output rate (Hz).  fidelity: "auto" | "kinematic" | "skidding".
+    seed: random slip and sensor noise.  solver: "default" | "rk4" | "reference" (skidding tier).
+    rk4_step: step of the "rk4" solver (s).  oversample: internal steps per output sample of the
+    kinematic tier (accuracy knob; default 4).
+    """
+
+    def __init__(self, scene, sample_rate: float = 15000.0, fidelity: str = "auto", seed: int = 0,
+                 solver: str = "default", rk4_step: float | None = None, oversample: int | None = None,
+                 tolerance: float | None = None):
+        if not isinstance(scene, Scene):
+            scene = load_scene(scene)
+        if not (isinstance(sample_rate, (int, float)) and 100.0 <= sample_rate <= 1.0e6):
+            raise UserError(f"sample_rate = {sample_rate!r}: allowed range is [100, 1e6] Hz")
+        if fidelity not in FIDELITIES:
+            raise UserError(f"fidelity = {fidelity!r}: allowed values are {', '.join(FIDELITIES)}")
+        if solver not in SOLVERS:
+            raise UserError(f"solver = {solver!r}: allowed values are {', '.join(SOLVERS)}")
+        if not isinstance(seed, int) or seed < 0:
+            raise UserError(f"seed = {seed!r}: expected a whole number >= 0")
+        self.scene = scene
+        self.bearing = scene.bearing
+        self.sample_rate = float(sample_rate)
+        self.seed = int(seed)
+        self.solver = solver
+        self.rk4_step = rk4_step
+        self.requested_fidelity = fidelity
+        self._shaft_speed = float(scene.shaft_speed)
+        self._radial_load = np.array(scene.radial_load, dtype=float)
+        self.index = 0                       # absolute index of the next output sample
+        self.tier_switches = 0
+
+        from .fidelity import select_tier
+
+        request = scene.fidelity if fidelity == "auto" else fidelity
+        self.selection = select_tier(scene, request, self._shaft_speed, self._radial_load,
+                                     tolerance if tolerance is not None else scene.fidelity_tolerance)
+        self.tier = self.selection.tier
+        self._oversample = oversample
+        self._model = self._build_model(self.tier)
+        self._build_chain()
+
+    # ---- construction ---------------------------------------------------------------------
+    def _build_model(self, tier: str):
+        if tier == "kinematic":
+            from .physics.kinematic import KinematicModel
+
+            m = self._oversample or 4
+            return KinematicModel(self.scene, self.sample_rate, m, self.seed,
+                                  self._shaft_speed, self._radial_load)
+        from .physics.skidding import SkiddingModel
+
+        return SkiddingModel(self.scene, self.sample_rate, self.seed, self._shaft_speed,
+                             self._radial_load, solver=self.solver, rk4_step=self.rk4_step)
+
+    def _build_chain(self):
+        from .physics.sensor import AccelerometerChain
+
+        self.oversample = int(round(self._model.internal_rate / self.sample_rate))
+        self.chain = AccelerometerChain(self.scene.sensor, self.sample_rate, self.oversample, self.seed)
+        self.accel_channels = tuple(f"accel_{a}" for a in self.scene.sensor.axes)
+        self.contact_channels = contact_channel_names(self.bearing.balls)
+        # run the physics ahead by the FIR group delay; keep the per-output-sample series that
+        # belong to those future samples until their time comes
+        self._pending = None
+        ahead = self.chain.lookahead_samples
+        if ahead:
+            out = self._model.advance(ahead * self.oversample, self._shaft_speed, self._shaft_speed,
+                                      self._radial_load, self._radial_load)
+            self.chain.prime(out.accel)
+            self._pending = self._per_sample(out, self._shaft_speed, self._shaft_speed,
+                                             self._radial_load, self._radial_load, ahead)
+
+    # ---- stepping ---------------------------------------------------------------------------
+    @property
+    def shaft_speed(self) -> float:
+        return self._shaft_speed
+
+    @property
+    def radial_load(self) -> tuple:
+        return tuple(self._radial_load)
+
+    @property
+    def time(self) -> float:
+        """Time of the next output sample (s)."""
+        return self.index / self.sample_rate
+
+    def _per_sample(self, out, s0, s1, l0, l1, n):
+        m = self.oversample
+        frac = (np.arange(n) * m) / (n * m)
+        speed = s0 + (s1 - s0) * frac
+        load = l0[None, :] + (l1 - l0)[None, :] * frac[:, None]
+        forces = np.concatenate([out.inner_force, out.outer_force], axis=1)
+        series = {"forces": forces, "cage_speed": out.cage_speed, "shaft_speed": speed, "load": load}
+        for key, val in out.extras.items():
+            series["x_" + key] = val
+        return series
+
+    def advance(self, n: int, shaft_speed: float | None = None, radial_load=None) -> Batch:
+        """Advance by ``n`` output samples.  ``shaft_speed`` (rad/s) and ``radial_load`` (N, (x, y))
+        replace the operating point; the change is ramped over this call."""
+        if not isinstance(n, (int, np.integer)) or n <= 0:
+            raise UserError(f"n = {n!r}: expected a whole number of samples > 0")
+        s0 = self._shaft_speed
+        l0 = self._radial_load.copy()
+        s1 = s0 if shaft_speed is None else float(shaft_speed)
+        l1 = l0 if radial_load is None else np.asarray(radial_load, dtype=float).reshape(2)
+        if not math.isfinite(s1) or not np.all(np.isfinite(l1)):
+            raise UserError(f"shaft_speed / radial_load = {s1!r} / {l1!r}: must be finite")
+        self.maybe_switch_tier(s1, l1)
+        out = self._model.advance(n * self.oversample, s0, s1, l0, l1)
+        accel = self.chain.process(out.accel, self.index)
+        fresh = self._per_sample(out, s0, s1, l0, l1, n)
+        series = self._take(fresh, n)
+        self._shaft_speed, self._radial_load = s1, l1
+        batch = Batch(
+            t0=self.index / self.sample_rate,
+            index0=self.index,
+            sample_rate=self.sample_rate,
+            accel=accel[:, self.chain.axis_columns],
+            accel_channels=self.accel_channels,
+            contact_forces=series["forces"],
+            contact_channels=self.contact_channels,
+            cage_speed=series["cage_speed"],
+            shaft_speed=series["shaft_speed"],
+            radial_load=series["load"],
+            tier=self.tier,
+            extras={k[2:]: v for k, v in series.items() if k.startswith("x_")},
+        )
+        self.index += n
+        return batch
+
+    def _take(self, fresh: dict, n: int) -> dict:
+        """The n oldest per-sample rows (pending from the lookahead first), keeping the rest."""
+        if self._pending is None:
+            return fresh
+        joined = {}
+        for key, val in fresh.items():
+            old = self._pending.get(key)
+            joined[key] = val if old is None else np.concatenate([old, val], axis=0)
+        self._pending = {k: v[n:] for k, v in joined.items()}
+        return {k: v[:n] for k, v in joined.items()}
+
+    # ---- fidelity -----------------------------------------------------------------------------
+    def maybe_switch_tier(self, shaft_speed: float, radial_load) -> bool:
+        """With ``fidelity="auto"``, re-select the tier for a new operating point and switch
+        without a discontinuity (the new tier starts from the old one's state)."""
+        if self.requested_fidelity != "auto" or self.scene.fidelity != "auto":
+            return False
+        from .fidelity import select_tier
+
+        sel = select_tier(self.scene, "auto", shaft_speed, np.asarray(radial_load),
+                          self.selection.tolerance)
+        if sel.tier == self.tier:
+            self.selection = sel
+            return False
+        old = self._model
+        self.tier = sel.tier
+        self.selection = sel
+        new = self._build_model(sel.tier)
+        if hasattr(new, "adopt_state"):
+            new.adopt_state(old)
+        if int(round(new.internal_rate / self.sample_rate)) != self.oversample:
+            raise RuntimeError("tiers must share the internal rate to switch without a seam")
+        self._model = new
+        self.tier_switches += 1
+        return True
+
+    # ---- state for the JointState topic ----------------------------------------------------
+    def snapshot(self):
+        """Angles and speeds of shaft, cage and balls (see ``physics.KinematicSnapshot``)."""
+        return self._model.snapshot()
