@@ -1,0 +1,85 @@
+"""Topic names, types, QoS, and the messages of one batch: shared by the live node and the
+offline renderer so that a recording from either is the same, message for message.
+
+No per-sample Python objects: waveform tables are built from arrays (see ``waveform.py``).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .waveform import make_fields, sample_time_ns, to_pointcloud2
+
+# topic -> ROS type (names relative to the node's namespace, INTERFACE.md)
+TOPIC_ACCEL = "accel"
+TOPIC_CONTACT = "contact_forces"
+TOPIC_STATE = "state"
+TOPIC_DIAGNOSTICS = "/diagnostics"
+TOPIC_CLOCK = "/clock"
+TOPIC_SHAFT_SPEED = "shaft_speed"
+TOPIC_LOAD = "load"
+
+TYPES = {
+    TOPIC_ACCEL: "sensor_msgs/msg/PointCloud2",
+    TOPIC_CONTACT: "sensor_msgs/msg/PointCloud2",
+    TOPIC_STATE: "sensor_msgs/msg/JointState",
+    TOPIC_DIAGNOSTICS: "diagnostic_msgs/msg/DiagnosticArray",
+    TOPIC_CLOCK: "rosgraph_msgs/msg/Clock",
+    TOPIC_SHAFT_SPEED: "std_msgs/msg/Float64",
+    TOPIC_LOAD: "geometry_msgs/msg/WrenchStamped",
+}
+
+
+def batch_qos_depth(batch_duration: float) -> int:
+    """Keep-last depth holding about one second of batches."""
+    return max(10, int(math.ceil(1.0 / batch_duration)))
+
+
+def waveform_qos(batch_duration: float):
+    """Reliable, volatile, keep-last about one second of batches."""
+    from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=batch_qos_depth(batch_duration),
+                      reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
+
+
+class BatchMessages:
+    """Builds the ``accel`` and ``contact_forces`` waveform tables and the ``state`` message of
+    a batch.  ``start_ns``: the ROS time of simulation sample 0 (wall clock at start for the
+    live node, 0 or a chosen epoch for offline renders)."""
+
+    def __init__(self, simulator, start_ns: int, frame_id: str | None = None):
+        self.sim = simulator
+        self.start_ns = int(start_ns)
+        self.frame_id = frame_id or simulator.scene.sensor.frame_id
+        self._accel_fields = make_fields(simulator.accel_channels)
+        self._contact_fields = make_fields(simulator.contact_channels)
+        nb = simulator.bearing.balls
+        self.joint_names = ["shaft", "cage"] + [f"ball_{j:02d}" for j in range(nb)]
+
+    def stamp_ns(self, index: int) -> int:
+        """ROS time (ns) of output sample ``index``."""
+        return sample_time_ns(self.start_ns, index, self.sim.sample_rate)
+
+    def accel(self, batch):
+        return to_pointcloud2(batch.accel, batch.accel_channels, self.stamp_ns(batch.index0),
+                              self.frame_id, self._accel_fields)
+
+    def contact_forces(self, batch):
+        return to_pointcloud2(batch.contact_forces, batch.contact_channels,
+                              self.stamp_ns(batch.index0), self.frame_id, self._contact_fields)
+
+    def state(self, stamp_ns: int):
+        """JointState of shaft, cage and balls: angle (rad) and speed (rad/s) now."""
+        from sensor_msgs.msg import JointState
+
+        snap = self.sim.snapshot()
+        msg = JointState()
+        msg.header.stamp.sec = int(stamp_ns // 1_000_000_000)
+        msg.header.stamp.nanosec = int(stamp_ns % 1_000_000_000)
+        msg.header.frame_id = self.frame_id
+        msg.name = self.joint_names
+        msg.position = np.concatenate([[snap.shaft_angle, snap.cage_angle], snap.ball_angles]).tolist()
+        msg.velocity = np.concatenate([[snap.shaft_speed, snap.cage_speed], snap.ball_speeds]).tolist()
+        return msg
