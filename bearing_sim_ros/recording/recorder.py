@@ -1,0 +1,333 @@
+"""MCAP recorder: ROS 2 messages to a file that rosbag2, Foxglove and ``rosbags`` read.
+
+    rec = Recorder("run.mcap", recording_metadata(scene, params, seed, sim.selection),
+                   attachments={"scene.yaml": scene.source_text.encode()})
+    rec.add_topic("/accel", "sensor_msgs/msg/PointCloud2", qos)
+    rec.write("/accel", msg, log_time_ns)      # never blocks, never raises
+    rec.close()                                # finalise (idempotent)
+
+The file: profile ``ros2``, ``cdr`` messages serialised by rclpy itself, ``ros2msg`` schemas with
+every dependency (``schemas.message_definition``), ``offered_qos_profiles`` channel metadata in
+rosbag2's YAML, a metadata record ``bearing_sim`` (how the recording was made) and the given
+attachments (the scene file).  Chunked and zstd-compressed.
+
+Threading: ``write`` serialises in the caller's thread and appends to a deque (atomic in CPython,
+no lock), so publishing never waits for the disk and a signal handler that interrupts ``write``
+can still call ``close``.  A background thread drains the deque into the MCAP writer.  A write
+error (full disk, path gone) stops recording: the error goes into ``status``, queued messages
+are counted as dropped, and nothing is raised into the publisher.
+
+Rotation (optional): ``rotate_bytes`` (serialised message bytes per file) and ``rotate_seconds``
+(log-time span per file) start a new file ``<stem>_001.mcap``, ``<stem>_002.mcap``... (the first
+is ``<stem>_000.mcap``).  Every file is complete on its own (schemas, channels, metadata,
+attachments), so a hard kill loses at most the file being written.
+"""
+from __future__ import annotations
+
+import atexit
+import json
+import math
+import os
+import threading
+import time
+from collections import deque
+from pathlib import Path
+
+from ..errors import UserError
+from .schemas import message_definition, qos_to_yaml
+
+PROFILE = "ros2"
+METADATA_NAME = "bearing_sim"
+MAX_QUEUE_BYTES = 512 * 1024 * 1024   # beyond this the disk is not keeping up: drop, count
+CHUNK_BYTES = 1024 * 1024             # MCAP chunk size (uncompressed)
+_POLL_S = 0.02                        # writer thread wake-up period (s)
+
+
+def _one_line(exc: BaseException) -> str:
+    return f"{exc.__class__.__name__}: {exc}".replace("\n", " ")
+
+
+def _normalise_topic(topic: str) -> str:
+    """rosbag2 records fully qualified names; a relative name is taken as in the root namespace
+    (the node should pass its publisher's resolved ``topic_name``)."""
+    return topic if topic.startswith("/") else "/" + topic
+
+
+def rotated_path(path: Path, index: int) -> Path:
+    """``run.mcap`` -> ``run_003.mcap``."""
+    return path.with_name(f"{path.stem}_{index:03d}{path.suffix or '.mcap'}")
+
+
+class Recorder:
+    """Record ROS 2 messages to MCAP off the publishing path (see the module docstring).
+
+    path: output file (``.mcap``); metadata: the ``bearing_sim`` record (str -> str);
+    attachments: name -> bytes (e.g. the scene YAML); rotate_bytes: start a new file after this
+    many bytes of messages (0 = never); rotate_seconds: after this span of log time (s, 0 = never);
+    start_time_ns: log time of the attachments (default: now; offline renders pass 0 so that the
+    file does not depend on the wall clock).
+    """
+
+    def __init__(self, path, metadata: dict, attachments: dict | None = None,
+                 rotate_bytes: int = 0, rotate_seconds: float = 0.0,
+                 start_time_ns: int | None = None):
+        if rotate_bytes < 0 or not math.isfinite(rotate_seconds) or rotate_seconds < 0:
+            raise UserError(f"rotation = {rotate_bytes!r} bytes / {rotate_seconds!r} s: "
+                            "expected numbers >= 0 (0 = no rotation)")
+        self._base = Path(path)
+        self._rotate = bool(rotate_bytes or rotate_seconds)
+        self._rotate_bytes = int(rotate_bytes)
+        self._rotate_ns = int(round(rotate_seconds * 1e9))
+        self._metadata = {str(k): str(v) for k, v in metadata.items()}
+        self._attachments = dict(attachments or {})
+        self._start_ns = time.time_ns() if start_time_ns is None else int(start_time_ns)
+        # state shared with the writer thread: single-writer fields only (see the docstring)
+        self._queue: deque = deque()
+        self._enqueued_bytes = 0          # by producers
+        self._drained_bytes = 0           # by the writer thread
+        self._dropped = 0
+        self._messages = 0
+        self._bytes = 0
+        self._error = ""
+        self._closing = False
+        self._closed = False
+        self._topics: dict = {}           # topic -> (type, qos yaml); also read by the writer
+        self._aliases: dict = {}          # topic as given -> normalised
+        self._files: list = []
+        self._file_index = 0
+        # open the first file now so that an unwritable path is the caller's error, at once
+        self._writer = None
+        self._stream = None
+        try:
+            self._open_file()
+        except OSError as exc:
+            raise UserError(f"record = {str(path)!r}: cannot write there ({_one_line(exc)})") from None
+        self._thread = threading.Thread(target=self._run, name="mcap-writer", daemon=True)
+        self._thread.start()
+        atexit.register(self.close)
+
+    # ---- producer side (any thread) -----------------------------------------------------------
+    def add_topic(self, topic: str, msg_type: str, qos) -> None:
+        """Declare a channel: ``msg_type`` like 'sensor_msgs/msg/PointCloud2'; ``qos`` the rclpy
+        QoSProfile it is published with (recorded as ``offered_qos_profiles``)."""
+        name = _normalise_topic(topic)
+        definition = message_definition(msg_type)      # fail now, in the caller, if unknown
+        self._aliases[topic] = name
+        self._aliases[name] = name
+        if name in self._topics:
+            return
+        self._topics[name] = (msg_type, qos_to_yaml(qos), definition)
+        self._queue.append(("topic", name, None, 0))
+
+    def write(self, topic: str, msg, log_time_ns: int) -> None:
+        """Queue ``msg`` for ``topic`` with log time = publish time ``log_time_ns``.  Never
+        blocks on the disk and never raises into the publisher."""
+        if self._closing or self._error:
+            self._dropped += 1
+            return
+        name = self._aliases.get(topic)
+        if name is None:
+            self._dropped += 1
+            return
+        try:
+            from rclpy.serialization import serialize_message
+
+            data = serialize_message(msg)
+        except Exception as exc:  # noqa: BLE001 - a bad message must not stop the publisher
+            self._set_error(f"cannot serialise a message on {name}: {_one_line(exc)}")
+            self._dropped += 1
+            return
+        if self._enqueued_bytes - self._drained_bytes > MAX_QUEUE_BYTES:
+            self._dropped += 1
+            return
+        self._enqueued_bytes += len(data)
+        self._queue.append(("msg", name, data, int(log_time_ns)))
+
+    def close(self) -> None:
+        """Write everything queued and finalise the file(s).  Idempotent; does not take any lock
+        that ``write`` holds, so it may run from a signal or shutdown handler."""
+        if self._closed:
+            return
+        self._closing = True
+        self._queue.append(("close", None, None, 0))
+        if threading.current_thread() is not self._thread:
+            self._thread.join()
+        self._closed = True
+        try:
+            atexit.unregister(self.close)
+        except Exception:  # noqa: BLE001 - interpreter shutdown
+            pass
+
+    @property
+    def status(self) -> dict:
+        """ok, error (one line), path (current file), messages and bytes written, dropped, files."""
+        return {"ok": not self._error, "error": self._error, "path": str(self._current_path()),
+                "messages": self._messages, "bytes": self._bytes, "dropped": self._dropped,
+                "files": [str(p) for p in self._files]}
+
+    @property
+    def closed(self) -> bool:
+        return self._closed
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    # ---- writer thread ---------------------------------------------------------------------
+    def _current_path(self) -> Path:
+        return rotated_path(self._base, self._file_index) if self._rotate else self._base
+
+    def _set_error(self, text: str) -> None:
+        if not self._error:
+            self._error = text
+
+    def _open_file(self) -> None:
+        from mcap.writer import CompressionType, Writer
+
+        path = self._current_path()
+        stream = open(path, "wb")       # noqa: SIM115 - closed in _close_file
+        try:
+            writer = Writer(stream, chunk_size=CHUNK_BYTES, compression=CompressionType.ZSTD)
+            writer.start(profile=PROFILE, library=f"bearing_sim_ros {self._metadata.get('package_version', '')}".strip())
+            meta = dict(self._metadata)
+            if self._rotate:
+                meta["file_index"] = str(self._file_index)
+            writer.add_metadata(METADATA_NAME, meta)
+            for name, data in sorted(self._attachments.items()):
+                media = "application/yaml" if name.endswith((".yaml", ".yml")) else "application/octet-stream"
+                writer.add_attachment(create_time=self._start_ns, log_time=self._start_ns, name=name,
+                                      media_type=media, data=bytes(data))
+        except BaseException:
+            stream.close()
+            raise
+        self._stream, self._writer = stream, writer
+        self._schema_ids: dict = {}
+        self._channel_ids: dict = {}
+        self._seq: dict = {}
+        self._file_bytes = 0
+        self._file_t0 = None
+        self._files.append(path)
+        for name in list(self._topics):
+            self._register(name)
+
+    def _register(self, name: str) -> None:
+        msg_type, qos_yaml, definition = self._topics[name]
+        sid = self._schema_ids.get(msg_type)
+        if sid is None:
+            sid = self._writer.register_schema(name=msg_type, encoding="ros2msg",
+                                               data=definition.encode("utf-8"))
+            self._schema_ids[msg_type] = sid
+        self._channel_ids[name] = self._writer.register_channel(
+            topic=name, message_encoding="cdr", schema_id=sid,
+            metadata={"offered_qos_profiles": qos_yaml})
+        self._seq[name] = 0
+
+    def _close_file(self) -> None:
+        writer, stream = self._writer, self._stream
+        self._writer = self._stream = None
+        if writer is None:
+            return
+        try:
+            writer.finish()
+            stream.flush()
+            os.fsync(stream.fileno())
+        finally:
+            stream.close()
+
+    def _abandon_file(self) -> None:
+        stream = self._stream
+        self._writer = self._stream = None
+        if stream is not None:
+            try:
+                stream.close()
+            except OSError:
+                pass
+
+    def _maybe_rotate(self, log_time_ns: int) -> None:
+        if not self._rotate or self._file_t0 is None:
+            return
+        if ((self._rotate_bytes and self._file_bytes >= self._rotate_bytes)
+                or (self._rotate_ns and log_time_ns - self._file_t0 >= self._rotate_ns)):
+            self._close_file()
+            self._file_index += 1
+            self._open_file()
+
+    def _handle(self, kind, name, data, log_time_ns) -> None:
+        if kind == "topic":
+            self._register(name)
+            return
+        self._maybe_rotate(log_time_ns)
+        if self._file_t0 is None:
+            self._file_t0 = log_time_ns
+        seq = self._seq[name]
+        self._seq[name] = seq + 1
+        self._writer.add_message(channel_id=self._channel_ids[name], log_time=log_time_ns,
+                                 data=data, publish_time=log_time_ns, sequence=seq)
+        self._messages += 1
+        self._bytes += len(data)
+        self._file_bytes += len(data)
+
+    def _run(self) -> None:
+        queue = self._queue
+        while True:
+            if not queue:
+                time.sleep(_POLL_S)
+                continue
+            kind, name, data, log_time_ns = queue.popleft()
+            if data is not None:
+                self._drained_bytes += len(data)
+            if kind == "close":
+                break
+            if self._error:
+                if kind == "msg":
+                    self._dropped += 1
+                continue
+            try:
+                self._handle(kind, name, data, log_time_ns)
+            except Exception as exc:  # noqa: BLE001 - full disk, path gone: record, stop, never raise
+                self._set_error(f"recording to {self._current_path()} stopped: {_one_line(exc)}")
+                if kind == "msg":
+                    self._dropped += 1
+                self._abandon_file()
+        if not self._error:
+            try:
+                self._close_file()
+            except Exception as exc:  # noqa: BLE001
+                self._set_error(f"recording to {self._current_path()} could not be finalised: {_one_line(exc)}")
+                self._abandon_file()
+        else:
+            self._abandon_file()
+
+
+# --------------------------------------------------------------------------------------------
+def _fmt(value) -> str:
+    if isinstance(value, float):
+        return repr(value)
+    return str(value)
+
+
+def recording_metadata(scene, params: dict, seed: int, selection) -> dict:
+    """The ``bearing_sim`` metadata record: how to reproduce this recording.
+
+    scene: the :class:`~bearing_sim_ros.scene.Scene`; params: the node parameters or render
+    arguments (JSON-encoded, sorted); seed; selection: ``Simulator.selection`` (tier, reason,
+    estimated error, tolerance).  Only deterministic content (no wall clock)."""
+    from .. import __version__
+
+    return {
+        "scene": scene.name,
+        "scene_description": scene.description,
+        "scene_yaml": scene.source_text,
+        "scene_path": os.path.basename(scene.source_path) if scene.source_path else "",
+        "parameters": json.dumps(params, sort_keys=True, default=_fmt),
+        "package": "bearing_sim_ros",
+        "package_version": __version__,
+        "seed": str(int(seed)),
+        "tier": str(selection.tier),
+        "tier_reason": str(selection.reason),
+        "tier_estimated_error": _fmt(float(selection.estimated_error)),
+        "tier_tolerance": _fmt(float(selection.tolerance)),
+        "ros_distro": "jazzy",
+    }
