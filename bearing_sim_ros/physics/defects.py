@@ -168,3 +168,46 @@ def waviness_gain(table, theta, shaft_angle):
         phi = theta - shaft_angle if table[k, 0] == 0 else theta
         gain += table[k, 2] * math.cos(table[k, 1] * phi + table[k, 3])
     return gain
+
+
+@njit(cache=True, inline="always")
+def add_defect_losses(table, cage_angle, spacing, nb, eps, shaft_angle, ball_spin,
+                      r_inner, r_outer, r_ball, loss_i, loss_o):
+    """Add every defect's interference loss (m) to ``loss_i`` / ``loss_o`` (per ball, inner and
+    outer contact) for balls at ``cage_angle + j * spacing + eps[j]``.
+
+    Same result as calling :func:`interference_loss` for every ball, but a race defect is only
+    tested against the ball nearest to it and that ball's two neighbours: a defect is narrower
+    than half the ball spacing (scene validation) and slip moves a ball by a few percent of the
+    spacing, so no other ball can be inside it.  That makes the cost per defect, not per ball.
+    """
+    for k in range(table.shape[0]):
+        kind = int(table[k, D_KIND])
+        half = table[k, D_HALF]
+        prof = int(table[k, D_PROFILE])
+        depth = table[k, D_DEPTH]
+        if kind == KIND_BALL:
+            j = int(table[k, D_BALL])
+            psi = ball_spin + table[k, D_ANGLE]
+            u = wrap(psi)
+            if abs(u) < half:
+                loss_o[j] += _profile_drop(prof, u, half, r_ball, table[k, D_RHO_O],
+                                           table[k, D_HMAX_O], table[k, D_RAMP_O], depth)
+            u = wrap(psi - math.pi)
+            if abs(u) < half:
+                loss_i[j] += _profile_drop(prof, u, half, r_ball, table[k, D_RHO_I],
+                                           table[k, D_HMAX_I], table[k, D_RAMP_I], depth)
+            continue
+        centre = table[k, D_ANGLE] + (shaft_angle if kind == KIND_INNER else 0.0)
+        rel = wrap(centre - cage_angle)            # where the defect is, seen from ball 0
+        nearest = int(math.floor(rel / spacing + 0.5))
+        for dj in range(-1, 2):
+            j = (nearest + dj) % nb
+            u = rel - (nearest + dj) * spacing - eps[j]    # defect centre minus ball angle
+            if abs(u) < half:
+                if kind == KIND_OUTER:
+                    loss_o[j] += _profile_drop(prof, -u, half, r_outer, table[k, D_RHO_O],
+                                               table[k, D_HMAX_O], table[k, D_RAMP_O], depth)
+                else:
+                    loss_i[j] += _profile_drop(prof, -u, half, r_inner, table[k, D_RHO_I],
+                                               table[k, D_HMAX_I], table[k, D_RAMP_I], depth)
