@@ -7,7 +7,8 @@
     rec.close()                                # finalise (idempotent)
 
 The file: profile ``ros2``, ``cdr`` messages serialised by rclpy itself, ``ros2msg`` schemas with
-every dependency (``schemas.message_definition``), ``offered_qos_profiles`` channel metadata in
+every dependency (``schemas.message_definition``; alignment padding zeroed, ``cdr.py``),
+``offered_qos_profiles`` channel metadata in
 rosbag2's YAML, a metadata record ``bearing_sim`` (how the recording was made) and the given
 attachments (the scene file).  Chunked and zstd-compressed.
 
@@ -34,6 +35,7 @@ from collections import deque
 from pathlib import Path
 
 from ..errors import UserError
+from .cdr import zero_padding
 from .schemas import message_definition, qos_to_yaml
 
 PROFILE = "ros2"
@@ -261,6 +263,9 @@ class Recorder:
         self._maybe_rotate(log_time_ns)
         if self._file_t0 is None:
             self._file_t0 = log_time_ns
+        # rclpy leaves CDR alignment padding uninitialised: zero it so that equal messages give
+        # equal bytes (byte-identical renders; better compression too)
+        data = zero_padding(data, self._topics[name][0])
         seq = self._seq[name]
         self._seq[name] = seq + 1
         self._writer.add_message(channel_id=self._channel_ids[name], log_time=log_time_ns,

@@ -1,0 +1,223 @@
+"""``bearing-sim render``: a scene to an MCAP recording, offline, as fast as the model allows.
+
+The messages are the live node's (``messages.BatchMessages``: the ``accel`` and
+``contact_forces`` waveform tables, ``state`` at ``state_rate``, ``/diagnostics`` once per
+simulated second) without DDS.  Simulation time starts at 0 (the ROS epoch), log time = the time
+the live node would publish (the end of each batch), and nothing in the file comes from the wall
+clock, so the same scene, duration, fidelity, sample rate and seed give a byte-identical file.
+
+Speed/load profile: when the scene has ``profile`` knots, the operating point follows the
+piecewise-linear profile (before the first knot: from the scene's operating point at t = 0 to the
+first knot; after the last: held).  Each batch ramps to the profile's value at its end (see
+``Simulator.advance``).  The operating point in use is recorded on ``shaft_speed``
+(std_msgs/Float64, rad/s) and ``load`` (geometry_msgs/WrenchStamped, N) at the start of every
+batch, the topics the live node subscribes to: ``bearing-sim play`` of a profile recording
+therefore also drives a live node listening on the same graph through the same profile (within
+one batch).
+"""
+from __future__ import annotations
+
+import math
+import sys
+import time
+
+import numpy as np
+
+from ..errors import UserError
+from ..messages import TOPIC_ACCEL, TOPIC_CONTACT, TOPIC_DIAGNOSTICS, TOPIC_LOAD, TOPIC_SHAFT_SPEED, \
+    TOPIC_STATE, TYPES, waveform_qos
+from ..waveform import NS
+
+BATCH_DURATION = 0.01     # s, the node's default
+STATE_RATE = 50.0         # Hz, the node's default
+NODE_NAME = "bearing_sim"
+
+
+def profile_at(scene, t: float) -> tuple:
+    """(shaft speed rad/s, (x, y) load N) of the scene's profile at time ``t`` (s)."""
+    pts = list(scene.profile)
+    if not pts:
+        return float(scene.shaft_speed), tuple(float(v) for v in scene.radial_load)
+    knots_t = [p.t for p in pts]
+    speeds = [p.shaft_speed for p in pts]
+    loads = [tuple(p.radial_load) for p in pts]
+    if knots_t[0] > 0.0:           # from the scene's operating point at t = 0
+        knots_t.insert(0, 0.0)
+        speeds.insert(0, scene.shaft_speed)
+        loads.insert(0, tuple(scene.radial_load))
+    speed = float(np.interp(t, knots_t, speeds))
+    load = tuple(float(np.interp(t, knots_t, [ld[k] for ld in loads])) for k in range(2))
+    return speed, load
+
+
+# ---- messages the node also publishes --------------------------------------------------------
+def _stamp(header, stamp_ns: int) -> None:
+    header.stamp.sec = int(stamp_ns // NS)
+    header.stamp.nanosec = int(stamp_ns % NS)
+
+
+def speed_message(speed: float):
+    from std_msgs.msg import Float64
+
+    return Float64(data=float(speed))
+
+
+def load_message(load, stamp_ns: int, frame_id: str):
+    from geometry_msgs.msg import WrenchStamped
+
+    msg = WrenchStamped()
+    _stamp(msg.header, stamp_ns)
+    msg.header.frame_id = frame_id
+    msg.wrench.force.x, msg.wrench.force.y = float(load[0]), float(load[1])
+    return msg
+
+
+def diagnostics_message(stamp_ns: int, values: dict, level: int = 0, message: str = "ok"):
+    """A DiagnosticArray with one status ``bearing_sim: simulator`` carrying ``values``."""
+    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+
+    arr = DiagnosticArray()
+    _stamp(arr.header, stamp_ns)
+    st = DiagnosticStatus(level=bytes([level]), name=f"{NODE_NAME}: simulator", message=message,
+                          hardware_id=NODE_NAME)
+    st.values = [KeyValue(key=str(k), value=str(v)) for k, v in values.items()]
+    arr.status = [st]
+    return arr
+
+
+def _qos_for(topic: str, batch_duration: float):
+    from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+    if topic in (TOPIC_ACCEL, TOPIC_CONTACT):
+        return waveform_qos(batch_duration)
+    # small status/command topics: reliable, volatile, keep-last 10 (rclpy's default profile)
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
+                      reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
+
+
+class _Progress:
+    """A one-line progress bar on stderr, only when stderr is a terminal."""
+
+    def __init__(self, total: float, enabled: bool):
+        self.total, self.enabled = total, enabled
+        self.t_wall0 = time.perf_counter()
+        self.last = 0.0
+
+    def update(self, done: float, force: bool = False) -> None:
+        if not self.enabled:
+            return
+        now = time.perf_counter()
+        if not force and now - self.last < 0.1:
+            return
+        self.last = now
+        frac = min(1.0, done / self.total)
+        width = 30
+        fill = int(round(frac * width))
+        wall = max(now - self.t_wall0, 1e-9)
+        sys.stderr.write(f"\rrender [{'#' * fill}{'.' * (width - fill)}] {100 * frac:5.1f}% "
+                         f"{done:7.2f}/{self.total:.2f} s  {done / wall:6.1f}x real time")
+        sys.stderr.flush()
+
+    def done(self) -> None:
+        if self.enabled:
+            sys.stderr.write("\n")
+            sys.stderr.flush()
+
+
+def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
+           sample_rate: float = 15000.0, solver: str = "default",
+           batch_duration: float = BATCH_DURATION, state_rate: float = STATE_RATE,
+           progress: bool | None = None) -> dict:
+    """Render ``duration`` seconds of ``scene`` (Scene, shipped name or YAML path) to ``out``.
+
+    Returns a summary: messages, bytes, wall time (s), real-time factor, recorder status."""
+    from .. import Simulator
+    from ..scene import load_scene
+    from .recorder import Recorder, recording_metadata
+
+    if not hasattr(scene, "bearing"):
+        scene = load_scene(scene)
+    if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
+        raise UserError(f"--duration = {duration!r}: expected seconds > 0")
+    sim = Simulator(scene, sample_rate=sample_rate, fidelity=fidelity, seed=seed, solver=solver)
+    from ..messages import BatchMessages
+
+    msgs = BatchMessages(sim, start_ns=0)
+    n_batch = max(1, int(round(sample_rate * batch_duration)))
+    total = int(round(duration * sample_rate))
+    params = {"mode": "render", "duration": float(duration), "fidelity": fidelity, "seed": int(seed),
+              "sample_rate": float(sample_rate), "solver": solver, "batch_duration": float(batch_duration),
+              "state_rate": float(state_rate), "start_time_ns": 0,
+              "command": (f"bearing-sim render {scene.name} --duration {duration:g} --fidelity {fidelity} "
+                          f"--seed {seed} --sample-rate {sample_rate:g} --solver {solver}")}
+    meta = recording_metadata(scene, params, seed, sim.selection)
+    attachments = {f"{scene.name}.yaml": scene.source_text.encode("utf-8")} if scene.source_text else {}
+    rec = Recorder(out, meta, attachments, start_time_ns=0)
+    topics = [TOPIC_SHAFT_SPEED, TOPIC_LOAD, TOPIC_ACCEL, TOPIC_CONTACT, TOPIC_STATE, TOPIC_DIAGNOSTICS]
+    for topic in topics:
+        rec.add_topic(topic, TYPES[topic], _qos_for(topic, batch_duration))
+
+    bar = _Progress(total / sample_rate, sys.stderr.isatty() if progress is None else progress)
+    t_wall0 = time.perf_counter()
+    frame = msgs.frame_id
+    skid_sum = {}
+    skid_n = 0
+    next_diag_s = 1
+    done = 0
+    try:
+        while done < total:
+            n = min(n_batch, total - done)
+            t0_ns = msgs.stamp_ns(done)
+            end_t = (done + n) / sample_rate
+            speed, load = profile_at(scene, end_t)
+            rec.write(TOPIC_SHAFT_SPEED, speed_message(speed), t0_ns)
+            rec.write(TOPIC_LOAD, load_message(load, t0_ns, frame), t0_ns)
+            batch = sim.advance(n, shaft_speed=speed, radial_load=load)
+            done += n
+            pub_ns = msgs.stamp_ns(done)         # the live node publishes when the batch is complete
+            rec.write(TOPIC_ACCEL, msgs.accel(batch), pub_ns)
+            rec.write(TOPIC_CONTACT, msgs.contact_forces(batch), pub_ns)
+            if math.floor(done * state_rate / sample_rate) > math.floor((done - n) * state_rate / sample_rate):
+                rec.write(TOPIC_STATE, msgs.state(pub_ns), pub_ns)
+            for key, val in batch.extras.items():
+                skid_sum[key] = skid_sum.get(key, 0.0) + float(np.mean(val))
+            skid_n += 1
+            while done >= next_diag_s * sample_rate:
+                values = {"tier": sim.tier, "tier_reason": sim.selection.reason,
+                          "tier_estimated_error": f"{sim.selection.estimated_error:.3g}",
+                          "real_time_factor": "offline render", "overruns": 0, "lag_s": 0,
+                          "rejected_inputs": 0, "shaft_speed_rad_s": f"{speed:.6g}",
+                          "radial_load_n": f"{load[0]:.6g} {load[1]:.6g}",
+                          "recording": "ok"}
+                for key, val in skid_sum.items():
+                    values[f"{key}_ratio"] = f"{val / max(skid_n, 1):.4g}"
+                skid_sum, skid_n = {}, 0
+                stamp = next_diag_s * NS
+                rec.write(TOPIC_DIAGNOSTICS, diagnostics_message(stamp, values, 0, "offline render"), pub_ns)
+                next_diag_s += 1
+            bar.update(done / sample_rate)
+    finally:
+        rec.close()
+        bar.update(done / sample_rate, force=True)
+        bar.done()
+    wall = time.perf_counter() - t_wall0
+    status = rec.status
+    if not status["ok"]:
+        raise UserError(f"--out = {str(out)!r}: {status['error']}")
+    return {"messages": status["messages"], "bytes": status["bytes"], "wall_s": wall,
+            "signal_s": total / sample_rate, "real_time_factor": (total / sample_rate) / max(wall, 1e-9),
+            "tier": sim.tier, "path": status["path"]}
+
+
+def render_command(args) -> int:
+    """CLI entry: ``bearing-sim render S --duration SEC --out F.mcap [...]``."""
+    from ..scene import load_scene
+
+    scene = load_scene(args.scene)
+    out = str(args.out)
+    summary = render(scene, float(args.duration), out, fidelity=args.fidelity, seed=int(args.seed),
+                     sample_rate=float(args.sample_rate), solver=getattr(args, "solver", "default"))
+    print(f"{summary['path']}: {summary['signal_s']:g} s of {scene.name} ({summary['tier']} tier), "
+          f"{summary['messages']} messages, {summary['bytes'] / 1e6:.1f} MB of messages, "
+          f"rendered in {summary['wall_s']:.2f} s = {summary['real_time_factor']:.1f}x real time")
+    return 0
