@@ -28,6 +28,7 @@ from .rng import uniform
 
 G = 9.80665
 NSTATE = 10   # xs, ys, xp, yp, yr, vxs, vys, vxp, vyp, vyr
+ANCHOR_STEPS = 4096   # re-anchor the rotated cage direction to cos/sin this often
 NINPUT = 4    # residual bearing force on the pedestal (x, y); external force on the shaft (x, y)
 
 # geometry vector layout
@@ -134,9 +135,10 @@ def bearing_force(geo, cj, sj, dtab, wtab, seed, dx, dy, shaft_angle, cage_angle
 
 
 @njit(cache=True)
-def advance_kernel(x, ang, n, m, s0, s1, l0x, l0y, l1x, l1y, h, geo, cj, sj, dtab, wtab, seed,
-                   slip_cache, kb, phi_t, g0_t, g1_t, cacc_t, dacc_t, out_acc, out_q, out_cage):
-    """ETD2 over ``n`` steps of ``h`` s.  x: state (10,), ang: (shaft, cage, ball spin) angles;
+def advance_kernel(x, ang, trig, step, n, m, s0, s1, l0x, l0y, l1x, l1y, h, geo, cj, sj, dtab, wtab,
+                   seed, slip_cache, kb, phi_t, g0_t, g1_t, cacc_t, dacc_t, out_acc, out_q, out_cage):
+    """ETD2 over ``n`` steps of ``h`` s.  x: state (10,), ang: (shaft, cage, ball spin) angles,
+    trig: (cos, sin) of the cage angle, step: (1,) int64 steps taken since t = 0;
     the propagators come transposed (``phi_t = Phi.T`` etc.).  Speed and load ramp linearly
     from (s0, l0) to (s1, l1).  Writes the sensor-mount acceleration of every step to out_acc
     (n, 2) and ball loads / cage speed of every m-th step to out_q (n // m, Nb) and out_cage.
@@ -171,8 +173,10 @@ def advance_kernel(x, ang, n, m, s0, s1, l0x, l0y, l1x, l1y, h, geo, cj, sj, dta
     kq = 0.0
     fq = 0.0
     inv_n = 1.0 / n
-    cage_cos = math.cos(ang[1])
-    cage_sin = math.sin(ang[1])
+    # cos/sin of the cage angle advance by rotation (no trig per step) and are re-anchored to
+    # the angle every ANCHOR_STEPS steps counted from t = 0, so chunking cannot change them
+    cage_cos = trig[0]
+    cage_sin = trig[1]
     ball_geometry(geo, cj, sj, dtab, wtab, seed, ang[0], ang[1], cage_cos, cage_sin, ang[2],
                   slip_cache, eps, loss_i, loss_o, gc, gs, goff)
     for i in range(n):
@@ -230,7 +234,12 @@ def advance_kernel(x, ang, n, m, s0, s1, l0x, l0y, l1x, l1y, h, geo, cj, sj, dta
         ang[0] += dth
         ang[1] += r_cage * dth
         ang[2] += r_spin * dth
-        cage_cos, cage_sin = _rotate(cage_cos, cage_sin, r_cage * dth)
+        step[0] += 1
+        if step[0] % ANCHOR_STEPS == 0:
+            cage_cos = math.cos(ang[1])
+            cage_sin = math.sin(ang[1])
+        else:
+            cage_cos, cage_sin = _rotate(cage_cos, cage_sin, r_cage * dth)
         # (same as ball_geometry, spelled out for the reason in the docstring)
         if slip_amp > 0.0:
             qk = ang[1] / spacing
@@ -287,6 +296,8 @@ def advance_kernel(x, ang, n, m, s0, s1, l0x, l0y, l1x, l1y, h, geo, cj, sj, dta
             du = us[k] - u[k]
             for r in range(NSTATE):
                 x[r] += g1_t[k, r] * du
+    trig[0] = cage_cos
+    trig[1] = cage_sin
 
 
 class KinematicModel:
@@ -324,6 +335,8 @@ class KinematicModel:
         self.wtab = waviness_table(scene.waviness)
         self.angles = np.zeros(3)   # shaft, cage, ball spin (rad)
         self.slip_cache = np.full((nb, 3), np.nan)
+        self.trig = np.array([1.0, 0.0])              # cos, sin of the cage angle
+        self.step = np.zeros(1, dtype=np.int64)
         self.x = np.zeros(NSTATE)
         self._lin_load = None
         self._linearise(np.asarray(radial_load, dtype=float), initial=True)
@@ -455,13 +468,22 @@ class KinematicModel:
         acc = np.empty((n_steps, 2))
         q = np.empty((n_steps // m, nb))
         cage = np.empty(n_steps // m)
-        advance_kernel(self.x, self.angles, n_steps, m, float(speed0), float(speed1),
+        advance_kernel(self.x, self.angles, self.trig, self.step, n_steps, m, float(speed0), float(speed1),
                        float(load0[0]), float(load0[1]), float(load1[0]), float(load1[1]),
                        self.h, self.geo, self.cj, self.sj, self.dtab, self.wtab, self.seed,
                        self.slip_cache, self.kb, self.phi_t, self.g0_t, self.g1_t, self.cacc_t,
                        self.dacc_t, acc, q, cage)
         self._last_speed = float(speed1)
         return TierOutput(accel=acc, inner_force=q, outer_force=q.copy(), cage_speed=cage)
+
+    def adopt_state(self, other) -> None:
+        """Continue from another tier's state (same ``x`` layout and ``angles``): the switch
+        of fidelity tiers keeps positions, velocities and angles, so the signal has no seam."""
+        self.x[:] = other.x
+        self.angles[:] = other.angles
+        self.step[:] = getattr(other, "step", self.step)
+        self.trig[:] = (math.cos(self.angles[1]), math.sin(self.angles[1]))
+        self._last_speed = getattr(other, "_last_speed", self.scene.shaft_speed)
 
     def snapshot(self) -> KinematicSnapshot:
         nb = int(self.geo[P_NB])

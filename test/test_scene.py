@@ -1,0 +1,108 @@
+"""Scene loading: every shipped scene loads; every mistake is one line naming key, value and
+what is allowed; the CLI turns it into exit status 2 without a traceback."""
+import math
+import subprocess
+import textwrap
+
+import pytest
+
+from bearing_sim_ros.errors import SceneError
+from bearing_sim_ros.scene import load_scene, shipped_scenes
+
+CONTRACT_SCENES = {
+    "er16k_healthy", "er16k_inner_race", "er16k_outer_race", "er16k_skidding",
+    "cwru_6205_normal", "cwru_6205_ir007", "cwru_6205_or007_6", "cwru_6205_b007",
+    "b6307_seed001", "b6205_ball_inner", "b6205_ball_outer", "b6205_inner_outer",
+}
+
+GOOD = textwrap.dedent("""\
+    bearing: ER-16K
+    structure:
+      shaft: {mass: 1.0, stiffness: 4.24e4, damping: 1376}
+      pedestal: {mass: 2.5, stiffness: 1.51e7, damping: 2210}
+    operating_point: {shaft_speed_rpm: 1600, radial_load: [0.0, -50.0]}
+    defects:
+      - {kind: outer, width_mm: 0.6, depth_mm: 0.25, clock: 6}
+    """)
+
+
+def test_contract_scenes_are_shipped_and_load():
+    assert CONTRACT_SCENES <= set(shipped_scenes())
+    for name in shipped_scenes():
+        scene = load_scene(name)
+        assert scene.shaft_speed > 0 and scene.bearing.balls >= 3
+
+
+def test_operating_points_match_the_contract():
+    rpm = lambda s: s.shaft_speed * 60 / (2 * math.pi)  # noqa: E731
+    s = load_scene("er16k_outer_race")
+    assert rpm(s) == pytest.approx(1600) and s.radial_load == (0.0, -50.0)
+    d = s.defects[0]
+    assert (d.kind, d.width, d.depth) == ("outer", pytest.approx(0.6e-3), pytest.approx(0.25e-3))
+    assert d.angle == pytest.approx(-math.pi / 2)          # bottom of the load zone
+    s = load_scene("er16k_skidding")
+    assert rpm(s) == pytest.approx(2000) and s.radial_load == (0.0, -200.0)
+    s = load_scene("cwru_6205_or007_6")
+    assert rpm(s) == pytest.approx(1797) and s.defects[0].width == pytest.approx(0.1778e-3)
+    s = load_scene("b6205_ball_inner")
+    assert rpm(s) == pytest.approx(1750) and s.radial_load == (0.0, -2000.0)
+    assert {d.kind for d in s.defects} == {"ball", "inner"}
+
+
+def test_numbers_in_exponent_form_are_floats(tmp_path):
+    path = tmp_path / "s.yaml"
+    path.write_text(GOOD)
+    assert load_scene(path).structure.shaft_stiffness == 4.24e4
+
+
+@pytest.mark.parametrize("old,new,expect", [
+    ("bearing: ER-16K", "bearing: ER-99", ["bearing", "ER-99", "ER-16K"]),
+    ("mass: 1.0,", "mass: -1.0,", ["structure.shaft.mass", "-1.0", "["]),
+    ("mass: 1.0,", "mass: heavy,", ["structure.shaft.mass", "heavy", "number"]),
+    ("width_mm: 0.6", "width_mm: 9.0", ["defects[0].width_mm", "9.0", "]"]),
+    ("depth_mm: 0.25", "depth_mm: 5.0", ["defects[0].depth_mm", "5.0", "]"]),
+    ("kind: outer", "kind: cage", ["defects[0].kind", "cage", "inner, outer, ball"]),
+    ("shaft_speed_rpm: 1600", "shaft_speed_rpm: 1e9", ["shaft_speed_rpm", "1000000000", "60000"]),
+    ("radial_load: [0.0, -50.0]", "radial_load: [0.0]", ["radial_load", "2 numbers"]),
+    ("clock: 6", "clock: 6, colour: red", ["defects[0].colour", "unknown key"]),
+    ("operating_point:", "operating_pont:", ["operating_pont", "unknown key"]),
+])
+def test_bad_scene_is_one_line_naming_key_value_and_allowed(tmp_path, old, new, expect):
+    path = tmp_path / "bad.yaml"
+    assert old in GOOD
+    path.write_text(GOOD.replace(old, new))
+    with pytest.raises(SceneError) as exc:
+        load_scene(path)
+    msg = str(exc.value)
+    assert "\n" not in msg
+    for piece in expect:
+        assert piece in msg, msg
+
+
+def test_missing_section_and_broken_yaml(tmp_path):
+    path = tmp_path / "s.yaml"
+    path.write_text(GOOD.replace("operating_point: {shaft_speed_rpm: 1600, radial_load: [0.0, -50.0]}\n", ""))
+    with pytest.raises(SceneError, match="operating_point: missing"):
+        load_scene(path)
+    path.write_text("bearing: [unclosed\n")
+    with pytest.raises(SceneError, match="not valid YAML"):
+        load_scene(path)
+    with pytest.raises(SceneError, match="unknown scene"):
+        load_scene("no_such_scene")
+
+
+def test_cli_bad_scene_exit_2_one_line(tmp_path, bearing_sim_exe):
+    path = tmp_path / "bad.yaml"
+    path.write_text(GOOD.replace("mass: 1.0,", "mass: -1.0,"))
+    out = subprocess.run([bearing_sim_exe, "render", str(path), "--duration", "0.1",
+                          "--out", str(tmp_path / "x.mcap")], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 2, out.stderr
+    lines = [ln for ln in out.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1 and "structure.shaft.mass" in lines[0] and "Traceback" not in out.stderr
+
+
+def test_cli_scenes_lists_one_line_each(bearing_sim_exe):
+    out = subprocess.run([bearing_sim_exe, "scenes"], capture_output=True, text=True, timeout=60)
+    assert out.returncode == 0
+    names = [ln.split()[0] for ln in out.stdout.splitlines()]
+    assert set(names) == set(shipped_scenes())
