@@ -7,9 +7,35 @@ into output samples (anti-aliasing, decimation, sensor).
 """
 from __future__ import annotations
 
+import hashlib
+import os
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
+
+
+def _isolate_numba_cache() -> None:
+    """Give the compiled kernels a cache folder keyed by the physics sources.
+
+    numba's ``cache=True`` checks only the source file of the function it caches, not the
+    modules it calls (e.g. a kernel in kinematic.py inlining defects.py): after an edit or an
+    upgrade it could load a stale kernel.  A folder per hash of every physics source makes any
+    change recompile once, and keeps start-up fast afterwards.
+    """
+    import numba.core.config as nb_config
+
+    here = Path(__file__).resolve().parent
+    digest = hashlib.sha256()
+    for src in sorted(here.rglob("*.py")):
+        digest.update(src.name.encode())
+        digest.update(src.read_bytes())
+    base = nb_config.CACHE_DIR or os.path.join(
+        os.environ.get("XDG_CACHE_HOME", os.path.expanduser("~/.cache")), "bearing_sim_ros", "numba")
+    nb_config.CACHE_DIR = os.path.join(base, digest.hexdigest()[:16])
+
+
+_isolate_numba_cache()
 
 
 @dataclass
