@@ -23,7 +23,9 @@ import numpy as np
 from numba import njit
 
 from . import KinematicSnapshot, TierOutput
-from .defects import add_defect_losses, defect_table, waviness_gain
+from .defects import (D_ANGLE, D_BALL, D_DEPTH, D_HALF, D_HMAX_I, D_HMAX_O, D_KIND, D_PROFILE,
+                      D_RAMP_I, D_RAMP_O, D_RHO_I, D_RHO_O, KIND_BALL, KIND_INNER, _profile_drop,
+                      add_defect_losses, defect_table, waviness_gain, wrap)
 from .rng import uniform
 
 G = 9.80665
@@ -166,7 +168,8 @@ def advance_kernel(x, ang, trig, step, n, m, s0, s1, l0x, l0y, l1x, l1y, h, geo,
     cr = geo[P_CR]
     spacing = 2.0 * math.pi / nb
     slip_amp = geo[P_SLIP] * spacing
-    has_defects = dtab.shape[0] > 0
+    n_def = dtab.shape[0]
+    has_defects = n_def > 0
     has_wav = wtab.shape[0] > 0
     r_in, r_out, r_ball = geo[P_RI], geo[P_RO], geo[P_RB]
     qk = 0.0
@@ -264,13 +267,39 @@ def advance_kernel(x, ang, trig, step, n, m, s0, s1, l0x, l0y, l1x, l1y, h, geo,
             gs[j] = sn
             goff[j] = cr
         if has_defects:
-            for j in range(nb):
-                loss_i[j] = 0.0
-                loss_o[j] = 0.0
-            add_defect_losses(dtab, ang[1], spacing, nb, eps, ang[0], ang[2], r_in, r_out, r_ball,
-                              loss_i, loss_o)
-            for j in range(nb):
-                goff[j] += loss_i[j] + loss_o[j]
+            # add_defect_losses, spelled out (see the docstring): each defect is tested against
+            # the ball nearest to it and that ball's neighbours only
+            for k in range(n_def):
+                kind = int(dtab[k, D_KIND])
+                half = dtab[k, D_HALF]
+                prof = int(dtab[k, D_PROFILE])
+                depth = dtab[k, D_DEPTH]
+                if kind == KIND_BALL:
+                    j = int(dtab[k, D_BALL])
+                    psi = ang[2] + dtab[k, D_ANGLE]
+                    uu = wrap(psi)
+                    if abs(uu) < half:
+                        goff[j] += _profile_drop(prof, uu, half, r_ball, dtab[k, D_RHO_O],
+                                                 dtab[k, D_HMAX_O], dtab[k, D_RAMP_O], depth)
+                    uu = wrap(psi - math.pi)
+                    if abs(uu) < half:
+                        goff[j] += _profile_drop(prof, uu, half, r_ball, dtab[k, D_RHO_I],
+                                                 dtab[k, D_HMAX_I], dtab[k, D_RAMP_I], depth)
+                    continue
+                inner = kind == KIND_INNER
+                centre = dtab[k, D_ANGLE] + (ang[0] if inner else 0.0)
+                rel = wrap(centre - ang[1])
+                nearest = int(math.floor(rel / spacing + 0.5))
+                for dj in range(-1, 2):
+                    j = (nearest + dj) % nb
+                    uu = rel - (nearest + dj) * spacing - eps[j]
+                    if abs(uu) < half:
+                        if inner:
+                            goff[j] += _profile_drop(prof, -uu, half, r_in, dtab[k, D_RHO_I],
+                                                     dtab[k, D_HMAX_I], dtab[k, D_RAMP_I], depth)
+                        else:
+                            goff[j] += _profile_drop(prof, -uu, half, r_out, dtab[k, D_RHO_O],
+                                                     dtab[k, D_HMAX_O], dtab[k, D_RAMP_O], depth)
         if has_wav:
             for j in range(nb):
                 goff[j] -= waviness_gain(wtab, ang[1] + j * spacing + eps[j], ang[0])

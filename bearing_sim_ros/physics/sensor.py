@@ -47,16 +47,31 @@ def _biquad(x, b, a, zi):
 
 @njit(cache=True)
 def _polyphase(buf, start, taps, m, first_pos, n_out, out):
-    """out[i] = sum_t taps[t] * buf[first_pos + i*m + t - start]."""
+    """out[i, c] = sum_t taps[t] * buf[first_pos + i*m + t - start, c] for two columns.
+
+    Four partial sums (even/odd taps x two columns) so the additions do not wait on each
+    other: a single running sum is limited by add latency (measured ~3x slower)."""
     nt = taps.shape[0]
-    cols = buf.shape[1]
     for i in range(n_out):
         p = first_pos + i * m - start
-        for c in range(cols):
-            acc = 0.0
-            for t in range(nt):
-                acc += taps[t] * buf[p + t, c]
-            out[i, c] = acc
+        a0 = 0.0
+        a1 = 0.0
+        b0 = 0.0
+        b1 = 0.0
+        t = 0
+        while t + 1 < nt:
+            ta = taps[t]
+            tb = taps[t + 1]
+            a0 += ta * buf[p + t, 0]
+            a1 += ta * buf[p + t, 1]
+            b0 += tb * buf[p + t + 1, 0]
+            b1 += tb * buf[p + t + 1, 1]
+            t += 2
+        if t < nt:
+            a0 += taps[t] * buf[p + t, 0]
+            a1 += taps[t] * buf[p + t, 1]
+        out[i, 0] = a0 + b0
+        out[i, 1] = a1 + b1
 
 
 @njit(cache=True)

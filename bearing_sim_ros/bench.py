@@ -1,0 +1,290 @@
+"""``bearing-sim bench``: speed against error (a work-precision study).
+
+For a fixed set of scenarios and for each tier / solver setting, the study measures the
+real-time factor on one core (median of repeats, after compilation) and the error against the
+``"reference"`` solver on the same scenario, seed and duration.  Sensor noise is switched off
+so that the error is the model's and the integrator's, not the dice's.
+
+Error metrics (all relative to the reference; README "Speed against error"):
+
+    rms        |RMS(a) - RMS(a_ref)| / RMS(a_ref) of accel_y
+    lines      largest relative difference of the envelope line heights at the scene's fault
+               frequencies (BPFO for a healthy scene: its ball-pass line)
+    cage       |mean cage speed - reference| / reference
+    skid       |cage skid ratio - reference| in percentage points
+    waveform   ||a - a_ref|| / ||a_ref|| over the first 20 ms after settling (phase-sensitive:
+               a model whose balls slip differently drifts in phase; this is the strictest)
+    error      max(rms, lines, cage): the number the plot and the fidelity choice use
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+import platform
+import statistics as stats
+import time
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from .analysis.envelope import fault_lines
+from .errors import UserError
+from .scene import RPM, Sensor, load_scene
+
+
+@dataclass(frozen=True)
+class Scenario:
+    label: str
+    scene: str
+    rpm: float | None = None
+    load_n: float | None = None      # downward radial load (N)
+
+    def build(self):
+        scene = load_scene(self.scene)
+        changes = {"sensor": replace(scene.sensor, noise_density=0.0)}
+        if self.rpm is not None:
+            changes["shaft_speed"] = self.rpm * RPM
+        if self.load_n is not None:
+            changes["radial_load"] = (0.0, -float(self.load_n))
+        return replace(scene, **changes)
+
+
+@dataclass(frozen=True)
+class Config:
+    label: str
+    family: str              # "kinematic", "skidding default", "skidding rk4", "reference"
+    fidelity: str
+    kwargs: tuple = ()       # extra Simulator keyword arguments, as (key, value) pairs
+
+    def simulator(self, scene, sample_rate, seed):
+        from .simulator import Simulator
+
+        return Simulator(scene, sample_rate=sample_rate, fidelity=self.fidelity, seed=seed, **dict(self.kwargs))
+
+
+SCENARIOS = [
+    Scenario("ER-16K healthy 1600 rpm 50 N", "er16k_healthy"),
+    Scenario("ER-16K inner 1600 rpm 50 N", "er16k_inner_race"),
+    Scenario("ER-16K outer 1600 rpm 50 N", "er16k_outer_race"),
+    Scenario("ER-16K healthy 2000 rpm 200 N", "er16k_skidding"),
+    Scenario("ER-16K healthy 2000 rpm 2000 N", "er16k_skidding", load_n=2000.0),
+    Scenario("ER-16K healthy 10000 rpm 10 N", "er16k_skidding", rpm=10000.0, load_n=10.0),
+    Scenario("CWRU 6205 outer 1797 rpm", "cwru_6205_or007_6"),
+    Scenario("6205 ball+outer 1750 rpm 2000 N", "b6205_ball_outer"),
+]
+QUICK_SCENARIOS = [SCENARIOS[2], SCENARIOS[3]]
+
+KINEMATIC = [Config(f"kinematic x{m}", "kinematic", "kinematic", (("oversample", m),)) for m in (1, 2, 4, 8)]
+
+
+def skidding_configs(quick: bool) -> list:
+    """Settings of the skidding tier's solvers, if the tier is available: its module may list
+    them as ``BENCH_CONFIGS`` [(label, family, kwargs dict)]; else rk4 at three steps."""
+    try:
+        from .physics import skidding
+    except ImportError:
+        return []
+    listed = getattr(skidding, "BENCH_CONFIGS", None)
+    if listed is None:
+        listed = [(f"rk4 h={h:g}", "skidding rk4", {"solver": "rk4", "rk4_step": h}) for h in (1e-5, 5e-6, 2.5e-6)]
+        listed.append(("default", "skidding default", {"solver": "default"}))
+    if quick:
+        listed = listed[:1] + [c for c in listed if c[1] == "skidding default"][:1]
+    return [Config(label, family, "skidding", tuple(kw.items())) for label, family, kw in listed]
+
+
+def reference_config() -> Config:
+    try:
+        from .physics import skidding  # noqa: F401
+        return Config("reference", "reference", "skidding", (("solver", "reference"),))
+    except ImportError:
+        return Config("reference (kinematic x32)", "reference", "kinematic", (("oversample", 32),))
+
+
+@dataclass
+class Run:
+    accel: np.ndarray
+    cage_speed: float
+    cage_skid: float
+    wall: float              # s per second of signal (median)
+    repeats: list
+
+
+def run_config(cfg: Config, scene, sample_rate: float, settle: float, seconds: float, repeats: int,
+               seed: int = 0) -> Run:
+    """Simulate ``settle + seconds`` and time the ``seconds`` part, ``repeats`` times."""
+    n_settle = int(settle * sample_rate)
+    n = int(seconds * sample_rate)
+    walls, result = [], None
+    warm = cfg.simulator(scene, sample_rate, seed)          # compile outside the timing
+    warm.advance(max(1, int(0.002 * sample_rate)))
+    for _ in range(repeats):
+        sim = cfg.simulator(scene, sample_rate, seed)
+        sim.advance(n_settle)
+        t0 = time.perf_counter()
+        batch = sim.advance(n)
+        walls.append(time.perf_counter() - t0)
+        result = batch
+    skid = result.extras.get("cage_skid")
+    return Run(accel=result.accel[:, -1].copy(), cage_speed=float(np.mean(result.cage_speed)),
+               cage_skid=float(np.mean(skid)) if skid is not None else 0.0,
+               wall=stats.median(walls) / seconds, repeats=[w / seconds for w in walls])
+
+
+def scene_lines(scene) -> list:
+    kinds = {d.kind for d in scene.defects}
+    keys = [k for kind, k in (("outer", "bpfo"), ("inner", "bpfi"), ("ball", "2bsf")) if kind in kinds]
+    return keys or ["bpfo"]
+
+
+def errors(run: Run, ref: Run, scene, sample_rate: float) -> dict:
+    a, r = run.accel, ref.accel
+    rms_a, rms_r = float(np.sqrt(np.mean(a * a))), float(np.sqrt(np.mean(r * r)))
+    ff = scene.bearing.fault_frequencies(scene.shaft_hz)
+    la, lr = fault_lines(a, sample_rate, ff), fault_lines(r, sample_rate, ff)
+    line_err = max(abs(la[k].height - lr[k].height) / max(lr[k].height, 1e-12) for k in scene_lines(scene))
+    w = min(a.size, int(0.02 * sample_rate))
+    wave = float(np.linalg.norm(a[:w] - r[:w]) / max(np.linalg.norm(r[:w]), 1e-12))
+    out = {
+        "rms": abs(rms_a - rms_r) / max(rms_r, 1e-12),
+        "lines": float(line_err),
+        "cage": abs(run.cage_speed - ref.cage_speed) / max(abs(ref.cage_speed), 1e-12),
+        "skid": abs(run.cage_skid - ref.cage_skid),
+        "waveform": wave,
+    }
+    out["error"] = max(out["rms"], out["lines"], out["cage"])
+    return out
+
+
+def study(quick: bool = False, sample_rate: float = 15000.0, progress=None) -> dict:
+    scenarios = QUICK_SCENARIOS if quick else SCENARIOS
+    settle, seconds, repeats = (0.1, 0.4, 1) if quick else (0.3, 2.0, 3)
+    configs = KINEMATIC[1:3] if quick else KINEMATIC
+    configs = configs + skidding_configs(quick)
+    ref_cfg = reference_config()
+    rows = []
+    for sc in scenarios:
+        scene = sc.build()
+        ref = run_config(ref_cfg, scene, sample_rate, settle, seconds, 1)
+        if progress:
+            progress(f"{sc.label}: reference {1 / ref.wall:.2f}x real time")
+        for cfg in configs:
+            run = run_config(cfg, scene, sample_rate, settle, seconds, repeats)
+            err = errors(run, ref, scene, sample_rate)
+            row = {"scenario": sc.label, "config": cfg.label, "family": cfg.family,
+                   "real_time_factor": 1.0 / run.wall, "rtf_repeats": [1.0 / w for w in run.repeats],
+                   **err, "cage_skid": run.cage_skid, "reference_cage_skid": ref.cage_skid,
+                   "reference_real_time_factor": 1.0 / ref.wall}
+            rows.append(row)
+            if progress:
+                progress(f"  {cfg.label:<24} {row['real_time_factor']:8.1f}x  error {row['error']:.2%}")
+    return {
+        "machine": machine_facts(),
+        "sample_rate": sample_rate,
+        "seconds": seconds,
+        "settle": settle,
+        "repeats": repeats,
+        "reference": ref_cfg.label,
+        "quick": quick,
+        "rows": rows,
+    }
+
+
+def machine_facts() -> dict:
+    cpu = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as fh:
+            for line in fh:
+                if line.startswith("model name"):
+                    cpu = line.split(":", 1)[1].strip()
+                    break
+    except OSError:
+        pass
+    import numba
+
+    return {"cpu": cpu, "cores": os.cpu_count(), "python": platform.python_version(),
+            "numpy": np.__version__, "numba": numba.__version__, "threads_used": 1}
+
+
+def markdown(result: dict) -> str:
+    m = result["machine"]
+    lines = [
+        "# Speed against error",
+        "",
+        f"Machine: {m['cpu']}, {m['cores']} cores (one used), Python {m['python']}, numba {m['numba']}. "
+        f"{result['seconds']:g} s of signal at {result['sample_rate']:g} Hz after {result['settle']:g} s of "
+        f"settling, median of {result['repeats']} run(s); errors against `{result['reference']}`, sensor noise off.",
+        "",
+        "| scenario | setting | real-time factor | error | RMS | lines | cage speed | cage skid (pp) | waveform |",
+        "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |",
+    ]
+    for r in result["rows"]:
+        lines.append(
+            f"| {r['scenario']} | {r['config']} | {r['real_time_factor']:.1f}x | {r['error']:.2%} | {r['rms']:.2%} | "
+            f"{r['lines']:.2%} | {r['cage']:.2%} | {r['skid']:.2f} | {r['waveform']:.2f} |")
+    lines.append("")
+    return "\n".join(lines)
+
+
+def plot(result: dict, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(8, 5.5))
+    families = sorted({r["family"] for r in result["rows"]})
+    markers = dict(zip(families, "osD^v<>"))
+    scenarios = sorted({r["scenario"] for r in result["rows"]})
+    colors = dict(zip(scenarios, plt.cm.tab10.colors))
+    for r in result["rows"]:
+        ax.loglog(r["real_time_factor"], max(r["error"], 1e-5), markers[r["family"]],
+                  color=colors[r["scenario"]], alpha=0.85)
+    for sc in scenarios:
+        for fam in families:
+            pts = sorted((r["real_time_factor"], max(r["error"], 1e-5)) for r in result["rows"]
+                         if r["scenario"] == sc and r["family"] == fam)
+            if len(pts) > 1:
+                ax.loglog(*zip(*pts), "-", color=colors[sc], alpha=0.4)
+    ax.axvline(1.0, color="k", lw=0.8, ls=":")
+    ax.axhline(0.01, color="k", lw=0.8, ls=":")
+    ax.set_xlabel("real-time factor (x real time, one core)")
+    ax.set_ylabel("error against the reference (max of RMS, line heights, cage speed)")
+    ax.set_title("Speed against error")
+    from matplotlib.lines import Line2D
+
+    handles = [Line2D([], [], marker=markers[f], ls="", color="0.3", label=f) for f in families]
+    handles += [Line2D([], [], color=colors[s], label=s) for s in scenarios]
+    ax.legend(handles=handles, fontsize=7, loc="best")
+    ax.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def bench_command(args) -> int:
+    out = Path(args.out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise UserError(f"--out {args.out!r}: cannot create the folder ({exc.strerror})") from None
+    import sys
+
+    result = study(quick=args.quick, progress=lambda msg: print(msg, file=sys.stderr, flush=True))
+    (out / "bench.json").write_text(json.dumps(result, indent=2))
+    (out / "bench.md").write_text(markdown(result))
+    plot(result, out / "bench.png")
+    print(markdown(result))
+    print(f"wrote {out / 'bench.md'}, {out / 'bench.json'}, {out / 'bench.png'}")
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    import argparse
+
+    p = argparse.ArgumentParser()
+    p.add_argument("--quick", action="store_true")
+    p.add_argument("--out", default="bench_out")
+    raise SystemExit(bench_command(p.parse_args()))
