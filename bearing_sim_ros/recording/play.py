@@ -1,0 +1,212 @@
+"""``bearing-sim play``: republish a recording on its topics, with its types and QoS.
+
+The node is named ``bearing_sim`` like the live node and publishes every recorded topic under its
+recorded (fully qualified) name with the recorded type and the QoS read from the channel's
+``offered_qos_profiles``, paced by the log times (= the live node's publish times) divided by
+``--rate``.  Messages keep their recorded stamps, so a subscriber sees what it would have seen
+from the live node: contiguous waveform tables, state, diagnostics.
+
+``--loop`` repeats the recording with every header stamp (and log time) moved on by the
+recording's length, measured on the waveform tables (last stamp + last width / sample rate -
+first stamp), so the tables stay contiguous across the seam and time never goes back.
+``--clock`` publishes ``/clock`` with the recording's time (log time, shifted like the stamps)
+before each new instant, for nodes running with ``use_sim_time``.  A recorded ``/clock`` topic
+is replaced by the generated one then.
+
+Recordings made by ``bearing-sim render`` also hold ``shaft_speed`` and ``load``: the operating
+point in use.  Played into a graph with a live node, they drive it through the same profile.
+
+Before the first message, play waits up to ``WAIT_FOR_SUBSCRIBERS`` seconds for a subscriber to
+appear (DDS discovery takes a moment; messages sent before a subscriber is matched are lost
+for it).
+"""
+from __future__ import annotations
+
+import sys
+import time
+
+from ..errors import UserError
+from ..waveform import NS
+from .reader import get_message, open_recording
+from .schemas import qos_from_yaml
+
+WAIT_FOR_SUBSCRIBERS = 2.0    # s
+DISCOVERY_GRACE = 0.3         # s after the first match, for the subscriber's other topics
+ACK_TIMEOUT = 2.0             # s to let reliable subscribers receive the tail at the end
+WAVEFORM_TYPE = "sensor_msgs/msg/PointCloud2"
+
+
+def _shift_stamp(msg, offset_ns: int) -> None:
+    """Move ``header.stamp`` (and ``Clock.clock``) by ``offset_ns``."""
+    for attr in ("header", "clock"):
+        obj = getattr(msg, attr, None)
+        if obj is None:
+            continue
+        stamp = obj.stamp if attr == "header" else obj
+        t = int(stamp.sec) * NS + int(stamp.nanosec) + offset_ns
+        stamp.sec, stamp.nanosec = int(t // NS), int(t % NS)
+
+
+class _Span:
+    """Length of a recording for looping, from its first waveform topic's tables."""
+
+    def __init__(self, sample_rate: float | None):
+        self.topic = None
+        self.first = self.last = None
+        self.last_width = 0
+        self.samples = 0
+        self.sample_rate = sample_rate
+
+    def see(self, topic: str, msg) -> None:
+        if self.topic is None:
+            self.topic = topic
+        if topic != self.topic:
+            return
+        t = int(msg.header.stamp.sec) * NS + int(msg.header.stamp.nanosec)
+        if self.first is None:
+            self.first = t
+        self.last = t
+        self.last_width = int(msg.width)
+        self.samples += int(msg.width)
+
+    def length_ns(self, start_ns: int, end_ns: int) -> int:
+        if self.first is None:
+            return max(1, end_ns - start_ns + 1)
+        fs = self.sample_rate
+        if not fs and self.last > self.first:
+            fs = (self.samples - self.last_width) * NS / (self.last - self.first)
+        if not fs:
+            return max(1, end_ns - start_ns + 1)
+        return self.last - self.first + int(round(self.last_width * NS / fs))
+
+
+def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
+         wait_for_subscribers: float = WAIT_FOR_SUBSCRIBERS, log=None) -> int:
+    """Republish ``path``; returns the number of messages published."""
+    import rclpy
+    from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+    from rclpy.serialization import deserialize_message
+
+    if not rate > 0:
+        raise UserError(f"--rate = {rate!r}: expected a number > 0")
+    log = log or (lambda text: print(text, file=sys.stderr, flush=True))
+    rec = open_recording(path)
+    try:
+        topics = rec.topics()
+        if not topics or rec.message_count == 0:
+            raise UserError(f"{path}: the recording holds no messages")
+        classes = {t: get_message(c.msg_type) for t, c in topics.items()}
+        sample_rate = None
+        try:
+            sample_rate = float(rec.parameters().get("sample_rate") or 0) or None
+        except (TypeError, ValueError):
+            sample_rate = None
+
+        from rclpy.signals import SignalHandlerOptions
+
+        # Python's own handlers: Ctrl-C (and SIGTERM, see play_command) end the loop as a
+        # KeyboardInterrupt, so the node is destroyed and the context shut down in order
+        rclpy.init(args=None, signal_handler_options=SignalHandlerOptions.NO)
+        node = rclpy.create_node("bearing_sim")
+        try:
+            pubs = {}
+            for topic, info in sorted(topics.items()):
+                if clock and topic == "/clock":
+                    continue
+                qos = qos_from_yaml(info.qos_yaml) or QoSProfile(depth=10)
+                pubs[topic] = node.create_publisher(classes[topic], topic, qos)
+            clock_pub = None
+            if clock:
+                from rosgraph_msgs.msg import Clock
+
+                clock_pub = node.create_publisher(
+                    Clock, "/clock", QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
+                                                reliability=ReliabilityPolicy.RELIABLE,
+                                                durability=DurabilityPolicy.VOLATILE))
+            log(f"play {path}: {rec.message_count} messages on {len(pubs)} topics, "
+                f"{(rec.end_ns - rec.start_ns) / NS:.2f} s at {rate:g}x"
+                + (", looping" if loop else "") + (", publishing /clock" if clock else ""))
+            _wait_for_subscribers(pubs, wait_for_subscribers)
+
+            published = 0
+            offset = 0
+            span = _Span(sample_rate)
+            wall0 = time.perf_counter()
+            rec0 = rec.start_ns
+            last_clock = None
+            while rclpy.ok():
+                for topic, msg_type, log_ns, data in rec.messages():
+                    if topic not in pubs:
+                        continue
+                    t_rec = log_ns + offset
+                    _sleep_until(wall0 + (t_rec - rec0) / NS / rate, rclpy)
+                    if not rclpy.ok():
+                        break
+                    if clock_pub is not None and (last_clock is None or t_rec > last_clock):
+                        from rosgraph_msgs.msg import Clock
+
+                        cmsg = Clock()
+                        cmsg.clock.sec, cmsg.clock.nanosec = int(t_rec // NS), int(t_rec % NS)
+                        clock_pub.publish(cmsg)
+                        last_clock = t_rec
+                    if offset == 0:
+                        # first pass: the recorded bytes go out as they are
+                        if loop and msg_type == WAVEFORM_TYPE and span.topic in (None, topic):
+                            span.see(topic, deserialize_message(data, classes[topic]))
+                        pubs[topic].publish(data)
+                    else:
+                        msg = deserialize_message(data, classes[topic])
+                        _shift_stamp(msg, offset)
+                        pubs[topic].publish(msg)
+                    published += 1
+                if not loop or not rclpy.ok():
+                    break
+                offset += span.length_ns(rec.start_ns, rec.end_ns)   # measured on the first pass
+            for pub in pubs.values():
+                try:
+                    pub.wait_for_all_acked(rclpy.duration.Duration(seconds=ACK_TIMEOUT))
+                except Exception:  # noqa: BLE001 - best effort at the end
+                    pass
+            log(f"play {path}: published {published} messages")
+            return published
+        finally:
+            node.destroy_node()
+            if rclpy.ok():
+                rclpy.shutdown()
+    finally:
+        rec.close()
+
+
+def _wait_for_subscribers(pubs: dict, timeout: float) -> None:
+    deadline = time.perf_counter() + timeout
+    while time.perf_counter() < deadline:
+        if any(p.get_subscription_count() > 0 for p in pubs.values()):
+            time.sleep(DISCOVERY_GRACE)
+            return
+        time.sleep(0.02)
+
+
+def _sleep_until(target: float, rclpy) -> None:
+    while True:
+        delay = target - time.perf_counter()
+        if delay <= 0 or not rclpy.ok():
+            return
+        time.sleep(min(delay, 0.1))
+
+
+def play_command(args) -> int:
+    """CLI entry: ``bearing-sim play F.mcap [--rate X] [--loop] [--clock]``.  Ctrl-C and SIGTERM
+    stop playback cleanly (exit status 0)."""
+    import signal
+    import threading
+
+    def _stop(signum, frame):
+        raise KeyboardInterrupt
+
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGTERM, _stop)
+    try:
+        play(args.file, rate=float(args.rate), loop=bool(args.loop), clock=bool(args.clock))
+    except KeyboardInterrupt:
+        pass
+    return 0
