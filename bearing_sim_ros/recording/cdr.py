@@ -1,4 +1,4 @@
-"""Zero the alignment padding of CDR messages, so that a recording is byte-identical run to run.
+"""Canonical CDR: zero the alignment padding, so that a recording is byte-identical run to run.
 
 rclpy's serialisation (Fast-CDR) skips over the padding that aligns a field to its size and
 leaves whatever was in the freshly allocated buffer there: the same message serialises to
@@ -7,8 +7,9 @@ decode identically, but an offline render must be byte-identical for the same se
 the payload with the type's ``.msg`` definition (XCDR1, little or big endian, alignment counted
 from the end of the 4-byte encapsulation header, as Fast-CDR does) and zeroes the padding only.
 Message bytes themselves are never changed: when the walk runs past the end of the buffer (a
-layout this walker does not know), the payload is returned untouched.  Bytes after the last
-field (rmw sizes the buffer from an estimate) are zeroed as well.
+layout this walker does not know), the payload is returned untouched.  Unused bytes after the
+last field (rmw sizes the buffer from an estimate) are dropped down to the padding to a multiple
+of 4, which is zeroed: ``rosbags`` rejects a payload with more than 3 bytes after its last field.
 """
 from __future__ import annotations
 
@@ -120,7 +121,8 @@ class _Walker:
 
 
 def zero_padding(data: bytes, msg_type: str) -> bytes:
-    """``data`` (a CDR payload of ``msg_type``) with its alignment padding set to zero."""
+    """``data`` (a CDR payload of ``msg_type``) with its alignment padding set to zero and unused
+    trailing bytes dropped (see the module docstring)."""
     if len(data) < 4 or data[0] != 0 or data[1] not in (0, 1):
         return data
     buf = bytearray(data)
@@ -129,8 +131,12 @@ def zero_padding(data: bytes, msg_type: str) -> bytes:
         walker.message(msg_type)
     except (_Unknown, struct.error):
         return data
-    # rmw sizes the buffer from an estimate that aligns even empty sequences, so a few bytes
-    # past the last field may belong to no field at all (seen: 4 and 8 with empty float64[]);
-    # they are not part of the message either, so zero them too
-    buf[walker.pos:] = bytes(len(buf) - walker.pos)
-    return bytes(buf)
+    # rmw sizes the buffer from an estimate that aligns even empty sequences, so bytes past the
+    # last field may belong to no field at all (seen: 4 and 8 after an empty float64[]).  Readers
+    # allow at most the padding to a multiple of 4 (rosbags rejects more), so drop the rest and
+    # zero that padding
+    end = walker.pos + (-walker.pos) % 4
+    if end > len(buf):
+        return data
+    buf[walker.pos:end] = bytes(end - walker.pos)
+    return bytes(buf[:end])
