@@ -1,0 +1,576 @@
+"""The live ROS 2 node ``bearing_sim``: a virtual bearing accelerometer (INTERFACE.md).
+
+    bearing-sim node --ros-args -p scene:=er16k_outer_race -p record:=run.mcap
+    ros2 run bearing_sim_ros bearing_sim_node --ros-args -p real_time:=false -p duration:=60.0
+
+One small :class:`Node` over :class:`~bearing_sim_ros.Simulator`.  A dedicated simulation thread
+advances the model in chunks of ``batch_duration`` and publishes each chunk when the moment of
+its last sample has come on the steady clock (``time.monotonic``).  When a chunk is not ready in
+time (an *overrun*) it is published at once and the following chunks are computed without
+waiting until the node is back on schedule: the node catches up, it never drifts, and it never
+drops samples (the waveform tables stay contiguous).  With ``real_time:=false`` it runs as fast
+as the model allows.  Stamps come from the absolute sample index (``messages.BatchMessages``), so
+consecutive tables are contiguous to the nanosecond whatever the pacing did.
+
+Inputs ``shaft_speed`` (std_msgs/Float64, rad/s) and ``load`` (geometry_msgs/WrenchStamped, N;
+x horizontal, y up, z axial) are checked in the subscription callback (see :class:`InputLimits`
+and :func:`check_speed`, :func:`check_load`); a bad message is rejected, logged (throttled) and
+counted in ``/diagnostics``, and the last good value stays.  An accepted value becomes the target
+of the next chunk: ``Simulator.advance`` ramps speed and load linearly from the value in use to
+the target over that chunk (10 ms by default), so the signal never jumps.
+
+The executor (main thread) serves the subscriptions and parameter services only; publishing,
+recording and diagnostics happen in the simulation thread, which owns the simulator.
+"""
+from __future__ import annotations
+
+import math
+import sys
+import threading
+import time
+
+import numpy as np
+import rclpy
+from rcl_interfaces.msg import SetParametersResult
+from rclpy.node import Node
+
+from ..errors import UserError
+
+NODE_NAME = "bearing_sim"
+DEFAULT_SCENE = "er16k_outer_race"
+FIDELITIES = ("auto", "kinematic", "skidding")
+
+# ---- input limits --------------------------------------------------------------------------
+# Speed: a speed factor n * d_m (rpm x mm) of 1.0e6 is above the reference speeds that catalogs
+# give for oil-lubricated deep-groove ball bearings (0.5-0.8e6); beyond it the pure-rolling
+# kinematics this model rests on no longer hold, so such a command is a mistake, not an input.
+NDM_LIMIT = 1.0e6              # rpm * mm
+# Load: ISO 76 basic static radial load rating C0 = f0 * Z * Dw^2 * cos(alpha) (N, mm) with
+# f0 = 14.7, the lowest value of the ISO 76 deep-groove table (gives 8.3 kN for a 6205; the
+# catalog says 7.8 kN).  C0 is the load of 4.2 GPa peak contact stress, where permanent
+# denting starts; twice C0 is far beyond any working load, so more is rejected.
+STATIC_F0 = 14.7
+LOAD_MULTIPLE_C0 = 2.0
+CLOCK_SKEW_ALLOWED = 1.0       # s: a load stamp further in the future than this is rejected
+
+
+class InputLimits:
+    """What the bearing of a scene can take: ``max_speed`` (rad/s), ``static_capacity`` C0 and
+    ``max_load`` (N).  Derived from the catalog geometry (see the constants above)."""
+
+    def __init__(self, bearing):
+        dm_mm = bearing.pitch_diameter * 1e3
+        dw_mm = bearing.ball_diameter * 1e3
+        self.max_speed = NDM_LIMIT / dm_mm * 2.0 * math.pi / 60.0
+        self.static_capacity = STATIC_F0 * bearing.balls * dw_mm ** 2 * math.cos(bearing.contact_angle)
+        self.max_load = LOAD_MULTIPLE_C0 * self.static_capacity
+
+    def __repr__(self):
+        return (f"InputLimits(max_speed={self.max_speed:.1f} rad/s, "
+                f"static_capacity={self.static_capacity:.0f} N, max_load={self.max_load:.0f} N)")
+
+
+def check_speed(value: float, limits: InputLimits):
+    """None if ``value`` (rad/s) is usable, else ``(reason_key, one-line reason)``."""
+    if not math.isfinite(value):
+        return "not_finite", f"shaft_speed = {value!r} rad/s: not a finite number"
+    if abs(value) > limits.max_speed:
+        return "out_of_range", (f"shaft_speed = {value:.6g} rad/s: beyond what the bearing takes "
+                                f"(|speed| <= {limits.max_speed:.0f} rad/s, n*dm <= {NDM_LIMIT:.0e} rpm mm)")
+    return None
+
+
+def check_load(fx: float, fy: float, fz: float, limits: InputLimits):
+    """None if the force (N) is usable, else ``(reason_key, one-line reason)``.  ``fz`` (axial)
+    is not modelled but must be sane too; the magnitude of the whole force is limited."""
+    if not (math.isfinite(fx) and math.isfinite(fy) and math.isfinite(fz)):
+        return "not_finite", f"load = ({fx!r}, {fy!r}, {fz!r}) N: not finite"
+    mag = math.sqrt(fx * fx + fy * fy + fz * fz)
+    if mag > limits.max_load:
+        return "out_of_range", (f"load = ({fx:.6g}, {fy:.6g}, {fz:.6g}) N: |F| = {mag:.6g} N beyond "
+                                f"{LOAD_MULTIPLE_C0:g} x C0 = {limits.max_load:.0f} N")
+    return None
+
+
+def check_stamp(stamp_ns: int, last_ns: int | None, now_ns: int, max_age: float):
+    """None if a load stamp (ns) is acceptable, else ``(reason_key, reason)``.  A zero stamp is
+    an unstamped message (accepted).  ``max_age`` 0 disables the age checks (for recordings
+    played back with their original stamps)."""
+    if stamp_ns == 0:
+        return None
+    if last_ns is not None and stamp_ns < last_ns:
+        return "out_of_order", f"load stamp {stamp_ns * 1e-9:.6f} s is older than the last accepted one ({last_ns * 1e-9:.6f} s)"
+    if max_age > 0.0:
+        age = (now_ns - stamp_ns) * 1e-9
+        if age > max_age:
+            return "stale", f"load stamp is {age:.3g} s old (input_max_age = {max_age:g} s)"
+        if -age > max(CLOCK_SKEW_ALLOWED, max_age):
+            return "stale", f"load stamp is {-age:.3g} s in the future (clocks out of step?)"
+    return None
+
+
+# ---- parameters --------------------------------------------------------------------------------
+def _descriptors():
+    """name -> (default, ParameterDescriptor).  Read-only: what the simulator or the recording is
+    built from at start-up; the rest may change while the node runs."""
+    from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
+    from rcl_interfaces.msg import ParameterType as T
+
+    def d(kind, text, read_only=False, lo=None, hi=None, constraints=""):
+        desc = ParameterDescriptor(type=kind, description=text, read_only=read_only,
+                                   additional_constraints=constraints)
+        if kind == T.PARAMETER_DOUBLE and lo is not None:
+            desc.floating_point_range = [FloatingPointRange(from_value=float(lo), to_value=float(hi), step=0.0)]
+        if kind == T.PARAMETER_INTEGER and lo is not None:
+            desc.integer_range = [IntegerRange(from_value=int(lo), to_value=int(hi), step=1)]
+        return desc
+
+    return {
+        "scene": (DEFAULT_SCENE, d(T.PARAMETER_STRING, "shipped scene name or path of a scene YAML", True,
+                                   constraints="see `bearing-sim scenes`")),
+        "sample_rate": (15000.0, d(T.PARAMETER_DOUBLE, "output sample rate, Hz", True, 1000.0, 200000.0)),
+        "batch_duration": (0.01, d(T.PARAMETER_DOUBLE, "samples per waveform table, s", True, 0.001, 1.0,
+                                   "batch_duration x sample_rate must be a whole number of samples")),
+        "real_time": (True, d(T.PARAMETER_BOOL, "pace on the steady clock; false = as fast as possible")),
+        "duration": (0.0, d(T.PARAMETER_DOUBLE, "seconds of signal, then exit; 0 = forever", False, 0.0, 1.0e9)),
+        "record": ("", d(T.PARAMETER_STRING, "MCAP file to record to; empty = no recording", True)),
+        "fidelity": ("auto", d(T.PARAMETER_STRING, "model tier", True, constraints="auto | kinematic | skidding")),
+        "seed": (0, d(T.PARAMETER_INTEGER, "seed of random slip and sensor noise", True, 0, 2 ** 31 - 1)),
+        "publish_clock": (False, d(T.PARAMETER_BOOL, "publish /clock with the simulation time")),
+        "frame_id": ("", d(T.PARAMETER_STRING, "frame of the waveform tables; empty = the scene's sensor frame", True)),
+        "state_rate": (50.0, d(T.PARAMETER_DOUBLE, "JointState rate, Hz; 0 = off", False, 0.0, 1000.0,
+                               "at most one per batch: state_rate <= 1 / batch_duration")),
+        "input_max_age": (1.0, d(T.PARAMETER_DOUBLE, "reject load messages whose stamp is older than "
+                                 "this, s; 0 = accept any age", False, 0.0, 3600.0)),
+    }
+
+
+def check_config(cfg: dict):
+    """None if the parameter set ``cfg`` (name -> value) is usable together, else a one-line reason."""
+    if cfg["fidelity"] not in FIDELITIES:
+        return f"fidelity = {cfg['fidelity']!r}: allowed values are {', '.join(FIDELITIES)}"
+    samples = cfg["sample_rate"] * cfg["batch_duration"]
+    if abs(samples - round(samples)) > 1e-6 * max(samples, 1.0) or round(samples) < 1:
+        return (f"batch_duration = {cfg['batch_duration']!r} s with sample_rate = {cfg['sample_rate']!r} Hz "
+                f"gives {samples:.6g} samples: must be a whole number >= 1")
+    if cfg["state_rate"] > 1.0 / cfg["batch_duration"] * (1 + 1e-9):
+        return (f"state_rate = {cfg['state_rate']!r} Hz: at most one state per batch, "
+                f"<= 1 / batch_duration = {1.0 / cfg['batch_duration']:g} Hz")
+    return None
+
+
+# ---- the node ----------------------------------------------------------------------------------
+class BearingSimNode(Node):
+    """The ``bearing_sim`` node; see the module docstring.  Raises UserError for a bad
+    parameter or scene (rclpy must be initialised)."""
+
+    def __init__(self, **kwargs):
+        super().__init__(NODE_NAME, **kwargs)
+        self._declare_all()
+        cfg = self._cfg
+        reason = check_config(cfg)
+        if reason:
+            raise UserError(reason)
+        self._build(cfg)
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+        self.add_post_set_parameters_callback(self._after_set_parameters)
+
+    # ---- parameters ----------------------------------------------------------------------
+    def _declare_all(self):
+        from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
+
+        self._cfg = {}
+        for name, (default, desc) in _descriptors().items():
+            try:
+                value = self.declare_parameter(name, default, desc).value
+            except InvalidParameterTypeException:
+                given = _override_value(self, name)
+                raise UserError(f"parameter {name} = {given!r}: wrong type, expected {_KINDS[type(default)]} "
+                                f"(default {_param_text(default)})") from None
+            except InvalidParameterValueException:
+                given = _override_value(self, name)
+                allowed = _allowed(desc)
+                raise UserError(f"parameter {name} = {given!r}: allowed range is {allowed}") from None
+            self._cfg[name] = value
+
+    def _on_set_parameters(self, params):
+        """Validate a run-time change against the whole configuration (read-only parameters
+        and descriptor ranges are refused by rclpy before this is called)."""
+        cfg = dict(self._cfg)
+        for p in params:
+            if p.name in cfg:
+                cfg[p.name] = p.value
+        reason = check_config(cfg)
+        return SetParametersResult(successful=reason is None, reason=reason or "")
+
+    def _after_set_parameters(self, params):
+        cfg = dict(self._cfg)
+        for p in params:
+            if p.name in cfg:
+                cfg[p.name] = p.value
+        if cfg["real_time"] and not self._cfg["real_time"]:
+            self._repace = True          # the sim thread re-anchors its schedule
+        self._cfg = cfg                  # one reference swap: the sim thread sees all or none
+
+    # ---- construction ------------------------------------------------------------------------
+    def _build(self, cfg):
+        from rclpy.qos import QoSProfile
+
+        from .. import Simulator
+        from ..messages import (TOPIC_ACCEL, TOPIC_CONTACT, TOPIC_DIAGNOSTICS, TOPIC_LOAD,
+                                TOPIC_SHAFT_SPEED, TOPIC_STATE, BatchMessages, waveform_qos)
+        from ..scene import load_scene
+        from diagnostic_msgs.msg import DiagnosticArray
+        from geometry_msgs.msg import WrenchStamped
+        from sensor_msgs.msg import JointState, PointCloud2
+        from std_msgs.msg import Float64
+
+        self.scene = load_scene(cfg["scene"])
+        self.sim = Simulator(self.scene, sample_rate=float(cfg["sample_rate"]),
+                             fidelity=cfg["fidelity"], seed=int(cfg["seed"]))
+        self.limits = InputLimits(self.scene.bearing)
+        self.n_batch = int(round(cfg["sample_rate"] * cfg["batch_duration"]))
+        self.batch_duration = self.n_batch / self.sim.sample_rate
+        self.wave_qos = waveform_qos(self.batch_duration)
+        self.small_qos = QoSProfile(depth=10)     # reliable, volatile, keep-last 10
+        self.pub_accel = self.create_publisher(PointCloud2, TOPIC_ACCEL, self.wave_qos)
+        self.pub_contact = self.create_publisher(PointCloud2, TOPIC_CONTACT, self.wave_qos)
+        self.pub_state = self.create_publisher(JointState, TOPIC_STATE, self.small_qos)
+        self.pub_diag = self.create_publisher(DiagnosticArray, TOPIC_DIAGNOSTICS, self.small_qos)
+        self.pub_clock = None                     # created when publish_clock is first true
+        self.sub_speed = self.create_subscription(Float64, TOPIC_SHAFT_SPEED, self._on_speed, self.small_qos)
+        self.sub_load = self.create_subscription(WrenchStamped, TOPIC_LOAD, self._on_load, self.small_qos)
+
+        # commands (written by the executor thread, read by the sim thread: plain rebinding)
+        self._cmd_speed = float(self.sim.shaft_speed)
+        self._cmd_load = tuple(float(v) for v in self.sim.radial_load)
+        self._last_load_stamp = None
+        self.rejected = {"not_finite": 0, "out_of_range": 0, "stale": 0, "out_of_order": 0}
+
+        self.start_ns = self.get_clock().now().nanoseconds
+        self.msgs = BatchMessages(self.sim, self.start_ns, cfg["frame_id"] or None)
+        self.recorder = None
+        if cfg["record"]:
+            self._open_recorder(cfg)
+        self._stop = threading.Event()
+        self._repace = False
+        self.finished = threading.Event()
+        self.error = None
+        self.stats = _Stats(self.sim.sample_rate)
+        self._thread = threading.Thread(target=self._run, name="bearing-sim", daemon=True)
+
+    def _open_recorder(self, cfg):
+        from ..messages import TYPES
+        from ..recording.recorder import Recorder, recording_metadata
+
+        params = dict(cfg)
+        params.update({"mode": "live", "start_time_ns": self.start_ns,
+                       "command": "bearing-sim node --ros-args " + " ".join(
+                           f"-p {k}:={_param_text(v)}" for k, v in sorted(cfg.items()))})
+        meta = recording_metadata(self.scene, params, int(cfg["seed"]), self.sim.selection)
+        text = self.scene.source_text
+        attachments = {f"{self.scene.name}.yaml": text.encode("utf-8")} if text else {}
+        self.recorder = Recorder(cfg["record"], meta, attachments)
+        for ent, qos in ((self.sub_speed, self.small_qos), (self.sub_load, self.small_qos),
+                         (self.pub_accel, self.wave_qos), (self.pub_contact, self.wave_qos),
+                         (self.pub_state, self.small_qos), (self.pub_diag, self.small_qos)):
+            self.recorder.add_topic(ent.topic_name, TYPES[_relative(ent.topic_name)], qos)
+
+    # ---- inputs (executor thread) ------------------------------------------------------------
+    def _reject(self, key, reason):
+        self.rejected[key] += 1
+        self.get_logger().warning(f"input rejected, keeping {self._cmd_speed:.6g} rad/s, "
+                                  f"load {self._cmd_load}: {reason}", throttle_duration_sec=2.0)
+
+    def _on_speed(self, msg):
+        value = float(msg.data)
+        bad = check_speed(value, self.limits)
+        if bad:
+            self._reject(*bad)
+            return
+        self._cmd_speed = value
+
+    def _on_load(self, msg):
+        f = msg.wrench.force
+        fx, fy, fz = float(f.x), float(f.y), float(f.z)
+        bad = check_load(fx, fy, fz, self.limits)
+        if bad:
+            self._reject(*bad)
+            return
+        stamp_ns = int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec)
+        bad = check_stamp(stamp_ns, self._last_load_stamp, self.get_clock().now().nanoseconds,
+                          float(self._cfg["input_max_age"]))
+        if bad:
+            self._reject(*bad)
+            return
+        if stamp_ns:
+            self._last_load_stamp = stamp_ns
+        self._cmd_load = (fx, fy)
+
+    # ---- simulation thread -------------------------------------------------------------------
+    def start(self):
+        self.get_logger().info(
+            f"scene {self.scene.name}: {self.sim.tier} tier ({self.sim.selection.reason}), "
+            f"{self.sim.sample_rate:g} Hz in batches of {self.n_batch}, "
+            f"real_time {self._cfg['real_time']}, duration {self._cfg['duration']:g} s, "
+            f"recording {self._cfg['record'] or 'off'}; input limits {self.limits}")
+        self._thread.start()
+
+    def stop(self, timeout: float = 10.0):
+        """Finish the batch in progress, close the recording.  Idempotent."""
+        self._stop.set()
+        if self._thread.is_alive() and threading.current_thread() is not self._thread:
+            self._thread.join(timeout)
+        if self.recorder is not None:
+            self.recorder.close()
+            st = self.recorder.status
+            if st["ok"]:
+                self.get_logger().info(f"recording {st['path']}: {st['messages']} messages, "
+                                       f"{st['bytes'] / 1e6:.1f} MB, {st['dropped']} dropped")
+            else:
+                self.get_logger().error(f"recording: {st['error']}")
+
+    def _run(self):
+        try:
+            self._loop()
+        except BaseException as exc:  # noqa: BLE001 - reported by main() as an internal error
+            self.error = exc
+        finally:
+            self.finished.set()
+
+    def _loop(self):
+        from rosgraph_msgs.msg import Clock
+
+        sim, msgs, stats = self.sim, self.msgs, self.stats
+        sr = sim.sample_rate
+        mono0 = time.monotonic()
+        anchor_t, anchor_i = mono0, sim.index      # pacing: sample anchor_i is due at anchor_t
+        next_diag = mono0 + 1.0
+        stats.period_start(mono0, sim.index)
+        context = self.context
+        while not self._stop.is_set():
+            cfg = self._cfg
+            total = int(round(cfg["duration"] * sr)) if cfg["duration"] > 0 else 0
+            if total and sim.index >= total:
+                break
+            n = min(self.n_batch, total - sim.index) if total else self.n_batch
+            speed, load = self._cmd_speed, self._cmd_load
+            start_stamp = msgs.stamp_ns(sim.index)
+            batch = sim.advance(n, shaft_speed=speed, radial_load=load)
+            end_index = sim.index
+            end_stamp = msgs.stamp_ns(end_index)
+            ready = time.monotonic()
+            real_time = cfg["real_time"]
+            if real_time:
+                if self._repace:
+                    self._repace = False
+                    anchor_t, anchor_i = ready - n / sr, end_index - n
+                due = anchor_t + (end_index - anchor_i) / sr
+                if ready > due:
+                    stats.overruns += 1
+                else:
+                    self._stop.wait(due - ready)    # wakes early on shutdown: publish at once
+                now = time.monotonic()
+                lag = max(0.0, now - due)
+                log_ns = self.start_ns + int((now - mono0) * 1e9)
+            else:
+                now, lag = time.monotonic(), 0.0
+                log_ns = end_stamp       # as `render`: the file replays at the signal's pace
+            stats.batch(lag, batch)
+
+            out = [(self.pub_accel, msgs.accel(batch)), (self.pub_contact, msgs.contact_forces(batch))]
+            rate = cfg["state_rate"]
+            if rate > 0 and math.floor(end_index * rate / sr) > math.floor((end_index - n) * rate / sr):
+                out.append((self.pub_state, msgs.state(end_stamp)))
+            if cfg["publish_clock"]:
+                if self.pub_clock is None:
+                    self.pub_clock = self.create_publisher(Clock, "/clock", self.small_qos)
+                clk = Clock()
+                clk.clock.sec, clk.clock.nanosec = divmod(end_stamp, 1_000_000_000)
+                out.append((self.pub_clock, clk))
+            if now >= next_diag:
+                next_diag = max(next_diag + 1.0, now - 0.5)
+                out.append((self.pub_diag, self._diagnostics(end_stamp, now)))
+
+            rec = self.recorder
+            if rec is not None:
+                from ..recording.render import load_message, speed_message
+
+                rec.write(self.sub_speed.topic_name, speed_message(speed), log_ns)
+                rec.write(self.sub_load.topic_name, load_message(load, start_stamp, msgs.frame_id), log_ns)
+                for pub, msg in out:
+                    if pub is not self.pub_clock:
+                        rec.write(pub.topic_name, msg, log_ns)
+            if not context.ok():
+                break                    # shut down by a signal: the batch is recorded, stop
+            try:
+                for pub, msg in out:
+                    pub.publish(msg)
+            except Exception:  # noqa: BLE001 - the context went away between ok() and publish
+                if context.ok():
+                    raise
+                break
+
+    def _diagnostics(self, stamp_ns, now):
+        from ..recording.render import diagnostics_message
+
+        st = self.stats
+        period = st.period_end(now, self.sim.index)
+        rtf = period["signal_s"] / period["wall_s"] if period["wall_s"] > 0 else float("nan")
+        values = {
+            "real_time_factor": f"{rtf:.4f}",
+            "real_time": str(bool(self._cfg["real_time"])).lower(),
+            "overruns": st.overruns,
+            "overruns_last_period": period["overruns"],
+            "lag_s": f"{period['worst_lag']:.6f}",
+            "worst_lag_s": f"{st.worst_lag:.6f}",
+            "tier": self.sim.tier,
+            "tier_reason": self.sim.selection.reason,
+            "tier_estimated_error": f"{self.sim.selection.estimated_error:.3g}",
+            "tier_switches": self.sim.tier_switches,
+            "shaft_speed_rad_s": f"{self.sim.shaft_speed:.6g}",
+            "radial_load_n": " ".join(f"{v:.6g}" for v in self.sim.radial_load),
+            "simulated_s": f"{self.sim.time:.3f}",
+            "rejected_inputs": sum(self.rejected.values()),
+        }
+        for key, count in self.rejected.items():
+            values[f"rejected_{key}"] = count
+        for key, val in period["extras"].items():
+            values[f"{key}_ratio"] = f"{val:.4g}"
+        level, message = 0, "ok"
+        if period["overruns"]:
+            level, message = 1, f"{period['overruns']} overruns in the last second"
+        rec = self.recorder
+        if rec is None:
+            values["recording"] = "off"
+        else:
+            rs = rec.status
+            values["recording"] = "ok" if rs["ok"] else "error"
+            values["recording_path"] = rs["path"]
+            values["recording_messages"] = rs["messages"]
+            values["recording_bytes"] = rs["bytes"]
+            values["recording_dropped"] = rs["dropped"]
+            if not rs["ok"]:
+                values["recording_error"] = rs["error"]
+                level, message = 2, "recording failed: " + rs["error"]
+        return diagnostics_message(stamp_ns, values, level, message)
+
+
+
+class _Stats:
+    """Pacing and batch statistics.  Written by the sim thread only."""
+
+    def __init__(self, sample_rate: float):
+        self.sample_rate = sample_rate
+        self.overruns = 0
+        self.worst_lag = 0.0
+        self.batches = 0
+        self.t0_mono = time.monotonic()
+
+    def period_start(self, now, index):
+        self._p_t, self._p_i, self._p_over, self._p_lag = now, index, self.overruns, 0.0
+        self._extras, self._extras_n = {}, 0
+
+    def batch(self, lag, batch):
+        self.batches += 1
+        self.worst_lag = max(self.worst_lag, lag)
+        self._p_lag = max(self._p_lag, lag)
+        for key, val in batch.extras.items():
+            self._extras[key] = self._extras.get(key, 0.0) + float(np.mean(val))
+        if batch.extras:
+            self._extras_n += 1
+
+    def period_end(self, now, index) -> dict:
+        """Figures of the period since the last call, and start a new one."""
+        sr_index = index - self._p_i
+        out = {"wall_s": now - self._p_t, "signal_s": sr_index / self.sample_rate,
+               "overruns": self.overruns - self._p_over, "worst_lag": self._p_lag,
+               "extras": {k: v / max(self._extras_n, 1) for k, v in self._extras.items()}}
+        self.period_start(now, index)
+        return out
+
+
+_KINDS = {bool: "true or false", int: "a whole number", float: "a floating-point number such as 1.0",
+          str: "a string"}
+
+
+def _override_value(node, name):
+    """The value given with ``-p name:=value`` (rclpy keeps the overrides in a private dict)."""
+    p = getattr(node, "_parameter_overrides", {}).get(name)
+    return getattr(p, "value", "?")
+
+
+def _allowed(desc) -> str:
+    for r in desc.floating_point_range:
+        return f"[{r.from_value:g}, {r.to_value:g}]"
+    for r in desc.integer_range:
+        return f"[{r.from_value}, {r.to_value}]"
+    return desc.additional_constraints or "see the parameter description"
+
+
+def _relative(topic: str) -> str:
+    """'/ns/accel' -> 'accel' for the TYPES table ('/diagnostics' stays absolute)."""
+    from ..messages import TYPES
+
+    if topic in TYPES:
+        return topic
+    return topic.rsplit("/", 1)[-1]
+
+
+def _param_text(value) -> str:
+    if isinstance(value, bool):
+        return str(value).lower()
+    if isinstance(value, str):
+        return value if value else "''"
+    return repr(value)
+
+
+def spin_node(node) -> None:
+    """Serve ``node`` until its simulation ends, rclpy shuts down (SIGTERM) or Ctrl-C
+    (KeyboardInterrupt, raised to the caller).  The caller then calls ``node.stop()``."""
+    from rclpy.executors import SingleThreadedExecutor
+
+    executor = SingleThreadedExecutor(context=node.context)
+    executor.add_node(node)
+    node.start()
+    try:
+        # a short timeout: the end of ``duration`` (set by the sim thread) is noticed at once
+        while node.context.ok() and not node.finished.is_set():
+            executor.spin_once(timeout_sec=0.1)
+    finally:
+        executor.remove_node(node)
+        executor.shutdown(timeout_sec=0)
+
+
+def main(argv=None) -> int:
+    """``bearing_sim_node`` / ``bearing-sim node``: run the node until ``duration``, Ctrl-C or
+    SIGTERM; exit status 0, or 2 with one line for a bad parameter or scene."""
+    from rclpy.executors import ExternalShutdownException
+
+    args = list(sys.argv) if argv is None else ["bearing_sim_node", *argv]
+    node = None
+    status = 0
+    try:
+        rclpy.init(args=args)
+        node = BearingSimNode()
+        spin_node(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except UserError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        status = 2
+    finally:
+        if node is not None:
+            node.stop()
+            error = node.error
+            node.destroy_node()
+        else:
+            error = None
+        rclpy.try_shutdown()
+    if error is not None:
+        raise error
+    return status
+
+
+if __name__ == "__main__":
+    sys.exit(main())
