@@ -176,3 +176,14 @@ def test_zero_padding_changes_no_value_and_matches_an_independent_serialiser():
         ref = ts.serialize_cdr(ts.deserialize_cdr(z, "sensor_msgs/msg/JointState"),
                                "sensor_msgs/msg/JointState")
         assert bytes(ref) == z[:len(ref)] and not any(z[len(ref):]) and len(z) - len(ref) < 4
+
+
+def test_waveform_table_padding_is_zeroed_in_the_file(tmp_path, sim_msgs):
+    """PointCloud2 has padding after each PointField's datatype and after is_bigendian."""
+    scene, sim, msgs = sim_msgs
+    path = tmp_path / "pad.mcap"
+    _record(path, scene, sim, msgs, batches=5)
+    with open_recording(path) as r:
+        for _, _, _, data in r.messages(["/accel"]):
+            # frame 'bearing_accel': PointField[0].datatype at 60, count at 64; see cdr.py
+            assert data[61:64] == b"\0\0\0" and data[85:88] == b"\0\0\0" and data[93:96] == b"\0\0\0"

@@ -135,8 +135,6 @@ def zero_padding(data: bytes, msg_type: str) -> bytes:
     # last field may belong to no field at all (seen: 4 and 8 after an empty float64[]).  Readers
     # allow at most the padding to a multiple of 4 (rosbags rejects more), so drop the rest and
     # zero that padding
-    end = walker.pos + (-walker.pos) % 4
-    if end > len(buf):
-        return data
+    end = min(len(buf), walker.pos + (-walker.pos) % 4)
     buf[walker.pos:end] = bytes(end - walker.pos)
     return bytes(buf[:end])

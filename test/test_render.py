@@ -1,0 +1,148 @@
+"""``bearing-sim render``: every message reads back with two independent readers, the file says
+how it was made, the same seed gives the same bytes, profiles drive the operating point, and user
+mistakes end with exit status 2 and one line."""
+from __future__ import annotations
+
+import math
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from bearing_sim_ros import cli, load_scene
+from bearing_sim_ros.recording.reader import get_message, open_recording
+from bearing_sim_ros.recording.render import profile_at, render
+from bearing_sim_ros.scene import RPM
+from bearing_sim_ros.waveform import NS, from_pointcloud2
+
+FS = 15000.0
+
+
+@pytest.fixture(scope="module")
+def rendered(tmp_path_factory):
+    out = tmp_path_factory.mktemp("render") / "a.mcap"
+    summary = render("er16k_outer_race", 2.0, out, fidelity="kinematic", seed=5, progress=False)
+    return out, summary
+
+
+def test_every_message_reads_back_with_rosbags(rendered):
+    from rosbags.highlevel import AnyReader
+
+    path, summary = rendered
+    counts = {}
+    accel = []
+    with AnyReader([path]) as reader:
+        types = {c.topic: c.msgtype for c in reader.connections}
+        for conn, t, raw in reader.messages():
+            msg = reader.deserialize(raw, conn.msgtype)      # raises on any unreadable message
+            counts[conn.topic] = counts.get(conn.topic, 0) + 1
+            if conn.topic == "/accel":
+                accel.append(from_pointcloud2(msg))
+    assert types == {"/accel": "sensor_msgs/msg/PointCloud2", "/contact_forces": "sensor_msgs/msg/PointCloud2",
+                     "/state": "sensor_msgs/msg/JointState", "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray",
+                     "/shaft_speed": "std_msgs/msg/Float64", "/load": "geometry_msgs/msg/WrenchStamped"}
+    # 2 s at 100 batches/s; state at 50 Hz; diagnostics once per simulated second
+    assert counts == {"/accel": 200, "/contact_forces": 200, "/state": 100, "/diagnostics": 2,
+                      "/shaft_speed": 200, "/load": 200}
+    assert sum(counts.values()) == summary["messages"]
+    # the waveform tables are contiguous: stamp(k+1) = stamp(k) + width / fs, from 0
+    stamps = np.array([a[0] for a in accel])
+    widths = np.array([a[2].shape[0] for a in accel])
+    assert stamps[0] == 0 and widths.sum() == 2 * FS
+    assert np.all(np.abs(np.diff(stamps) - widths[:-1] * NS / FS) <= 1)
+
+
+def test_every_message_reads_back_with_mcap_and_rclpy(rendered):
+    from rclpy.serialization import deserialize_message
+
+    path, _ = rendered
+    with open_recording(path) as rec:
+        assert rec.header.profile == "ros2"
+        meta = rec.metadata
+        n = 0
+        for topic, msg_type, t, data in rec.messages():
+            msg = deserialize_message(data, get_message(msg_type))
+            if topic == "/state":
+                assert list(msg.name[:2]) == ["shaft", "cage"]
+                assert msg.header.stamp.sec * NS + msg.header.stamp.nanosec == t
+            n += 1
+        assert n == rec.message_count
+        for info in rec.channels.values():
+            assert "reliability: reliable" in info.qos_yaml
+    scene = load_scene("er16k_outer_race")
+    assert meta["scene"] == "er16k_outer_race" and meta["scene_yaml"] == scene.source_text
+    assert meta["seed"] == "5" and meta["tier"] == "kinematic"
+    assert meta["package_version"]
+    params = rec.parameters()
+    assert params["duration"] == 2.0 and params["sample_rate"] == FS and params["fidelity"] == "kinematic"
+    assert "bearing-sim render er16k_outer_race" in params["command"]
+
+
+def test_same_seed_same_bytes_other_seed_other_signal(rendered, tmp_path):
+    path, _ = rendered
+    again = tmp_path / "b.mcap"
+    other = tmp_path / "c.mcap"
+    render("er16k_outer_race", 2.0, again, fidelity="kinematic", seed=5, progress=False)
+    render("er16k_outer_race", 2.0, other, fidelity="kinematic", seed=6, progress=False)
+    assert Path(path).read_bytes() == again.read_bytes()
+    assert Path(path).read_bytes() != other.read_bytes()
+
+
+def test_profile_drives_the_operating_point(tmp_path):
+    from rclpy.serialization import deserialize_message
+    from sensor_msgs.msg import JointState
+    from std_msgs.msg import Float64
+
+    text = load_scene("er16k_inner_race").source_text + (
+        "profile:\n"
+        "  - {t: 0.2, shaft_speed_rpm: 1600}\n"
+        "  - {t: 0.7, shaft_speed_rpm: 2400, radial_load: [0.0, -150.0]}\n")
+    scene_path = tmp_path / "ramp.yaml"
+    scene_path.write_text(text)
+    scene = load_scene(scene_path)
+    assert profile_at(scene, 0.45)[0] == pytest.approx(2000 * RPM)
+    assert profile_at(scene, 0.45)[1] == pytest.approx((0.0, -100.0))
+    out = tmp_path / "ramp.mcap"
+    render(scene_path, 1.0, out, fidelity="kinematic", progress=False)
+    with open_recording(out) as rec:
+        speeds = [(t, deserialize_message(d, Float64).data) for _, _, t, d in rec.messages(["/shaft_speed"])]
+        state = [deserialize_message(d, JointState) for _, _, _, d in rec.messages(["/state"])]
+    # the command recorded at the start of each batch is the profile at the batch's end
+    for t, w in speeds:
+        assert w == pytest.approx(profile_at(scene, t / NS + 0.01)[0], rel=1e-12)
+    assert speeds[0][1] == pytest.approx(1600 * RPM) and speeds[-1][1] == pytest.approx(2400 * RPM)
+    # the simulated shaft follows: 1600 rpm before the ramp, 2400 rpm after it
+    shaft = np.array([s.velocity[0] for s in state]) * 60 / (2 * math.pi)
+    assert shaft[5] == pytest.approx(1600, rel=1e-6) and shaft[-1] == pytest.approx(2400, rel=1e-6)
+    assert np.all(np.diff(shaft) >= -1e-9)
+
+
+def _one_line_error(capsys, argv):
+    code = cli.main(argv)
+    err = capsys.readouterr().err.strip()
+    return code, err
+
+
+def test_scene_error_and_bad_output_exit_2_with_one_line(tmp_path, capsys):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(load_scene("er16k_healthy").source_text.replace("shaft_speed_rpm: 1600", "shaft_speed_rpm: fast"))
+    code, err = _one_line_error(capsys, ["render", str(bad), "--duration", "1", "--out", str(tmp_path / "x.mcap")])
+    assert code == 2 and len(err.splitlines()) == 1 and "shaft_speed_rpm" in err and "fast" in err
+    code, err = _one_line_error(capsys, ["render", "no_such_scene", "--duration", "1", "--out", str(tmp_path / "x.mcap")])
+    assert code == 2 and len(err.splitlines()) == 1 and "er16k_outer_race" in err
+    code, err = _one_line_error(capsys, ["render", "er16k_healthy", "--duration", "1",
+                                         "--out", str(tmp_path / "nodir" / "x.mcap")])
+    assert code == 2 and len(err.splitlines()) == 1 and "cannot write there" in err
+
+
+def test_console_script_renders_and_reports_exit_2_for_a_bad_scene(bearing_sim_exe, tmp_path, ros_env):
+    out = tmp_path / "cli.mcap"
+    ok = subprocess.run([bearing_sim_exe, "render", "er16k_healthy", "--duration", "0.5", "--out", str(out),
+                         "--fidelity", "kinematic"], env=ros_env, capture_output=True, text=True, timeout=120)
+    assert ok.returncode == 0, ok.stderr
+    assert "x real time" in ok.stdout and ok.stderr == ""     # no progress bar without a terminal
+    assert open_recording(out).message_count > 0
+    bad = subprocess.run([bearing_sim_exe, "render", str(tmp_path / "missing.yaml"), "--duration", "1",
+                          "--out", str(out)], env=ros_env, capture_output=True, text=True, timeout=120)
+    assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1 and "Traceback" not in bad.stderr
