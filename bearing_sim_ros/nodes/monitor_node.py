@@ -1,0 +1,196 @@
+"""``bearing-sim monitor``: a small condition-monitoring subscriber, the consumer to learn from.
+
+    bearing-sim node &                       # or any recording played with `bearing-sim play`
+    bearing-sim monitor --window 4 --count 3
+
+It subscribes to ``accel`` (waveform tables, reliable like the node offers them) and ``state``
+(for the shaft speed in use), decodes each table with :func:`bearing_sim_ros.waveform.from_pointcloud2`
+into a float32 array (no per-sample objects), and checks that the tables are contiguous: a gap
+(a lost table, a restarted node) starts the window again, because envelope analysis of a signal
+with a hole in it would smear the lines.  Every ``window`` seconds of signal it runs the shared
+envelope detector (:func:`bearing_sim_ros.analysis.envelope.diagnose`) on each accelerometer axis
+at the fault frequencies of the scene's bearing at the measured shaft speed, and prints one line:
+
+    t=4.00s shaft=1600rpm verdict=outer | bpfo 95.2/95.3Hz x266 | bpfi 144.8/144.7Hz x1.0 | 2bsf 123.8/123.8Hz x1.1
+
+``found/theory Hz`` and ``x`` the height of the line over the median of its neighbourhood
+(threshold x4, ``envelope.DETECTION_THRESHOLD``).  The axis where a line stands highest counts.
+"""
+from __future__ import annotations
+
+import sys
+import time
+
+import numpy as np
+import rclpy
+from rclpy.node import Node
+
+from ..analysis.envelope import DETECTION_THRESHOLD, FAULT_LINES, diagnose
+from ..messages import TOPIC_ACCEL, TOPIC_STATE, waveform_qos
+from ..waveform import NS, from_pointcloud2
+
+DEFAULT_SCENE = "er16k_outer_race"
+FAULT_NAMES = {"outer": "outer-race fault", "inner": "inner-race fault", "ball": "ball fault",
+               "healthy": "healthy"}
+
+
+class Window:
+    """Contiguous waveform tables gathered into one (n, channels) array.
+
+    ``add`` returns False when a table does not continue the previous one (then the window
+    restarts with it).  The sample rate comes from the stamps: width / (stamp - previous stamp)."""
+
+    def __init__(self):
+        self.clear()
+        self.sample_rate = None
+        self.gaps = 0
+        self._prev_stamp = None
+        self._prev_width = None
+        self.channels = None
+
+    def clear(self):
+        self.parts = []
+        self.samples = 0
+        self.first_stamp = None
+
+    def add(self, stamp_ns: int, channels, data: np.ndarray) -> bool:
+        contiguous = True
+        if self._prev_stamp is not None:
+            step = stamp_ns - self._prev_stamp
+            rate = self._prev_width * NS / step if step > 0 else None
+            expected = (self._prev_stamp + round(self._prev_width * NS / self.sample_rate)
+                        if self.sample_rate else None)
+            if self.sample_rate is None and rate is not None:
+                self.sample_rate = rate          # the first pair of tables fixes the rate
+            elif expected is None or abs(stamp_ns - expected) > 1000 or list(channels) != self.channels:
+                contiguous = False               # > 1 us off: a table is missing or time jumped
+        if not contiguous:
+            self.gaps += 1
+            self.clear()
+            self.sample_rate = None
+        self._prev_stamp, self._prev_width = stamp_ns, data.shape[0]
+        self.channels = list(channels)
+        if self.first_stamp is None:
+            self.first_stamp = stamp_ns
+        self.parts.append(data)
+        self.samples += data.shape[0]
+        return contiguous
+
+    def seconds(self) -> float:
+        return self.samples / self.sample_rate if self.sample_rate else 0.0
+
+    def take(self) -> np.ndarray:
+        data = np.concatenate(self.parts, axis=0)
+        self.clear()
+        return data
+
+
+def verdict(data: np.ndarray, channels, sample_rate: float, bearing, shaft_hz: float) -> dict:
+    """Envelope verdict over the axes of ``data`` (n, channels): for each fault the highest
+    prominence over the axes wins.  Returns {"verdict", "axis", "scores", "lines", "theory"}."""
+    freqs = bearing.fault_frequencies(shaft_hz)
+    per_fault = {}          # fault -> (score, axis, lines of that axis)
+    for k, name in enumerate(channels):
+        d = diagnose(data[:, k].astype(float), sample_rate, freqs)
+        for fault, score in d["scores"].items():
+            if fault not in per_fault or score > per_fault[fault][0]:
+                per_fault[fault] = (score, name, d["lines"])
+    scores = {fault: s for fault, (s, _axis, _lines) in per_fault.items()}
+    top = max(scores, key=scores.get)
+    return {"verdict": top if scores[top] >= DETECTION_THRESHOLD else "healthy",
+            "scores": scores, "axis": per_fault[top][1], "lines": per_fault[top][2],
+            "theory": freqs, "shaft_hz": shaft_hz}
+
+
+def format_verdict(t: float, result: dict) -> str:
+    """One line per verdict (see the module docstring)."""
+    parts = [f"t={t:.2f}s shaft={result['shaft_hz'] * 60:.0f}rpm verdict={result['verdict']}"]
+    for fault, key in FAULT_LINES.items():
+        if fault == "cage":
+            continue
+        line = result["lines"][key]
+        parts.append(f"{key} {line.found_hz:.1f}/{line.expected_hz:.1f}Hz x{line.prominence:.1f}")
+    parts.append(f"({FAULT_NAMES[result['verdict']]}, threshold x{DETECTION_THRESHOLD:g}, axis {result['axis']})")
+    return " | ".join(parts)
+
+
+class MonitorNode(Node):
+    """Subscribes to ``accel`` and ``state``; prints a verdict every ``window`` s of signal."""
+
+    def __init__(self, scene, window: float, count: int = 0, out=None, **kwargs):
+        from sensor_msgs.msg import JointState, PointCloud2
+
+        super().__init__("bearing_monitor", **kwargs)
+        self.scene = scene
+        self.window_s = float(window)
+        self.count = int(count)
+        self.out = out or sys.stdout
+        self.window = Window()
+        self.verdicts = []
+        self._speeds = []
+        self._t0 = None
+        self._warned = False
+        # reliable like the node offers; depth = 1 s of 10 ms batches, so an analysis that takes
+        # a while (scipy on the executor thread) does not lose tables
+        self.create_subscription(PointCloud2, TOPIC_ACCEL, self._on_accel, waveform_qos(0.01))
+        self.create_subscription(JointState, TOPIC_STATE, self._on_state, 10)
+
+    @property
+    def done(self) -> bool:
+        return bool(self.count) and len(self.verdicts) >= self.count
+
+    def _on_state(self, msg):
+        if "shaft" in msg.name and msg.velocity:
+            self._speeds.append(float(msg.velocity[list(msg.name).index("shaft")]))
+
+    def _on_accel(self, msg):
+        if self.done:
+            return
+        stamp, channels, data = from_pointcloud2(msg)
+        if self._t0 is None:
+            self._t0 = stamp
+        if not self.window.add(stamp, channels, data):
+            self.get_logger().warning("accel tables not contiguous (a table was lost or the source "
+                                      "restarted): starting the window again", throttle_duration_sec=5.0)
+            self._speeds = []
+        if self.window.sample_rate and self.window.seconds() >= self.window_s:
+            fs = self.window.sample_rate
+            x = self.window.take()
+            speeds, self._speeds = self._speeds, []
+            # the speed in use comes from `state`; without it, the scene's operating point
+            shaft = float(np.mean(speeds)) if speeds else float(self.scene.shaft_speed)
+            result = verdict(x, channels, fs, self.scene.bearing, abs(shaft) / (2 * np.pi))
+            self.verdicts.append(result)
+            t = (stamp + data.shape[0] * NS / fs - self._t0) / NS
+            print(format_verdict(t, result), file=self.out, flush=True)
+
+
+def main(args) -> int:
+    """``bearing-sim monitor --window S --count N --scene S``; exit 0 after ``count`` verdicts,
+    on Ctrl-C or SIGTERM."""
+    from rclpy.executors import ExternalShutdownException
+
+    from ..scene import load_scene
+
+    scene = load_scene(getattr(args, "scene", None) or DEFAULT_SCENE)   # UserError: exit 2
+    node = None
+    try:
+        rclpy.init()
+        node = MonitorNode(scene, args.window, args.count)
+        print(f"monitor: {scene.bearing.name} ({scene.name}), envelope analysis every {args.window:g} s "
+              f"of {node.resolve_topic_name(TOPIC_ACCEL)}", flush=True)
+        t_start = time.monotonic()
+        while rclpy.ok() and not node.done:
+            rclpy.spin_once(node, timeout_sec=0.2)
+            if not node.window.samples and not node.verdicts and time.monotonic() - t_start > 5.0 \
+                    and not node._warned:
+                node._warned = True
+                print(f"monitor: no waveform tables on {node.resolve_topic_name(TOPIC_ACCEL)} yet "
+                      "(is `bearing-sim node` running on this ROS_DOMAIN_ID?)", flush=True)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
