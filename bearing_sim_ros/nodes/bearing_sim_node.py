@@ -323,12 +323,6 @@ class BearingSimNode(Node):
             self._thread.join(timeout)
         if self.recorder is not None:
             self.recorder.close()
-            st = self.recorder.status
-            if st["ok"]:
-                self.get_logger().info(f"recording {st['path']}: {st['messages']} messages, "
-                                       f"{st['bytes'] / 1e6:.1f} MB, {st['dropped']} dropped")
-            else:
-                self.get_logger().error(f"recording: {st['error']}")
 
     def _run(self):
         try:
@@ -347,6 +341,7 @@ class BearingSimNode(Node):
         anchor_t, anchor_i = mono0, sim.index      # pacing: sample anchor_i is due at anchor_t
         next_diag = mono0 + 1.0
         stats.period_start(mono0, sim.index)
+        stats.started = mono0
         context = self.context
         while not self._stop.is_set():
             cfg = self._cfg
@@ -376,7 +371,7 @@ class BearingSimNode(Node):
             else:
                 now, lag = time.monotonic(), 0.0
                 log_ns = end_stamp       # as `render`: the file replays at the signal's pace
-            stats.batch(lag, batch)
+            stats.batch(lag, batch, now)
 
             out = [(self.pub_accel, msgs.accel(batch)), (self.pub_contact, msgs.contact_forces(batch))]
             rate = cfg["state_rate"]
@@ -465,14 +460,23 @@ class _Stats:
         self.overruns = 0
         self.worst_lag = 0.0
         self.batches = 0
-        self.t0_mono = time.monotonic()
+        self.samples = 0
+        self.started = self.last = time.monotonic()   # steady-clock start and last batch (s)
+
+    @property
+    def real_time_factor(self) -> float:
+        """Signal seconds produced per steady-clock second since the start."""
+        wall = self.last - self.started
+        return self.samples / self.sample_rate / wall if wall > 0 else float("nan")
 
     def period_start(self, now, index):
         self._p_t, self._p_i, self._p_over, self._p_lag = now, index, self.overruns, 0.0
         self._extras, self._extras_n = {}, 0
 
-    def batch(self, lag, batch):
+    def batch(self, lag, batch, now):
         self.batches += 1
+        self.samples += batch.n
+        self.last = now
         self.worst_lag = max(self.worst_lag, lag)
         self._p_lag = max(self._p_lag, lag)
         for key, val in batch.extras.items():
@@ -525,6 +529,20 @@ def _param_text(value) -> str:
     return repr(value)
 
 
+def log_recording(recorder) -> None:
+    """Log where a closed recording went.  Call after ``destroy_node``: after a signal the node's
+    context is gone, and its logger's /rosout publisher with it."""
+    if recorder is None:
+        return
+    st = recorder.status
+    log = rclpy.logging.get_logger(NODE_NAME)
+    if st["ok"]:
+        log.info(f"recording {st['path']}: {st['messages']} messages, {st['bytes'] / 1e6:.1f} MB, "
+                 f"{st['dropped']} dropped")
+    else:
+        log.error(f"recording: {st['error']}")
+
+
 def spin_node(node) -> None:
     """Serve ``node`` until its simulation ends, rclpy shuts down (SIGTERM) or Ctrl-C
     (KeyboardInterrupt, raised to the caller).  The caller then calls ``node.stop()``."""
@@ -564,6 +582,7 @@ def main(argv=None) -> int:
             node.stop()
             error = node.error
             node.destroy_node()
+            log_recording(node.recorder)
         else:
             error = None
         rclpy.try_shutdown()

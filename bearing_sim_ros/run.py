@@ -1,0 +1,158 @@
+"""``bearing-sim run`` (what ``make run`` calls): the live node on a scene, recorded, then a summary.
+
+    bearing-sim run --scene er16k_outer_race --duration 10 --out runs/now.mcap
+
+Runs the ``bearing_sim`` node in this process in real time for ``--duration`` seconds (0 = until
+Ctrl-C or SIGTERM), publishing on the ROS graph like ``bearing-sim node`` and recording to
+``--out``.  Then it reads the recording back (so the summary also proves the file is readable)
+and prints one screen: the envelope lines found at the fault frequencies against theory (the
+shared detector, ``analysis.envelope``, over the last ``ANALYSIS_MAX_S`` seconds), the verdict,
+the real-time factor and overruns, and where the recording is.
+"""
+from __future__ import annotations
+
+import math
+import time
+from collections import deque
+
+import numpy as np
+
+from .errors import UserError
+
+ANALYSIS_MAX_S = 30.0       # s of signal (the end of the recording) that the summary analyses
+
+
+def _record_tail(path, max_s: float) -> dict:
+    """The last ``max_s`` seconds of ``accel`` from a recording, and the shaft speed in use."""
+    from rclpy.serialization import deserialize_message
+
+    from .recording.reader import get_message, open_recording
+    from .waveform import NS, from_pointcloud2
+
+    parts: deque = deque()
+    held = 0
+    speeds: deque = deque()
+    channels, rate, first = None, None, None
+    prev = None
+    with open_recording(path) as rec:
+        topics = rec.topics()
+        accel_topic = next((t for t in topics if t.rsplit("/", 1)[-1] == "accel"), None)
+        speed_topic = next((t for t in topics if t.rsplit("/", 1)[-1] == "shaft_speed"), None)
+        if accel_topic is None:
+            raise UserError(f"{path}: no accel topic in the recording")
+        types = {t: get_message(c.msg_type) for t, c in topics.items() if t in (accel_topic, speed_topic)}
+        for topic, _type, _log_ns, data in rec.messages(topics=[t for t in (accel_topic, speed_topic) if t]):
+            msg = deserialize_message(data, types[topic])
+            if topic == speed_topic:
+                speeds.append(float(msg.data))
+                continue
+            stamp, channels, arr = from_pointcloud2(msg)
+            if prev is not None and rate is None:
+                rate = prev[1] * NS / (stamp - prev[0])
+            prev = (stamp, arr.shape[0])
+            if first is None:
+                first = stamp
+            parts.append(arr)
+            held += arr.shape[0]
+            if rate:
+                while held - parts[0].shape[0] >= max_s * rate:
+                    held -= parts.popleft().shape[0]
+                while len(speeds) > len(parts):       # one speed record per batch
+                    speeds.popleft()
+        meta = dict(rec.metadata)
+        counts = {t: c.count for t, c in topics.items()}
+        size = rec.path.stat().st_size
+    data = np.concatenate(list(parts)) if parts else np.zeros((0, 0), np.float32)
+    return {"accel": data, "channels": channels, "sample_rate": rate,
+            "shaft_speed": float(np.mean(speeds)) if speeds else None, "metadata": meta,
+            "counts": counts, "bytes": size}
+
+
+def summarise(scene, tail: dict, node_figures: dict, path) -> str:
+    """The one-screen summary (text)."""
+    from .analysis.envelope import DETECTION_THRESHOLD
+    from .nodes.monitor_node import FAULT_NAMES, verdict
+
+    lines = []
+    f = node_figures
+    lines.append(f"bearing-sim run: {scene.name} ({scene.bearing.name}), {f['signal_s']:.2f} s of signal in "
+                 f"{f['wall_s']:.2f} s: real-time factor {f['rtf']:.3f}, {f['overruns']} overruns, "
+                 f"worst lag {1e3 * f['worst_lag']:.1f} ms, {f['tier']} tier")
+    fs = tail["sample_rate"]
+    x = tail["accel"]
+    if not fs or x.shape[0] < fs:
+        lines.append("envelope analysis: less than 1 s of signal recorded, nothing to analyse")
+    else:
+        speed = tail["shaft_speed"] if tail["shaft_speed"] is not None else scene.shaft_speed
+        shaft_hz = abs(speed) / (2 * math.pi)
+        res = verdict(x, tail["channels"], fs, scene.bearing, shaft_hz)
+        lines.append(f"envelope analysis of the last {x.shape[0] / fs:.1f} s ({', '.join(tail['channels'])}, "
+                     f"band 2-5 kHz) at shaft {shaft_hz:.2f} Hz ({shaft_hz * 60:.0f} rpm), axis {res['axis']}:")
+        lines.append(f"  {'line':<6} {'theory Hz':>10} {'found Hz':>9} {'x floor':>8}")
+        for key, label in (("bpfo", "BPFO"), ("bpfi", "BPFI"), ("2bsf", "2xBSF"), ("ftf", "FTF")):
+            ln = res["lines"][key]
+            mark = "  <- detected" if key != "ftf" and ln.prominence >= DETECTION_THRESHOLD else ""
+            lines.append(f"  {label:<6} {ln.expected_hz:>10.2f} {ln.found_hz:>9.2f} {ln.prominence:>8.1f}{mark}")
+        defects = ", ".join(d.kind for d in scene.defects) or "none"
+        lines.append(f"verdict: {FAULT_NAMES[res['verdict']]} (threshold x{DETECTION_THRESHOLD:g} the "
+                     f"local floor; the scene's defects: {defects})")
+    n_msgs = sum(tail["counts"].values())
+    lines.append(f"recording: {path} ({tail['bytes'] / 1e6:.1f} MB, {n_msgs} messages on "
+                 f"{len(tail['counts'])} topics, {f['dropped']} dropped)")
+    lines.append(f"  next: bearing-sim report {path} --out {str(path).rsplit('.', 1)[0]}_report"
+                 f"   |   bearing-sim play {path}")
+    return "\n".join(lines)
+
+
+def run_command(args) -> int:
+    """CLI entry: ``bearing-sim run --scene S --duration SEC --out F.mcap``."""
+    import rclpy
+    from rclpy.executors import ExternalShutdownException
+    from rclpy.parameter import Parameter
+
+    from .nodes.bearing_sim_node import BearingSimNode, log_recording, spin_node
+    from .scene import load_scene
+
+    duration = float(args.duration)
+    if not (math.isfinite(duration) and duration >= 0):
+        raise UserError(f"--duration = {args.duration!r}: expected seconds >= 0 (0 = until Ctrl-C)")
+    scene = load_scene(args.scene)
+    out = str(args.out)
+    overrides = [Parameter("scene", value=str(args.scene)), Parameter("duration", value=duration),
+                 Parameter("record", value=out), Parameter("real_time", value=True)]
+    node = None
+    error = None
+    t0 = time.monotonic()
+    try:
+        rclpy.init(args=[])
+        node = BearingSimNode(parameter_overrides=overrides)
+        print(f"bearing-sim run: {scene.name} in real time "
+              f"{'until Ctrl-C' if duration == 0 else f'for {duration:g} s'}, recording to {out}", flush=True)
+        t0 = time.monotonic()
+        spin_node(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        if node is not None:
+            node.stop()
+            error = node.error
+        wall = time.monotonic() - t0
+        figures = None
+        if node is not None:
+            rs = node.recorder.status
+            figures = {"signal_s": node.sim.time, "wall_s": wall, "rtf": node.stats.real_time_factor,
+                       "overruns": node.stats.overruns, "worst_lag": node.stats.worst_lag,
+                       "tier": node.sim.tier, "dropped": rs["dropped"], "ok": rs["ok"], "error": rs["error"],
+                       "path": rs["path"]}
+            node.destroy_node()
+            log_recording(node.recorder)
+        rclpy.try_shutdown()
+    if error is not None:
+        raise error
+    if figures is None:
+        return 0
+    if not figures["ok"]:
+        raise UserError(f"--out = {out!r}: {figures['error']}")
+    tail = _record_tail(figures["path"], ANALYSIS_MAX_S)
+    print(summarise(scene, tail, figures, figures["path"]), flush=True)
+    return 0
