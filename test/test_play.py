@@ -1,0 +1,158 @@
+"""``bearing-sim play`` delivers every recorded message to a subscriber in another process, with
+the recorded types, stamps and bytes; ``--loop`` keeps the waveform tables contiguous across the
+seam; ``--clock`` publishes the recording's time; bad files end with exit status 2 and one line."""
+from __future__ import annotations
+
+import json
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+import zlib
+
+import numpy as np
+import pytest
+
+from bearing_sim_ros.recording.reader import open_recording
+from bearing_sim_ros.recording.render import render
+from bearing_sim_ros.waveform import NS
+
+SUBSCRIBER = textwrap.dedent('''
+    import json, sys, time, zlib
+    import rclpy
+    from rclpy.qos import QoSProfile
+    from sensor_msgs.msg import PointCloud2, JointState
+    from diagnostic_msgs.msg import DiagnosticArray
+    from std_msgs.msg import Float64
+    from geometry_msgs.msg import WrenchStamped
+    from rosgraph_msgs.msg import Clock
+    from rclpy.serialization import serialize_message
+
+    want_accel, timeout, out = int(sys.argv[1]), float(sys.argv[2]), sys.argv[3]
+    rclpy.init()
+    node = rclpy.create_node("monitor")
+    got = {}
+    qos = QoSProfile(depth=1000)
+
+    def keep(topic):
+        def cb(msg):
+            stamp = None
+            if hasattr(msg, "header"):
+                stamp = msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec
+            elif hasattr(msg, "clock"):
+                stamp = msg.clock.sec * 10**9 + msg.clock.nanosec
+            crc = zlib.crc32(bytes(msg.data)) if topic.endswith("accel") else 0
+            got.setdefault(topic, []).append([stamp, int(getattr(msg, "width", 0)), crc])
+        return cb
+
+    for topic, cls in [("/accel", PointCloud2), ("/contact_forces", PointCloud2), ("/state", JointState),
+                       ("/diagnostics", DiagnosticArray), ("/shaft_speed", Float64),
+                       ("/load", WrenchStamped), ("/clock", Clock)]:
+        node.create_subscription(cls, topic, keep(topic), qos)
+    print("ready", flush=True)
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < timeout and len(got.get("/accel", [])) < want_accel:
+        rclpy.spin_once(node, timeout_sec=0.05)
+    t1 = time.monotonic()           # a little longer for the rest of the last instant
+    while time.monotonic() - t1 < 0.5:
+        rclpy.spin_once(node, timeout_sec=0.05)
+    json.dump(got, open(out, "w"))
+    node.destroy_node()
+    rclpy.shutdown()
+''')
+
+
+@pytest.fixture(scope="module")
+def recording(tmp_path_factory):
+    out = tmp_path_factory.mktemp("play") / "one_second.mcap"
+    render("er16k_outer_race", 1.0, out, fidelity="kinematic", seed=2, progress=False)
+    with open_recording(out) as rec:
+        counts = {c.topic: c.count for c in rec.channels.values()}
+        accel = [(t, d) for _, _, t, d in rec.messages(["/accel"])]
+    return out, counts, accel
+
+
+def _subscriber(tmp_path, env, want_accel, timeout):
+    script = tmp_path / "monitor.py"
+    script.write_text(SUBSCRIBER)
+    result = tmp_path / "got.json"
+    proc = subprocess.Popen([sys.executable, str(script), str(want_accel), str(timeout), str(result)],
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    line = proc.stdout.readline()
+    assert line.strip() == "ready", line + proc.stdout.read()
+    return proc, result
+
+
+def test_play_delivers_every_message_to_another_process(recording, bearing_sim_exe, ros_env, tmp_path):
+    from rclpy.serialization import deserialize_message
+    from sensor_msgs.msg import PointCloud2
+
+    path, counts, accel = recording
+    sub, result = _subscriber(tmp_path, ros_env, len(accel), 40)
+    try:
+        play = subprocess.run([bearing_sim_exe, "play", str(path), "--rate", "2", "--clock"], env=ros_env,
+                              capture_output=True, text=True, timeout=60)
+        assert play.returncode == 0, play.stderr
+        sub.wait(timeout=60)
+    finally:
+        if sub.poll() is None:
+            sub.kill()
+            sub.wait()
+    got = json.loads(result.read_text())
+    for topic, n in counts.items():
+        assert len(got.get(topic, [])) == n, f"{topic}: {len(got.get(topic, []))} of {n}"
+    # the same tables, stamps and bytes as recorded
+    rec_stamps = []
+    for (_, data), (stamp, width, crc) in zip(accel, got["/accel"]):
+        msg = deserialize_message(data, PointCloud2)
+        rec_stamps.append(msg.header.stamp.sec * NS + msg.header.stamp.nanosec)
+        assert (stamp, width, crc) == (rec_stamps[-1], msg.width, zlib.crc32(bytes(msg.data)))
+    # /clock: the recording's time, increasing, covering it
+    clock = np.array([c[0] for c in got["/clock"]])
+    assert clock[0] == 0 and np.all(np.diff(clock) > 0) and clock[-1] == 1 * NS
+
+
+def test_loop_keeps_tables_contiguous_and_sigint_ends_cleanly(recording, bearing_sim_exe, ros_env, tmp_path):
+    path, counts, accel = recording
+    want = int(2.5 * len(accel))
+    sub, result = _subscriber(tmp_path, ros_env, want, 40)
+    play = subprocess.Popen([bearing_sim_exe, "play", str(path), "--rate", "4", "--loop"], env=ros_env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        sub.wait(timeout=60)
+        assert play.poll() is None            # still looping
+        play.send_signal(signal.SIGINT)
+        _, err = play.communicate(timeout=30)
+    finally:
+        for p in (sub, play):
+            if p.poll() is None:
+                p.kill()
+                p.wait()
+    assert play.returncode == 0 and "Traceback" not in err, err
+    got = json.loads(result.read_text())
+    tables = got["/accel"]
+    assert len(tables) >= want
+    stamps = np.array([t[0] for t in tables], dtype=np.int64)
+    widths = np.array([t[1] for t in tables])
+    # contiguous across the seams: next stamp = stamp + width / fs (1 ns rounding of 1/15 kHz)
+    assert np.all(np.abs(np.diff(stamps) - widths[:-1] * NS / 15000.0) <= 1)
+    assert stamps[len(accel)] == 1 * NS       # the second pass starts where the first ended
+    # the second pass is the recording again, sample for sample
+    assert [t[2] for t in tables[len(accel):2 * len(accel)]] == [t[2] for t in tables[:len(accel)]]
+
+
+@pytest.mark.parametrize("kind", ["not_mcap", "truncated", "missing"])
+def test_bad_files_exit_2_with_one_line(kind, recording, bearing_sim_exe, ros_env, tmp_path):
+    path, _, _ = recording
+    bad = tmp_path / f"{kind}.mcap"
+    if kind == "not_mcap":
+        bad.write_text("name: not a recording\n")
+    elif kind == "truncated":
+        data = path.read_bytes()
+        bad.write_bytes(data[: len(data) // 2])
+    r = subprocess.run([bearing_sim_exe, "play", str(bad)], env=ros_env, capture_output=True, text=True,
+                       timeout=60)
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 2 and len(lines) == 1, r.stderr
+    assert {"not_mcap": "not an MCAP file", "truncated": "truncated", "missing": "no such file"}[kind] in lines[0]
