@@ -389,7 +389,11 @@ def _markdown(s: dict) -> str:
         lines += [s["description"], ""]
     verdict = s["verdict"].upper()
     exp = ", ".join(s["expected_defects"]) or "none (healthy)"
-    lines += [f"**Verdict (envelope analysis of {s['envelope_channel']}): {verdict}**; the scene's defects: {exp}.", ""]
+    found = set() if s["verdict"] in ("healthy", "unknown") else {s["verdict"]}
+    agree = ("agrees with the scene" if found <= set(s["expected_defects"]) and (found or not s["expected_defects"])
+             else "differs from the scene")
+    lines += [f"**Verdict (envelope analysis of {s['envelope_channel']}): {verdict}**; the scene's defects: "
+              f"{exp} (the verdict {agree}).", ""]
     lines += ["| | |", "| --- | --- |",
               f"| file | `{s['file']}` |",
               f"| made by | bearing_sim_ros {s['package_version']}, {s['tier']} tier ({s['tier_reason']}), seed {s['seed']} |",
