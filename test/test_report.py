@@ -67,3 +67,15 @@ def test_report_bad_files_exit_2_with_one_line(kind, outer, tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1
     assert ("not an MCAP file" if kind == "not_mcap" else "truncated") in err[0]
+
+
+def test_report_of_a_skidding_run_shows_cage_and_skid_ratios(tmp_path):
+    pytest.importorskip("bearing_sim_ros.physics.skidding")
+    rec = tmp_path / "skid.mcap"
+    render("er16k_skidding", 1.0, rec, fidelity="skidding", progress=False)
+    s = build_report(rec, tmp_path / "out")
+    assert "cage.png" in s["plots"]
+    ratios = s["skid_ratios_percent"]
+    assert set(ratios) >= {"ball_skid_ratio", "cage_skid_ratio"}
+    # percent, and the cage runs slower than pure rolling (seed 000: 1.25 % at this point)
+    assert 0.05 < ratios["cage_skid_ratio"] < 20

@@ -291,8 +291,9 @@ def plot_cage(d: _Data, scene, out: Path, meta: dict) -> str | None:
     axes[1].grid(alpha=0.3)
     if d.skid:
         for key, arr in sorted(d.skid.items()):
-            axes[2].plot(arr[:, 0] / NS, 100 * arr[:, 1], marker="o", ms=3, lw=1.0, label=key)
-        axes[2].set(ylabel="skid ratio (%)", xlabel="time (s)")
+            # the node reports skid ratios in percent already (physics/skidding.py, seed 000 eqs 37-38)
+            axes[2].plot(arr[:, 0] / NS, arr[:, 1], marker="o", ms=3, lw=1.0, label=key)
+        axes[2].set(ylabel="skid ratio (%, /diagnostics)", xlabel="time (s)")
         axes[2].legend(loc="best", fontsize=8)
         axes[2].grid(alpha=0.3)
     return _save(plt, fig, out / "cage.png")
@@ -359,6 +360,7 @@ def build_report(path, out) -> dict:
                         if verdict else {}),
         "verdict": verdict["verdict"] if verdict else "unknown",
         "expected_defects": expected,
+        "skid_ratios_percent": {k: float(np.mean(v[:, 1])) for k, v in sorted(d.skid.items())},
         "plots": plots,
     }
     (out / "summary.json").write_text(json.dumps(summary, indent=2, default=_json_default) + "\n")
@@ -412,6 +414,9 @@ def _markdown(s: dict) -> str:
                          f"{_num(line['prominence'])} |")
         lines += ["", f"A line counts as a fault above a prominence of 4 (`analysis.envelope.DETECTION_THRESHOLD`); "
                   f"which line marks which fault: {', '.join(f'{k} -> {LINE_LABELS[v]}' for k, v in FAULT_LINES.items())}.", ""]
+    if s["skid_ratios_percent"]:
+        lines += ["## Skidding", "", "Mean over the recording (`/diagnostics`): "
+                  + ", ".join(f"{k.replace('_ratio', '')} {v:.3g} %" for k, v in s["skid_ratios_percent"].items()), ""]
     lines += ["## Waveform statistics", "", "| channel | RMS (m/s²) | kurtosis | crest factor | peak-to-peak (m/s²) |",
               "| --- | --- | --- | --- | --- |"]
     for name, st in s["statistics"].items():
