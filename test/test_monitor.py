@@ -1,0 +1,69 @@
+"""``bearing-sim monitor`` end to end: the node and the monitor as two processes over DDS.
+
+Healthy reference: ``cwru_6205_normal``, not ``er16k_healthy``.  With the current physics the
+healthy ER-16K shows a strong ball-pass line (BPFO, prominence ~200) from the varying compliance
+of 9 balls under a 50 N load on a bearing with clearance; the shared envelope detector cannot tell
+it from the outer-race defect (it looks at the height of the BPFO line only), so calling it
+healthy would be a test of the wrong thing.  The CWRU 6205 scene carries its load with many balls
+(100 N, tighter structure) and its ball-pass modulation stays below the detector's floor.
+"""
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+from test_node_support import NS, NodeProcess
+
+from bearing_sim_ros.nodes.monitor_node import Window
+
+
+def test_window_gathers_contiguous_tables_and_restarts_on_a_gap():
+    w = Window()
+    step = 10_000_000
+    t = 5 * NS
+    assert w.add(t, ["a"], np.zeros((150, 1), np.float32))
+    assert w.add(t + step, ["a"], np.ones((150, 1), np.float32))
+    assert w.sample_rate == pytest.approx(15000.0)
+    assert w.add(t + 2 * step, ["a"], np.ones((150, 1), np.float32))
+    assert w.seconds() == pytest.approx(0.03)
+    assert not w.add(t + 4 * step, ["a"], np.ones((150, 1), np.float32))      # one table lost
+    assert w.gaps == 1 and w.samples == 150 and w.sample_rate is None
+    assert w.add(t + 5 * step, ["a"], np.ones((150, 1), np.float32))
+    assert not w.add(t + 6 * step, ["b"], np.ones((150, 1), np.float32))      # other channels
+    assert w.take().shape == (150, 1) and w.samples == 0
+
+
+def _other_domain(env):
+    d = int(env["ROS_DOMAIN_ID"])
+    return dict(env, ROS_DOMAIN_ID=str(1 + (d + 49) % 100))
+
+
+def test_monitor_detects_outer_race_and_calls_healthy_healthy(ros_env, bearing_sim_exe, tmp_path):
+    """Two node + monitor pairs at once, each pair on its own domain: the outer-race ER-16K gives
+    verdict=outer with the BPFO line at theory; the healthy CWRU 6205 gives verdict=healthy."""
+    env_h = _other_domain(ros_env)
+    procs = []
+    try:
+        for env, scene in ((ros_env, "er16k_outer_race"), (env_h, "cwru_6205_normal")):
+            procs.append(NodeProcess(bearing_sim_exe, env, {"scene": scene}, tmp_path / f"node_{scene}.log"))
+            procs.append(NodeProcess(bearing_sim_exe, env, None, tmp_path / f"monitor_{scene}.log",
+                                     command=("monitor", "--window", "3", "--count", "1", "--scene", scene)))
+        monitors = procs[1], procs[3]
+        for m in monitors:
+            assert m.wait(60) == 0, m.output()
+        out_fault, out_healthy = (m.output() for m in monitors)
+    finally:
+        for p in procs:
+            p.close()
+    v = [ln for ln in out_fault.splitlines() if "verdict=" in ln]
+    assert len(v) == 1, out_fault
+    assert "verdict=outer" in v[0]
+    found, theory, prominence = re.search(r"bpfo ([\d.]+)/([\d.]+)Hz x([\d.]+)", v[0]).groups()
+    assert float(found) == pytest.approx(float(theory), rel=0.005)
+    assert float(theory) == pytest.approx(95.25, rel=0.001)        # ER-16K at 1600 rpm
+    assert float(prominence) > 20
+    h = [ln for ln in out_healthy.splitlines() if "verdict=" in ln]
+    assert len(h) == 1 and "verdict=healthy" in h[0], out_healthy
+    assert "shaft=1797rpm" in h[0]

@@ -1,0 +1,201 @@
+"""Helpers for the cross-process node tests (no tests here): the node as a subprocess and an
+rclpy listener/publisher in the test process, each test on its own ROS_DOMAIN_ID (``ros_env``)."""
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import threading
+import time
+
+import numpy as np
+
+NS = 1_000_000_000
+
+
+def param_text(value) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float):
+        return repr(value)
+    return str(value)
+
+
+class NodeProcess:
+    """``bearing-sim node --ros-args -p k:=v ...`` as a subprocess, output to a file."""
+
+    def __init__(self, exe, env, params: dict, log_path, command=("node",)):
+        args = [exe, *command]
+        if params is not None:
+            args.append("--ros-args")
+            for key, value in params.items():
+                args += ["-p", f"{key}:={param_text(value)}"]
+        self.log_path = log_path
+        self._log = open(log_path, "w+")  # noqa: SIM115 - closed in close()
+        self.proc = subprocess.Popen(args, env=env, stdout=self._log, stderr=subprocess.STDOUT,
+                                     start_new_session=True)
+
+    def output(self) -> str:
+        self._log.flush()
+        with open(self.log_path) as f:
+            return f.read()
+
+    def wait_for_output(self, text: str, timeout: float = 30.0) -> None:
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            if text in self.output():
+                return
+            if self.proc.poll() is not None:
+                raise AssertionError(f"node exited ({self.proc.returncode}) before printing {text!r}:\n{self.output()}")
+            time.sleep(0.1)
+        raise AssertionError(f"no {text!r} after {timeout} s:\n{self.output()}")
+
+    def send(self, sig) -> None:
+        self.proc.send_signal(sig)
+
+    def wait(self, timeout: float = 20.0) -> int:
+        try:
+            return self.proc.wait(timeout)
+        except subprocess.TimeoutExpired:
+            self.kill()
+            raise AssertionError(f"node still running after {timeout} s:\n{self.output()}") from None
+
+    def kill(self) -> None:
+        if self.proc.poll() is None:
+            os.killpg(self.proc.pid, signal.SIGKILL)
+            self.proc.wait(5)
+
+    def close(self) -> None:
+        self.kill()
+        self._log.close()
+
+
+class Listener:
+    """An rclpy node in the test process: subscribes to accel, state and /diagnostics (what a
+    consumer does), publishes shaft_speed and load, and can set the node's parameters."""
+
+    def __init__(self, name: str = "test_listener"):
+        import rclpy
+        from diagnostic_msgs.msg import DiagnosticArray
+        from geometry_msgs.msg import WrenchStamped
+        from rclpy.executors import SingleThreadedExecutor
+        from sensor_msgs.msg import JointState, PointCloud2
+        from std_msgs.msg import Float64
+
+        from bearing_sim_ros.messages import waveform_qos
+
+        self.ctx = rclpy.Context()
+        rclpy.init(context=self.ctx)           # ROS_DOMAIN_ID from the ros_env fixture
+        self.node = rclpy.create_node(name, context=self.ctx)
+        self.accel = []          # (receive time monotonic s, stamp ns, channels, (n, c) float32)
+        self.state = []          # (stamp ns, names, positions, velocities)
+        self.diagnostics = []    # (receive time, level, message, {key: value})
+        self.node.create_subscription(PointCloud2, "accel", self._on_accel, waveform_qos(0.01))
+        self.node.create_subscription(JointState, "state", self._on_state, 50)
+        self.node.create_subscription(DiagnosticArray, "/diagnostics", self._on_diag, 10)
+        self.pub_speed = self.node.create_publisher(Float64, "shaft_speed", 10)
+        self.pub_load = self.node.create_publisher(WrenchStamped, "load", 10)
+        self.executor = SingleThreadedExecutor(context=self.ctx)
+        self.executor.add_node(self.node)
+        self._thread = threading.Thread(target=self._spin, daemon=True)
+        self._thread.start()
+
+    def _spin(self):
+        from rclpy.executors import ExternalShutdownException
+
+        try:
+            while self.ctx.ok():
+                self.executor.spin_once(timeout_sec=0.05)
+        except (ExternalShutdownException, Exception):  # noqa: BLE001 - shutting down
+            pass
+
+    def _on_accel(self, msg):
+        from bearing_sim_ros.waveform import from_pointcloud2
+
+        stamp, channels, data = from_pointcloud2(msg)
+        self.accel.append((time.monotonic(), stamp, channels, data.copy()))
+
+    def _on_state(self, msg):
+        s = msg.header.stamp
+        self.state.append((s.sec * NS + s.nanosec, list(msg.name), list(msg.position), list(msg.velocity)))
+
+    def _on_diag(self, msg):
+        for st in msg.status:
+            level = st.level[0] if isinstance(st.level, (bytes, bytearray)) else int(st.level)
+            self.diagnostics.append((time.monotonic(), level, st.message, {kv.key: kv.value for kv in st.values}))
+
+    def wait_for(self, predicate, timeout: float, what: str):
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            value = predicate()
+            if value:
+                return value
+            time.sleep(0.05)
+        raise AssertionError(f"timed out after {timeout} s waiting for {what}")
+
+    def wait_matched(self, timeout: float = 15.0) -> None:
+        self.wait_for(lambda: self.pub_speed.get_subscription_count() > 0
+                      and self.pub_load.get_subscription_count() > 0, timeout, "the node's subscriptions")
+
+    def publish_speed(self, value: float) -> None:
+        from std_msgs.msg import Float64
+
+        self.pub_speed.publish(Float64(data=float(value)))
+
+    def publish_load(self, fx: float, fy: float, fz: float = 0.0, stamp_ns: int | None = None) -> None:
+        from geometry_msgs.msg import WrenchStamped
+
+        msg = WrenchStamped()
+        if stamp_ns is None:
+            stamp_ns = self.node.get_clock().now().nanoseconds
+        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(int(stamp_ns), NS)
+        msg.wrench.force.x, msg.wrench.force.y, msg.wrench.force.z = float(fx), float(fy), float(fz)
+        self.pub_load.publish(msg)
+
+    def set_parameters(self, values: dict, timeout: float = 10.0):
+        """[(successful, reason)] for each parameter, set on the ``bearing_sim`` node."""
+        from rclpy.parameter import Parameter
+        from rclpy.parameter_client import AsyncParameterClient
+
+        client = AsyncParameterClient(self.node, "bearing_sim")
+        assert client.wait_for_services(timeout_sec=timeout), "bearing_sim parameter services not found"
+        future = client.set_parameters([Parameter(k, value=v) for k, v in values.items()])
+        self.wait_for(future.done, timeout, "the set_parameters reply")
+        return [(r.successful, r.reason) for r in future.result().results]
+
+    def accel_since(self, stamp_ns: int):
+        """Contiguous (stamp, data) of the tables from ``stamp_ns`` on."""
+        return [(s, d) for _t, s, _c, d in list(self.accel) if s >= stamp_ns]
+
+    def close(self) -> None:
+        self.ctx.try_shutdown()
+        self._thread.join(5)
+        try:
+            self.executor.shutdown(timeout_sec=1)
+            self.node.destroy_node()
+        except Exception:  # noqa: BLE001
+            pass
+
+
+def stamps_and_widths(tables):
+    stamps = np.array([s for s, _d in tables], dtype=np.int64)
+    widths = np.array([d.shape[0] for _s, d in tables], dtype=np.int64)
+    return stamps, widths
+
+
+def read_recording(path):
+    """{topic: [(log_time_ns, msg)]} and the metadata of an MCAP file, read with ``rosbags``
+    (an independent reader: what a user's tooling sees)."""
+    from pathlib import Path
+
+    from rosbags.highlevel import AnyReader
+
+    out = {}
+    with AnyReader([Path(path)]) as reader:
+        for conn, log_ns, raw in reader.messages():
+            out.setdefault(conn.topic, []).append((log_ns, reader.deserialize(raw, conn.msgtype)))
+    from mcap.reader import make_reader
+
+    with open(path, "rb") as f:
+        meta = {m.name: dict(m.metadata) for m in make_reader(f).iter_metadata()}
+    return out, meta
