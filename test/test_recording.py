@@ -187,3 +187,19 @@ def test_waveform_table_padding_is_zeroed_in_the_file(tmp_path, sim_msgs):
         for _, _, _, data in r.messages(["/accel"]):
             # frame 'bearing_accel': PointField[0].datatype at 60, count at 64; see cdr.py
             assert data[61:64] == b"\0\0\0" and data[85:88] == b"\0\0\0" and data[93:96] == b"\0\0\0"
+
+
+def test_rotation_by_size(tmp_path, sim_msgs):
+    scene, sim, msgs = sim_msgs
+    base = tmp_path / "size.mcap"
+    # 40 batches x (1.3 kB accel + 0.5 kB state) = 72 kB: 20 kB files -> 4 files
+    rec, sent = _record(base, scene, sim, msgs, batches=40, rotate_bytes=20_000)
+    files = rec.status["files"]
+    assert len(files) == 4
+    total = 0
+    for f in files:
+        with open_recording(f) as r:
+            n = sum(len(d) for _, _, _, d in r.messages())
+            assert n < 20_000 + 2_000                  # at most one message over the limit
+            total += sum(1 for _ in r.messages(["/accel"]))
+    assert total == len(sent)

@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -201,10 +202,22 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
                 rec.write(TOPIC_DIAGNOSTICS, diagnostics_message(pub_ns, values, 0, "ok"), pub_ns)
                 next_diag_s += 1
             bar.update(done / sample_rate)
-    finally:
+    except KeyboardInterrupt:
+        # Ctrl-C: keep what was rendered, finalised, and say so
         rec.close()
-        bar.update(done / sample_rate, force=True)
         bar.done()
+        print(f"interrupted: {str(out)!r} holds the first {done / sample_rate:g} s", file=sys.stderr)
+        raise
+    except BaseException:
+        # a failed render (solver diverged, ...) must not leave a short file that looks complete
+        rec.close()
+        bar.done()
+        for f in rec.status["files"]:
+            Path(f).unlink(missing_ok=True)
+        raise
+    rec.close()
+    bar.update(done / sample_rate, force=True)
+    bar.done()
     wall = time.perf_counter() - t_wall0
     status = rec.status
     if not status["ok"]:
