@@ -335,6 +335,8 @@ class BearingSimNode(Node):
     def _loop(self):
         from rosgraph_msgs.msg import Clock
 
+        from ..recording.render import load_message, speed_message
+
         sim, msgs, stats = self.sim, self.msgs, self.stats
         sr = sim.sample_rate
         mono0 = time.monotonic()
@@ -344,6 +346,7 @@ class BearingSimNode(Node):
         stats.started = mono0
         context = self.context
         while not self._stop.is_set():
+            began = time.monotonic()
             cfg = self._cfg
             total = int(round(cfg["duration"] * sr)) if cfg["duration"] > 0 else 0
             if total and sim.index >= total:
@@ -354,25 +357,7 @@ class BearingSimNode(Node):
             batch = sim.advance(n, shaft_speed=speed, radial_load=load)
             end_index = sim.index
             end_stamp = msgs.stamp_ns(end_index)
-            ready = time.monotonic()
-            real_time = cfg["real_time"]
-            if real_time:
-                if self._repace:
-                    self._repace = False
-                    anchor_t, anchor_i = ready - n / sr, end_index - n
-                due = anchor_t + (end_index - anchor_i) / sr
-                if ready > due:
-                    stats.overruns += 1
-                else:
-                    self._stop.wait(due - ready)    # wakes early on shutdown: publish at once
-                now = time.monotonic()
-                lag = max(0.0, now - due)
-                log_ns = self.start_ns + int((now - mono0) * 1e9)
-            else:
-                now, lag = time.monotonic(), 0.0
-                log_ns = end_stamp       # as `render`: the file replays at the signal's pace
-            stats.batch(lag, batch, now)
-
+            # build the messages before waiting: at the due time only publishing is left
             out = [(self.pub_accel, msgs.accel(batch)), (self.pub_contact, msgs.contact_forces(batch))]
             rate = cfg["state_rate"]
             if rate > 0 and math.floor(end_index * rate / sr) > math.floor((end_index - n) * rate / sr):
@@ -383,27 +368,49 @@ class BearingSimNode(Node):
                 clk = Clock()
                 clk.clock.sec, clk.clock.nanosec = divmod(end_stamp, 1_000_000_000)
                 out.append((self.pub_clock, clk))
+            ready = time.monotonic()
+
+            if cfg["real_time"]:
+                if self._repace:
+                    self._repace = False
+                    anchor_t, anchor_i = ready - n / sr, end_index - n
+                # the moment the batch's last sample happens; from the anchor, so no drift
+                due = anchor_t + (end_index - anchor_i) / sr
+                if ready > due:
+                    stats.overruns += 1       # late: publish at once, the next batches catch up
+                else:
+                    self._stop.wait(due - ready)    # wakes early on shutdown: publish at once
+                now = time.monotonic()
+                lag = max(0.0, now - due)
+                log_ns = self.start_ns + int((now - mono0) * 1e9)
+            else:
+                now, lag = time.monotonic(), 0.0
+                log_ns = end_stamp       # as `render`: the file replays at the signal's pace
+            stats.batch(lag, batch, now)
             if now >= next_diag:
                 next_diag = max(next_diag + 1.0, now - 0.5)
                 out.append((self.pub_diag, self._diagnostics(end_stamp, now)))
 
+            if not context.ok():
+                shutting_down = True     # a signal shut rclpy down: record this batch, then stop
+            else:
+                shutting_down = False
+                try:
+                    for pub, msg in out:
+                        pub.publish(msg)
+                except Exception:  # noqa: BLE001 - the context went away between ok() and publish
+                    if context.ok():
+                        raise
+                    shutting_down = True
             rec = self.recorder
-            if rec is not None:
-                from ..recording.render import load_message, speed_message
-
+            if rec is not None:           # after publishing: serialising is off the critical path
                 rec.write(self.sub_speed.topic_name, speed_message(speed), log_ns)
                 rec.write(self.sub_load.topic_name, load_message(load, start_stamp, msgs.frame_id), log_ns)
                 for pub, msg in out:
                     if pub is not self.pub_clock:
                         rec.write(pub.topic_name, msg, log_ns)
-            if not context.ok():
-                break                    # shut down by a signal: the batch is recorded, stop
-            try:
-                for pub, msg in out:
-                    pub.publish(msg)
-            except Exception:  # noqa: BLE001 - the context went away between ok() and publish
-                if context.ok():
-                    raise
+            stats.busy((ready - began) + (time.monotonic() - now))
+            if shutting_down:
                 break
 
     def _diagnostics(self, stamp_ns, now):
@@ -419,6 +426,9 @@ class BearingSimNode(Node):
             "overruns_last_period": period["overruns"],
             "lag_s": f"{period['worst_lag']:.6f}",
             "worst_lag_s": f"{st.worst_lag:.6f}",
+            "batch_compute_s": f"{period['busy_mean']:.6f}",
+            "batch_compute_worst_s": f"{period['busy_worst']:.6f}",
+            "sim_thread_load": f"{period['busy_fraction']:.4f}",
             "tier": self.sim.tier,
             "tier_reason": self.sim.selection.reason,
             "tier_estimated_error": f"{self.sim.selection.estimated_error:.3g}",
@@ -461,6 +471,7 @@ class _Stats:
         self.worst_lag = 0.0
         self.batches = 0
         self.samples = 0
+        self.busy_worst = 0.0
         self.started = self.last = time.monotonic()   # steady-clock start and last batch (s)
 
     @property
@@ -469,8 +480,16 @@ class _Stats:
         wall = self.last - self.started
         return self.samples / self.sample_rate / wall if wall > 0 else float("nan")
 
+    def busy(self, seconds: float) -> None:
+        """Time the sim thread spent on one batch (model, messages, publishing, recording)."""
+        self.busy_worst = max(self.busy_worst, seconds)
+        self._p_busy += seconds
+        self._p_busy_worst = max(self._p_busy_worst, seconds)
+        self._p_batches += 1
+
     def period_start(self, now, index):
         self._p_t, self._p_i, self._p_over, self._p_lag = now, index, self.overruns, 0.0
+        self._p_busy, self._p_busy_worst, self._p_batches = 0.0, 0.0, 0
         self._extras, self._extras_n = {}, 0
 
     def batch(self, lag, batch, now):
@@ -489,6 +508,8 @@ class _Stats:
         sr_index = index - self._p_i
         out = {"wall_s": now - self._p_t, "signal_s": sr_index / self.sample_rate,
                "overruns": self.overruns - self._p_over, "worst_lag": self._p_lag,
+               "busy_mean": self._p_busy / max(self._p_batches, 1), "busy_worst": self._p_busy_worst,
+               "busy_fraction": self._p_busy / (now - self._p_t) if now > self._p_t else 0.0,
                "extras": {k: v / max(self._extras_n, 1) for k, v in self._extras.items()}}
         self.period_start(now, index)
         return out
