@@ -82,7 +82,8 @@ def test_bad_inputs_exit_2_with_one_line(tmp_path, capsys):
     assert "not a .mat file" in _one_line_exit_2(capsys, ["validate", "--cwru", str(text), "--out", out])
     fake = tmp_path / "12k_Drive_End_IR007_0_105.mat"
     fake.write_text("not a MATLAB file either\n")
-    assert "not a readable MATLAB .mat file" in _one_line_exit_2(capsys, ["validate", "--cwru", str(fake), "--out", out])
+    err = _one_line_exit_2(capsys, ["validate", "--cwru", str(fake), "--out", out])
+    assert "not a readable MATLAB .mat file" in err
     from scipy.io import savemat
 
     nochan = tmp_path / "chan" / "12k_Drive_End_IR007_0_105.mat"
@@ -269,7 +270,8 @@ def test_ball_fault_is_reported_as_it_is(compared):
 
 def test_report_files_are_written(compared):
     rows, out = compared
-    for name in ("validation.md", "validation.json", "envelope_spectra.png", "spectra.png", "waveforms.png", "metrics.png"):
+    for name in ("validation.md", "validation.json", "envelope_spectra.png", "spectra.png", "waveforms.png",
+                 "metrics.png"):
         assert (out / name).stat().st_size > 1000, name
     data = json.loads((out / "validation.json").read_text())
     assert {r["file"] for r in data["rows"]} == {r["file"] for r in rows.values()}

@@ -138,7 +138,7 @@ def _load_mat(path: Path) -> dict:
                         f"expected a CWRU recording with X<nnn>_DE_time") from None
 
 
-def _pick(data: dict, suffix: str, number: str | None, path: Path) -> str | None:
+def _pick(data: dict, suffix: str, number: str | None) -> str | None:
     """The variable ending in ``suffix``, preferring the one whose test number matches the file
     name (a few CWRU files carry a second test's channels too)."""
     keys = sorted(k for k in data if not k.startswith("__") and k.endswith(suffix))
@@ -165,7 +165,7 @@ def read_recording(path: str | Path, sample_rate: float | None = None) -> Record
     info = parse_name(path)
     data = _load_mat(path)
     number = info.number if info else None
-    de = _pick(data, "_DE_time", number, path)
+    de = _pick(data, "_DE_time", number)
     if de is None:
         names = ", ".join(k for k in data if not k.startswith("__")) or "none"
         raise UserError(f"--cwru {str(path)!r}: no drive-end channel X<nnn>_DE_time "
@@ -178,7 +178,7 @@ def read_recording(path: str | Path, sample_rate: float | None = None) -> Record
     if info is None:
         raise UserError(f"--cwru {str(path)!r}: file name does not say the condition; expected "
                         f"a CWRU name like normal_0_97.mat or 12k_Drive_End_IR007_0_105.mat")
-    rpm_key = _pick(data, "RPM", number, path)
+    rpm_key = _pick(data, "RPM", number)
     if rpm_key is not None and np.size(data[rpm_key]) >= 1 and float(np.ravel(data[rpm_key])[0]) > 0:
         rpm = float(np.ravel(data[rpm_key])[0])
         rpm_source = rpm_key

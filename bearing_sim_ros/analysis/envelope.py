@@ -9,7 +9,8 @@ Choices, checked on the CWRU recordings (``bearing-sim validate``, docs/readme/v
 
 * Band 2-5 kHz (clipped below 0.9 x Nyquist).  The CWRU housing resonances that the defect
   impacts ring sit at 2.3-3.6 kHz (plus 5.2 kHz for the outer-race fault); the healthy machine's
-  lines in the band (near 4.1 kHz) beat at 120 and 240 Hz, away from every fault line.  A band picked by spectral kurtosis was tried and rejected:
+  lines in the band (near 4.1 kHz) beat at 120 and 240 Hz, away from every fault line.  A band
+  picked by spectral kurtosis was tried and rejected:
   on the real recordings the impacts overlap (one every 6-9 ms, rings of several ms), spectral
   kurtosis stays below 1.5 in every band and its maximum lands on noise.
 * Averaged envelope spectrum (Welch, ``segment`` = 1 s, Hann, 50 % overlap) for the decision.

@@ -498,23 +498,27 @@ def write_report(out: Path, rows: list, robust: list, zone: list) -> None:
                "The outer-race scene (calibrated, not refitted) with its defect at 6, 3 and 12 o'clock, read by the "
                "vertical axis (the CWRU sensor) and the horizontal one, against the recording's first seconds. "
                "CWRU names its outer-race positions by the load zone: @6 centred, @3 orthogonal, @12 opposite.", "",
-               "| defect at | RMS y, m/s^2 | kurtosis y | BPFO height y, m/s^2 | verdict y | BPFO height x, m/s^2 | verdict x |",
+               "| defect at | RMS y, m/s^2 | kurtosis y | BPFO height y, m/s^2 | verdict y "
+               "| BPFO height x, m/s^2 | verdict x |",
                "| --- | --- | --- | --- | --- | --- | --- |"]
         for z in zone:
             where = z["clock"] if z["clock"] == "recording" else f"{z['clock']} o'clock"
-            md.append(f"| {where} | {_g(z['rms_y'])} | {_g(z['kurtosis_y'])} | {_g(z['bpfo_height_y'])} | {z['verdict_y']} "
+            md.append(f"| {where} | {_g(z['rms_y'])} | {_g(z['kurtosis_y'])} | {_g(z['bpfo_height_y'])} "
+                      f"| {z['verdict_y']} "
                       f"| {_g(z.get('bpfo_height_x'))} | {z.get('verdict_x', '-')} |")
         md.append("")
     if robust:
         md += ["## Without refitting: other speeds, a heavier load, 48 kHz", "",
                "No recordings at these points are in the data folder; these rows show that the calibrated scenes "
                "behave sensibly (same verdict, levels that change smoothly), not that they match data.", "",
-               "| scene | rpm | rate, kHz | radial load, N | verdict (expected) | RMS, m/s^2 | kurtosis | fault-line prominence |",
+               "| scene | rpm | rate, kHz | radial load, N | verdict (expected) | RMS, m/s^2 | kurtosis "
+               "| fault-line prominence |",
                "| --- | --- | --- | --- | --- | --- | --- | --- |"]
         for q in robust:
             ok = "" if q["verdict"] == q["expected"] else " **differs**"
             md.append(f"| {q['scene']} | {q['rpm']:g} | {q['sample_rate'] / 1000:g} | {q['radial_load'][1]:g} "
-                      f"| {q['verdict']} ({q['expected']}){ok} | {_g(q['rms'])} | {_g(q['kurtosis'])} | {_g(q['prominence'])} |")
+                      f"| {q['verdict']} ({q['expected']}){ok} | {_g(q['rms'])} | {_g(q['kurtosis'])} "
+                      f"| {_g(q['prominence'])} |")
         md.append("")
     (out / "validation.md").write_text("\n".join(md), encoding="utf-8")
     data = {"rows": [{k: v for k, v in r.items() if k != "signals"} for r in rows],
