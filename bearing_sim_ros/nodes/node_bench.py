@@ -1,0 +1,232 @@
+"""Cost of the live node: CPU per second of signal, batch compute time, worst lag, overruns.
+
+    python -m bearing_sim_ros.nodes.node_bench --duration 60 --out bench_out/node
+    python -m bearing_sim_ros.nodes.node_bench --duration 600 --tiers skidding     # the 10-min aim
+
+For each tier it starts ``bearing-sim node`` in real time (``fidelity`` forced to the tier,
+recording to a temporary MCAP unless ``--no-record``) and ``--subscribers`` subscriber processes
+that decode every ``accel`` and ``contact_forces`` table (two by default: the issue's target is
+zero overruns over ten minutes with the skidding tier, recording and two subscribers on this
+2-core machine).  It reads the node's own figures from ``/diagnostics`` and its CPU time from
+``/proc/<pid>/stat`` (all threads: simulation, executor, DDS, MCAP writer) between the third and
+the last diagnostics message, so start-up (imports, JIT cache load) is left out.
+
+Figures: ``cpu_per_signal_s`` = CPU seconds the node process used per second of signal (1.0 =
+one core fully busy); ``batch_compute`` = time the simulation thread spends on one batch (model,
+messages, publishing, recording); ``worst_lag`` = how late the worst batch was published against
+the moment of its last sample; ``overruns`` = batches not ready by that moment.  Timing on a
+shared machine is noisy: repeat a run before believing a single overrun.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+DEFAULT_SCENES = {"kinematic": "er16k_outer_race", "skidding": "er16k_skidding"}
+
+
+def _cpu_seconds(pid: int) -> float:
+    """utime + stime of a process, all threads (Linux /proc)."""
+    with open(f"/proc/{pid}/stat") as f:
+        fields = f.read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def _tier_available(scene: str, tier: str) -> str:
+    """'' if the simulator can run ``scene`` on ``tier``, else the reason."""
+    try:
+        from .. import Simulator
+
+        Simulator(scene, fidelity=tier).advance(150)
+        return ""
+    except Exception as exc:  # noqa: BLE001 - reported in the table
+        return f"{exc.__class__.__name__}: {exc}".splitlines()[0]
+
+
+def subscriber_main() -> int:
+    """A plain consumer: decode every table, count tables and gaps; JSON on stdout at the end."""
+    import rclpy
+    from rclpy.executors import ExternalShutdownException
+    from sensor_msgs.msg import PointCloud2
+
+    from ..messages import TOPIC_ACCEL, TOPIC_CONTACT, waveform_qos
+    from ..waveform import from_pointcloud2
+
+    counts = {TOPIC_ACCEL: [0, 0, None], TOPIC_CONTACT: [0, 0, None]}   # tables, gaps, next stamp
+
+    def on(topic):
+        def cb(msg):
+            stamp, _names, data = from_pointcloud2(msg)
+            c = counts[topic]
+            if c[2] is not None and stamp != c[2]:
+                c[1] += 1
+            c[0] += 1
+            c[2] = stamp + data.shape[0] * 1_000_000_000 // 15000
+        return cb
+
+    rclpy.init()
+    node = rclpy.create_node("bench_subscriber")
+    for topic in counts:
+        node.create_subscription(PointCloud2, topic, on(topic), waveform_qos(0.01))
+    try:
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+    print(json.dumps({t: {"tables": c[0], "gaps": c[1]} for t, c in counts.items()}), flush=True)
+    return 0
+
+
+def bench_tier(tier: str, scene: str, duration: float, subscribers: int, record: bool, domain: int) -> dict:
+    """Run the node on one tier; return its figures."""
+    import rclpy
+    from diagnostic_msgs.msg import DiagnosticArray
+
+    env = dict(os.environ, ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
+    tmp = tempfile.mkdtemp(prefix="node_bench_")
+    out = os.path.join(tmp, f"{tier}.mcap")
+    params = {"scene": scene, "fidelity": tier, "duration": repr(float(duration)),
+              "record": out if record else "''"}
+    cmd = [sys.executable, "-m", "bearing_sim_ros.cli", "node", "--ros-args"]
+    for k, v in params.items():
+        cmd += ["-p", f"{k}:={v}"]
+    subs = [subprocess.Popen([sys.executable, "-m", "bearing_sim_ros.nodes.node_bench", "--subscriber"],
+                             env=env, stdout=subprocess.PIPE, text=True) for _ in range(subscribers)]
+    time.sleep(1.0)                   # let the subscribers come up: the node's first tables reach them
+    node = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+
+    os.environ["ROS_DOMAIN_ID"] = str(domain)
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx)
+    lis = rclpy.create_node("bench_listener", context=ctx)
+    diags = []
+    cpu_marks = []
+
+    def on_diag(msg):
+        values = {kv.key: kv.value for st in msg.status for kv in st.values}
+        diags.append(values)
+        if len(diags) >= 3:
+            try:
+                cpu_marks.append((float(values["simulated_s"]), _cpu_seconds(node.pid)))
+            except (OSError, KeyError, IndexError):
+                pass
+
+    lis.create_subscription(DiagnosticArray, "/diagnostics", on_diag, 10)
+    from rclpy.executors import SingleThreadedExecutor
+
+    ex = SingleThreadedExecutor(context=ctx)
+    ex.add_node(lis)
+    deadline = time.monotonic() + duration + 60.0
+    while node.poll() is None and time.monotonic() < deadline:
+        ex.spin_once(timeout_sec=0.2)
+    if node.poll() is None:
+        node.send_signal(signal.SIGINT)
+    node_err = node.communicate(timeout=30)[1]
+    ex.shutdown(timeout_sec=1)
+    lis.destroy_node()
+    ctx.try_shutdown()
+    received = []
+    for p in subs:
+        p.send_signal(signal.SIGINT)
+        try:
+            text = p.communicate(timeout=20)[0].strip().splitlines()
+            received.append(json.loads(text[-1]) if text else {})
+        except (subprocess.TimeoutExpired, ValueError):
+            p.kill()
+            received.append({})
+
+    steady = diags[2:]
+    res = {"tier": tier, "scene": scene, "duration_s": duration, "subscribers": subscribers,
+           "recording": record, "exit_status": node.returncode, "diagnostics": len(diags)}
+    if node.returncode != 0:
+        res["error"] = node_err.strip().splitlines()[-1] if node_err.strip() else "node failed"
+    if len(cpu_marks) >= 2:
+        (s0, c0), (s1, c1) = cpu_marks[0], cpu_marks[-1]
+        res["cpu_per_signal_s"] = (c1 - c0) / (s1 - s0) if s1 > s0 else float("nan")
+    if steady:
+        last = diags[-1]
+        f = lambda key: [float(d[key]) for d in steady if key in d]   # noqa: E731
+        res.update({
+            "overruns": int(last.get("overruns", 0)),
+            "overruns_after_start": int(last.get("overruns", 0)) - int(diags[1].get("overruns", 0)),
+            "worst_lag_ms": 1e3 * max(f("lag_s") or [float("nan")]),
+            "worst_lag_incl_start_ms": 1e3 * float(last.get("worst_lag_s", "nan")),
+            "batch_compute_mean_ms": 1e3 * sum(f("batch_compute_s")) / max(len(f("batch_compute_s")), 1),
+            "batch_compute_worst_ms": 1e3 * max(f("batch_compute_worst_s") or [float("nan")]),
+            "sim_thread_load": sum(f("sim_thread_load")) / max(len(f("sim_thread_load")), 1),
+            "real_time_factor": sum(f("real_time_factor")) / max(len(f("real_time_factor")), 1),
+            "recording_dropped": int(last.get("recording_dropped", 0)) if record else None,
+            "tier_in_use": last.get("tier"),
+        })
+    res["subscriber_tables"] = [r.get("/accel", r.get("accel", {})).get("tables") for r in received]
+    res["subscriber_gaps"] = [sum(v.get("gaps", 0) for v in r.values()) for r in received]
+    if record and os.path.exists(out):
+        res["recording_mb"] = os.path.getsize(out) / 1e6
+    shutil.rmtree(tmp, ignore_errors=True)
+    return res
+
+
+def table(results) -> str:
+    head = ("| tier | scene | signal s | CPU s per signal s | batch compute mean / worst ms | "
+            "worst lag ms (after start / incl.) | overruns (after start / all) | RTF | subscribers' gaps | rec. dropped |")
+    rows = [head, "|---" * (head.count("|") - 1) + "|"]
+    for r in results:
+        if "skipped" in r:
+            rows.append(f"| {r['tier']} | {r['scene']} | skipped: {r['skipped']} |||||||")
+            continue
+        rows.append(
+            f"| {r['tier']} | {r['scene']} | {r['duration_s']:g} | {r.get('cpu_per_signal_s', float('nan')):.3f} | "
+            f"{r.get('batch_compute_mean_ms', float('nan')):.2f} / {r.get('batch_compute_worst_ms', float('nan')):.1f} | "
+            f"{r.get('worst_lag_ms', float('nan')):.1f} / {r.get('worst_lag_incl_start_ms', float('nan')):.1f} | "
+            f"{r.get('overruns_after_start', '?')} / {r.get('overruns', '?')} | {r.get('real_time_factor', float('nan')):.4f} | "
+            f"{r.get('subscriber_gaps')} | {r.get('recording_dropped')} |")
+    return "\n".join(rows)
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(prog="python -m bearing_sim_ros.nodes.node_bench", description=__doc__.split("\n")[0])
+    p.add_argument("--duration", type=float, default=60.0, help="seconds of real-time signal per tier")
+    p.add_argument("--tiers", nargs="+", default=["kinematic", "skidding"], choices=["kinematic", "skidding"])
+    p.add_argument("--scene", default=None, help="one scene for every tier (default: er16k_outer_race / er16k_skidding)")
+    p.add_argument("--subscribers", type=int, default=2)
+    p.add_argument("--no-record", action="store_true")
+    p.add_argument("--out", default=None, help="folder for node_bench.md and node_bench.json")
+    p.add_argument("--subscriber", action="store_true", help=argparse.SUPPRESS)
+    args = p.parse_args(argv)
+    if args.subscriber:
+        return subscriber_main()
+    domain = 60 + os.getpid() % 30
+    results = []
+    for k, tier in enumerate(args.tiers):
+        scene = args.scene or DEFAULT_SCENES[tier]
+        why = _tier_available(scene, tier)
+        if why:
+            results.append({"tier": tier, "scene": scene, "skipped": why})
+            print(f"{tier}: skipped ({why})", flush=True)
+            continue
+        print(f"{tier}: {scene}, {args.duration:g} s real time, {args.subscribers} subscribers, "
+              f"recording {'off' if args.no_record else 'on'} ...", flush=True)
+        results.append(bench_tier(tier, scene, args.duration, args.subscribers, not args.no_record, domain + k))
+    text = table(results)
+    print(text)
+    if args.out:
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "node_bench.md").write_text(text + "\n")
+        (out / "node_bench.json").write_text(json.dumps(results, indent=2) + "\n")
+        print(f"wrote {out / 'node_bench.md'} and {out / 'node_bench.json'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
