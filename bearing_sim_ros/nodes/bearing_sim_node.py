@@ -264,7 +264,7 @@ class BearingSimNode(Node):
         from ..recording.recorder import Recorder, recording_metadata
 
         params = dict(cfg)
-        params.update({"mode": "live", "start_time_ns": self.start_ns,
+        params.update({"mode": "live",
                        "command": "bearing-sim node --ros-args " + " ".join(
                            f"-p {k}:={_param_text(v)}" for k, v in sorted(cfg.items()))})
         meta = recording_metadata(self.scene, params, int(cfg["seed"]), self.sim.selection)
@@ -353,9 +353,19 @@ class BearingSimNode(Node):
                 break
             n = min(self.n_batch, total - sim.index) if total else self.n_batch
             speed, load = self._cmd_speed, self._cmd_load
-            start_stamp = msgs.stamp_ns(sim.index)
             batch = sim.advance(n, shaft_speed=speed, radial_load=load)
             end_index = sim.index
+            if batch.index0 == 0:
+                # time starts when the first batch is ready, not before it: its computation may
+                # include loading compiled kernels, which must not count as an overrun
+                ready = time.monotonic()
+                mono0 = anchor_t = ready - n / sr
+                anchor_i = 0
+                self.start_ns = msgs.start_ns = self.get_clock().now().nanoseconds - int(round(n / sr * 1e9))
+                next_diag = mono0 + 1.0
+                stats.period_start(mono0, 0)
+                stats.started = mono0
+            start_stamp = msgs.stamp_ns(batch.index0)
             end_stamp = msgs.stamp_ns(end_index)
             # build the messages before waiting: at the due time only publishing is left
             out = [(self.pub_accel, msgs.accel(batch)), (self.pub_contact, msgs.contact_forces(batch))]
