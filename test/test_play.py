@@ -101,7 +101,7 @@ def test_play_delivers_every_message_to_another_process(recording, bearing_sim_e
             sub.wait()
     got = json.loads(result.read_text())
     for topic, n in counts.items():
-        assert len(got.get(topic, [])) == n, f"{topic}: {len(got.get(topic, []))} of {n}"
+        assert len(got.get(topic, [])) == n, f"{topic}: {len(got.get(topic, []))} of {n}; play: {play.stderr}"
     # the same tables, stamps and bytes as recorded
     rec_stamps = []
     for (_, data), (stamp, width, crc) in zip(accel, got["/accel"]):

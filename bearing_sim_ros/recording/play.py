@@ -23,6 +23,7 @@ for it).
 from __future__ import annotations
 
 import sys
+import threading
 import time
 
 from ..errors import UserError
@@ -30,8 +31,8 @@ from ..waveform import NS
 from .reader import get_message, open_recording
 from .schemas import qos_from_yaml
 
-WAIT_FOR_SUBSCRIBERS = 2.0    # s
-DISCOVERY_GRACE = 0.3         # s after the first match, for the subscriber's other topics
+WAIT_FOR_SUBSCRIBERS = 3.0    # s
+DISCOVERY_GRACE = 0.5         # s without a new match: the subscriber's topics have all matched
 ACK_TIMEOUT = 2.0             # s to let reliable subscribers receive the tail at the end
 WAVEFORM_TYPE = "sensor_msgs/msg/PointCloud2"
 
@@ -81,8 +82,9 @@ class _Span:
 
 
 def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
-         wait_for_subscribers: float = WAIT_FOR_SUBSCRIBERS, log=None) -> int:
-    """Republish ``path``; returns the number of messages published."""
+         wait_for_subscribers: float = WAIT_FOR_SUBSCRIBERS, log=None, stop=None) -> int:
+    """Republish ``path``; returns the number of messages published.  ``stop``: a
+    ``threading.Event`` that ends playback between two messages (set by the signal handlers)."""
     import rclpy
     from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
     from rclpy.serialization import deserialize_message
@@ -90,6 +92,8 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
     if not rate > 0:
         raise UserError(f"--rate = {rate!r}: expected a number > 0")
     log = log or (lambda text: print(text, file=sys.stderr, flush=True))
+    stop = stop or threading.Event()
+    running = lambda: rclpy.ok() and not stop.is_set()  # noqa: E731
     rec = open_recording(path)
     try:
         topics = rec.topics()
@@ -104,8 +108,8 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
 
         from rclpy.signals import SignalHandlerOptions
 
-        # Python's own handlers: Ctrl-C (and SIGTERM, see play_command) end the loop as a
-        # KeyboardInterrupt, so the node is destroyed and the context shut down in order
+        # our own handlers (play_command) set ``stop``: the loop ends between two messages and
+        # the node is destroyed and the context shut down in order
         rclpy.init(args=None, signal_handler_options=SignalHandlerOptions.NO)
         node = rclpy.create_node("bearing_sim")
         try:
@@ -126,7 +130,7 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
             log(f"play {path}: {rec.message_count} messages on {len(pubs)} topics, "
                 f"{(rec.end_ns - rec.start_ns) / NS:.2f} s at {rate:g}x"
                 + (", looping" if loop else "") + (", publishing /clock" if clock else ""))
-            _wait_for_subscribers(pubs, wait_for_subscribers)
+            _wait_for_subscribers(pubs, wait_for_subscribers, running)
 
             published = 0
             offset = 0
@@ -134,13 +138,13 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
             wall0 = time.perf_counter()
             rec0 = rec.start_ns
             last_clock = None
-            while rclpy.ok():
+            while running():
                 for topic, msg_type, log_ns, data in rec.messages():
                     if topic not in pubs:
                         continue
                     t_rec = log_ns + offset
-                    _sleep_until(wall0 + (t_rec - rec0) / NS / rate, rclpy)
-                    if not rclpy.ok():
+                    _sleep_until(wall0 + (t_rec - rec0) / NS / rate, running)
+                    if not running():
                         break
                     if clock_pub is not None and (last_clock is None or t_rec > last_clock):
                         from rosgraph_msgs.msg import Clock
@@ -159,15 +163,16 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
                         _shift_stamp(msg, offset)
                         pubs[topic].publish(msg)
                     published += 1
-                if not loop or not rclpy.ok():
+                if not loop or not running():
                     break
                 offset += span.length_ns(rec.start_ns, rec.end_ns)   # measured on the first pass
-            for pub in pubs.values():
-                try:
-                    pub.wait_for_all_acked(rclpy.duration.Duration(seconds=ACK_TIMEOUT))
-                except Exception:  # noqa: BLE001 - best effort at the end
-                    pass
-            log(f"play {path}: published {published} messages")
+            if not stop.is_set():          # let reliable subscribers receive the tail
+                for pub in pubs.values():
+                    try:
+                        pub.wait_for_all_acked(rclpy.duration.Duration(seconds=ACK_TIMEOUT))
+                    except Exception:  # noqa: BLE001 - best effort at the end
+                        pass
+            log(f"play {path}: {'stopped after' if stop.is_set() else 'published'} {published} messages")
             return published
         finally:
             node.destroy_node()
@@ -177,19 +182,33 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
         rec.close()
 
 
-def _wait_for_subscribers(pubs: dict, timeout: float) -> None:
-    deadline = time.perf_counter() + timeout
-    while time.perf_counter() < deadline:
-        if any(p.get_subscription_count() > 0 for p in pubs.values()):
-            time.sleep(DISCOVERY_GRACE)
+def _wait_for_subscribers(pubs: dict, timeout: float, running) -> None:
+    """Wait up to ``timeout`` s for a first subscriber; once one appears, until the number of
+    matched subscriptions has not changed for ``DISCOVERY_GRACE`` s (a subscriber's topics
+    match one by one), at most ``timeout`` s more."""
+    start = time.perf_counter()
+    first_match = stable_since = counts = None
+    while running():
+        now = time.perf_counter()
+        new = tuple(p.get_subscription_count() for p in pubs.values())
+        if any(new):
+            if first_match is None:
+                first_match = now
+            if new != counts:
+                counts, stable_since = new, now
+            elif now - stable_since >= DISCOVERY_GRACE:
+                return
+            if now - first_match >= timeout:
+                return
+        elif now - start >= timeout:
             return
         time.sleep(0.02)
 
 
-def _sleep_until(target: float, rclpy) -> None:
+def _sleep_until(target: float, running) -> None:
     while True:
         delay = target - time.perf_counter()
-        if delay <= 0 or not rclpy.ok():
+        if delay <= 0 or not running():
             return
         time.sleep(min(delay, 0.1))
 
@@ -198,15 +217,16 @@ def play_command(args) -> int:
     """CLI entry: ``bearing-sim play F.mcap [--rate X] [--loop] [--clock]``.  Ctrl-C and SIGTERM
     stop playback cleanly (exit status 0)."""
     import signal
-    import threading
+
+    stop = threading.Event()
 
     def _stop(signum, frame):
-        raise KeyboardInterrupt
+        # a flag, not an exception: an exception raised inside rclpy's C calls comes out as a
+        # TypeError; the loop checks the flag between messages and ends cleanly
+        stop.set()
 
     if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, _stop)
         signal.signal(signal.SIGTERM, _stop)
-    try:
-        play(args.file, rate=float(args.rate), loop=bool(args.loop), clock=bool(args.clock))
-    except KeyboardInterrupt:
-        pass
+    play(args.file, rate=float(args.rate), loop=bool(args.loop), clock=bool(args.clock), stop=stop)
     return 0
