@@ -67,12 +67,13 @@ class Recorder:
     attachments: name -> bytes (e.g. the scene YAML); rotate_bytes: start a new file after this
     many bytes of messages (0 = never); rotate_seconds: after this span of log time (s, 0 = never);
     start_time_ns: log time of the attachments (default: now; offline renders pass 0 so that the
-    file does not depend on the wall clock).
+    file does not depend on the wall clock); argument: how errors name the path (the node's
+    ``record`` parameter, render's ``--out``).
     """
 
     def __init__(self, path, metadata: dict, attachments: dict | None = None,
                  rotate_bytes: int = 0, rotate_seconds: float = 0.0,
-                 start_time_ns: int | None = None):
+                 start_time_ns: int | None = None, argument: str = "record"):
         if rotate_bytes < 0 or not math.isfinite(rotate_seconds) or rotate_seconds < 0:
             raise UserError(f"rotation = {rotate_bytes!r} bytes / {rotate_seconds!r} s: "
                             "expected numbers >= 0 (0 = no rotation)")
@@ -87,7 +88,8 @@ class Recorder:
         self._queue: deque = deque()
         self._enqueued_bytes = 0          # by producers
         self._drained_bytes = 0           # by the writer thread
-        self._dropped = 0
+        self._dropped = 0                 # by producers
+        self._dropped_writer = 0          # by the writer thread (counters are single-writer too)
         self._messages = 0
         self._bytes = 0
         self._error = ""
@@ -103,7 +105,7 @@ class Recorder:
         try:
             self._open_file()
         except OSError as exc:
-            raise UserError(f"record = {str(path)!r}: cannot write there ({_one_line(exc)})") from None
+            raise UserError(f"{argument} = {str(path)!r}: cannot write there ({_one_line(exc)})") from None
         self._thread = threading.Thread(target=self._run, name="mcap-writer", daemon=True)
         self._thread.start()
         atexit.register(self.close)
@@ -164,7 +166,7 @@ class Recorder:
     def status(self) -> dict:
         """ok, error (one line), path (current file), messages and bytes written, dropped, files."""
         return {"ok": not self._error, "error": self._error, "path": str(self._current_path()),
-                "messages": self._messages, "bytes": self._bytes, "dropped": self._dropped,
+                "messages": self._messages, "bytes": self._bytes, "dropped": self._dropped + self._dropped_writer,
                 "files": [str(p) for p in self._files]}
 
     @property
@@ -215,6 +217,8 @@ class Recorder:
             self._register(name)
 
     def _register(self, name: str) -> None:
+        if name in self._channel_ids:     # already registered by a rotation that saw it first
+            return
         msg_type, qos_yaml, definition = self._topics[name]
         sid = self._schema_ids.get(msg_type)
         if sid is None:
@@ -287,14 +291,14 @@ class Recorder:
                 break
             if self._error:
                 if kind == "msg":
-                    self._dropped += 1
+                    self._dropped_writer += 1
                 continue
             try:
                 self._handle(kind, name, data, log_time_ns)
             except Exception as exc:  # noqa: BLE001 - full disk, path gone: record, stop, never raise
                 self._set_error(f"recording to {self._current_path()} stopped: {_one_line(exc)}")
                 if kind == "msg":
-                    self._dropped += 1
+                    self._dropped_writer += 1
                 self._abandon_file()
         if not self._error:
             try:

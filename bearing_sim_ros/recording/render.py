@@ -153,7 +153,7 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
                           f"--seed {seed} --sample-rate {sample_rate:g} --solver {solver}")}
     meta = recording_metadata(scene, params, seed, sim.selection)
     attachments = {f"{scene.name}.yaml": scene.source_text.encode("utf-8")} if scene.source_text else {}
-    rec = Recorder(out, meta, attachments, start_time_ns=0)
+    rec = Recorder(out, meta, attachments, start_time_ns=0, argument="--out")
     topics = [TOPIC_SHAFT_SPEED, TOPIC_LOAD, TOPIC_ACCEL, TOPIC_CONTACT, TOPIC_STATE, TOPIC_DIAGNOSTICS]
     for topic in topics:
         rec.add_topic(topic, TYPES[topic], _qos_for(topic, batch_duration))
