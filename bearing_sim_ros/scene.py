@@ -106,6 +106,15 @@ class Lubrication:
     cage_pocket_clearance: float = 0.0
     cage_inertia: float = 0.0         # kg m^2; 0 = from the catalog geometry
     cage_mass: float = 0.0            # kg; 0 = estimated from the geometry
+    # skidding tier (issue 3): damping inside a ball-race contact as a ratio of the ball's own
+    # contact mode, c = 2 zeta sqrt(m_b k_t) (seed 000 eqs 17-18 give no values; EHL point
+    # contacts measure zeta ~ 0.05-0.1, Wijnant 1998); the squeeze-film damping around the contact
+    # follows from viscosity and geometry (ehl_film), with surface_roughness (m, composite Ra of
+    # ground raceways and balls) as the smallest film it sees.
+    contact_damping_ratio: float = 0.05
+    surface_roughness: float = 0.05e-6
+    pocket_damping_ratio: float = 0.05    # ball-cage pocket contact, same definition with k_c
+    cage_drag: float = 0.0            # N m s: viscous torque on the cage (not in seed 000)
 
 
 @dataclass(frozen=True)
@@ -333,7 +342,8 @@ def _waviness(top: _Section) -> tuple:
 def _lubrication(top: _Section) -> Lubrication:
     keys = ("viscosity", "pressure_viscosity", "traction_a", "traction_b", "traction_c", "traction_d",
             "creep_velocity", "drag_coefficient", "fluid_density", "ehl_film", "cage_stiffness",
-            "cage_pocket_clearance_um", "cage_inertia", "cage_mass")
+            "cage_pocket_clearance_um", "cage_inertia", "cage_mass", "contact_damping_ratio",
+            "surface_roughness_um", "pocket_damping_ratio", "cage_drag")
     s = top.section("lubrication", keys)
     d = Lubrication()
     return Lubrication(
@@ -351,6 +361,10 @@ def _lubrication(top: _Section) -> Lubrication:
         cage_pocket_clearance=s.number("cage_pocket_clearance_um", 0.0, lo=0.0, hi=2000.0) * 1e-6,
         cage_inertia=s.number("cage_inertia", 0.0, lo=0.0, hi=10.0),
         cage_mass=s.number("cage_mass", 0.0, lo=0.0, hi=100.0),
+        contact_damping_ratio=s.number("contact_damping_ratio", d.contact_damping_ratio, lo=0.0, hi=2.0),
+        surface_roughness=s.number("surface_roughness_um", d.surface_roughness * 1e6, lo=0.001, hi=5.0) * 1e-6,
+        pocket_damping_ratio=s.number("pocket_damping_ratio", d.pocket_damping_ratio, lo=0.0, hi=2.0),
+        cage_drag=s.number("cage_drag", d.cage_drag, lo=0.0, hi=1.0),
     )
 
 

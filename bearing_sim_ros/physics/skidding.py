@@ -1,0 +1,1582 @@
+"""Skidding tier: seed 000's (3 Nb + 5)-DOF deep-groove ball bearing with slip.
+
+Degrees of freedom (state vector ``y``; SI units, angles counterclockwise from +x looking along
+the shaft, the shaft turning counterclockwise for positive speed):
+
+    y[0:10]   shaft/inner race x, y; pedestal/outer race x, y; unit resonator y; their velocities
+              (the kinematic tier's ``x`` layout: [xs, ys, xp, yp, yr, vxs, vys, vxp, vyp, vyr])
+    y[10:12]  cage angle phi_c (rad) and speed (rad/s)
+    y[12+6j:] ball j: revolution angle theta (rad), radial position rho of its centre from the
+              outer-race centre (m), spin angle psi relative to its orbital frame (rad, positive in
+              the direction of the pure-rolling spin, i.e. BSF > 0), revolution speed
+              theta' (rad/s), radial speed rho' (m/s), absolute angular velocity Omega (rad/s,
+              counterclockwise; pure rolling has Omega < 0 when the cage turns counterclockwise)
+
+The shaft angle follows the commanded speed (seed 000 assumption 4).
+
+Forces (seed 000 Sec. 2, with the corrections of PHYSICS_NOTES):
+
+* Hertz at each contact separately (catalog ``inner_contact`` / ``outer_contact`` stiffness,
+  Hamrock-Brewe): Q = K delta^1.5 with the interferences (eqs 3, 4, 10)
+      delta_i = e + R_m - C_r/2 - rho + h_i - loss_i,   delta_o = rho - R_m - C_r/2 + h_o - loss_o
+  where e = (x_s - x_p) cos(theta) + (y_s - y_p) sin(theta) is the shaft offset towards the
+  ball, loss_* the defect interference losses of ``defects.interference_loss`` (every kind and
+  depth profile, inner and outer contact separately) and the waviness gain of each race.
+* EHL film (eqs 12-16, ``lubrication.ehl_film``): the Hamrock-Dowson minimum film thickness
+  h = 3.63 U^0.68 G^0.49 W^-0.073 (1 - exp(-0.68 k)) R_x of each contact separates the solids, so
+  it enters the interference as +h (a reduced clearance, as seed 001 treats the film; eq. 13's
+  minus sign would open the clearance instead).  h is evaluated at every integrator grid point
+  from the Hertz load and the entrainment speed and held over the step; since h falls with load
+  as Q^-0.073, the contact is the film and Hertz springs in series, k = k_H k_oil / (k_H + k_oil)
+  with k_oil = -dQ/dh = Q / (0.073 h) (eqs 14-16).
+* Damping (eqs 14, 17-18): in the contact a structural part c_h = 2 zeta sqrt(m_b k_t) (k_t =
+  1.5 K delta^0.5 the tangent stiffness, zeta = ``contact_damping_ratio``), and, with the film,
+  the squeeze-film damping of the lubricant around the contact on approach, c_oil = dW/du =
+  6 pi eta R_x R_y / (g + h + roughness) (Reynolds' squeeze film of an ellipsoid on a plane; g
+  the gap, 0 in contact), in parallel (eq. 17's inlet term c_r; a series film damper as eq. 17
+  writes it would be short-circuited by the stiff film).  In a flooded groove it is of the order
+  of the critical damping of the ball on its contact, so a ball leaving the load zone or meeting
+  a race lands without rattling, as wet impacts at Stokes numbers near 1 do.  The contact
+  force never pulls (Q >= 0).
+* Traction (eqs 21-23): slip velocities of the ball surface against each race
+      dv_i = rho theta' - r_b Omega - (rho - e - r_b) omega_s,   dv_o = rho theta' + r_b Omega
+  (rho - e - r_b: the inner-race radius at the contact, measured from the shaft centre, so the
+  clearance, the shaft offset and a ball inside an inner-race pit all enter the kinematics)
+  and f = -Q mu(dv) with mu(v) = sign(v) [(A + B|v|) exp(-C|v|) + D] the traction curve (eq. 23;
+  NOT times the viscosity: eq. 24 is dimensionally wrong).  Its jump A + D at zero slip is
+  regularised as (A + D) v / sqrt(v^2 + v_c^2) (``creep_velocity`` v_c); the rest is continuous.
+* Ball-cage pocket (eqs 26-29): a spring k_c (``cage_stiffness``) on the arc R_m (theta - phi_c -
+  2 pi j / Nb) beyond the pocket clearance, with a contact damping of ratio
+  ``pocket_damping_ratio``; friction mu(r_b (Omega - theta')) |F_pocket| at the pocket face,
+  radial on the ball with a torque on its spin.
+* Lubricant drag (eq. 30, Harris' form in SI: eq. 30 as printed has d for d^2 and a stray g):
+  F_v = c_v pi xi d^2 (D_m theta')^1.95 / 32 against the revolution.
+* Centrifugal and Coriolis terms from the polar coordinates (eq. 31), gravity on balls and shaft,
+  reactions of normal and traction forces on both races (eqs 20, 25, 33), cage rotation (eq. 35)
+  with ``cage_drag`` (N m s) against its speed.  The ball's own inertia about its centre enters
+  only the spin equation (Newton in polar coordinates; eq. 34's J_m = J_b + m r^2 mixes the two).
+
+Outputs: sensor-mount acceleration (pedestal x; resonator y, else pedestal y) at the start of
+every internal sample; ball loads, slip velocities and traction forces, cage speed and the skid
+ratios (eqs 37-38) at every 4th:
+
+    cage_skid = 100 (w_ct - w_c) / w_ct                 w_ct = omega_s (1 - gamma) / 2
+    ball_skid = 100 mean_j (w_bt - w_bj) / w_bt          w_bt = omega_s D_m / (2 d) (1 - gamma^2)
+
+with w_bj = theta'_j - Omega_j the spin of ball j in its orbital frame (the ball-spin frequency of
+a defect on the ball), averaged over ALL balls (the paper plots one ball over time, i.e. through
+loaded and unloaded zone).  The denominators are regularised as w_t / (w_t^2 + w_ref^2) with
+w_ref = 0.01 rad/s so that a standing shaft gives 0 instead of a division by zero.
+
+Solvers: see :mod:`.integrators`.  ``"rk4"``: classic RK4 at 1e-5 s (seed 000); ``"reference"``:
+RK4 at 1/32 of the internal sample spacing; ``"default"``: ROS2 Rosenbrock-W with a block
+Jacobian of the stiff per-ball couplings, one step per internal sample.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from . import KinematicSnapshot, TierOutput
+from .defects import (D_ANGLE, D_BALL, D_KIND, KIND_BALL, KIND_INNER, defect_table, interference_loss,
+                      waviness_gain, waviness_table)
+from .integrators import EXPLICIT, SPLIT, method_for
+
+G = 9.80665
+NS0 = 12            # structure (10) + cage (2)
+NBV = 6             # per-ball state entries
+B_TH, B_R, B_PSI, B_W, B_V, B_OM = range(NBV)
+
+# parameter vector layout
+(P_NB, P_RB, P_RM, P_CR, P_KI, P_KO, P_MB, P_JB, P_MS, P_KS, P_CS, P_MP, P_KP, P_CP, P_MR, P_KR,
+ P_CRS, P_HASRES, P_KC, P_CPK, P_CCD, P_JC, P_CDI, P_CDO, P_TA, P_TB, P_TC, P_TD, P_VC, P_DRAG,
+ P_G, P_WS, P_RI, P_RO, P_HCI, P_HCO, P_FILM, P_QMIN, P_CAGER, P_SPINR, P_CDRAG, P_DM, P_SQI,
+ P_SQO, P_ROUGH, NPAR) = range(46)
+
+# per-ball auxiliary values from a right-hand-side evaluation (for the Jacobian)
+(X_KTI, X_KTO, X_CI, X_CO, X_QI, X_QO, X_MUI, X_MUO, X_DMUI, X_DMUO, X_FT, X_DMUP, X_CIN, X_DRAGD,
+ X_MUP, X_SFT, X_SARC, X_C, X_S, NAUX) = range(20)
+# per-ball diagnostics: contact loads (N), slip velocities (m/s), traction forces on the ball (N)
+(D_QI, D_QO, D_SLI, D_SLO, D_FI, D_FO, NDG) = range(7)
+# film table columns: film thickness inner / outer (m), drag factor (N s^2/rad^2), and the values
+# at the last exact evaluation (film thicknesses, entrainment speeds, loads, revolution speed)
+(F_HI, F_HO, F_DRAG, F_HI0, F_HO0, F_UI0, F_UO0, F_QI0, F_QO0, F_W0, NFILM) = range(11)
+# ramp: chunk start time, duration, speed 0/1, load 0/1 (x, y), shaft angle at chunk start
+(R_T0, R_T, R_S0, R_S1, R_L0X, R_L0Y, R_L1X, R_L1Y, R_A0, NRAMP) = range(10)
+
+W_REF = 0.01        # rad/s: regularises the skid-ratio denominators at standstill
+FILM_EXP_U, FILM_EXP_Q = 0.68, -0.073     # Hamrock-Dowson exponents (speed, load)
+
+
+# ---------------------------------------------------------------------------------------------
+# force model
+@njit(cache=True, inline="always")
+def _traction(v, ta, tb, tc, td, vc):
+    """Traction coefficient mu(v) (signed, odd in v) and its slope dmu/dv (s/m), eq. 23 with the
+    jump A + D at zero slip regularised over ``vc``."""
+    a = abs(v)
+    ex = math.exp(-tc * a)
+    g = (ta + tb * a) * ex - ta                   # continuous part, 0 at 0
+    dg = tb * ex - tc * (ta + tb * a) * ex
+    mu = g if v >= 0.0 else -g
+    dmu = dg
+    jump = ta + td
+    if jump != 0.0:
+        den = 1.0 / math.sqrt(v * v + vc * vc)
+        mu += jump * v * den
+        dmu += jump * vc * vc * den * den * den
+    return mu, dmu
+
+
+@njit(cache=True, inline="always")
+def _inputs(ramp, t):
+    """Shaft speed (rad/s), shaft angle (rad) and external load (N) at time t: linear ramp over
+    the chunk, held before and after it."""
+    t0 = ramp[R_T0]
+    tt = ramp[R_T]
+    s0 = ramp[R_S0]
+    s1 = ramp[R_S1]
+    tau = t - t0
+    if tau <= 0.0:
+        frac = 0.0
+        ang = ramp[R_A0] + s0 * tau
+    elif tau >= tt:
+        frac = 1.0
+        ang = ramp[R_A0] + 0.5 * (s0 + s1) * tt + s1 * (tau - tt)
+    else:
+        frac = tau / tt
+        ang = ramp[R_A0] + s0 * tau + 0.5 * (s1 - s0) * tau * tau / tt
+    ws = s0 + (s1 - s0) * frac
+    fx = ramp[R_L0X] + (ramp[R_L1X] - ramp[R_L0X]) * frac
+    fy = ramp[R_L0Y] + (ramp[R_L1Y] - ramp[R_L0Y]) * frac
+    return ws, ang, fx, fy
+
+
+@njit(cache=True)
+def _defect_losses(dtab, y, p, sh_ang, scr):
+    """Interference losses (m) of every ball from every defect: scr[:, 0] inner contact,
+    scr[:, 1] outer contact.  Only the balls that can be inside a defect are evaluated (with
+    ``defects.interference_loss``): for a race defect the ball nearest to it and the two next to
+    it (a defect is at most half a ball spacing wide and a ball stays within its pocket), for a
+    ball defect that ball; so the cost is per defect, not per ball."""
+    nb = int(p[P_NB])
+    spacing = 2.0 * math.pi / nb
+    for j in range(nb):
+        scr[j, 0] = 0.0
+        scr[j, 1] = 0.0
+        scr[j, 2] = 0.0
+    phic = y[10]
+    for k in range(dtab.shape[0]):
+        kind = int(dtab[k, D_KIND])
+        if kind == KIND_BALL:
+            scr[int(dtab[k, D_BALL]), 2] = 1.0
+            continue
+        centre = dtab[k, D_ANGLE] + (sh_ang if kind == KIND_INNER else 0.0)
+        near = int(math.floor((centre - phic) / spacing + 0.5))
+        for dj in range(-1, 2):
+            scr[(near + dj) % nb, 2] = 1.0
+    for j in range(nb):
+        if scr[j, 2] > 0.0:
+            b = NS0 + NBV * j
+            li, lo = interference_loss(dtab, j, y[b + B_TH], sh_ang, y[b + B_PSI], p[P_RI], p[P_RO], p[P_RB])
+            scr[j, 0] = li
+            scr[j, 1] = lo
+
+
+@njit(cache=True)
+def _rhs(y, f, ws, sh_ang, fx_ext, fy_ext, p, dtab, wti, wto, film, aux, dg, scr, frc):
+    """Time derivative ``f`` of the state ``y`` (see module docstring) at shaft speed ``ws``
+    (rad/s), shaft angle ``sh_ang`` (rad) and external force (fx_ext, fy_ext) on the shaft (N).
+    Fills ``aux`` (nb, NAUX: stiffnesses, loads, traction slopes for the Jacobian) and ``dg``
+    (nb, NDG: loads, slips and traction forces) and ``frc`` (the balls' forces on the shaft, x and
+    y, and on the pedestal, N); ``scr`` (nb, 3) is scratch."""
+    nb = int(p[P_NB])
+    rb = p[P_RB]
+    rm = p[P_RM]
+    half_cr = 0.5 * p[P_CR]
+    ki = p[P_KI]
+    ko = p[P_KO]
+    mb = p[P_MB]
+    jb = p[P_JB]
+    kc = p[P_KC]
+    cpk = p[P_CPK]
+    ccd = p[P_CCD]
+    cdi = p[P_CDI]
+    cdo = p[P_CDO]
+    ta = p[P_TA]
+    tb = p[P_TB]
+    tc = p[P_TC]
+    td = p[P_TD]
+    vc = p[P_VC]
+    grav = p[P_G]
+    sqz_i = p[P_SQI]
+    sqz_o = p[P_SQO]
+    rough = p[P_ROUGH]
+    spacing = 2.0 * math.pi / nb
+    has_def = dtab.shape[0] > 0
+    has_wi = wti.shape[0] > 0
+    has_wo = wto.shape[0] > 0
+    dx = y[0] - y[2]
+    dy = y[1] - y[3]
+    dvx = y[5] - y[7]
+    dvy = y[6] - y[8]
+    phic = y[10]
+    wc = y[11]
+    fsx = 0.0
+    fsy = 0.0
+    fpx = 0.0
+    fpy = 0.0
+    torque = 0.0
+    if has_def:
+        _defect_losses(dtab, y, p, sh_ang, scr)
+    # cos/sin of each ball angle from the cage's (one cos/sin per call) and the ball's small
+    # offset from its pocket centre (Taylor series, error < eps^6/720 for |eps| < 0.05 rad)
+    cphi = math.cos(phic)
+    sphi = math.sin(phic)
+    for j in range(nb):
+        b = NS0 + NBV * j
+        th = y[b + B_TH]
+        r = y[b + B_R]
+        w = y[b + B_W]
+        v = y[b + B_V]
+        om = y[b + B_OM]
+        cj = p[NPAR + j]
+        sj = p[NPAR + nb + j]
+        cb = cphi * cj - sphi * sj
+        sb = sphi * cj + cphi * sj
+        eps = th - phic - j * spacing
+        if abs(eps) < 0.05:
+            e2 = eps * eps
+            ce = 1.0 - e2 * (0.5 - e2 * (1.0 / 24.0))
+            se = eps * (1.0 - e2 * (1.0 / 6.0 - e2 * (1.0 / 120.0)))
+        else:
+            ce = math.cos(eps)
+            se = math.sin(eps)
+        c = cb * ce - sb * se
+        s = sb * ce + cb * se
+        e = dx * c + dy * s
+        edot = dvx * c + dvy * s + w * (dy * c - dx * s)
+        di = e + rm - half_cr - r + film[j, F_HI]
+        do = r - rm - half_cr + film[j, F_HO]
+        if has_def:
+            di -= scr[j, 0]
+            do -= scr[j, 1]
+        if has_wi:
+            di += waviness_gain(wti, th, sh_ang)
+        if has_wo:
+            do += waviness_gain(wto, th, sh_ang)
+        # Hertz + structural damping in the contact, + squeeze-film damping of the lubricant
+        # between ball and race on approach (in contact and across a small gap); never pulling
+        qi = 0.0
+        kti = 0.0
+        ci = 0.0
+        rate = edot - v                              # approach rate of ball and inner race
+        if di > 0.0:
+            sq = math.sqrt(di)
+            kti = 1.5 * ki * sq
+            ci = cdi * math.sqrt(sq)
+            qi = ki * di * sq + ci * rate
+        if rate > 0.0 and sqz_i > 0.0:
+            gap = -di if di < 0.0 else 0.0
+            csq = sqz_i / (gap + film[j, F_HI] + rough)
+            qi += csq * rate
+            ci += csq
+        if qi <= 0.0:
+            qi = 0.0
+            kti = 0.0
+            ci = 0.0
+        qo = 0.0
+        kto = 0.0
+        co = 0.0
+        if do > 0.0:
+            sq = math.sqrt(do)
+            kto = 1.5 * ko * sq
+            co = cdo * math.sqrt(sq)
+            qo = ko * do * sq + co * v
+        if v > 0.0 and sqz_o > 0.0:
+            gap = -do if do < 0.0 else 0.0
+            csq = sqz_o / (gap + film[j, F_HO] + rough)
+            qo += csq * v
+            co += csq
+        if qo <= 0.0:
+            qo = 0.0
+            kto = 0.0
+            co = 0.0
+        # traction at both races (force on the ball, along e_t)
+        sli = r * w - rb * om - (r - rb - e) * ws
+        slo = r * w + rb * om
+        mui = 0.0
+        dmui = 0.0
+        muo = 0.0
+        dmuo = 0.0
+        if qi > 0.0:
+            mui, dmui = _traction(sli, ta, tb, tc, td, vc)
+        if qo > 0.0:
+            muo, dmuo = _traction(slo, ta, tb, tc, td, vc)
+        fi = -qi * mui
+        fo = -qo * muo
+        # ball-cage pocket: tangential force on the ball, friction at the pocket face
+        arc = rm * eps                 # angles are unwrapped: ball and cage stay together
+        ft = 0.0
+        cin = 0.0
+        if arc > cpk:
+            ft = -kc * (arc - cpk) - ccd * rm * (w - wc)
+            cin = 1.0
+            if ft > 0.0:
+                ft = 0.0
+                cin = 0.0
+        elif arc < -cpk:
+            ft = -kc * (arc + cpk) - ccd * rm * (w - wc)
+            cin = 1.0
+            if ft < 0.0:
+                ft = 0.0
+                cin = 0.0
+        aft = abs(ft)
+        mup = 0.0
+        dmup = 0.0
+        if aft > 0.0:
+            mup, dmup = _traction(rb * (om - w), ta, tb, tc, td, vc)
+        fric = aft * mup
+        fr = fric if arc >= 0.0 else -fric        # radial on the ball
+        # lubricant drag against the revolution (factor frozen over the step)
+        fdrag = -film[j, F_DRAG] * w * abs(w)
+        # equations of motion of the ball (polar coordinates about the outer-race centre)
+        f[b + B_TH] = w
+        f[b + B_R] = v
+        f[b + B_PSI] = w - om
+        f[b + B_W] = (fi + fo + ft + fdrag - 2.0 * mb * v * w) / (mb * r) - grav * c / r
+        f[b + B_V] = r * w * w + (qi - qo + fr) / mb - grav * s
+        f[b + B_OM] = rb * (fo - fi - fric) / jb
+        # reactions: on the shaft -Q_i e_r - f_i e_t, on the pedestal +Q_o e_r - f_o e_t
+        fsx += -qi * c + fi * s
+        fsy += -qi * s - fi * c
+        fpx += qo * c + fo * s
+        fpy += qo * s - fo * c
+        torque -= ft * rm
+        a = aux[j]
+        a[X_KTI] = kti
+        a[X_KTO] = kto
+        a[X_CI] = ci
+        a[X_CO] = co
+        a[X_QI] = qi
+        a[X_QO] = qo
+        a[X_MUI] = mui
+        a[X_MUO] = muo
+        a[X_DMUI] = dmui
+        a[X_DMUO] = dmuo
+        a[X_FT] = aft
+        a[X_DMUP] = dmup
+        a[X_CIN] = cin
+        a[X_DRAGD] = 2.0 * film[j, F_DRAG] * abs(w)
+        a[X_MUP] = mup
+        a[X_SFT] = 1.0 if ft > 0.0 else (-1.0 if ft < 0.0 else 0.0)
+        a[X_SARC] = 1.0 if arc >= 0.0 else -1.0
+        a[X_C] = c
+        a[X_S] = s
+        d = dg[j]
+        d[D_QI] = qi
+        d[D_QO] = qo
+        d[D_SLI] = sli
+        d[D_SLO] = slo
+        d[D_FI] = fi
+        d[D_FO] = fo
+    # structure (seed 000 eq. 33) with the unit resonator on the pedestal's y
+    for k in range(5):
+        f[k] = y[5 + k]
+    f[5] = (-p[P_KS] * y[0] - p[P_CS] * y[5] + fx_ext + fsx) / p[P_MS]
+    f[6] = (-p[P_KS] * y[1] - p[P_CS] * y[6] + fy_ext - p[P_WS] + fsy) / p[P_MS]
+    fres = 0.0
+    if p[P_HASRES] > 0.0:
+        fres = p[P_KR] * (y[4] - y[3]) + p[P_CRS] * (y[9] - y[8])
+        f[9] = -fres / p[P_MR]
+    else:
+        f[9] = 0.0
+    f[7] = (-p[P_KP] * y[2] - p[P_CP] * y[7] + fpx) / p[P_MP]
+    f[8] = (-p[P_KP] * y[3] - p[P_CP] * y[8] + fpy + fres) / p[P_MP]
+    f[10] = wc
+    f[11] = (torque - p[P_CDRAG] * wc) / p[P_JC]
+    frc[0] = fsx
+    frc[1] = fsy
+    frc[2] = fpx
+    frc[3] = fpy
+
+
+@njit(cache=True, inline="always")
+def _entrainment(y, b, e, ws, rb):
+    """Entrainment (mean surface) speeds (m/s) of the inner and outer contact of the ball at
+    state offset b, relative to the moving contacts."""
+    r = y[b + B_R]
+    w = y[b + B_W]
+    om = y[b + B_OM]
+    ui = 0.5 * abs(-rb * (om - w) + (r - rb - e) * ws - (r - rb) * w)
+    uo = 0.5 * abs(rb * (om - w) - (r + rb) * w)
+    return ui, uo
+
+
+@njit(cache=True, inline="always")
+def _film_exact(p, coef, u, q):
+    if p[P_FILM] <= 0.0 or u <= 1e-9:
+        return 0.0
+    return coef * math.exp(FILM_EXP_U * math.log(u) + FILM_EXP_Q * math.log(max(q, p[P_QMIN])))
+
+
+@njit(cache=True, inline="always")
+def _film_contact(film, j, col_h, col_h0, col_u0, col_q0, p, coef, u, q):
+    """Update one contact's film thickness: a second-order Taylor step of h ~ u^0.68 Q^-0.073
+    from the last exact value while u and Q stay within 2 % / 5 % of it, else exactly."""
+    q = max(q, p[P_QMIN])
+    u0 = film[j, col_u0]
+    q0 = film[j, col_q0]
+    if p[P_FILM] <= 0.0:
+        film[j, col_h] = 0.0
+        return
+    if u0 > 1e-9 and u > 1e-9:
+        x = u / u0 - 1.0
+        z = q / q0 - 1.0
+        if abs(x) < 0.02 and abs(z) < 0.05:
+            film[j, col_h] = film[j, col_h0] * (1.0 + x * (FILM_EXP_U + 0.5 * FILM_EXP_U * (FILM_EXP_U - 1.0) * x)) \
+                * (1.0 + z * (FILM_EXP_Q + 0.5 * FILM_EXP_Q * (FILM_EXP_Q - 1.0) * z))
+            return
+    h = _film_exact(p, coef, u, q)
+    film[j, col_h] = h
+    film[j, col_h0] = h
+    film[j, col_u0] = u
+    film[j, col_q0] = q
+
+
+@njit(cache=True, inline="always")
+def _drag_factor(film, j, p, w):
+    """Drag factor F_v / (w |w|) at revolution speed w, refreshed when w moved by 2 %."""
+    w0 = film[j, F_W0]
+    if w0 > 0.0 and abs(abs(w) / w0 - 1.0) < 0.02:
+        return
+    aw = abs(w) if abs(w) > 1e-3 else 1e-3
+    film[j, F_DRAG] = p[P_DRAG] * math.exp(1.95 * math.log(p[P_DM]) - 0.05 * math.log(aw))
+    film[j, F_W0] = aw
+
+
+@njit(cache=True)
+def _film_update(y, ws, p, film, aux, from_aux):
+    """Film thickness of every contact (Hamrock-Dowson, eq. 12) and drag factor of every ball at
+    one grid point.  Loads from ``aux`` (the last right-hand-side evaluation, at the end of the
+    step) if ``from_aux``, else from the geometry (Hertz with the current film)."""
+    nb = int(p[P_NB])
+    rb = p[P_RB]
+    rm = p[P_RM]
+    half_cr = 0.5 * p[P_CR]
+    dx = y[0] - y[2]
+    dy = y[1] - y[3]
+    for j in range(nb):
+        b = NS0 + NBV * j
+        th = y[b + B_TH]
+        r = y[b + B_R]
+        _drag_factor(film, j, p, y[b + B_W])
+        e = dx * math.cos(th) + dy * math.sin(th)
+        ui, uo = _entrainment(y, b, e, ws, rb)
+        if from_aux:
+            qi = aux[j, X_QI]
+            qo = aux[j, X_QO]
+        else:
+            di = e + rm - half_cr - r + film[j, F_HI]
+            do = r - rm - half_cr + film[j, F_HO]
+            qi = p[P_KI] * di * math.sqrt(di) if di > 0.0 else 0.0
+            qo = p[P_KO] * do * math.sqrt(do) if do > 0.0 else 0.0
+            film[j, F_UI0] = 0.0          # force exact values
+            film[j, F_UO0] = 0.0
+        _film_contact(film, j, F_HI, F_HI0, F_UI0, F_QI0, p, p[P_HCI], ui, qi)
+        _film_contact(film, j, F_HO, F_HO0, F_UO0, F_QO0, p, p[P_HCO], uo, qo)
+
+
+@njit(cache=True)
+def _ball_radial_force(p, y, j, sh_ang, dtab, wti, wto, film, r):
+    """Quasi-static radial force (N, outward) on ball j at radius r with the rest of ``y`` fixed:
+    Hertz (with film), centrifugal, gravity.  Decreasing in r."""
+    b = NS0 + NBV * j
+    th = y[b + B_TH]
+    w = y[b + B_W]
+    c = math.cos(th)
+    s = math.sin(th)
+    e = (y[0] - y[2]) * c + (y[1] - y[3]) * s
+    di = e + p[P_RM] - 0.5 * p[P_CR] - r + film[j, F_HI]
+    do = r - p[P_RM] - 0.5 * p[P_CR] + film[j, F_HO]
+    if dtab.shape[0] > 0:
+        li, lo = interference_loss(dtab, j, th, sh_ang, y[b + B_PSI], p[P_RI], p[P_RO], p[P_RB])
+        di -= li
+        do -= lo
+    if wti.shape[0] > 0:
+        di += waviness_gain(wti, th, sh_ang)
+    if wto.shape[0] > 0:
+        do += waviness_gain(wto, th, sh_ang)
+    qi = p[P_KI] * di * math.sqrt(di) if di > 0.0 else 0.0
+    qo = p[P_KO] * do * math.sqrt(do) if do > 0.0 else 0.0
+    return qi - qo + p[P_MB] * r * w * w - p[P_MB] * p[P_G] * s
+
+
+@njit(cache=True)
+def _settle_balls(p, y, sh_ang, dtab, wti, wto, film):
+    """Put every ball at its quasi-static radius (bisection on the monotone radial force); a ball
+    with no radial force at all (free in the clearance) goes to the middle of its free range."""
+    nb = int(p[P_NB])
+    span = abs(p[P_CR]) + abs(y[0] - y[2]) + abs(y[1] - y[3]) + 1e-4
+    for j in range(nb):
+        b = NS0 + NBV * j
+        lo = p[P_RM] - span
+        hi = p[P_RM] + span
+        # bracket of the zero-force band: first root from below and from above
+        a_lo, a_hi = lo, hi
+        for _ in range(80):
+            mid = 0.5 * (a_lo + a_hi)
+            if _ball_radial_force(p, y, j, sh_ang, dtab, wti, wto, film, mid) > 0.0:
+                a_lo = mid
+            else:
+                a_hi = mid
+        b_lo, b_hi = lo, hi
+        for _ in range(80):
+            mid = 0.5 * (b_lo + b_hi)
+            if _ball_radial_force(p, y, j, sh_ang, dtab, wti, wto, film, mid) >= 0.0:
+                b_lo = mid
+            else:
+                b_hi = mid
+        y[b + B_R] = 0.5 * (a_hi + b_lo)
+        y[b + B_V] = 0.0
+
+
+@njit(cache=True)
+def _quasi_static_forces(p, y, sh_ang, dtab, wti, wto, film, out):
+    """Settle the balls and return the bearing forces (N) on the shaft (out[0:2]) and on the
+    pedestal (out[2:4]) without traction: the quasi-static load-deflection law."""
+    nb = int(p[P_NB])
+    _settle_balls(p, y, sh_ang, dtab, wti, wto, film)
+    out[:] = 0.0
+    for j in range(nb):
+        b = NS0 + NBV * j
+        th = y[b + B_TH]
+        r = y[b + B_R]
+        c = math.cos(th)
+        s = math.sin(th)
+        e = (y[0] - y[2]) * c + (y[1] - y[3]) * s
+        di = e + p[P_RM] - 0.5 * p[P_CR] - r + film[j, F_HI]
+        do = r - p[P_RM] - 0.5 * p[P_CR] + film[j, F_HO]
+        if dtab.shape[0] > 0:
+            li, lo = interference_loss(dtab, j, th, sh_ang, y[b + B_PSI], p[P_RI], p[P_RO], p[P_RB])
+            di -= li
+            do -= lo
+        if wti.shape[0] > 0:
+            di += waviness_gain(wti, th, sh_ang)
+        if wto.shape[0] > 0:
+            do += waviness_gain(wto, th, sh_ang)
+        qi = p[P_KI] * di * math.sqrt(di) if di > 0.0 else 0.0
+        qo = p[P_KO] * do * math.sqrt(do) if do > 0.0 else 0.0
+        out[0] -= qi * c
+        out[1] -= qi * s
+        out[2] += qo * c
+        out[3] += qo * s
+
+
+# ---------------------------------------------------------------------------------------------
+# Rosenbrock-W: the block Jacobian, factorised once per step, applied once per stage
+# per-ball workspace: LU of the reduced 3x3 (no pivoting: the matrix is I plus h-scaled damping,
+# stiffness and traction terms of the right signs, its pivots stay >= 1), the position couplings
+# of the right-hand side and the cage column
+(W_L10, W_L20, W_L21, W_U00, W_U01, W_U02, W_U11, W_U12, W_U22, W_THTH, W_THR, W_THPH, W_RR, W_OMR,
+ W_ZC0, W_ZC1, W_ZC2, W_COEF, W_DCTH, W_RTH, W_OMTH, NW) = range(22)
+
+
+@njit(cache=True, inline="always")
+def _lu3_solve(wk, x0, x1, x2):
+    """Solve with the stored LU (forward, then backward); returns the solution."""
+    z1 = x1 - wk[W_L10] * x0
+    z2 = x2 - wk[W_L20] * x0 - wk[W_L21] * z1
+    s2 = z2 / wk[W_U22]
+    s1 = (z1 - wk[W_U12] * s2) / wk[W_U11]
+    s0 = (x0 - wk[W_U01] * s1 - wk[W_U02] * s2) / wk[W_U00]
+    return s0, s1, s2
+
+
+@njit(cache=True)
+def _w_factor(y, aux, p, hg, wsp, wcage):
+    """Build and factorise W = I - hg J for the approximate Jacobian J of the stiff couplings.
+
+    J keeps, per ball, the couplings of (theta, rho, psi, theta', rho', Omega) through contact
+    stiffness and damping, traction slopes, pocket spring/damping/friction and drag, and the
+    cage (phi_c, omega_c) tied to every ball by the pocket springs (an arrow matrix).  Position
+    rows are eliminated (k_pos = r_pos + hg k_vel), which leaves a 3x3 system per ball and one
+    scalar for the cage (its Schur complement, wcage[0]).  Structure rows: J = 0."""
+    nb = int(p[P_NB])
+    mb = p[P_MB]
+    jb = p[P_JB]
+    rb = p[P_RB]
+    rm = p[P_RM]
+    kc = p[P_KC]
+    ccd = p[P_CCD]
+    jc = p[P_JC]
+    hg2 = hg * hg
+    cage_diag = 1.0 + hg * p[P_CDRAG] / jc
+    for j in range(nb):
+        b = NS0 + NBV * j
+        a = aux[j]
+        wk = wsp[j]
+        r = y[b + B_R]
+        w = y[b + B_W]
+        mr = mb * r
+        qi = a[X_QI]
+        qo = a[X_QO]
+        cin = a[X_CIN]
+        tdi = qi * a[X_DMUI]
+        tdo = qo * a[X_DMUO]
+        # derivatives of theta'', rho'', Omega' (see _rhs)
+        dth_th = -kc * rm * cin / mr
+        dth_r = (a[X_MUI] * a[X_KTI] - a[X_MUO] * a[X_KTO]) / mr
+        dth_w = (-(tdi + tdo) * r - ccd * rm * cin - a[X_DRAGD]) / mr
+        dth_v = (a[X_MUI] * a[X_CI] - a[X_MUO] * a[X_CO]) / mr
+        dth_om = (tdi - tdo) * rb / mr
+        dth_phic = -dth_th
+        dth_wc = ccd * rm * cin / mr
+        dr_r = -(a[X_KTI] + a[X_KTO]) / mb + w * w
+        dr_v = -(a[X_CI] + a[X_CO]) / mb
+        dr_w = 2.0 * r * w
+        pf = rb * rb * a[X_FT] * a[X_DMUP]
+        # pocket friction: its normal force |F_pocket| follows the pocket spring and damper, and
+        # the ball's spin inertia is tiny, so d(Omega')/d(theta) is among the stiffest couplings
+        gsp = a[X_MUP] * a[X_SFT] * cin           # d fric / d F_pocket... times the sign of F_pocket
+        dfr_th = -gsp * kc * rm                   # d fric / d theta (= - d fric / d phi_c)
+        dfr_w = -gsp * ccd * rm                   # d fric / d theta' (= - d fric / d w_c)
+        dom_w = (rb * r * (tdi - tdo) + pf - rb * dfr_w) / jb
+        dom_om = (-rb * rb * (tdi + tdo) - pf) / jb
+        dom_r = -rb * (a[X_MUO] * a[X_KTO] + a[X_MUI] * a[X_KTI]) / jb
+        dom_v = -rb * (a[X_MUO] * a[X_CO] + a[X_MUI] * a[X_CI]) / jb
+        dom_th = -rb * dfr_th / jb
+        dom_phic = -dom_th
+        dom_wc = rb * dfr_w / jb
+        dr_th = a[X_SARC] * dfr_th / mb
+        dr_phic = -dr_th
+        dr_wc = -a[X_SARC] * dfr_w / mb
+        dr_w += a[X_SARC] * dfr_w / mb
+        # reduced matrix on (k_w, k_v, k_om): I - hg A_v - hg^2 A_x (positions paired)
+        m00 = 1.0 - hg * dth_w - hg2 * dth_th
+        m01 = -hg * dth_v - hg2 * dth_r
+        m02 = -hg * dth_om
+        m10 = -hg * dr_w - hg2 * dr_th
+        m11 = 1.0 - hg * dr_v - hg2 * dr_r
+        m12 = 0.0
+        m20 = -hg * dom_w - hg2 * dom_th
+        m21 = -hg * dom_v - hg2 * dom_r
+        m22 = 1.0 - hg * dom_om
+        l10 = m10 / m00
+        l20 = m20 / m00
+        u11 = m11 - l10 * m01
+        u12 = m12 - l10 * m02
+        l21 = (m21 - l20 * m01) / u11
+        u22 = m22 - l20 * m02 - l21 * u12
+        wk[W_L10] = l10
+        wk[W_L20] = l20
+        wk[W_L21] = l21
+        wk[W_U00] = m00
+        wk[W_U01] = m01
+        wk[W_U02] = m02
+        wk[W_U11] = u11
+        wk[W_U12] = u12
+        wk[W_U22] = u22
+        wk[W_THTH] = dth_th
+        wk[W_THR] = dth_r
+        wk[W_THPH] = dth_phic
+        wk[W_RR] = dr_r
+        wk[W_OMR] = dom_r
+        wk[W_RTH] = dr_th
+        wk[W_OMTH] = dom_th
+        # the ball's response to the cage unknown k_wc (through phi_c = r_phic + hg k_wc, w_c)
+        z0, z1, z2 = _lu3_solve(wk, -(hg * dth_wc + hg2 * dth_phic), -(hg * dr_wc + hg2 * dr_phic),
+                                -(hg * dom_wc + hg2 * dom_phic))
+        wk[W_ZC0] = z0
+        wk[W_ZC1] = z1
+        wk[W_ZC2] = z2
+        # cage row: d a_c / d theta_j = kc rm^2 cin / jc, d a_c / d w_j = ccd rm^2 cin / jc
+        dc_th = kc * rm * rm * cin / jc
+        dc_w = ccd * rm * rm * cin / jc
+        coef = hg * dc_w + hg2 * dc_th
+        wk[W_COEF] = coef
+        wk[W_DCTH] = dc_th
+        cage_diag += coef + coef * z0
+    wcage[0] = cage_diag
+
+
+@njit(cache=True)
+def _w_apply(p, hg, wsp, wcage, rhs_vec, k):
+    """k = W^-1 rhs_vec with the factors of :func:`_w_factor`."""
+    nb = int(p[P_NB])
+    for i in range(NS0 - 2):
+        k[i] = rhs_vec[i]
+    r_phic = rhs_vec[10]
+    cage_rhs = rhs_vec[11]
+    for j in range(nb):
+        b = NS0 + NBV * j
+        wk = wsp[j]
+        r_th = rhs_vec[b + B_TH]
+        r_r = rhs_vec[b + B_R]
+        x0 = rhs_vec[b + B_W] + hg * (wk[W_THTH] * r_th + wk[W_THR] * r_r + wk[W_THPH] * r_phic)
+        x1 = rhs_vec[b + B_V] + hg * (wk[W_RR] * r_r + wk[W_RTH] * (r_th - r_phic))
+        x2 = rhs_vec[b + B_OM] + hg * (wk[W_OMR] * r_r + wk[W_OMTH] * (r_th - r_phic))
+        z0, z1, z2 = _lu3_solve(wk, x0, x1, x2)
+        k[b + B_W] = z0
+        k[b + B_V] = z1
+        k[b + B_OM] = z2
+        cage_rhs += hg * wk[W_DCTH] * (r_th - r_phic) + wk[W_COEF] * z0
+    kwc = cage_rhs / wcage[0]
+    k[11] = kwc
+    k[10] = r_phic + hg * kwc
+    for j in range(nb):
+        b = NS0 + NBV * j
+        wk = wsp[j]
+        kw = k[b + B_W] - wk[W_ZC0] * kwc
+        kv = k[b + B_V] - wk[W_ZC1] * kwc
+        kom = k[b + B_OM] - wk[W_ZC2] * kwc
+        k[b + B_W] = kw
+        k[b + B_V] = kv
+        k[b + B_OM] = kom
+        k[b + B_TH] = rhs_vec[b + B_TH] + hg * kw
+        k[b + B_R] = rhs_vec[b + B_R] + hg * kv
+        k[b + B_PSI] = rhs_vec[b + B_PSI] + hg * (kw - kom)
+
+
+# ---------------------------------------------------------------------------------------------
+# the stepping engine
+@njit(cache=True)
+def _step(kind, ta_, tb_, tc_, tg_, gamma, y, fy, aux0, t, hstep, ramp, p, dtab, wti, wto, film,
+          ynew, kst, ytmp, rtmp, auxs, dgs, wsp, wcage, scr, frc):
+    """One step of ``hstep`` s from (t, y) with f(t, y) = fy given; result in ynew."""
+    ns = tb_.shape[0]
+    n = y.shape[0]
+    if kind == EXPLICIT:
+        for i in range(n):
+            kst[0, i] = fy[i]
+        for st in range(1, ns):
+            for i in range(n):
+                acc = y[i]
+                for jj in range(st):
+                    if ta_[st, jj] != 0.0:
+                        acc += hstep * ta_[st, jj] * kst[jj, i]
+                ytmp[i] = acc
+            ws, ang, fx, fyy = _inputs(ramp, t + tc_[st] * hstep)
+            _rhs(ytmp, kst[st], ws, ang, fx, fyy, p, dtab, wti, wto, film, auxs, dgs, scr, frc)
+    else:
+        hg = hstep * gamma
+        _w_factor(y, aux0, p, hg, wsp, wcage)
+        for st in range(ns):
+            if st == 0:
+                for i in range(n):
+                    rtmp[i] = fy[i]
+            else:
+                for i in range(n):
+                    acc = y[i]
+                    for jj in range(st):
+                        if ta_[st, jj] != 0.0:
+                            acc += hstep * ta_[st, jj] * kst[jj, i]
+                    ytmp[i] = acc
+                ws, ang, fx, fyy = _inputs(ramp, t + tc_[st] * hstep)
+                _rhs(ytmp, rtmp, ws, ang, fx, fyy, p, dtab, wti, wto, film, auxs, dgs, scr, frc)
+                for jj in range(st):
+                    if tg_[st, jj] != 0.0:
+                        for i in range(n):
+                            rtmp[i] += tg_[st, jj] * kst[jj, i]
+            # W k = rtmp  (W = I - gamma h J, J from the step's first evaluation)
+            _w_apply(p, hg, wsp, wcage, rtmp, kst[st])
+    for i in range(n):
+        acc = y[i]
+        for st in range(ns):
+            acc += hstep * tb_[st] * kst[st, i]
+        ynew[i] = acc
+
+
+@njit(cache=True)
+def _record(i, m, y, fy, dg, ws, p, out_acc, out_qi, out_qo, out_cage, out_bs, out_cs,
+            out_sli, out_slo, out_fi, out_fo):
+    """Sensor-mount acceleration of sample i from the derivative fy; every m-th sample the
+    cage, ball and contact values (see :func:`_record_diag`)."""
+    out_acc[i, 0] = fy[7]
+    out_acc[i, 1] = fy[9] if p[P_HASRES] > 0.0 else fy[8]
+    _record_diag(i, m, y, dg, ws, p, out_qi, out_qo, out_cage, out_bs, out_cs, out_sli, out_slo,
+                 out_fi, out_fo)
+
+
+@njit(cache=True)
+def _record_diag(i, m, y, dg, ws, p, out_qi, out_qo, out_cage, out_bs, out_cs, out_sli, out_slo,
+                 out_fi, out_fo):
+    """Cage speed, skid ratios (eqs 37-38, regularised at standstill), contact loads, slips and
+    traction forces, if i is a multiple of m."""
+    nb = int(p[P_NB])
+    if i % m == 0:
+        o = i // m
+        out_cage[o] = y[11]
+        wct = p[P_CAGER] * ws
+        out_cs[o] = 100.0 * (wct - y[11]) * wct / (wct * wct + W_REF * W_REF)
+        wbt = p[P_SPINR] * ws
+        acc = 0.0
+        for j in range(nb):
+            b = NS0 + NBV * j
+            wb = y[b + B_W] - y[b + B_OM]
+            acc += (wbt - wb)
+            out_qi[o, j] = dg[j, D_QI]
+            out_qo[o, j] = dg[j, D_QO]
+            out_sli[o, j] = dg[j, D_SLI]
+            out_slo[o, j] = dg[j, D_SLO]
+            out_fi[o, j] = dg[j, D_FI]
+            out_fo[o, j] = dg[j, D_FO]
+        out_bs[o] = 100.0 * (acc / nb) * wbt / (wbt * wbt + W_REF * W_REF)
+
+
+@njit(cache=True)
+def _engine(y, counters, n, m, hs, hstep, ramp, kind, ta_, tb_, tc_, tg_, gamma, p, dtab, wti,
+            wto, film, out_acc, out_qi, out_qo, out_cage, out_bs, out_cs, out_sli, out_slo,
+            out_fi, out_fo):
+    """Advance ``n`` internal samples of spacing ``hs`` with fixed steps of ``hstep``.
+
+    counters[0]: global step count k (the state y is at time k * hstep); counters[1]: global
+    index of the first sample of this chunk (at time index * hs).  The step grid is global, so
+    chunking does not change the steps; a step that straddles the end of the chunk is taken with
+    the inputs held at their final values and recomputed by the next call.  Returns 0, or 1 if
+    the state stopped being finite (with counters[2] = the sample where it happened).
+    """
+    nvar = y.shape[0]
+    nb = int(p[P_NB])
+    ns = tb_.shape[0]
+    fy = np.empty(nvar)
+    ynext = np.empty(nvar)
+    fnext = np.empty(nvar)
+    yint = np.empty(nvar)
+    fint = np.empty(nvar)
+    ytmp = np.empty(nvar)
+    rtmp = np.empty(nvar)
+    kst = np.empty((ns, nvar))
+    aux0 = np.empty((nb, NAUX))
+    auxn = np.empty((nb, NAUX))
+    auxs = np.empty((nb, NAUX))
+    dg0 = np.empty((nb, NDG))
+    dgn = np.empty((nb, NDG))
+    dgs = np.empty((nb, NDG))
+    filmn = np.empty_like(film)
+    wsp = np.empty((nb, NW))
+    wcage = np.empty(1)
+    scr = np.empty((nb, 3))
+    frc = np.empty(4)
+    kstep = counters[0]
+    i0 = counters[1]
+    ty = kstep * hstep
+    ws, ang, fx, fyy = _inputs(ramp, ty)
+    _rhs(y, fy, ws, ang, fx, fyy, p, dtab, wti, wto, film, aux0, dg0, scr, frc)
+    have_next = False
+    eps = 1e-9 * hs
+    for i in range(n):
+        ts = (i0 + i) * hs
+        # commit the steps that end at or before this sample
+        while (kstep + 1) * hstep <= ts + eps:
+            if not have_next:
+                _step(kind, ta_, tb_, tc_, tg_, gamma, y, fy, aux0, ty, hstep, ramp, p, dtab, wti,
+                      wto, film, ynext, kst, ytmp, rtmp, auxs, dgs, wsp, wcage, scr, frc)
+                ws, ang, fx, fyy = _inputs(ramp, ty + hstep)
+                filmn[:, :] = film
+                _film_update(ynext, ws, p, filmn, auxs, True)
+                _rhs(ynext, fnext, ws, ang, fx, fyy, p, dtab, wti, wto, filmn, auxn, dgn, scr, frc)
+            y[:] = ynext
+            fy[:] = fnext
+            film[:, :] = filmn
+            aux0[:, :] = auxn
+            dg0[:, :] = dgn
+            kstep += 1
+            ty = kstep * hstep
+            have_next = False
+            if not np.isfinite(y[11]) or not np.isfinite(y[3]) or not np.isfinite(fy[8]):
+                counters[0] = kstep
+                counters[2] = i
+                return 1
+        ws, ang, fx, fyy = _inputs(ramp, ts)
+        if ts - ty <= eps:
+            _record(i, m, y, fy, dg0, ws, p, out_acc, out_qi, out_qo, out_cage, out_bs, out_cs,
+                    out_sli, out_slo, out_fi, out_fo)
+        else:
+            if not have_next:
+                _step(kind, ta_, tb_, tc_, tg_, gamma, y, fy, aux0, ty, hstep, ramp, p, dtab, wti,
+                      wto, film, ynext, kst, ytmp, rtmp, auxs, dgs, wsp, wcage, scr, frc)
+                ws1, ang1, fx1, fy1 = _inputs(ramp, ty + hstep)
+                filmn[:, :] = film
+                _film_update(ynext, ws1, p, filmn, auxs, True)
+                _rhs(ynext, fnext, ws1, ang1, fx1, fy1, p, dtab, wti, wto, filmn, auxn, dgn, scr, frc)
+                have_next = True
+            th = (ts - ty) / hstep
+            h00 = (2.0 * th - 3.0) * th * th + 1.0
+            h10 = ((th - 2.0) * th + 1.0) * th * hstep
+            h01 = (3.0 - 2.0 * th) * th * th
+            h11 = (th - 1.0) * th * th * hstep
+            for k in range(nvar):
+                yint[k] = h00 * y[k] + h10 * fy[k] + h01 * ynext[k] + h11 * fnext[k]
+            _rhs(yint, fint, ws, ang, fx, fyy, p, dtab, wti, wto, film, auxs, dgs, scr, frc)
+            _record(i, m, yint, fint, dgs, ws, p, out_acc, out_qi, out_qo, out_cage, out_bs, out_cs,
+                    out_sli, out_slo, out_fi, out_fo)
+    counters[0] = kstep
+    counters[1] = i0 + n
+    return 0
+
+
+@njit(cache=True, inline="always")
+def _inputs_split(frc, y, kb, fx, fy, wshaft, u):
+    """Inputs of the linear structure: ball forces minus the linearised bearing force (which is
+    inside the structure's matrix), plus the external load and the shaft weight on the shaft."""
+    dx = y[0] - y[2]
+    dy = y[1] - y[3]
+    lx = kb[0, 0] * dx + kb[0, 1] * dy
+    ly = kb[1, 0] * dx + kb[1, 1] * dy
+    u[0] = frc[0] + lx + fx
+    u[1] = frc[1] + ly + fy - wshaft
+    u[2] = frc[2] - lx
+    u[3] = frc[3] - ly
+
+
+@njit(cache=True)
+def _forcing_increment(y, xpred, aux, p, ws, dlt):
+    """h * df/dt of the balls over a step in which the structure moves from y[0:10] to xpred:
+    the change of each ball's radial, revolution and spin acceleration when the shaft-pedestal
+    offset and its rate change, linearised with the contact stiffness, damping and traction
+    slope of ``aux``.  The structure is a time-dependent forcing of the (stiff) ball equations;
+    a Rosenbrock method needs that term (autonomised: the Jacobian's time column), or it drops
+    to first order on them and its lagging quasi-static ball damps the structure."""
+    nb = int(p[P_NB])
+    mb = p[P_MB]
+    jb = p[P_JB]
+    rb = p[P_RB]
+    ddx = (xpred[0] - xpred[2]) - (y[0] - y[2])
+    ddy = (xpred[1] - xpred[3]) - (y[1] - y[3])
+    ddvx = (xpred[5] - xpred[7]) - (y[5] - y[7])
+    ddvy = (xpred[6] - xpred[8]) - (y[6] - y[8])
+    for k in range(dlt.shape[0]):
+        dlt[k] = 0.0
+    for j in range(nb):
+        b = NS0 + NBV * j
+        a = aux[j]
+        c = a[X_C]
+        s = a[X_S]
+        de = ddx * c + ddy * s
+        dedot = ddvx * c + ddvy * s
+        dq = a[X_KTI] * de + a[X_CI] * dedot
+        dfi = -a[X_MUI] * dq - a[X_QI] * a[X_DMUI] * ws * de
+        dlt[b + B_V] = dq / mb
+        dlt[b + B_W] = dfi / (mb * y[b + B_R])
+        dlt[b + B_OM] = -rb * dfi / jb
+
+
+@njit(cache=True)
+def _split_core(y, fy, un, aux0, t, hstep, ramp, ta_, tg_, tb_, gamma, p, dtab, wti, wto, film,
+                phi, g0, g1, kb, ynext, fnext, unext, auxn, dgn, filmn, kst, ytmp, rtmp, auxs, dgs,
+                wsp, wcage, scr, frc, xpred):
+    """One step of :class:`~.integrators.SplitROS2` of ``hstep`` s from (t, y) with the structure
+    propagators (phi, g0, g1) of that step (see its docstring)."""
+    n = y.shape[0]
+    # structure predictor with the input held
+    for r in range(10):
+        acc = 0.0
+        for c in range(10):
+            acc += phi[r, c] * y[c]
+        for c in range(4):
+            acc += g0[r, c] * un[c]
+        xpred[r] = acc
+    # ROS2 on balls and cage, the structure given (x_n at the start, x* at the end)
+    hg = hstep * gamma
+    _w_factor(y, aux0, p, hg, wsp, wcage)
+    # the time column of the autonomised Jacobian: + gamma h f_t in stage 1, - in stage 2 (ROS2)
+    ws0, _a0, _x0, _y0 = _inputs(ramp, t)
+    _forcing_increment(y, xpred, aux0, p, ws0, ytmp)
+    for i in range(n):
+        rtmp[i] = fy[i] + gamma * ytmp[i]
+        ytmp[i] = -gamma * ytmp[i]
+    _w_apply(p, hg, wsp, wcage, rtmp, kst[0])
+    for i in range(n):
+        rtmp[i] = ytmp[i]                          # keep - gamma h f_t for stage 2
+    for i in range(n):
+        ytmp[i] = y[i] + hstep * ta_[1, 0] * kst[0, i]
+    for i in range(10):
+        ytmp[i] = xpred[i]
+    ws, ang, fx, fyy = _inputs(ramp, t + hstep)
+    for i in range(n):
+        kst[1, i] = rtmp[i]
+    _rhs(ytmp, rtmp, ws, ang, fx, fyy, p, dtab, wti, wto, film, auxs, dgs, scr, frc)
+    for i in range(n):
+        rtmp[i] += tg_[1, 0] * kst[0, i] + kst[1, i]
+    _w_apply(p, hg, wsp, wcage, rtmp, kst[1])
+    for i in range(n):
+        ynext[i] = y[i] + hstep * (tb_[0] * kst[0, i] + tb_[1] * kst[1, i])
+    for i in range(10):
+        ynext[i] = xpred[i]
+    filmn[:, :] = film
+    _film_update(ynext, ws, p, filmn, auxs, True)
+    _rhs(ynext, fnext, ws, ang, fx, fyy, p, dtab, wti, wto, filmn, auxn, dgn, scr, frc)
+    _inputs_split(frc, ynext, kb, fx, fyy, p[P_WS], unext)
+    # structure corrector with the input ramped from u_n to u'
+    for r in range(10):
+        acc = xpred[r]
+        for c in range(4):
+            acc += g1[r, c] * (unext[c] - un[c])
+        ynext[r] = acc
+
+
+@njit(cache=True, inline="always")
+def _contact_changed(a0, a1, nb, pocket):
+    """Whether any ball-race contact (or, with ``pocket``, ball-pocket contact) opened or closed
+    between two evaluations.  Without pocket clearance the pocket spring is always engaged (its
+    flag flickers only where its damping outweighs it), so it is not an event."""
+    for j in range(nb):
+        if (a0[j, X_KTI] > 0.0) != (a1[j, X_KTI] > 0.0):
+            return True
+        if (a0[j, X_KTO] > 0.0) != (a1[j, X_KTO] > 0.0):
+            return True
+        if pocket and a0[j, X_CIN] != a1[j, X_CIN]:
+            return True
+    return False
+
+
+@njit(cache=True)
+def _split_step(y, fy, un, aux0, kstep, kk, hs, ramp, ta_, tg_, tb_, gamma, p, dtab, wti, wto, film,
+                phi, g0, g1, phie, g0e, g1e, nsub, kb, ynext, fnext, unext, auxn, dgn, filmn, kst,
+                ytmp, rtmp, auxs, dgs, wsp, wcage, scr, frc, xpred, ycur, fcur, ucur, auxc, filmc,
+                xsmp, usmp, flag):
+    """One grid step (kk samples) of the split method, event-aware: if a contact opened or
+    closed during the step, the step is redone as ``nsub`` sub-steps (structure propagators
+    phie, g0e, g1e of one sub-step), so that the instant of the change is resolved to H / nsub.
+    With sub-steps, the structure state and input at the samples inside the step are stored
+    in xsmp, usmp (flag[0] = 1)."""
+    hstep = kk * hs
+    t = kstep * hstep
+    nb = int(p[P_NB])
+    flag[0] = 0
+    _split_core(y, fy, un, aux0, t, hstep, ramp, ta_, tg_, tb_, gamma, p, dtab, wti, wto, film,
+                phi, g0, g1, kb, ynext, fnext, unext, auxn, dgn, filmn, kst, ytmp, rtmp, auxs, dgs,
+                wsp, wcage, scr, frc, xpred)
+    if nsub <= 1 or not _contact_changed(aux0, auxn, nb, p[P_CPK] > 0.0):
+        return
+    flag[0] = 1
+    hsub = hstep / nsub
+    per_sample = nsub // kk
+    ycur[:] = y
+    fcur[:] = fy
+    ucur[:] = un
+    auxc[:, :] = aux0
+    filmc[:, :] = film
+    for sidx in range(nsub):
+        _split_core(ycur, fcur, ucur, auxc, t + sidx * hsub, hsub, ramp, ta_, tg_, tb_, gamma, p,
+                    dtab, wti, wto, filmc, phie, g0e, g1e, kb, ynext, fnext, unext, auxn, dgn,
+                    filmn, kst, ytmp, rtmp, auxs, dgs, wsp, wcage, scr, frc, xpred)
+        ycur[:] = ynext
+        fcur[:] = fnext
+        ucur[:] = unext
+        auxc[:, :] = auxn
+        filmc[:, :] = filmn
+        done = sidx + 1
+        if done < nsub and done % per_sample == 0:
+            jj = done // per_sample
+            for r in range(10):
+                xsmp[jj, r] = ycur[r]
+            for c in range(4):
+                usmp[jj, c] = ucur[c]
+
+
+@njit(cache=True)
+def _engine_split(y, fy, un, aux0, dg0, film, counters, n, m, hs, kk, ramp, ta_, tg_, tb_, gamma,
+                  p, dtab, wti, wto, phi, g0, g1, phis, g0s, g1s, phie, g0e, g1e, nsub, cacc, dacc,
+                  kb, out_acc, out_qi, out_qo, out_cage, out_bs, out_cs, out_sli, out_slo, out_fi,
+                  out_fo):
+    """Advance ``n`` internal samples with :class:`~.integrators.SplitROS2`, one step per ``kk``
+    samples.  The state (y, its derivative fy, the structure input un, aux0, dg0, film) persists
+    between calls, so chunking does not change the result; counters as in :func:`_engine`
+    (counters[3] = 1 once fy/un are valid)."""
+    nvar = y.shape[0]
+    nb = int(p[P_NB])
+    ynext = np.empty(nvar)
+    fnext = np.empty(nvar)
+    unext = np.empty(4)
+    ytmp = np.empty(nvar)
+    rtmp = np.empty(nvar)
+    kst = np.empty((2, nvar))
+    auxn = np.empty((nb, NAUX))
+    auxs = np.empty((nb, NAUX))
+    dgn = np.empty((nb, NDG))
+    dgs = np.empty((nb, NDG))
+    filmn = np.empty_like(film)
+    wsp = np.empty((nb, NW))
+    wcage = np.empty(1)
+    scr = np.empty((nb, 3))
+    frc = np.empty(4)
+    xpred = np.empty(10)
+    xs = np.empty(10)
+    uu = np.empty(4)
+    ycur = np.empty(nvar)
+    fcur = np.empty(nvar)
+    ucur = np.empty(4)
+    auxc = np.empty((nb, NAUX))
+    filmc = np.empty_like(film)
+    xsmp = np.empty((kk, 10))
+    usmp = np.empty((kk, 4))
+    flag = np.zeros(1, dtype=np.int64)
+    kstep = counters[0]
+    i0 = counters[1]
+    if counters[3] == 0:
+        ws, ang, fx, fyy = _inputs(ramp, kstep * kk * hs)
+        _rhs(y, fy, ws, ang, fx, fyy, p, dtab, wti, wto, film, aux0, dg0, scr, frc)
+        _inputs_split(frc, y, kb, fx, fyy, p[P_WS], un)
+        counters[3] = 1
+    have_next = False
+    for i in range(n):
+        gi = i0 + i
+        while (kstep + 1) * kk <= gi:
+            if not have_next:
+                _split_step(y, fy, un, aux0, kstep, kk, hs, ramp, ta_, tg_, tb_, gamma, p, dtab, wti,
+                            wto, film, phi, g0, g1, phie, g0e, g1e, nsub, kb, ynext, fnext, unext,
+                            auxn, dgn, filmn, kst, ytmp, rtmp, auxs, dgs, wsp, wcage, scr, frc, xpred,
+                            ycur, fcur, ucur, auxc, filmc, xsmp, usmp, flag)
+            y[:] = ynext
+            fy[:] = fnext
+            un[:] = unext
+            film[:, :] = filmn
+            aux0[:, :] = auxn
+            dg0[:, :] = dgn
+            kstep += 1
+            have_next = False
+            if not np.isfinite(y[11]) or not np.isfinite(y[3]) or not np.isfinite(fy[8]):
+                counters[0] = kstep
+                counters[2] = i
+                return 1
+        jj = gi - kstep * kk
+        ws, ang, fx, fyy = _inputs(ramp, gi * hs)
+        if jj == 0:
+            for r in range(10):
+                xs[r] = y[r]
+            for c in range(4):
+                uu[c] = un[c]
+        else:
+            if not have_next:
+                _split_step(y, fy, un, aux0, kstep, kk, hs, ramp, ta_, tg_, tb_, gamma, p, dtab, wti,
+                            wto, film, phi, g0, g1, phie, g0e, g1e, nsub, kb, ynext, fnext, unext,
+                            auxn, dgn, filmn, kst, ytmp, rtmp, auxs, dgs, wsp, wcage, scr, frc, xpred,
+                            ycur, fcur, ucur, auxc, filmc, xsmp, usmp, flag)
+                have_next = True
+            fr = jj / kk
+            if flag[0] == 1:
+                for r in range(10):
+                    xs[r] = xsmp[jj, r]
+                for c in range(4):
+                    uu[c] = usmp[jj, c]
+            for r in range(10 if flag[0] == 0 else 0):
+                acc = 0.0
+                for c in range(10):
+                    acc += phis[jj, r, c] * y[c]
+                for c in range(4):
+                    acc += g0s[jj, r, c] * un[c] + g1s[jj, r, c] * (unext[c] - un[c])
+                xs[r] = acc
+            if flag[0] == 0:
+                for c in range(4):
+                    uu[c] = un[c] + fr * (unext[c] - un[c])
+        for r in range(2):
+            acc = 0.0
+            for c in range(10):
+                acc += cacc[r, c] * xs[c]
+            for c in range(4):
+                acc += dacc[r, c] * uu[c]
+            out_acc[i, r] = acc
+        # the cage, ball and contact values of the grid point at or before the sample (the
+        # Simulator's chunks are multiples of 4 samples, so with kk | 4 it is the sample itself)
+        _record_diag(i, m, y, dg0, ws, p, out_qi, out_qo, out_cage, out_bs, out_cs, out_sli, out_slo,
+                     out_fi, out_fo)
+    counters[0] = kstep
+    counters[1] = i0 + n
+    return 0
+
+
+def structure_system(scene, kb: np.ndarray):
+    """State matrices of the linear structure (x' = A x + B u, x the 10-state layout, u = forces
+    on the shaft x, y and on the pedestal x, y) with the linearised bearing stiffness ``kb``
+    (2x2, force on the pedestal per shaft-pedestal offset) between shaft and pedestal; and the
+    sensor-mount acceleration rows (C, D)."""
+    st = scene.structure
+    ms, mp = st.shaft_mass, st.pedestal_mass
+    has_res = st.has_resonator
+    mr = st.resonator_mass if has_res else 1.0
+    kr, cr = (st.resonator_stiffness, st.resonator_damping) if has_res else (0.0, 0.0)
+    mass = np.array([ms, ms, mp, mp, mr])
+    kmat = np.zeros((5, 5))
+    cmat = np.zeros((5, 5))
+    kmat[0, 0] = kmat[1, 1] = st.shaft_stiffness
+    kmat[2, 2] = kmat[3, 3] = st.pedestal_stiffness
+    cmat[0, 0] = cmat[1, 1] = st.shaft_damping
+    cmat[2, 2] = cmat[3, 3] = st.pedestal_damping
+    kmat[3, 3] += kr
+    kmat[4, 4] += kr
+    kmat[3, 4] = kmat[4, 3] = -kr
+    cmat[3, 3] += cr
+    cmat[4, 4] += cr
+    cmat[3, 4] = cmat[4, 3] = -cr
+    for a_ in range(2):
+        for b_ in range(2):
+            kmat[a_, b_] += kb[a_, b_]
+            kmat[2 + a_, 2 + b_] += kb[a_, b_]
+            kmat[a_, 2 + b_] -= kb[a_, b_]
+            kmat[2 + a_, b_] -= kb[a_, b_]
+    minv = 1.0 / mass
+    A = np.zeros((10, 10))
+    A[:5, 5:] = np.eye(5)
+    A[5:, :5] = -minv[:, None] * kmat
+    A[5:, 5:] = -minv[:, None] * cmat
+    B = np.zeros((10, 4))
+    B[5, 0] = B[6, 1] = 1.0 / ms
+    B[7, 2] = B[8, 3] = 1.0 / mp
+    rows = [7, 9 if has_res else 8]
+    return A, B, np.ascontiguousarray(A[rows]), np.ascontiguousarray(B[rows])
+
+
+def propagators(A: np.ndarray, B: np.ndarray, h: float, tau: float | None = None):
+    """(Phi, G0, G1) over ``tau`` (default h) for x' = A x + B u with u = u0 + (u1 - u0) s / h:
+    x(tau) = Phi x0 + G0 u0 + G1 (u1 - u0) (exact; augmented matrix exponential)."""
+    from scipy.linalg import expm
+
+    tau = h if tau is None else tau
+    n, k = B.shape
+    z = np.zeros((n + 2 * k, n + 2 * k))
+    z[:n, :n] = A * tau
+    z[:n, n:n + k] = B * tau
+    z[n:n + k, n + k:] = np.eye(k)
+    e = expm(z)
+    return (np.ascontiguousarray(e[:n, :n]), np.ascontiguousarray(e[:n, n:n + k]),
+            np.ascontiguousarray(e[:n, n + k:] * (tau / h)))
+
+
+# ---------------------------------------------------------------------------------------------
+def _film_coefficient(contact, lub, e_eff: float) -> float:
+    """C in h = C u^0.68 Q^-0.073 (m, with u in m/s and Q in N): Hamrock-Dowson (1977) minimum
+    film thickness h = 3.63 U^0.68 G^0.49 W^-0.073 (1 - exp(-0.68 k)) R_x, U = eta0 u / (E' R_x),
+    G = alpha E', W = Q / (E' R_x^2)."""
+    rx = contact.rx
+    return (3.63 * rx * (lub.viscosity / (e_eff * rx)) ** FILM_EXP_U
+            * (lub.pressure_viscosity * e_eff) ** 0.49 * (1.0 / (e_eff * rx * rx)) ** FILM_EXP_Q
+            * (1.0 - math.exp(-0.68 * contact.ellipticity)))
+
+
+def cage_inertia(scene) -> float:
+    """Cage moment of inertia about the bearing axis (kg m^2): ``lubrication.cage_inertia`` if
+    given, else a thin ring at the pitch radius of mass ``cage_mass`` (if given, else 0.3 x the
+    ball set: pressed-steel cages of deep-groove bearings weigh a quarter to a third of their
+    balls, e.g. SKF 6205: 9 balls of 2.05 g, cage about 6 g)."""
+    lub = scene.lubrication
+    b = scene.bearing
+    if lub.cage_inertia > 0.0:
+        return lub.cage_inertia
+    mass = lub.cage_mass if lub.cage_mass > 0.0 else 0.3 * b.balls * b.ball_mass
+    return mass * (0.5 * b.pitch_diameter) ** 2
+
+
+def parameters(scene) -> np.ndarray:
+    """The kernel's parameter vector for a scene (SI)."""
+    b = scene.bearing
+    st = scene.structure
+    lub = scene.lubrication
+    p = np.zeros(NPAR)
+    gam = b.diameter_ratio
+    ic, oc = b.inner_contact, b.outer_contact
+    p[P_NB] = b.balls
+    p[P_RB] = 0.5 * b.ball_diameter
+    p[P_RM] = 0.5 * b.pitch_diameter
+    p[P_DM] = b.pitch_diameter
+    p[P_CR] = b.radial_clearance
+    p[P_KI] = ic.stiffness
+    p[P_KO] = oc.stiffness
+    p[P_MB] = b.ball_mass
+    p[P_JB] = b.ball_inertia
+    p[P_MS], p[P_KS], p[P_CS] = st.shaft_mass, st.shaft_stiffness, st.shaft_damping
+    p[P_MP], p[P_KP], p[P_CP] = st.pedestal_mass, st.pedestal_stiffness, st.pedestal_damping
+    p[P_HASRES] = 1.0 if st.has_resonator else 0.0
+    p[P_MR] = st.resonator_mass if st.has_resonator else 1.0
+    p[P_KR], p[P_CRS] = (st.resonator_stiffness, st.resonator_damping) if st.has_resonator else (0.0, 0.0)
+    p[P_KC] = lub.cage_stiffness
+    p[P_CPK] = lub.cage_pocket_clearance
+    p[P_CCD] = 2.0 * lub.pocket_damping_ratio * math.sqrt(lub.cage_stiffness * b.ball_mass)
+    p[P_JC] = cage_inertia(scene)
+    p[P_CDRAG] = lub.cage_drag
+    zeta = lub.contact_damping_ratio
+    # c = 2 zeta sqrt(m_b k_t), k_t = 1.5 K delta^0.5  ->  c = [2 zeta sqrt(1.5 K m_b)] delta^0.25
+    p[P_CDI] = 2.0 * zeta * math.sqrt(1.5 * ic.stiffness * b.ball_mass)
+    p[P_CDO] = 2.0 * zeta * math.sqrt(1.5 * oc.stiffness * b.ball_mass)
+    p[P_TA], p[P_TB], p[P_TC], p[P_TD] = lub.traction_a, lub.traction_b, lub.traction_c, lub.traction_d
+    p[P_VC] = lub.creep_velocity
+    # Harris' drag in SI: F = c_v pi xi d^2 (D_m w)^1.95 / 32 (N); the kernel multiplies by D_m^1.95 w^1.95
+    p[P_DRAG] = lub.drag_coefficient * math.pi * lub.fluid_density * b.ball_diameter ** 2 / 32.0
+    p[P_G] = G if scene.gravity else 0.0
+    p[P_WS] = st.shaft_mass * G if scene.gravity else 0.0
+    p[P_RI] = 0.5 * b.inner_race_diameter
+    p[P_RO] = 0.5 * b.outer_race_diameter
+    e_eff = b.effective_modulus
+    p[P_FILM] = 1.0 if lub.ehl_film else 0.0
+    p[P_HCI] = _film_coefficient(ic, lub, e_eff)
+    p[P_HCO] = _film_coefficient(oc, lub, e_eff)
+    p[P_QMIN] = 0.01          # N: the film formula's W^-0.073 has no limit at zero load
+    # squeeze film (eq. 14: c_oil = dW/du; eq. 17's inlet term c_r): Reynolds' squeeze film
+    # between an ellipsoid of radii R_x, R_y and a plane, F = 6 pi eta R_x R_y u / h
+    p[P_SQI] = 6.0 * math.pi * lub.viscosity * ic.rx * ic.ry if lub.ehl_film else 0.0
+    p[P_SQO] = 6.0 * math.pi * lub.viscosity * oc.rx * oc.ry if lub.ehl_film else 0.0
+    p[P_ROUGH] = lub.surface_roughness
+    p[P_CAGER] = 0.5 * (1.0 - gam)
+    p[P_SPINR] = 0.5 * b.pitch_diameter / b.ball_diameter * (1.0 - gam * gam)
+    a = 2.0 * np.pi * np.arange(b.balls) / b.balls
+    return np.concatenate([p, np.cos(a), np.sin(a)])       # pocket directions follow
+
+
+class SolverDiverged(RuntimeError):
+    pass
+
+
+class SkiddingModel:
+    """The skidding tier (see module docstring).  ``internal_rate`` = 4 x the output rate (Hz)."""
+
+    name = "skidding"
+    decimation = 4
+
+    def __init__(self, scene, sample_rate: float, seed: int, shaft_speed: float, radial_load,
+                 solver: str = "default", rk4_step: float | None = None, method=None):
+        """``method``: an :class:`~.integrators.Method` instance overriding ``solver`` (for
+        studies of step size and method; the Simulator does not use it)."""
+        from ..errors import UserError
+
+        self.scene = scene
+        self.seed = int(seed)
+        self.sample_rate = float(sample_rate)
+        self.internal_rate = self.sample_rate * self.decimation
+        self.hs = 1.0 / self.internal_rate
+        if rk4_step is not None and not (isinstance(rk4_step, (int, float)) and 1e-9 <= rk4_step <= 1e-3):
+            raise UserError(f"rk4_step = {rk4_step!r}: allowed range is [1e-09, 0.001] s")
+        self.solver = solver
+        self.method = method if method is not None else method_for(solver, rk4_step)
+        self.hstep = self.method.step(self.hs)
+        self._tableau = self.method.arrays()
+        b = scene.bearing
+        self.nb = b.balls
+        self.p = parameters(scene)
+        self.dtab = defect_table(scene.defects, b)
+        wt = waviness_table(scene.waviness)
+        self.wti = np.ascontiguousarray(wt[wt[:, 0] == 0]) if wt.size else np.zeros((0, 4))
+        self.wto = np.ascontiguousarray(wt[wt[:, 0] == 1]) if wt.size else np.zeros((0, 4))
+        self.y = np.zeros(NS0 + NBV * self.nb)
+        self.film = np.zeros((self.nb, NFILM))
+        self._aux = np.zeros((self.nb, NAUX))
+        self.counters = np.zeros(4, dtype=np.int64)
+        self.shaft_angle = 0.0
+        self._speed = float(shaft_speed)
+        nvar = self.y.size
+        # persistent state of the split method (derivative, structure input, contact values)
+        self._fy = np.zeros(nvar)
+        self._un = np.zeros(4)
+        self._aux0 = np.zeros((self.nb, NAUX))
+        self._dg0 = np.zeros((self.nb, NDG))
+        load = np.asarray(radial_load, dtype=float)
+        self._equilibrium(load, float(shaft_speed))
+        self._lin_load = None
+        if self.method.kind == SPLIT:
+            self._linearise(load)
+
+    # ---- split method: linear structure ----------------------------------------------------------
+    def _mean_pedestal_force(self, d: np.ndarray) -> np.ndarray:
+        """Quasi-static force of the balls on the pedestal (N) for a shaft-pedestal offset d (m),
+        averaged over one ball spacing of cage angle (no defects): the load-deflection law."""
+        y = self.y.copy()
+        y[0:2] = d
+        y[2:4] = 0.0
+        out = np.zeros(4)
+        tot = np.zeros(2)
+        cages = np.linspace(0.0, 2.0 * np.pi / self.nb, 8, endpoint=False)
+        empty = np.zeros((0, self.dtab.shape[1]))
+        for c in cages:
+            y[10] = c
+            y[NS0 + B_TH::NBV][: self.nb] = c + 2.0 * np.pi * np.arange(self.nb) / self.nb
+            _quasi_static_forces(self.p, y, 0.0, empty, np.zeros((0, 4)), np.zeros((0, 4)), self.film, out)
+            tot += out[2:4]
+        return tot / cages.size
+
+    def _linearise(self, load: np.ndarray):
+        """Bearing stiffness at the current shaft-pedestal offset (secant over +-0.2 um) and the
+        structure's propagators for the step and every sample inside it."""
+        d0 = self.y[0:2] - self.y[2:4]
+        kb = np.zeros((2, 2))
+        eps = 2e-7
+        for k in range(2):
+            dp = d0.copy()
+            dm = d0.copy()
+            dp[k] += eps
+            dm[k] -= eps
+            kb[:, k] = (self._mean_pedestal_force(dp) - self._mean_pedestal_force(dm)) / (2 * eps)
+        self.kb = np.ascontiguousarray(0.5 * (kb + kb.T))
+        A, B, self.cacc, self.dacc = structure_system(self.scene, self.kb)
+        kk = int(round(self.hstep / self.hs))
+        self.kk = kk
+        self.phi, self.g0, self.g1 = propagators(A, B, self.hstep)
+        self.phis = np.zeros((kk, 10, 10))
+        self.g0s = np.zeros((kk, 10, 4))
+        self.g1s = np.zeros((kk, 10, 4))
+        self.phis[0] = np.eye(10)
+        for j in range(1, kk):
+            self.phis[j], self.g0s[j], self.g1s[j] = propagators(A, B, self.hstep, j * self.hs)
+        self.nsub = int(getattr(self.method, "event_substeps", 1))
+        if self.nsub > 1:
+            self.nsub = max(kk, (self.nsub // kk) * kk)
+            self.phie, self.g0e, self.g1e = propagators(A, B, self.hstep / self.nsub)
+        else:
+            self.phie, self.g0e, self.g1e = self.phi, self.g0, self.g1
+        self._lin_load = load.copy()
+        self.counters[3] = 0            # the structure input depends on kb: re-evaluate
+
+    def _needs_relinearising(self, load: np.ndarray) -> bool:
+        ref = self._lin_load
+        scale = max(float(np.linalg.norm(ref)), 10.0)
+        return float(np.linalg.norm(load - ref)) > 0.2 * scale
+
+    # ---- state ---------------------------------------------------------------------------------
+    @property
+    def x(self) -> np.ndarray:
+        """Structure state [xs, ys, xp, yp, yr, vxs, vys, vxp, vyp, vyr] (a view: writable)."""
+        return self.y[:10]
+
+    @property
+    def angles(self) -> np.ndarray:
+        """[shaft, cage, ball spin] angles (rad), the kinematic tier's layout (spin of ball 0)."""
+        return np.array([self.shaft_angle, self.y[10], self.y[NS0 + B_PSI]])
+
+    def _set_rolling(self, speed: float, cage_angle: float, spin_angle: float):
+        """Balls in their pockets at the pure-rolling speeds of ``speed`` (rad/s)."""
+        p = self.p
+        wc = p[P_CAGER] * speed
+        self.y[10] = cage_angle
+        self.y[11] = wc
+        for j in range(self.nb):
+            bse = NS0 + NBV * j
+            self.y[bse + B_TH] = cage_angle + 2.0 * math.pi * j / self.nb
+            self.y[bse + B_R] = p[P_RM]
+            self.y[bse + B_PSI] = spin_angle
+            self.y[bse + B_W] = wc
+            self.y[bse + B_V] = 0.0
+            # Omega = theta' - w_b, w_b = spin in the orbital frame (BSF > 0)
+            self.y[bse + B_OM] = wc - p[P_SPINR] * speed
+
+    def _settle(self, speed: float):
+        """Film and quasi-static ball radii for the current structure state (two passes: the film
+        depends on the loads)."""
+        for _ in range(2):
+            _settle_balls(self.p, self.y, self.shaft_angle, self.dtab, self.wti, self.wto, self.film)
+            _film_update(self.y, speed, self.p, self.film, self._aux, False)
+        _settle_balls(self.p, self.y, self.shaft_angle, self.dtab, self.wti, self.wto, self.film)
+
+    def _equilibrium(self, load: np.ndarray, speed: float):
+        """Static equilibrium of shaft and pedestal under ``load`` (+ shaft weight), balls rolling
+        at ``speed`` and sitting at their quasi-static radii."""
+        from scipy.optimize import fsolve
+
+        p = self.p
+        self._set_rolling(speed, 0.0, 0.0)
+        ext = load + np.array([0.0, -p[P_WS]])
+        ks, kp = p[P_KS], p[P_KP]
+        scale = max(float(np.linalg.norm(ext)), 1.0)
+        out = np.zeros(4)
+        y = self.y
+
+        def residual(z):
+            y[:4] = z * 1e-6
+            _quasi_static_forces(p, y, 0.0, self.dtab, self.wti, self.wto, self.film, out)
+            xs, xp = y[:2], y[2:4]
+            return np.concatenate([(out[:2] - ks * xs + ext) / scale, (out[2:] - kp * xp) / scale])
+
+        k_guess = 2.0 * self.scene.bearing.combined_stiffness
+        dmag = (scale / k_guess) ** (2.0 / 3.0) + max(p[P_CR], 0.0)
+        direction = ext / scale if np.linalg.norm(ext) > 0 else np.array([0.0, -1.0])
+        xp0 = ext / kp if kp > 0 else np.zeros(2)
+        z0 = np.concatenate([xp0 + direction * dmag, xp0]) * 1e6
+        for _ in range(2):                                   # second pass with the film
+            z = fsolve(residual, z0, xtol=1e-12)
+            _film_update(y, speed, p, self.film, self._aux, False)
+            z0 = z
+        z = fsolve(residual, z0, xtol=1e-12)
+        y[:4] = z * 1e-6
+        y[4] = y[3]                         # the resonator spring carries no static load
+        y[5:10] = 0.0
+        self._settle(speed)
+
+    def adopt_state(self, other):
+        """Start from another tier's state (e.g. the kinematic tier's ``x`` and ``angles``): same
+        structure state, cage angle and ball spin angle, balls in their pockets rolling at the
+        pure-rolling speeds of the other tier's shaft speed, at their quasi-static radii."""
+        snap = other.snapshot()
+        self.y[:10] = np.asarray(other.x, dtype=float)[:10]
+        ang = np.asarray(other.angles, dtype=float)
+        self.shaft_angle = float(ang[0])
+        self._speed = float(snap.shaft_speed)
+        self._set_rolling(self._speed, float(ang[1]), float(ang[2]))
+        self.counters[3] = 0
+        if isinstance(other, SkiddingModel):
+            self.y[:] = other.y
+            self.film[:, :] = other.film
+            return
+        self._settle(self._speed)
+
+    # ---- TierModel interface -----------------------------------------------------------------
+    def advance(self, n_steps: int, speed0: float, speed1: float, load0, load1) -> TierOutput:
+        from ..errors import UserError
+
+        n = int(n_steps)
+        m = self.decimation
+        nb = self.nb
+        nd = (n + m - 1) // m
+        ramp = np.zeros(NRAMP)
+        ramp[R_T0] = self.counters[1] * self.hs
+        ramp[R_T] = n * self.hs
+        ramp[R_S0], ramp[R_S1] = float(speed0), float(speed1)
+        ramp[R_L0X], ramp[R_L0Y] = float(load0[0]), float(load0[1])
+        ramp[R_L1X], ramp[R_L1Y] = float(load1[0]), float(load1[1])
+        # shaft angle at the chunk start (the state may sit a little earlier on the step grid)
+        ramp[R_A0] = self.shaft_angle
+        acc = np.empty((n, 2))
+        qi = np.empty((nd, nb))
+        qo = np.empty((nd, nb))
+        cage = np.empty(nd)
+        bs = np.empty(nd)
+        cs = np.empty(nd)
+        sli = np.empty((nd, nb))
+        slo = np.empty((nd, nb))
+        fi = np.empty((nd, nb))
+        fo = np.empty((nd, nb))
+        kind, ta_, tb_, tc_, tg_, gamma = self._tableau
+        if kind == SPLIT:
+            l1 = np.asarray(load1, dtype=float)
+            if self._needs_relinearising(l1):
+                self._linearise(l1)
+            if self.kk < 1 or m % self.kk != 0:
+                raise ValueError("the split method needs a step of 1, 2 or 4 internal samples")
+            status = _engine_split(self.y, self._fy, self._un, self._aux0, self._dg0, self.film,
+                                   self.counters, n, m, self.hs, self.kk, ramp, ta_, tg_, tb_, gamma,
+                                   self.p, self.dtab, self.wti, self.wto, self.phi, self.g0, self.g1,
+                                   self.phis, self.g0s, self.g1s, self.phie, self.g0e, self.g1e,
+                                   self.nsub, self.cacc, self.dacc, self.kb, acc, qi, qo, cage, bs,
+                                   cs, sli, slo, fi, fo)
+        else:
+                status = _engine(self.y, self.counters, n, m, self.hs, self.hstep, ramp, kind, ta_, tb_,
+                             tc_, tg_, gamma, self.p, self.dtab, self.wti, self.wto, self.film, acc, qi,
+                             qo, cage, bs, cs, sli, slo, fi, fo)
+        if status != 0:
+            t_bad = (self.counters[1] + self.counters[2]) * self.hs
+            if self.solver == "rk4":
+                raise UserError(
+                    f"rk4_step = {self.hstep:g} s: the fixed-step RK4 diverged at t = {t_bad:.4g} s "
+                    f"(step beyond its stability limit for this load/speed); use solver='default' "
+                    f"or a smaller rk4_step")
+            raise SolverDiverged(f"skidding solver {self.solver!r} diverged at t = {t_bad:.4g} s")
+        self.shaft_angle = ramp[R_A0] + 0.5 * (speed0 + speed1) * n * self.hs
+        self._speed = float(speed1)
+        extras = {"ball_skid": bs, "cage_skid": cs, "slip_inner": sli, "slip_outer": slo,
+                  "friction_inner": fi, "friction_outer": fo}
+        return TierOutput(accel=acc, inner_force=qi, outer_force=qo, cage_speed=cage, extras=extras)
+
+    def snapshot(self) -> KinematicSnapshot:
+        y = self.y
+        th = y[NS0 + B_TH::NBV][: self.nb].copy()
+        w = y[NS0 + B_W::NBV][: self.nb].copy()
+        return KinematicSnapshot(self.shaft_angle, self._speed, float(y[10]), float(y[11]), th, w)
