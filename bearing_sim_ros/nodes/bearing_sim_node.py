@@ -140,6 +140,9 @@ def _descriptors():
         "frame_id": ("", d(T.PARAMETER_STRING, "frame of the waveform tables; empty = the scene's sensor frame", True)),
         "state_rate": (50.0, d(T.PARAMETER_DOUBLE, "JointState rate, Hz; 0 = off", False, 0.0, 1000.0,
                                "at most one per batch: state_rate <= 1 / batch_duration")),
+        "compute_ahead": (0.05, d(T.PARAMETER_DOUBLE, "compute batches up to this long before they are "
+                                  "due, s: absorbs scheduling hiccups; a command takes effect this much "
+                                  "later in the published signal", False, 0.0, 2.0)),
         "input_max_age": (1.0, d(T.PARAMETER_DOUBLE, "reject load messages whose stamp is older than "
                                  "this, s; 0 = accept any age", False, 0.0, 3600.0)),
     }
@@ -332,102 +335,133 @@ class BearingSimNode(Node):
         finally:
             self.finished.set()
 
+    def _compute(self, n, cfg, Clock):
+        """Advance one batch and build its messages (no waiting, no publishing)."""
+        sim, msgs = self.sim, self.msgs
+        speed, load = self._cmd_speed, self._cmd_load       # commands take effect here
+        batch = sim.advance(n, shaft_speed=speed, radial_load=load)
+        if batch.index0 == 0:
+            # ROS time of sample 0: one batch before now, when the first batch is ready (its
+            # computation may include loading compiled kernels: that must not be an overrun)
+            self.start_ns = msgs.start_ns = self.get_clock().now().nanoseconds - int(round(n / sim.sample_rate * 1e9))
+        end_index = sim.index
+        start_stamp, end_stamp = msgs.stamp_ns(batch.index0), msgs.stamp_ns(end_index)
+        out = [(self.pub_accel, msgs.accel(batch)), (self.pub_contact, msgs.contact_forces(batch))]
+        rate, sr = cfg["state_rate"], sim.sample_rate
+        if rate > 0 and math.floor(end_index * rate / sr) > math.floor(batch.index0 * rate / sr):
+            out.append((self.pub_state, msgs.state(end_stamp)))
+        if cfg["publish_clock"]:
+            if self.pub_clock is None:
+                self.pub_clock = self.create_publisher(Clock, "/clock", self.small_qos)
+            clk = Clock()
+            clk.clock.sec, clk.clock.nanosec = divmod(end_stamp, 1_000_000_000)
+            out.append((self.pub_clock, clk))
+        return _Pending(batch, end_index, start_stamp, end_stamp, speed, load, out)
+
     def _loop(self):
+        """Compute batches up to ``compute_ahead`` before their due time, publish each at its due
+        time (the moment of its last sample), record it after publishing.
+
+        Publishing on time comes first: a batch is computed only when the queue is empty or
+        there is time for it (``est``, a decaying maximum of recent compute times) before the
+        next publication.  An overrun is a batch whose computation ended after its due time;
+        the node then publishes it at once and computes on without waiting until it is ahead
+        again (catch up; the schedule is fixed by the sample index, so it never drifts)."""
+        from collections import deque
+
         from rosgraph_msgs.msg import Clock
 
         from ..recording.render import load_message, speed_message
 
         sim, msgs, stats = self.sim, self.msgs, self.stats
         sr = sim.sample_rate
-        mono0 = time.monotonic()
-        anchor_t, anchor_i = mono0, sim.index      # pacing: sample anchor_i is due at anchor_t
-        next_diag = mono0 + 1.0
-        stats.period_start(mono0, sim.index)
-        stats.started = mono0
         context = self.context
-        while not self._stop.is_set():
-            began = time.monotonic()
+        queue = deque()
+        anchor_t = anchor_i = None            # sample anchor_i is due at steady time anchor_t
+        next_diag = None
+        est = 0.0
+        published_index = 0
+        stats.period_start(time.monotonic(), 0)
+        while True:
+            stop = self._stop.is_set() or not context.ok()
             cfg = self._cfg
+            real_time = cfg["real_time"]
+            now = time.monotonic()
+            if queue and (stop or not real_time or queue[0].due <= now):
+                item = queue.popleft()
+                lag = max(0.0, now - item.due) if real_time else 0.0
+                stats.batch(lag, item.batch, now)
+                published_index = item.end_index
+                out = item.out
+                if now >= next_diag:
+                    next_diag = max(next_diag + 1.0, now - 0.5)
+                    out = out + [(self.pub_diag, self._diagnostics(item.end_stamp, now, published_index))]
+                if context.ok():
+                    try:
+                        for pub, msg in out:
+                            pub.publish(msg)
+                    except Exception:  # noqa: BLE001 - the context went away between ok() and publish
+                        if context.ok():
+                            raise
+                rec = self.recorder
+                if rec is not None:          # after publishing: serialising is off the critical path
+                    # real time: when it was published = end stamp + lateness; otherwise the end
+                    # stamp, like `render`, so the file replays at the signal's pace
+                    log_ns = item.end_stamp + int(lag * 1e9)
+                    rec.write(self.sub_speed.topic_name, speed_message(item.speed), log_ns)
+                    rec.write(self.sub_load.topic_name,
+                              load_message(item.load, item.start_stamp, msgs.frame_id), log_ns)
+                    for pub, msg in out:
+                        if pub is not self.pub_clock:
+                            rec.write(pub.topic_name, msg, log_ns)
+                stats.work(time.monotonic() - now)
+                continue
+            if stop:
+                break                          # every computed batch is published and recorded
             total = int(round(cfg["duration"] * sr)) if cfg["duration"] > 0 else 0
             if total and sim.index >= total:
-                break
+                if not queue:
+                    break
+                self._stop.wait(max(0.0, queue[0].due - now))
+                continue
             n = min(self.n_batch, total - sim.index) if total else self.n_batch
-            speed, load = self._cmd_speed, self._cmd_load
-            batch = sim.advance(n, shaft_speed=speed, radial_load=load)
-            end_index = sim.index
-            if batch.index0 == 0:
-                # time starts when the first batch is ready, not before it: its computation may
-                # include loading compiled kernels, which must not count as an overrun
-                ready = time.monotonic()
-                mono0 = anchor_t = ready - n / sr
-                anchor_i = 0
-                self.start_ns = msgs.start_ns = self.get_clock().now().nanoseconds - int(round(n / sr * 1e9))
-                next_diag = mono0 + 1.0
-                stats.period_start(mono0, 0)
-                stats.started = mono0
-            start_stamp = msgs.stamp_ns(batch.index0)
-            end_stamp = msgs.stamp_ns(end_index)
-            # build the messages before waiting: at the due time only publishing is left
-            out = [(self.pub_accel, msgs.accel(batch)), (self.pub_contact, msgs.contact_forces(batch))]
-            rate = cfg["state_rate"]
-            if rate > 0 and math.floor(end_index * rate / sr) > math.floor((end_index - n) * rate / sr):
-                out.append((self.pub_state, msgs.state(end_stamp)))
-            if cfg["publish_clock"]:
-                if self.pub_clock is None:
-                    self.pub_clock = self.create_publisher(Clock, "/clock", self.small_qos)
-                clk = Clock()
-                clk.clock.sec, clk.clock.nanosec = divmod(end_stamp, 1_000_000_000)
-                out.append((self.pub_clock, clk))
-            ready = time.monotonic()
-
-            if cfg["real_time"]:
-                if self._repace:
-                    self._repace = False
-                    anchor_t, anchor_i = ready - n / sr, end_index - n
-                # the moment the batch's last sample happens; from the anchor, so no drift
-                due = anchor_t + (end_index - anchor_i) / sr
-                if ready > due:
-                    stats.overruns += 1       # late: publish at once, the next batches catch up
+            if real_time and self._repace:
+                self._repace = False
+                anchor_t, anchor_i = now, sim.index
+            # earliest start of the next computation: when the batch before it is due (just in
+            # time), minus compute_ahead
+            start_at = (anchor_t + (sim.index - anchor_i) / sr - cfg["compute_ahead"]
+                        if real_time and anchor_t is not None else now)
+            may = start_at <= now
+            if may and (not queue or now + est <= queue[0].due):
+                item = self._compute(n, cfg, Clock)
+                done = time.monotonic()
+                stats.compute(done - now)
+                est = max(0.9 * est, done - now)
+                if anchor_t is None:
+                    # the schedule starts with the first batch: it is due now
+                    anchor_t, anchor_i = done - n / sr, 0
+                    next_diag = anchor_t + 1.0
+                    stats.period_start(anchor_t, 0)
+                    stats.started = anchor_t
+                if real_time:
+                    item.due = anchor_t + (item.end_index - anchor_i) / sr
+                    if done > item.due:
+                        stats.overruns += 1    # late: publish at once, the next batches catch up
                 else:
-                    self._stop.wait(due - ready)    # wakes early on shutdown: publish at once
-                now = time.monotonic()
-                lag = max(0.0, now - due)
-                log_ns = self.start_ns + int((now - mono0) * 1e9)
-            else:
-                now, lag = time.monotonic(), 0.0
-                log_ns = end_stamp       # as `render`: the file replays at the signal's pace
-            stats.batch(lag, batch, now)
-            if now >= next_diag:
-                next_diag = max(next_diag + 1.0, now - 0.5)
-                out.append((self.pub_diag, self._diagnostics(end_stamp, now)))
+                    item.due = done
+                queue.append(item)
+                continue
+            wake = queue[0].due if queue else start_at
+            if not may:
+                wake = min(wake, start_at)
+            self._stop.wait(max(0.0, wake - now))
 
-            if not context.ok():
-                shutting_down = True     # a signal shut rclpy down: record this batch, then stop
-            else:
-                shutting_down = False
-                try:
-                    for pub, msg in out:
-                        pub.publish(msg)
-                except Exception:  # noqa: BLE001 - the context went away between ok() and publish
-                    if context.ok():
-                        raise
-                    shutting_down = True
-            rec = self.recorder
-            if rec is not None:           # after publishing: serialising is off the critical path
-                rec.write(self.sub_speed.topic_name, speed_message(speed), log_ns)
-                rec.write(self.sub_load.topic_name, load_message(load, start_stamp, msgs.frame_id), log_ns)
-                for pub, msg in out:
-                    if pub is not self.pub_clock:
-                        rec.write(pub.topic_name, msg, log_ns)
-            stats.busy((ready - began) + (time.monotonic() - now))
-            if shutting_down:
-                break
-
-    def _diagnostics(self, stamp_ns, now):
+    def _diagnostics(self, stamp_ns, now, published_index):
         from ..recording.render import diagnostics_message
 
         st = self.stats
-        period = st.period_end(now, self.sim.index)
+        period = st.period_end(now, published_index)
         rtf = period["signal_s"] / period["wall_s"] if period["wall_s"] > 0 else float("nan")
         values = {
             "real_time_factor": f"{rtf:.4f}",
@@ -445,7 +479,8 @@ class BearingSimNode(Node):
             "tier_switches": self.sim.tier_switches,
             "shaft_speed_rad_s": f"{self.sim.shaft_speed:.6g}",
             "radial_load_n": " ".join(f"{v:.6g}" for v in self.sim.radial_load),
-            "simulated_s": f"{self.sim.time:.3f}",
+            "simulated_s": f"{published_index / self.sim.sample_rate:.3f}",
+            "computed_ahead_s": f"{(self.sim.index - published_index) / self.sim.sample_rate:.3f}",
             "rejected_inputs": sum(self.rejected.values()),
         }
         for key, count in self.rejected.items():
@@ -472,6 +507,18 @@ class BearingSimNode(Node):
 
 
 
+class _Pending:
+    """A computed batch waiting for its due time (steady clock, s)."""
+
+    __slots__ = ("batch", "end_index", "start_stamp", "end_stamp", "speed", "load", "out", "due")
+
+    def __init__(self, batch, end_index, start_stamp, end_stamp, speed, load, out):
+        self.batch, self.end_index = batch, end_index
+        self.start_stamp, self.end_stamp = start_stamp, end_stamp
+        self.speed, self.load, self.out = speed, load, out
+        self.due = 0.0
+
+
 class _Stats:
     """Pacing and batch statistics.  Written by the sim thread only."""
 
@@ -490,16 +537,21 @@ class _Stats:
         wall = self.last - self.started
         return self.samples / self.sample_rate / wall if wall > 0 else float("nan")
 
-    def busy(self, seconds: float) -> None:
-        """Time the sim thread spent on one batch (model, messages, publishing, recording)."""
+    def compute(self, seconds: float) -> None:
+        """Time spent computing one batch: model and messages."""
         self.busy_worst = max(self.busy_worst, seconds)
+        self._p_compute += seconds
         self._p_busy += seconds
         self._p_busy_worst = max(self._p_busy_worst, seconds)
         self._p_batches += 1
 
+    def work(self, seconds: float) -> None:
+        """Time spent publishing and recording one batch."""
+        self._p_busy += seconds
+
     def period_start(self, now, index):
         self._p_t, self._p_i, self._p_over, self._p_lag = now, index, self.overruns, 0.0
-        self._p_busy, self._p_busy_worst, self._p_batches = 0.0, 0.0, 0
+        self._p_busy, self._p_compute, self._p_busy_worst, self._p_batches = 0.0, 0.0, 0.0, 0
         self._extras, self._extras_n = {}, 0
 
     def batch(self, lag, batch, now):
@@ -518,7 +570,7 @@ class _Stats:
         sr_index = index - self._p_i
         out = {"wall_s": now - self._p_t, "signal_s": sr_index / self.sample_rate,
                "overruns": self.overruns - self._p_over, "worst_lag": self._p_lag,
-               "busy_mean": self._p_busy / max(self._p_batches, 1), "busy_worst": self._p_busy_worst,
+               "busy_mean": self._p_compute / max(self._p_batches, 1), "busy_worst": self._p_busy_worst,
                "busy_fraction": self._p_busy / (now - self._p_t) if now > self._p_t else 0.0,
                "extras": {k: v / max(self._extras_n, 1) for k, v in self._extras.items()}}
         self.period_start(now, index)
