@@ -33,7 +33,6 @@ setup(
     maintainer_email="bearing-sim@example.com",
     description="Virtual bearing accelerometer for ROS 2: skidding ball-bearing model, 15 kHz waveform tables, MCAP.",
     license="Apache-2.0",
-    tests_require=["pytest"],
     entry_points={
         "console_scripts": [
             "bearing-sim = bearing_sim_ros.cli:main",
