@@ -114,6 +114,8 @@ def bench_tier(tier: str, scene: str, duration: float, subscribers: int, record:
 
     def on_diag(msg):
         values = {kv.key: kv.value for st in msg.status for kv in st.values}
+        with open("/proc/loadavg") as f:
+            values["machine_load_1min"] = f.read().split()[0]   # other users of the machine
         diags.append(values)
         if len(diags) >= 3:
             try:
@@ -167,7 +169,11 @@ def bench_tier(tier: str, scene: str, duration: float, subscribers: int, record:
             "real_time_factor": sum(f("real_time_factor")) / max(len(f("real_time_factor")), 1),
             "recording_dropped": int(last.get("recording_dropped", 0)) if record else None,
             "tier_in_use": last.get("tier"),
+            "machine_load_1min_mean": sum(f("machine_load_1min")) / max(len(f("machine_load_1min")), 1),
+            "seconds_with_overruns": sum(1 for d in steady if int(d.get("overruns_last_period", 0)) > 0),
         })
+    res["per_second"] = [{k: d.get(k) for k in ("simulated_s", "overruns_last_period", "lag_s",
+                                                 "batch_compute_worst_s", "machine_load_1min")} for d in diags]
     res["subscriber_tables"] = [r.get("/accel", r.get("accel", {})).get("tables") for r in received]
     res["subscriber_gaps"] = [sum(v.get("gaps", 0) for v in r.values()) for r in received]
     if record and os.path.exists(out):
@@ -178,18 +184,20 @@ def bench_tier(tier: str, scene: str, duration: float, subscribers: int, record:
 
 def table(results) -> str:
     head = ("| tier | scene | signal s | CPU s per signal s | batch compute mean / worst ms | "
-            "worst lag ms (after start / incl.) | overruns (after start / all) | RTF | subscribers' gaps | rec. dropped |")
+            "worst lag ms (after start / incl.) | overruns (after start / all) | seconds with overruns | RTF | "
+            "subscribers' gaps | rec. dropped | machine load (1 min avg) |")
     rows = [head, "|---" * (head.count("|") - 1) + "|"]
     for r in results:
         if "skipped" in r:
-            rows.append(f"| {r['tier']} | {r['scene']} | skipped: {r['skipped']} |||||||")
+            rows.append(f"| {r['tier']} | {r['scene']} | skipped: {r['skipped']} " + "|" * 10)
             continue
         rows.append(
             f"| {r['tier']} | {r['scene']} | {r['duration_s']:g} | {r.get('cpu_per_signal_s', float('nan')):.3f} | "
             f"{r.get('batch_compute_mean_ms', float('nan')):.2f} / {r.get('batch_compute_worst_ms', float('nan')):.1f} | "
             f"{r.get('worst_lag_ms', float('nan')):.1f} / {r.get('worst_lag_incl_start_ms', float('nan')):.1f} | "
-            f"{r.get('overruns_after_start', '?')} / {r.get('overruns', '?')} | {r.get('real_time_factor', float('nan')):.4f} | "
-            f"{r.get('subscriber_gaps')} | {r.get('recording_dropped')} |")
+            f"{r.get('overruns_after_start', '?')} / {r.get('overruns', '?')} | {r.get('seconds_with_overruns', '?')} | "
+            f"{r.get('real_time_factor', float('nan')):.4f} | "
+            f"{r.get('subscriber_gaps')} | {r.get('recording_dropped')} | {r.get('machine_load_1min_mean', float('nan')):.2f} |")
     return "\n".join(rows)
 
 
