@@ -141,9 +141,11 @@ class SplitROS2(ROS2):
     name = "split-ros2"
     kind = SPLIT
 
-    def __init__(self, step: float | None = None, per_sample: float = 1, event_substeps: int = 16):
+    def __init__(self, step: float | None = None, per_sample: float = 1, event_substeps: int = 16,
+                 ball_substeps: int = 1):
         super().__init__(step, per_sample)
         self.event_substeps = int(event_substeps)
+        self.ball_substeps = int(ball_substeps)
 
 
 def method_for(solver: str, rk4_step: float | None, reference_per_sample: int = 32) -> Method:

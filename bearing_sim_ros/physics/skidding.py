@@ -97,7 +97,7 @@ B_TH, B_R, B_PSI, B_W, B_V, B_OM = range(NBV)
 
 # per-ball auxiliary values from a right-hand-side evaluation (for the Jacobian)
 (X_KTI, X_KTO, X_CI, X_CO, X_QI, X_QO, X_MUI, X_MUO, X_DMUI, X_DMUO, X_FT, X_DMUP, X_CIN, X_DRAGD,
- X_MUP, X_SFT, X_SARC, X_C, X_S, NAUX) = range(20)
+ X_MUP, X_SFT, X_SARC, X_C, X_S, X_DEDTH, X_DLI, X_DLO, NAUX) = range(23)
 # per-ball diagnostics: contact loads (N), slip velocities (m/s), traction forces on the ball (N)
 (D_QI, D_QO, D_SLI, D_SLO, D_FI, D_FO, NDG) = range(7)
 # film table columns: film thickness inner / outer (m), drag factor (N s^2/rad^2), and the values
@@ -106,6 +106,7 @@ B_TH, B_R, B_PSI, B_W, B_V, B_OM = range(NBV)
 # ramp: chunk start time, duration, speed 0/1, load 0/1 (x, y), shaft angle at chunk start
 (R_T0, R_T, R_S0, R_S1, R_L0X, R_L0Y, R_L1X, R_L1Y, R_A0, NRAMP) = range(10)
 
+DEFECT_EPS = 1e-6    # rad: finite-difference step of the defect-depth slope
 W_REF = 0.01        # rad/s: regularises the skid-ratio denominators at standstill
 FILM_EXP_U, FILM_EXP_Q = 0.68, -0.073     # Hamrock-Dowson exponents (speed, load)
 
@@ -157,7 +158,7 @@ def _inputs(ramp, t):
 @njit(cache=True)
 def _defect_losses(dtab, y, p, sh_ang, scr):
     """Interference losses (m) of every ball from every defect: scr[:, 0] inner contact,
-    scr[:, 1] outer contact.  Only the balls that can be inside a defect are evaluated (with
+    scr[:, 1] outer contact, and their slopes along the ball angle (m/rad) scr[:, 3], scr[:, 4].  Only the balls that can be inside a defect are evaluated (with
     ``defects.interference_loss``): for a race defect the ball nearest to it and the two next to
     it (a defect is at most half a ball spacing wide and a ball stays within its pocket), for a
     ball defect that ball; so the cost is per defect, not per ball."""
@@ -167,6 +168,8 @@ def _defect_losses(dtab, y, p, sh_ang, scr):
         scr[j, 0] = 0.0
         scr[j, 1] = 0.0
         scr[j, 2] = 0.0
+        scr[j, 3] = 0.0
+        scr[j, 4] = 0.0
     phic = y[10]
     for k in range(dtab.shape[0]):
         kind = int(dtab[k, D_KIND])
@@ -180,9 +183,16 @@ def _defect_losses(dtab, y, p, sh_ang, scr):
     for j in range(nb):
         if scr[j, 2] > 0.0:
             b = NS0 + NBV * j
-            li, lo = interference_loss(dtab, j, y[b + B_TH], sh_ang, y[b + B_PSI], p[P_RI], p[P_RO], p[P_RB])
+            th = y[b + B_TH]
+            li, lo = interference_loss(dtab, j, th, sh_ang, y[b + B_PSI], p[P_RI], p[P_RO], p[P_RB])
             scr[j, 0] = li
             scr[j, 1] = lo
+            # slopes along the ball's angle (race defects; a ball defect turns with psi instead):
+            # the pit's edges force the stiff radial mode, so the Jacobian needs them
+            li2, lo2 = interference_loss(dtab, j, th + DEFECT_EPS, sh_ang, y[b + B_PSI], p[P_RI], p[P_RO],
+                                         p[P_RB])
+            scr[j, 3] = (li2 - li) / DEFECT_EPS
+            scr[j, 4] = (lo2 - lo) / DEFECT_EPS
 
 
 @njit(cache=True)
@@ -278,9 +288,8 @@ def _rhs(y, f, ws, sh_ang, fx_ext, fy_ext, p, dtab, wti, wto, film, aux, dg, scr
             kti = 1.5 * ki * sq
             ci = cdi * math.sqrt(sq)
             qi = ki * di * sq + ci * rate
-        if rate > 0.0 and sqz_i > 0.0:
-            gap = -di if di < 0.0 else 0.0
-            csq = sqz_i / (gap + film[j, F_HI] + rough)
+        if sqz_i > 0.0 and (di > 0.0 or rate > 0.0):
+            csq = sqz_i / (abs(di) + film[j, F_HI] + rough)
             qi += csq * rate
             ci += csq
         if qi <= 0.0:
@@ -295,9 +304,8 @@ def _rhs(y, f, ws, sh_ang, fx_ext, fy_ext, p, dtab, wti, wto, film, aux, dg, scr
             kto = 1.5 * ko * sq
             co = cdo * math.sqrt(sq)
             qo = ko * do * sq + co * v
-        if v > 0.0 and sqz_o > 0.0:
-            gap = -do if do < 0.0 else 0.0
-            csq = sqz_o / (gap + film[j, F_HO] + rough)
+        if sqz_o > 0.0 and (do > 0.0 or v > 0.0):
+            csq = sqz_o / (abs(do) + film[j, F_HO] + rough)
             qo += csq * v
             co += csq
         if qo <= 0.0:
@@ -375,6 +383,9 @@ def _rhs(y, f, ws, sh_ang, fx_ext, fy_ext, p, dtab, wti, wto, film, aux, dg, scr
         a[X_SARC] = 1.0 if arc >= 0.0 else -1.0
         a[X_C] = c
         a[X_S] = s
+        a[X_DEDTH] = dy * c - dx * s           # d e / d theta: the inner contact moves with the ball
+        a[X_DLI] = scr[j, 3] if has_def else 0.0
+        a[X_DLO] = scr[j, 4] if has_def else 0.0
         d = dg[j]
         d[D_QI] = qi
         d[D_QO] = qo
@@ -457,7 +468,7 @@ def _drag_factor(film, j, p, w):
     film[j, F_W0] = aw
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _film_update(y, ws, p, film, aux, from_aux):
     """Film thickness of every contact (Hamrock-Dowson, eq. 12) and drag factor of every ball at
     one grid point.  Loads from ``aux`` (the last right-hand-side evaluation, at the end of the
@@ -473,7 +484,10 @@ def _film_update(y, ws, p, film, aux, from_aux):
         th = y[b + B_TH]
         r = y[b + B_R]
         _drag_factor(film, j, p, y[b + B_W])
-        e = dx * math.cos(th) + dy * math.sin(th)
+        if from_aux:       # direction of the ball at the end of the step (the last evaluation)
+            e = dx * aux[j, X_C] + dy * aux[j, X_S]
+        else:
+            e = dx * math.cos(th) + dy * math.sin(th)
         ui, uo = _entrainment(y, b, e, ws, rb)
         if from_aux:
             qi = aux[j, X_QI]
@@ -581,7 +595,7 @@ def _quasi_static_forces(p, y, sh_ang, dtab, wti, wto, film, out):
 # stiffness and traction terms of the right signs, its pivots stay >= 1), the position couplings
 # of the right-hand side and the cage column
 (W_L10, W_L20, W_L21, W_U00, W_U01, W_U02, W_U11, W_U12, W_U22, W_THTH, W_THR, W_THPH, W_RR, W_OMR,
- W_ZC0, W_ZC1, W_ZC2, W_COEF, W_DCTH, W_RTH, W_OMTH, NW) = range(22)
+ W_ZC0, W_ZC1, W_ZC2, W_COEF, W_DCTH, W_RTH, W_OMTH, W_RTHG, W_OMTHG, NW) = range(24)
 
 
 @njit(cache=True, inline="always")
@@ -595,8 +609,8 @@ def _lu3_solve(wk, x0, x1, x2):
     return s0, s1, s2
 
 
-@njit(cache=True)
-def _w_factor(y, aux, p, hg, wsp, wcage):
+@njit(cache=True, inline="always")
+def _w_factor(y, aux, p, hg, ws, wsp, wcage):
     """Build and factorise W = I - hg J for the approximate Jacobian J of the stiff couplings.
 
     J keeps, per ball, the couplings of (theta, rho, psi, theta', rho', Omega) through contact
@@ -628,11 +642,19 @@ def _w_factor(y, aux, p, hg, wsp, wcage):
         tdo = qo * a[X_DMUO]
         # derivatives of theta'', rho'', Omega' (see _rhs)
         dth_th = -kc * rm * cin / mr
+        dth_phic = -dth_th
+        # the ball's angle moves its inner contact along the offset shaft (e = dx cos + dy sin):
+        # a slow variable forcing the stiff radial mode, so it belongs in W like the time column
+        # (and a race defect's depth changes with it: d delta_i = de - dloss_i, d delta_o = -dloss_o)
+        tgi = a[X_MUI] * a[X_KTI] * (a[X_DEDTH] - a[X_DLI]) + qi * a[X_DMUI] * ws * a[X_DEDTH]
+        tgo = a[X_MUO] * a[X_KTO] * a[X_DLO]                              # d f_o / d theta
+        dth_th += (tgo - tgi) / mr
+        dr_thg = (a[X_KTI] * (a[X_DEDTH] - a[X_DLI]) + a[X_KTO] * a[X_DLO]) / mb
+        dom_thg = rb * (tgo + tgi) / jb
         dth_r = (a[X_MUI] * a[X_KTI] - a[X_MUO] * a[X_KTO]) / mr
         dth_w = (-(tdi + tdo) * r - ccd * rm * cin - a[X_DRAGD]) / mr
         dth_v = (a[X_MUI] * a[X_CI] - a[X_MUO] * a[X_CO]) / mr
         dth_om = (tdi - tdo) * rb / mr
-        dth_phic = -dth_th
         dth_wc = ccd * rm * cin / mr
         dr_r = -(a[X_KTI] + a[X_KTO]) / mb + w * w
         dr_v = -(a[X_CI] + a[X_CO]) / mb
@@ -658,10 +680,10 @@ def _w_factor(y, aux, p, hg, wsp, wcage):
         m00 = 1.0 - hg * dth_w - hg2 * dth_th
         m01 = -hg * dth_v - hg2 * dth_r
         m02 = -hg * dth_om
-        m10 = -hg * dr_w - hg2 * dr_th
+        m10 = -hg * dr_w - hg2 * (dr_th + dr_thg)
         m11 = 1.0 - hg * dr_v - hg2 * dr_r
         m12 = 0.0
-        m20 = -hg * dom_w - hg2 * dom_th
+        m20 = -hg * dom_w - hg2 * (dom_th + dom_thg)
         m21 = -hg * dom_v - hg2 * dom_r
         m22 = 1.0 - hg * dom_om
         l10 = m10 / m00
@@ -686,6 +708,8 @@ def _w_factor(y, aux, p, hg, wsp, wcage):
         wk[W_OMR] = dom_r
         wk[W_RTH] = dr_th
         wk[W_OMTH] = dom_th
+        wk[W_RTHG] = dr_thg
+        wk[W_OMTHG] = dom_thg
         # the ball's response to the cage unknown k_wc (through phi_c = r_phic + hg k_wc, w_c)
         z0, z1, z2 = _lu3_solve(wk, -(hg * dth_wc + hg2 * dth_phic), -(hg * dr_wc + hg2 * dr_phic),
                                 -(hg * dom_wc + hg2 * dom_phic))
@@ -702,7 +726,7 @@ def _w_factor(y, aux, p, hg, wsp, wcage):
     wcage[0] = cage_diag
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _w_apply(p, hg, wsp, wcage, rhs_vec, k):
     """k = W^-1 rhs_vec with the factors of :func:`_w_factor`."""
     nb = int(p[P_NB])
@@ -716,8 +740,8 @@ def _w_apply(p, hg, wsp, wcage, rhs_vec, k):
         r_th = rhs_vec[b + B_TH]
         r_r = rhs_vec[b + B_R]
         x0 = rhs_vec[b + B_W] + hg * (wk[W_THTH] * r_th + wk[W_THR] * r_r + wk[W_THPH] * r_phic)
-        x1 = rhs_vec[b + B_V] + hg * (wk[W_RR] * r_r + wk[W_RTH] * (r_th - r_phic))
-        x2 = rhs_vec[b + B_OM] + hg * (wk[W_OMR] * r_r + wk[W_OMTH] * (r_th - r_phic))
+        x1 = rhs_vec[b + B_V] + hg * (wk[W_RR] * r_r + wk[W_RTH] * (r_th - r_phic) + wk[W_RTHG] * r_th)
+        x2 = rhs_vec[b + B_OM] + hg * (wk[W_OMR] * r_r + wk[W_OMTH] * (r_th - r_phic) + wk[W_OMTHG] * r_th)
         z0, z1, z2 = _lu3_solve(wk, x0, x1, x2)
         k[b + B_W] = z0
         k[b + B_V] = z1
@@ -762,7 +786,8 @@ def _step(kind, ta_, tb_, tc_, tg_, gamma, y, fy, aux0, t, hstep, ramp, p, dtab,
             _rhs(ytmp, kst[st], ws, ang, fx, fyy, p, dtab, wti, wto, film, auxs, dgs, scr, frc)
     else:
         hg = hstep * gamma
-        _w_factor(y, aux0, p, hg, wsp, wcage)
+        ws0, _a0, _x0, _y0 = _inputs(ramp, t)
+        _w_factor(y, aux0, p, hg, ws0, wsp, wcage)
         for st in range(ns):
             if st == 0:
                 for i in range(n):
@@ -800,7 +825,7 @@ def _record(i, m, y, fy, dg, ws, p, out_acc, out_qi, out_qo, out_cage, out_bs, o
                  out_fi, out_fo)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _record_diag(i, m, y, dg, ws, p, out_qi, out_qo, out_cage, out_bs, out_cs, out_sli, out_slo,
                  out_fi, out_fo):
     """Cage speed, skid ratios (eqs 37-38, regularised at standstill), contact loads, slips and
@@ -858,7 +883,7 @@ def _engine(y, counters, n, m, hs, hstep, ramp, kind, ta_, tb_, tc_, tg_, gamma,
     filmn = np.empty_like(film)
     wsp = np.empty((nb, NW))
     wcage = np.empty(1)
-    scr = np.empty((nb, 3))
+    scr = np.zeros((nb, 5))
     frc = np.empty(4)
     kstep = counters[0]
     i0 = counters[1]
@@ -932,9 +957,10 @@ def _inputs_split(frc, y, kb, fx, fy, wshaft, u):
     u[3] = frc[3] - ly
 
 
-@njit(cache=True)
-def _forcing_increment(y, xpred, aux, p, ws, dlt):
-    """h * df/dt of the balls over a step in which the structure moves from y[0:10] to xpred:
+@njit(cache=True, inline="always")
+def _forcing_increment(y, xpred, aux, p, ws, hstep, dlt):
+    """h * df/dt of the balls over a step of ``hstep`` in which the structure moves from y[0:10]
+    to xpred (and an inner-race defect turns with the shaft):
     the change of each ball's radial, revolution and spin acceleration when the shaft-pedestal
     offset and its rate change, linearised with the contact stiffness, damping and traction
     slope of ``aux``.  The structure is a time-dependent forcing of the (stiff) ball equations;
@@ -957,7 +983,9 @@ def _forcing_increment(y, xpred, aux, p, ws, dlt):
         s = a[X_S]
         de = ddx * c + ddy * s
         dedot = ddvx * c + ddvy * s
-        dq = a[X_KTI] * de + a[X_CI] * dedot
+        # an inner-race defect turns with the shaft: its depth at the ball changes by
+        # -ws h dloss_i/dtheta (the slope along theta holds only race defects)
+        dq = a[X_KTI] * (de + ws * hstep * a[X_DLI]) + a[X_CI] * dedot
         dfi = -a[X_MUI] * dq - a[X_QI] * a[X_DMUI] * ws * de
         dlt[b + B_V] = dq / mb
         dlt[b + B_W] = dfi / (mb * y[b + B_R])
@@ -967,7 +995,7 @@ def _forcing_increment(y, xpred, aux, p, ws, dlt):
 @njit(cache=True)
 def _split_core(y, fy, un, aux0, t, hstep, ramp, ta_, tg_, tb_, gamma, p, dtab, wti, wto, film,
                 phi, g0, g1, kb, ynext, fnext, unext, auxn, dgn, filmn, kst, ytmp, rtmp, auxs, dgs,
-                wsp, wcage, scr, frc, xpred):
+                wsp, wcage, scr, frc, xpred, nball, ycur_, fcur_, xb_, auxb_):
     """One step of :class:`~.integrators.SplitROS2` of ``hstep`` s from (t, y) with the structure
     propagators (phi, g0, g1) of that step (see its docstring)."""
     n = y.shape[0]
@@ -979,33 +1007,47 @@ def _split_core(y, fy, un, aux0, t, hstep, ramp, ta_, tg_, tb_, gamma, p, dtab, 
         for c in range(4):
             acc += g0[r, c] * un[c]
         xpred[r] = acc
-    # ROS2 on balls and cage, the structure given (x_n at the start, x* at the end)
-    hg = hstep * gamma
-    _w_factor(y, aux0, p, hg, wsp, wcage)
-    # the time column of the autonomised Jacobian: + gamma h f_t in stage 1, - in stage 2 (ROS2)
-    ws0, _a0, _x0, _y0 = _inputs(ramp, t)
-    _forcing_increment(y, xpred, aux0, p, ws0, ytmp)
+    # ROS2 on balls and cage, the structure given (going linearly from x_n to x*), in nball
+    # sub-steps (multirate: the balls' stiff forced response converges at first order in their
+    # step where the forcing is rough, the exact structure needs no sub-steps)
+    MB = nball
+    hb = hstep / MB
+    hg = hb * gamma
     for i in range(n):
-        rtmp[i] = fy[i] + gamma * ytmp[i]
-        ytmp[i] = -gamma * ytmp[i]
-    _w_apply(p, hg, wsp, wcage, rtmp, kst[0])
-    for i in range(n):
-        rtmp[i] = ytmp[i]                          # keep - gamma h f_t for stage 2
-    for i in range(n):
-        ytmp[i] = y[i] + hstep * ta_[1, 0] * kst[0, i]
-    for i in range(10):
-        ytmp[i] = xpred[i]
-    ws, ang, fx, fyy = _inputs(ramp, t + hstep)
-    for i in range(n):
-        kst[1, i] = rtmp[i]
-    _rhs(ytmp, rtmp, ws, ang, fx, fyy, p, dtab, wti, wto, film, auxs, dgs, scr, frc)
-    for i in range(n):
-        rtmp[i] += tg_[1, 0] * kst[0, i] + kst[1, i]
-    _w_apply(p, hg, wsp, wcage, rtmp, kst[1])
-    for i in range(n):
-        ynext[i] = y[i] + hstep * (tb_[0] * kst[0, i] + tb_[1] * kst[1, i])
-    for i in range(10):
-        ynext[i] = xpred[i]
+        ycur_[i] = y[i]
+        fcur_[i] = fy[i]
+    auxb_[:, :] = aux0
+    for sb in range(MB):
+        for i in range(10):
+            xb_[i] = y[i] + (sb + 1.0) / MB * (xpred[i] - y[i])
+        ws0, _a0, _x0, _y0 = _inputs(ramp, t + sb * hb)
+        _w_factor(ycur_, auxb_, p, hg, ws0, wsp, wcage)
+        _forcing_increment(ycur_, xb_, auxb_, p, ws0, hb, ytmp)
+        for i in range(n):
+            rtmp[i] = fcur_[i] + gamma * ytmp[i]
+            ytmp[i] = -gamma * ytmp[i]
+        _w_apply(p, hg, wsp, wcage, rtmp, kst[0])
+        for i in range(n):
+            rtmp[i] = ytmp[i]
+        for i in range(n):
+            ytmp[i] = ycur_[i] + hb * ta_[1, 0] * kst[0, i]
+        for i in range(10):
+            ytmp[i] = xb_[i]
+        ws, ang, fx, fyy = _inputs(ramp, t + (sb + 1) * hb)
+        for i in range(n):
+            kst[1, i] = rtmp[i]
+        _rhs(ytmp, rtmp, ws, ang, fx, fyy, p, dtab, wti, wto, film, auxs, dgs, scr, frc)
+        for i in range(n):
+            rtmp[i] += tg_[1, 0] * kst[0, i] + kst[1, i]
+        _w_apply(p, hg, wsp, wcage, rtmp, kst[1])
+        for i in range(n):
+            ynext[i] = ycur_[i] + hb * (tb_[0] * kst[0, i] + tb_[1] * kst[1, i])
+        for i in range(10):
+            ynext[i] = xb_[i]
+        if sb < MB - 1:
+            _rhs(ynext, fcur_, ws, ang, fx, fyy, p, dtab, wti, wto, film, auxb_, dgs, scr, frc)
+            for i in range(n):
+                ycur_[i] = ynext[i]
     filmn[:, :] = film
     _film_update(ynext, ws, p, filmn, auxs, True)
     _rhs(ynext, fnext, ws, ang, fx, fyy, p, dtab, wti, wto, filmn, auxn, dgn, scr, frc)
@@ -1037,7 +1079,7 @@ def _contact_changed(a0, a1, nb, pocket):
 def _split_step(y, fy, un, aux0, kstep, kk, hs, ramp, ta_, tg_, tb_, gamma, p, dtab, wti, wto, film,
                 phi, g0, g1, phie, g0e, g1e, nsub, kb, ynext, fnext, unext, auxn, dgn, filmn, kst,
                 ytmp, rtmp, auxs, dgs, wsp, wcage, scr, frc, xpred, ycur, fcur, ucur, auxc, filmc,
-                xsmp, usmp, flag):
+                xsmp, usmp, flag, nball, ybl, fbl, xbl, auxbl):
     """One grid step (kk samples) of the split method, event-aware: if a contact opened or
     closed during the step, the step is redone as ``nsub`` sub-steps (structure propagators
     phie, g0e, g1e of one sub-step), so that the instant of the change is resolved to H / nsub.
@@ -1049,7 +1091,7 @@ def _split_step(y, fy, un, aux0, kstep, kk, hs, ramp, ta_, tg_, tb_, gamma, p, d
     flag[0] = 0
     _split_core(y, fy, un, aux0, t, hstep, ramp, ta_, tg_, tb_, gamma, p, dtab, wti, wto, film,
                 phi, g0, g1, kb, ynext, fnext, unext, auxn, dgn, filmn, kst, ytmp, rtmp, auxs, dgs,
-                wsp, wcage, scr, frc, xpred)
+                wsp, wcage, scr, frc, xpred, nball, ybl, fbl, xbl, auxbl)
     if nsub <= 1 or not _contact_changed(aux0, auxn, nb, p[P_CPK] > 0.0):
         return
     flag[0] = 1
@@ -1063,7 +1105,8 @@ def _split_step(y, fy, un, aux0, kstep, kk, hs, ramp, ta_, tg_, tb_, gamma, p, d
     for sidx in range(nsub):
         _split_core(ycur, fcur, ucur, auxc, t + sidx * hsub, hsub, ramp, ta_, tg_, tb_, gamma, p,
                     dtab, wti, wto, filmc, phie, g0e, g1e, kb, ynext, fnext, unext, auxn, dgn,
-                    filmn, kst, ytmp, rtmp, auxs, dgs, wsp, wcage, scr, frc, xpred)
+                    filmn, kst, ytmp, rtmp, auxs, dgs, wsp, wcage, scr, frc, xpred, 1, ybl, fbl, xbl,
+                    auxbl)
         ycur[:] = ynext
         fcur[:] = fnext
         ucur[:] = unext
@@ -1080,8 +1123,8 @@ def _split_step(y, fy, un, aux0, kstep, kk, hs, ramp, ta_, tg_, tb_, gamma, p, d
 
 @njit(cache=True)
 def _engine_split(y, fy, un, aux0, dg0, film, counters, n, m, hs, kk, ramp, ta_, tg_, tb_, gamma,
-                  p, dtab, wti, wto, phi, g0, g1, phis, g0s, g1s, phie, g0e, g1e, nsub, cacc, dacc,
-                  kb, out_acc, out_qi, out_qo, out_cage, out_bs, out_cs, out_sli, out_slo, out_fi,
+                  p, dtab, wti, wto, phi, g0, g1, phis, g0s, g1s, phie, g0e, g1e, nsub, nball, cacc,
+                  dacc, kb, out_acc, out_qi, out_qo, out_cage, out_bs, out_cs, out_sli, out_slo, out_fi,
                   out_fo):
     """Advance ``n`` internal samples with :class:`~.integrators.SplitROS2`, one step per ``kk``
     samples.  The state (y, its derivative fy, the structure input un, aux0, dg0, film) persists
@@ -1102,7 +1145,7 @@ def _engine_split(y, fy, un, aux0, dg0, film, counters, n, m, hs, kk, ramp, ta_,
     filmn = np.empty_like(film)
     wsp = np.empty((nb, NW))
     wcage = np.empty(1)
-    scr = np.empty((nb, 3))
+    scr = np.zeros((nb, 5))
     frc = np.empty(4)
     xpred = np.empty(10)
     xs = np.empty(10)
@@ -1115,6 +1158,10 @@ def _engine_split(y, fy, un, aux0, dg0, film, counters, n, m, hs, kk, ramp, ta_,
     xsmp = np.empty((kk, 10))
     usmp = np.empty((kk, 4))
     flag = np.zeros(1, dtype=np.int64)
+    ybl = np.empty(nvar)
+    fbl = np.empty(nvar)
+    xbl = np.empty(10)
+    auxbl = np.empty((nb, NAUX))
     kstep = counters[0]
     i0 = counters[1]
     if counters[3] == 0:
@@ -1130,7 +1177,8 @@ def _engine_split(y, fy, un, aux0, dg0, film, counters, n, m, hs, kk, ramp, ta_,
                 _split_step(y, fy, un, aux0, kstep, kk, hs, ramp, ta_, tg_, tb_, gamma, p, dtab, wti,
                             wto, film, phi, g0, g1, phie, g0e, g1e, nsub, kb, ynext, fnext, unext,
                             auxn, dgn, filmn, kst, ytmp, rtmp, auxs, dgs, wsp, wcage, scr, frc, xpred,
-                            ycur, fcur, ucur, auxc, filmc, xsmp, usmp, flag)
+                            ycur, fcur, ucur, auxc, filmc, xsmp, usmp, flag, nball, ybl, fbl, xbl,
+                            auxbl)
             y[:] = ynext
             fy[:] = fnext
             un[:] = unext
@@ -1155,7 +1203,8 @@ def _engine_split(y, fy, un, aux0, dg0, film, counters, n, m, hs, kk, ramp, ta_,
                 _split_step(y, fy, un, aux0, kstep, kk, hs, ramp, ta_, tg_, tb_, gamma, p, dtab, wti,
                             wto, film, phi, g0, g1, phie, g0e, g1e, nsub, kb, ynext, fnext, unext,
                             auxn, dgn, filmn, kst, ytmp, rtmp, auxs, dgs, wsp, wcage, scr, frc, xpred,
-                            ycur, fcur, ucur, auxc, filmc, xsmp, usmp, flag)
+                            ycur, fcur, ucur, auxc, filmc, xsmp, usmp, flag, nball, ybl, fbl, xbl,
+                            auxbl)
                 have_next = True
             fr = jj / kk
             if flag[0] == 1:
@@ -1163,23 +1212,24 @@ def _engine_split(y, fy, un, aux0, dg0, film, counters, n, m, hs, kk, ramp, ta_,
                     xs[r] = xsmp[jj, r]
                 for c in range(4):
                     uu[c] = usmp[jj, c]
-            for r in range(10 if flag[0] == 0 else 0):
+            else:
+                # the sensor rows of the exact sub-step response (C Phi_j, C G0_j, C G1_j)
+                for r in range(2):
+                    acc = 0.0
+                    for c in range(10):
+                        acc += phis[jj, r, c] * y[c]
+                    for c in range(4):
+                        du = unext[c] - un[c]
+                        acc += g0s[jj, r, c] * un[c] + g1s[jj, r, c] * du + dacc[r, c] * (un[c] + fr * du)
+                    out_acc[i, r] = acc
+        if jj == 0 or flag[0] == 1:
+            for r in range(2):
                 acc = 0.0
                 for c in range(10):
-                    acc += phis[jj, r, c] * y[c]
+                    acc += cacc[r, c] * xs[c]
                 for c in range(4):
-                    acc += g0s[jj, r, c] * un[c] + g1s[jj, r, c] * (unext[c] - un[c])
-                xs[r] = acc
-            if flag[0] == 0:
-                for c in range(4):
-                    uu[c] = un[c] + fr * (unext[c] - un[c])
-        for r in range(2):
-            acc = 0.0
-            for c in range(10):
-                acc += cacc[r, c] * xs[c]
-            for c in range(4):
-                acc += dacc[r, c] * uu[c]
-            out_acc[i, r] = acc
+                    acc += dacc[r, c] * uu[c]
+                out_acc[i, r] = acc
         # the cage, ball and contact values of the grid point at or before the sample (the
         # Simulator's chunks are multiples of 4 samples, so with kk | 4 it is the sample itself)
         _record_diag(i, m, y, dg0, ws, p, out_qi, out_qo, out_cage, out_bs, out_cs, out_sli, out_slo,
@@ -1412,12 +1462,15 @@ class SkiddingModel:
         kk = int(round(self.hstep / self.hs))
         self.kk = kk
         self.phi, self.g0, self.g1 = propagators(A, B, self.hstep)
-        self.phis = np.zeros((kk, 10, 10))
-        self.g0s = np.zeros((kk, 10, 4))
-        self.g1s = np.zeros((kk, 10, 4))
-        self.phis[0] = np.eye(10)
+        # sensor rows of the sub-step propagators: accel(j hs) = C Phi_j x + C G0_j u0 + C G1_j du + D u
+        self.phis = np.zeros((kk, 2, 10))
+        self.g0s = np.zeros((kk, 2, 4))
+        self.g1s = np.zeros((kk, 2, 4))
+        self.phis[0] = self.cacc
         for j in range(1, kk):
-            self.phis[j], self.g0s[j], self.g1s[j] = propagators(A, B, self.hstep, j * self.hs)
+            ph, gg0, gg1 = propagators(A, B, self.hstep, j * self.hs)
+            self.phis[j], self.g0s[j], self.g1s[j] = self.cacc @ ph, self.cacc @ gg0, self.cacc @ gg1
+        self.nball = max(1, int(getattr(self.method, "ball_substeps", 1)))
         self.nsub = int(getattr(self.method, "event_substeps", 1))
         if self.nsub > 1:
             self.nsub = max(kk, (self.nsub // kk) * kk)
@@ -1555,7 +1608,7 @@ class SkiddingModel:
                                    self.counters, n, m, self.hs, self.kk, ramp, ta_, tg_, tb_, gamma,
                                    self.p, self.dtab, self.wti, self.wto, self.phi, self.g0, self.g1,
                                    self.phis, self.g0s, self.g1s, self.phie, self.g0e, self.g1e,
-                                   self.nsub, self.cacc, self.dacc, self.kb, acc, qi, qo, cage, bs,
+                                   self.nsub, self.nball, self.cacc, self.dacc, self.kb, acc, qi, qo, cage, bs,
                                    cs, sli, slo, fi, fo)
         else:
                 status = _engine(self.y, self.counters, n, m, self.hs, self.hstep, ramp, kind, ta_, tb_,
