@@ -2,8 +2,9 @@
 
 1. Sensor resonance (optional): the mounted accelerometer's own second-order response
    H(s) = w^2 / (s^2 + 2 zeta w s + w^2), flat below its resonance and peaking at it, applied
-   by a bilinear-transform biquad (pre-warped at the resonance) when the resonance lies below
-   0.45 x the internal rate; above that it cannot be represented and is left out.
+   by a biquad at the internal rate with the poles mapped exactly and the numerator fitted to
+   H over the output band (``design_resonance``), when the resonance lies below 0.45 x the
+   internal rate; above that it cannot be represented and is left out.
 2. Anti-aliasing: a linear-phase Kaiser FIR, passband to 0.4 x the output rate, at least 60 dB
    down from the output Nyquist frequency on, as a real acquisition chain does: nothing above
    Nyquist folds back.  Its group delay (``lookahead`` internal samples) is compensated by the
@@ -11,7 +12,8 @@
    k / sample_rate exactly.
 3. Decimation to the output rate (polyphase: only the kept samples are computed).
 4. Noise: white, ``noise_density`` (m/s^2/sqrt(Hz)) over the output band, from a counter-based
-   generator indexed by the absolute sample (chunk-invariant).
+   generator indexed by the absolute sample (chunk-invariant); one Box-Muller pair per sample
+   gives both axes.
 5. Clipping at +-``range`` (m/s^2), as the real sensor saturates.
 """
 from __future__ import annotations
@@ -21,7 +23,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .rng import normal
+from .rng import uniform
 
 AA_PASS = 0.4     # passband edge / output rate
 AA_STOP = 0.5     # stopband edge / output rate (the output Nyquist frequency)
@@ -29,65 +31,71 @@ AA_ATTEN_DB = 60.0
 
 
 @njit(cache=True)
-def _biquad(x, b, a, zi):
-    """Direct form II transposed, in place over columns; zi (2, cols) state."""
-    n, cols = x.shape
-    for c in range(cols):
-        z1 = zi[0, c]
-        z2 = zi[1, c]
-        for i in range(n):
-            xi = x[i, c]
-            y = b[0] * xi + z1
-            z1 = b[1] * xi - a[1] * y + z2
-            z2 = b[2] * xi - a[2] * y
-            x[i, c] = y
-        zi[0, c] = z1
-        zi[1, c] = z2
+def _biquad2(x, b, a, zi):
+    """Direct form II transposed over the two columns of x (n, 2) in place; zi (2, 2) state.
+    Both columns in one loop: their recursions are independent, so they overlap (a recursion is
+    latency bound)."""
+    b0, b1, b2, a1, a2 = b[0], b[1], b[2], a[1], a[2]
+    p1, p2, q1, q2 = zi[0, 0], zi[1, 0], zi[0, 1], zi[1, 1]
+    for i in range(x.shape[0]):
+        u = x[i, 0]
+        v = x[i, 1]
+        y = b0 * u + p1
+        z = b0 * v + q1
+        p1 = b1 * u - a1 * y + p2
+        q1 = b1 * v - a1 * z + q2
+        p2 = b2 * u - a2 * y
+        q2 = b2 * v - a2 * z
+        x[i, 0] = y
+        x[i, 1] = z
+    zi[0, 0], zi[1, 0], zi[0, 1], zi[1, 1] = p1, p2, q1, q2
 
 
 @njit(cache=True)
-def _polyphase(buf, start, taps, m, first_pos, n_out, out):
-    """out[i, c] = sum_t taps[t] * buf[first_pos + i*m + t - start, c] for two columns.
+def _polyphase(flat, taps2, m, first, n_out, out):
+    """out[i, c] = sum_t taps[t] * buf[first + i*m + t, c] for the two columns of a (n, 2)
+    buffer given as ``flat`` (its row-major ravel) and ``taps2`` (each tap twice, zero-padded to
+    a multiple of 8, as rows of 8).
 
-    Four partial sums (even/odd taps x two columns) so the additions do not wait on each
-    other: a single running sum is limited by add latency (measured ~3x slower)."""
-    nt = taps.shape[0]
+    Eight independent partial sums over consecutive elements of ``flat`` (lanes alternate
+    between the columns): the compiler packs them into vector registers without reordering any
+    sum (a single running sum is limited by add latency; measured ~5x slower)."""
+    nblk = taps2.shape[0]
     for i in range(n_out):
-        p = first_pos + i * m - start
-        a0 = 0.0
-        a1 = 0.0
-        b0 = 0.0
-        b1 = 0.0
-        t = 0
-        while t + 1 < nt:
-            ta = taps[t]
-            tb = taps[t + 1]
-            a0 += ta * buf[p + t, 0]
-            a1 += ta * buf[p + t, 1]
-            b0 += tb * buf[p + t + 1, 0]
-            b1 += tb * buf[p + t + 1, 1]
-            t += 2
-        if t < nt:
-            a0 += taps[t] * buf[p + t, 0]
-            a1 += taps[t] * buf[p + t, 1]
-        out[i, 0] = a0 + b0
-        out[i, 1] = a1 + b1
+        # a view starting at the first tap, read in rows of eight with constant column indices:
+        # no negative-index wraparound checks per element (they block vectorising)
+        seg = flat[2 * (first + i * m):2 * (first + i * m) + 8 * nblk].reshape((nblk, 8))
+        s0 = s1 = s2 = s3 = s4 = s5 = s6 = s7 = 0.0
+        for k in range(nblk):
+            s0 += taps2[k, 0] * seg[k, 0]
+            s1 += taps2[k, 1] * seg[k, 1]
+            s2 += taps2[k, 2] * seg[k, 2]
+            s3 += taps2[k, 3] * seg[k, 3]
+            s4 += taps2[k, 4] * seg[k, 4]
+            s5 += taps2[k, 5] * seg[k, 5]
+            s6 += taps2[k, 6] * seg[k, 6]
+            s7 += taps2[k, 7] * seg[k, 7]
+        out[i, 0] = (s0 + s2) + (s4 + s6)
+        out[i, 1] = (s1 + s3) + (s5 + s7)
 
 
 @njit(cache=True)
-def _noise_clip(out, index0, seed, sigma, limit, cols_to_axis):
-    n, cols = out.shape
-    for c in range(cols):
-        stream = 10 + cols_to_axis[c]
-        for i in range(n):
-            v = out[i, c]
-            if sigma > 0.0:
-                v += sigma * normal(seed, stream, index0 + i)
-            if v > limit:
-                v = limit
-            elif v < -limit:
-                v = -limit
-            out[i, c] = v
+def _noise_clip(out, index0, seed, sigma, limit):
+    """Add white noise (sigma, m/s^2) and clip at +-limit.  One Box-Muller pair per sample gives
+    the two axes' independent normals (one log, sqrt, cos and sin per sample, not two)."""
+    n = out.shape[0]
+    for i in range(n):
+        x = out[i, 0]
+        y = out[i, 1]
+        if sigma > 0.0:
+            u1 = uniform(seed, 20, index0 + i)
+            u2 = uniform(seed, 21, index0 + i)
+            r = sigma * math.sqrt(-2.0 * math.log(1.0 - u1))
+            th = 2.0 * math.pi * u2
+            x += r * math.cos(th)
+            y += r * math.sin(th)
+        out[i, 0] = min(max(x, -limit), limit)
+        out[i, 1] = min(max(y, -limit), limit)
 
 
 def design_antialias(oversample: int) -> np.ndarray:
@@ -101,6 +109,27 @@ def design_antialias(oversample: int) -> np.ndarray:
     d = int(math.ceil((numtaps - 1) / 2 / m)) * m
     cutoff = 0.5 * (AA_PASS + AA_STOP) / m          # cycles per internal sample
     return firwin(2 * d + 1, 2.0 * cutoff, window=("kaiser", beta))
+
+
+def design_resonance(f_res: float, zeta: float, rate: float, band: float):
+    """Digital biquad (b, a) at ``rate`` Hz for the sensor's H(s) = w^2 / (s^2 + 2 zeta w s + w^2):
+    poles mapped exactly (z = exp(s / rate), so the resonance sits where it is), numerator fitted
+    by least squares to H over 0 .. ``band`` Hz (the output band that survives the anti-aliasing
+    filter).  The bilinear transform pre-warped at the resonance, used before, compresses the
+    frequency axis below it: 8.7 % error at 6.75 kHz for a 22 kHz sensor at 60 kHz; this gives
+    1e-3 there and 1e-7 at 480 kHz."""
+    w = 2.0 * math.pi * f_res
+    poles = np.roots([1.0, 2.0 * zeta * w, w * w])
+    a = np.real(np.poly(np.exp(poles / rate)))
+    f = np.linspace(0.0, band, 256)
+    s = 2j * math.pi * f
+    target = w * w / (s * s + 2.0 * zeta * w * s + w * w)
+    zinv = np.exp(-2j * math.pi * f / rate)
+    basis = np.stack([np.ones_like(zinv), zinv, zinv * zinv], axis=1)
+    rhs = target * (a[0] + a[1] * zinv + a[2] * zinv * zinv)
+    b = np.linalg.lstsq(np.concatenate([basis.real, basis.imag]),
+                        np.concatenate([rhs.real, rhs.imag]), rcond=None)[0]
+    return np.asarray(b, float), np.asarray(a, float)
 
 
 class AccelerometerChain:
@@ -118,11 +147,8 @@ class AccelerometerChain:
         self._bq = None
         f = sensor.resonance_hz
         if 0.0 < f < 0.45 * internal:
-            from scipy.signal import bilinear
-
-            w = 2.0 * internal * math.tan(math.pi * f / internal)     # pre-warped
-            b, a = bilinear([w * w], [1.0, 2.0 * sensor.damping_ratio * w, w * w], fs=internal)
-            self._bq = (np.asarray(b, float), np.asarray(a, float), np.zeros((2, 2)))
+            b, a = design_resonance(f, sensor.damping_ratio, internal, AA_STOP * self.sample_rate)
+            self._bq = (b, a, np.zeros((2, 2)))
         # 2. anti-aliasing FIR
         if self.m > 1:
             self.taps = design_antialias(self.m)
@@ -130,21 +156,35 @@ class AccelerometerChain:
         else:
             self.taps = np.ones(1)
             self.half = 0
+        nt = self.taps.size
+        self._taps2 = np.zeros(-(-2 * nt // 8) * 8)
+        self._taps2[0:2 * nt:2] = self.taps
+        self._taps2[1:2 * nt:2] = self.taps
+        self._taps2 = self._taps2.reshape(-1, 8)
+        self._tail = (self._taps2.size - 2 * nt + 1) // 2   # rows the zero-padded taps read past the data
         self.lookahead_samples = self.half // self.m
         # internal samples held for the FIR: start index of buf (absolute internal index)
         self._buf = np.zeros((self.half, 2))     # x[-D .. -1] = 0: at rest before t = 0
+        self._nvalid = self.half                 # rows of _buf that hold samples
         self._buf_start = -self.half
         self._next_internal = 0                  # absolute internal index of the next input
         self._sigma = sensor.noise_density * math.sqrt(0.5 * self.sample_rate)
-        self._axis_map = np.array([0, 1], dtype=np.int64)
 
     def _push(self, acc_internal: np.ndarray):
-        x = np.array(acc_internal, dtype=float, copy=True)
+        """Append the new samples (through the sensor resonance) to the held ones: one copy, and
+        zero rows after them for the FIR's padded taps to read."""
+        keep = self._nvalid
+        n = acc_internal.shape[0]
+        buf = np.empty((keep + n + self._tail, 2))
+        buf[:keep] = self._buf[:keep]
+        buf[keep:keep + n] = acc_internal
+        buf[keep + n:] = 0.0
         if self._bq is not None:
             b, a, zi = self._bq
-            _biquad(x, b, a, zi)
-        self._buf = np.concatenate([self._buf, x], axis=0)
-        self._next_internal += x.shape[0]
+            _biquad2(buf[keep:keep + n], b, a, zi)
+        self._buf = buf
+        self._nvalid = keep + n
+        self._next_internal += n
 
     def prime(self, acc_internal: np.ndarray):
         """Feed the lookahead (the first D internal samples) without producing output."""
@@ -156,9 +196,10 @@ class AccelerometerChain:
         n = acc_internal.shape[0] // self.m
         out = np.empty((n, 2))
         first = index0 * self.m - self.half          # absolute internal index of the first tap
-        _polyphase(self._buf, self._buf_start, self.taps, self.m, first, n, out)
+        _polyphase(self._buf.ravel(), self._taps2, self.m, first - self._buf_start, n, out)
         keep_from = (index0 + n) * self.m - self.half
-        self._buf = self._buf[keep_from - self._buf_start:]
+        self._buf = self._buf[keep_from - self._buf_start:self._nvalid]
+        self._nvalid = self._buf.shape[0]
         self._buf_start = keep_from
-        _noise_clip(out, index0, self.seed, self._sigma, self.sensor.range, self._axis_map)
+        _noise_clip(out, index0, self.seed, self._sigma, self.sensor.range)
         return out
