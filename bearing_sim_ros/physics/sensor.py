@@ -51,7 +51,26 @@ def _biquad2(x, b, a, zi):
     zi[0, 0], zi[1, 0], zi[0, 1], zi[1, 1] = p1, p2, q1, q2
 
 
-@njit(cache=True)
+def _slp_njit(signature):
+    """``njit(signature, cache=True)`` compiled with LLVM's SLP vectoriser on.  numba leaves it
+    off by default (config.SLP_VECTORIZE, read when a function is compiled); here it packs the
+    eight independent lanes of the FIR into vector instructions: measured 1.16 -> 0.78 ms per
+    signal-second at 4x.  Lane-wise packing does not reorder any sum, so results are unchanged.
+    Compiled eagerly (at import) so that the switch is on exactly for this compilation."""
+    import numba.core.config as nb_config
+
+    def wrap(fn):
+        old = nb_config.SLP_VECTORIZE
+        nb_config.SLP_VECTORIZE = 1
+        try:
+            return njit(signature, cache=True)(fn)
+        finally:
+            nb_config.SLP_VECTORIZE = old
+
+    return wrap
+
+
+@_slp_njit("void(float64[::1], float64[:, ::1], int64, int64, int64, float64[:, ::1])")
 def _polyphase(flat, taps2, m, first, n_out, out):
     """out[i, c] = sum_t taps[t] * buf[first + i*m + t, c] for the two columns of a (n, 2)
     buffer given as ``flat`` (its row-major ravel) and ``taps2`` (each tap twice, zero-padded to
