@@ -115,11 +115,12 @@ def test_speed_change_is_ramped_not_stepped():
     assert np.all(np.isfinite(b.accel)) and np.all(np.isfinite(b2.accel))
 
 
-@pytest.mark.parametrize("scene", ["er16k_outer_race", "b6205_ball_inner"])
-def test_chunked_equals_continuous(scene):
+@pytest.mark.parametrize("scene, oversample", [("er16k_outer_race", None), ("b6205_ball_inner", None),
+                                               ("cwru_6205_or007_6", 1), ("er16k_inner_race", 2)])
+def test_chunked_equals_continuous(scene, oversample):
     total = 4500
-    one = Simulator(scene, seed=3).advance(total)
-    sim = Simulator(scene, seed=3)
+    one = Simulator(scene, seed=3, oversample=oversample).advance(total)
+    sim = Simulator(scene, seed=3, oversample=oversample)
     sizes = [150, 37, 1, 613, 2000]
     sizes.append(total - sum(sizes))
     parts = [sim.advance(n) for n in sizes]
