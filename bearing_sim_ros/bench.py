@@ -264,6 +264,60 @@ def plot(result: dict, path: Path) -> None:
     plt.close(fig)
 
 
+# operating points of the fidelity calibration: ER-16K from heavy load / low speed (almost pure
+# rolling) to light load / high speed (seed 000 Fig. 17 and beyond), plus the CWRU and seed 004
+# bearings at their own operating points
+CALIBRATION_POINTS = [
+    Scenario("ER-16K 600 rpm 2000 N", "er16k_skidding", rpm=600.0, load_n=2000.0),
+    Scenario("ER-16K 1000 rpm 2000 N", "er16k_skidding", rpm=1000.0, load_n=2000.0),
+    Scenario("ER-16K 2000 rpm 2000 N", "er16k_skidding", rpm=2000.0, load_n=2000.0),
+    Scenario("ER-16K 1600 rpm 1000 N", "er16k_skidding", rpm=1600.0, load_n=1000.0),
+    Scenario("ER-16K 2000 rpm 200 N", "er16k_skidding"),
+    Scenario("ER-16K 3000 rpm 200 N", "er16k_skidding", rpm=3000.0, load_n=200.0),
+    Scenario("ER-16K 5000 rpm 200 N", "er16k_skidding", rpm=5000.0, load_n=200.0),
+    Scenario("ER-16K 1600 rpm 50 N", "er16k_skidding", rpm=1600.0, load_n=50.0),
+    Scenario("ER-16K 10000 rpm 10 N", "er16k_skidding", rpm=10000.0, load_n=10.0),
+    Scenario("CWRU 6205 healthy 1797 rpm", "cwru_6205_normal"),
+    Scenario("6205 healthy 1750 rpm 2000 N", "b6205_ball_outer"),
+]
+KINEMATIC_DEFAULT = Config("kinematic", "kinematic", "kinematic")
+
+
+def calibrate_fidelity(sample_rate: float = 15000.0, settle: float = 0.3, seconds: float = 0.6,
+                       progress=None, points=CALIBRATION_POINTS) -> dict:
+    """Measure the kinematic tier's error against the skidding reference over ``points`` and fit
+    the fidelity estimate (see fidelity.py).  Defects are removed: the estimate is about the
+    model (skidding), not about a particular defect."""
+    from .fidelity import fit, skid_index
+
+    ref_cfg = reference_config()
+    rows = []
+    for sc in points:
+        scene = replace(sc.build(), defects=())
+        ref = run_config(ref_cfg, scene, sample_rate, settle, seconds, 1)
+        run = run_config(KINEMATIC_DEFAULT, scene, sample_rate, settle, seconds, 1)
+        err = errors(run, ref, scene, sample_rate)
+        chi = skid_index(scene, scene.shaft_speed, scene.radial_load)
+        rows.append({"scenario": sc.label, "skid_index": chi, "error": err["error"], "rms": err["rms"],
+                     "lines": err["lines"], "cage": err["cage"], "reference_cage_skid": ref.cage_skid})
+        if progress:
+            progress(f"{sc.label:<32} chi {chi:9.3g}  kinematic error {err['error']:.2%} "
+                     f"(rms {err['rms']:.2%}, lines {err['lines']:.2%}, cage {err['cage']:.2%})")
+    model = fit([(r["skid_index"], max(r["error"], 1e-4)) for r in rows])
+    return {**model, "points": rows, "reference": ref_cfg.label, "seconds": seconds,
+            "settle": settle, "sample_rate": sample_rate, "machine": machine_facts(),
+            "source": "bearing-sim bench --calibrate-fidelity"}
+
+
+def write_calibration(result: dict, path: Path) -> None:
+    import yaml
+
+    head = ("# Fidelity calibration: the kinematic tier's error against the skidding tier's reference,\n"
+            "# error = floor + scale * skid_index^power (bearing_sim_ros/fidelity.py).\n"
+            "# Written by `bearing-sim bench --calibrate-fidelity --out DIR`; do not edit by hand.\n")
+    path.write_text(head + yaml.safe_dump(json.loads(json.dumps(result)), sort_keys=False))
+
+
 def bench_command(args) -> int:
     out = Path(args.out)
     try:
@@ -272,7 +326,18 @@ def bench_command(args) -> int:
         raise UserError(f"--out {args.out!r}: cannot create the folder ({exc.strerror})") from None
     import sys
 
-    result = study(quick=args.quick, progress=lambda msg: print(msg, file=sys.stderr, flush=True))
+    say = lambda msg: print(msg, file=sys.stderr, flush=True)  # noqa: E731
+    if getattr(args, "calibrate_fidelity", False):
+        from .paths import config_dir
+
+        result = calibrate_fidelity(progress=say)
+        target = config_dir() / "fidelity.yaml"
+        write_calibration(result, target)
+        write_calibration(result, out / "fidelity.yaml")
+        print(f"fit: error = {result['floor']:.4g} + {result['scale']:.4g} chi^{result['power']:.3g} "
+              f"(worst point off by x{result['worst_factor']:.2f}); wrote {target}")
+        return 0
+    result = study(quick=args.quick, progress=say)
     (out / "bench.json").write_text(json.dumps(result, indent=2))
     (out / "bench.md").write_text(markdown(result))
     plot(result, out / "bench.png")

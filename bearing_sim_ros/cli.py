@@ -77,6 +77,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     s = sub.add_parser("bench", help="speed-against-error study")
     s.add_argument("--quick", action="store_true")
+    s.add_argument("--calibrate-fidelity", action="store_true",
+                   help="measure the kinematic tier's error against the skidding reference and refit config/fidelity.yaml")
     s.add_argument("--out", required=True)
 
     s = sub.add_parser("validate", help="simulated against real CWRU recordings")

@@ -213,7 +213,7 @@ class Simulator:
         from .fidelity import select_tier
 
         sel = select_tier(self.scene, "auto", shaft_speed, np.asarray(radial_load),
-                          self.selection.tolerance)
+                          self.selection.tolerance, current=self.tier)
         if sel.tier == self.tier:
             self.selection = sel
             return False
