@@ -142,10 +142,13 @@ def test_stream_is_15khz_contiguous_and_paced(started, listener):
     diags = [d for d in listener.diagnostics if d[0] >= recv[0]]
     assert 8 <= len(diags) <= 13
     values = diags[-1][3]
-    for key in ("real_time_factor", "overruns", "lag_s", "worst_lag_s", "tier", "shaft_speed_rad_s",
+    for key in ("real_time_factor", "overruns", "lag_s", "worst_lag_s", "batch_compute_s", "computed_ahead_s",
+                "tier", "shaft_speed_rad_s",
                 "radial_load_n", "rejected_inputs", "recording"):
         assert key in values, key
     assert values["tier"] == "kinematic" and values["recording"] == "off"
+    ahead = [float(d[3]["computed_ahead_s"]) for d in diags]
+    assert max(ahead) > 0.0 and max(ahead) <= 0.06 + 1e-9      # compute_ahead 0.05 s + one batch
     assert float(values["shaft_speed_rad_s"]) == pytest.approx(167.552, rel=1e-5)
     assert values["radial_load_n"] == "0 -50"
     assert int(values["rejected_inputs"]) == 0

@@ -4,20 +4,23 @@
     ros2 run bearing_sim_ros bearing_sim_node --ros-args -p real_time:=false -p duration:=60.0
 
 One small :class:`Node` over :class:`~bearing_sim_ros.Simulator`.  A dedicated simulation thread
-advances the model in chunks of ``batch_duration`` and publishes each chunk when the moment of
-its last sample has come on the steady clock (``time.monotonic``).  When a chunk is not ready in
-time (an *overrun*) it is published at once and the following chunks are computed without
-waiting until the node is back on schedule: the node catches up, it never drifts, and it never
-drops samples (the waveform tables stay contiguous).  With ``real_time:=false`` it runs as fast
-as the model allows.  Stamps come from the absolute sample index (``messages.BatchMessages``), so
-consecutive tables are contiguous to the nanosecond whatever the pacing did.
+advances the model in chunks of ``batch_duration``, up to ``compute_ahead`` (50 ms) before they
+are due, and publishes each chunk when the moment of its last sample has come on the steady
+clock (``time.monotonic``).  The lead absorbs scheduling hiccups of a shared machine.  When a
+chunk is not computed in time (an *overrun*) it is published at once and the following chunks
+are computed without waiting until the node is ahead again: the node catches up, it never
+drifts, and it never drops samples (the waveform tables stay contiguous).  With
+``real_time:=false`` it runs as fast as the model allows.  Stamps come from the absolute sample
+index (``messages.BatchMessages``), so consecutive tables are contiguous to the nanosecond
+whatever the pacing did.
 
 Inputs ``shaft_speed`` (std_msgs/Float64, rad/s) and ``load`` (geometry_msgs/WrenchStamped, N;
 x horizontal, y up, z axial) are checked in the subscription callback (see :class:`InputLimits`
 and :func:`check_speed`, :func:`check_load`); a bad message is rejected, logged (throttled) and
 counted in ``/diagnostics``, and the last good value stays.  An accepted value becomes the target
-of the next chunk: ``Simulator.advance`` ramps speed and load linearly from the value in use to
-the target over that chunk (10 ms by default), so the signal never jumps.
+of the next chunk computed: ``Simulator.advance`` ramps speed and load linearly from the value in
+use to the target over that chunk (10 ms by default), so the signal never jumps.  In the
+published stream that chunk starts up to ``compute_ahead`` after the command arrived.
 
 The executor (main thread) serves the subscriptions and parameter services only; publishing,
 recording and diagnostics happen in the simulation thread, which owns the simulator.

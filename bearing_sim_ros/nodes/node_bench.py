@@ -87,7 +87,8 @@ def subscriber_main() -> int:
     return 0
 
 
-def bench_tier(tier: str, scene: str, duration: float, subscribers: int, record: bool, domain: int) -> dict:
+def bench_tier(tier: str, scene: str, duration: float, subscribers: int, record: bool, domain: int,
+               compute_ahead: float | None = None) -> dict:
     """Run the node on one tier; return its figures."""
     import rclpy
     from diagnostic_msgs.msg import DiagnosticArray
@@ -97,6 +98,8 @@ def bench_tier(tier: str, scene: str, duration: float, subscribers: int, record:
     out = os.path.join(tmp, f"{tier}.mcap")
     params = {"scene": scene, "fidelity": tier, "duration": repr(float(duration)),
               "record": out if record else "''"}
+    if compute_ahead is not None:
+        params["compute_ahead"] = repr(float(compute_ahead))
     cmd = [sys.executable, "-m", "bearing_sim_ros.cli", "node", "--ros-args"]
     for k, v in params.items():
         cmd += ["-p", f"{k}:={v}"]
@@ -149,6 +152,7 @@ def bench_tier(tier: str, scene: str, duration: float, subscribers: int, record:
 
     steady = diags[2:]
     res = {"tier": tier, "scene": scene, "duration_s": duration, "subscribers": subscribers,
+           "compute_ahead_s": compute_ahead,
            "recording": record, "exit_status": node.returncode, "diagnostics": len(diags)}
     if node.returncode != 0:
         res["error"] = node_err.strip().splitlines()[-1] if node_err.strip() else "node failed"
@@ -208,6 +212,7 @@ def main(argv=None) -> int:
     p.add_argument("--scene", default=None, help="one scene for every tier (default: er16k_outer_race / er16k_skidding)")
     p.add_argument("--subscribers", type=int, default=2)
     p.add_argument("--no-record", action="store_true")
+    p.add_argument("--compute-ahead", type=float, default=None, help="the node's compute_ahead (s); default: the node's")
     p.add_argument("--out", default=None, help="folder for node_bench.md and node_bench.json")
     p.add_argument("--subscriber", action="store_true", help=argparse.SUPPRESS)
     args = p.parse_args(argv)
@@ -224,7 +229,8 @@ def main(argv=None) -> int:
             continue
         print(f"{tier}: {scene}, {args.duration:g} s real time, {args.subscribers} subscribers, "
               f"recording {'off' if args.no_record else 'on'} ...", flush=True)
-        results.append(bench_tier(tier, scene, args.duration, args.subscribers, not args.no_record, domain + k))
+        results.append(bench_tier(tier, scene, args.duration, args.subscribers, not args.no_record, domain + k,
+                                  args.compute_ahead))
     text = table(results)
     print(text)
     if args.out:
