@@ -576,6 +576,7 @@ class KinematicModel:
         basis.  The kernel gets the x and y blocks separately; C, D: acceleration rows."""
         from scipy.linalg import expm
 
+        self.A, self.B, self.C, self.D = A, B, C, D      # kept for tests and studies
         h = self.h
         order = len(CORRECTOR_NODES)
         nz = NSTATE + order * NINPUT

@@ -1,0 +1,93 @@
+"""Numerics of the fast kinematic tier: the ETD3 propagators, its order, and the error budget that
+lets it run at 2 steps per output sample (docs/readme/kinematic_speed.md).  Speed itself is
+measured by `bearing-sim bench` and the study in the README, not asserted here."""
+import math
+from dataclasses import replace
+from functools import lru_cache
+
+import numpy as np
+import pytest
+
+from bearing_sim_ros import Simulator, load_scene
+from bearing_sim_ros.analysis.envelope import fault_lines
+from bearing_sim_ros.physics.kinematic import (CORRECTOR_NODES, X_BLOCK, Y_BLOCK, KinematicModel)
+
+FS = 15000.0
+
+
+def quiet(name):
+    scene = load_scene(name)
+    return replace(scene, sensor=replace(scene.sensor, noise_density=0.0))
+
+
+@lru_cache(maxsize=None)
+def accel_y(name, oversample, seconds=1.0):
+    """accel_y without sensor noise after 0.2 s of settling."""
+    sim = Simulator(quiet(name), fidelity="kinematic", oversample=oversample)
+    sim.advance(int(0.2 * FS))
+    return sim.advance(int(seconds * FS)).accel[:, 1].copy()
+
+
+def test_propagators_integrate_a_parabolic_residual_exactly():
+    """One corrector step and the dense output against an accurate ODE solution of the linear
+    structure driven by a residual that is exactly the parabola through the three nodes and an
+    external force that is exactly linear: they must agree to round-off."""
+    from scipy.integrate import solve_ivp
+
+    scene = load_scene("er16k_outer_race")
+    model = KinematicModel(scene, FS, 2, 0, scene.shaft_speed, np.array(scene.radial_load))
+    assert model.dense == 2                        # chain at 4x: one dense sample per step
+    A, B, C, D, h = model.A, model.B, model.C, model.D, model.h
+    rng = np.random.default_rng(1)
+    x0 = rng.normal(scale=1e-6, size=10)
+    nodes = np.array(CORRECTOR_NODES)               # step end, start, previous start (in steps)
+    r = rng.normal(scale=5.0, size=(3, 2))          # residual (x, y) at the nodes, N
+    coef = np.linalg.solve(np.vander(nodes, 3, increasing=True), r)   # r(s) = sum_j coef_j s^j
+    e0, de = np.array([3.0, -40.0]), np.array([1.5, -2.0])            # external force and change
+
+    def u(t):
+        s = t / h
+        return np.concatenate([coef[0] + coef[1] * s + coef[2] * s * s, e0 + de * s])
+
+    sol = solve_ivp(lambda t, x: A @ x + B @ u(t), (0.0, h), x0, method="DOP853", rtol=1e-13,
+                    atol=1e-20, dense_output=True)
+    xb, yb = list(X_BLOCK), list(Y_BLOCK)
+    a, b = x0[xb], x0[yb]
+    # the kernel's corrector with its block arrays
+    a1 = model.px @ a + model.ex[0] * e0[0] + model.ex[1] * de[0] + model.wx[:3].T @ r[:, 0]
+    b1 = model.py @ b + model.ey[0] * e0[1] + model.ey[1] * de[1] + model.wy[:3].T @ r[:, 1]
+    exact = sol.y[:, -1]
+    scale = np.abs(exact).max()
+    np.testing.assert_allclose(a1, exact[xb], atol=1e-9 * scale)
+    np.testing.assert_allclose(b1, exact[yb], atol=1e-9 * scale)
+    # dense output at half the step: the sensor-mount acceleration
+    xm = sol.sol(0.5 * h)
+    acc = C @ xm + D @ u(0.5 * h)
+    dx, dy = model.dense_x[1], model.dense_y[1]
+    ax = dx[:4] @ a + dx[4:7] @ r[:, 0] + dx[7] * e0[0] + dx[8] * de[0]
+    ay = dy[:6] @ b + dy[6:9] @ r[:, 1] + dy[9] * e0[1] + dy[10] * de[1]
+    assert ax == pytest.approx(acc[0], rel=1e-8, abs=1e-9 * np.abs(acc).max())
+    assert ay == pytest.approx(acc[1], rel=1e-8, abs=1e-9 * np.abs(acc).max())
+
+
+def test_third_order_convergence_on_a_smooth_scene():
+    """Halving the step divides the waveform error by ~2^3 (ETD3): measured 6.8 per halving on
+    the healthy ER-16K; ETD2 (the former integrator) gave 4."""
+    ref = accel_y("er16k_healthy", 32)
+    err = {m: np.linalg.norm(accel_y("er16k_healthy", m) - ref) / np.linalg.norm(ref) for m in (2, 4)}
+    assert err[2] / err[4] > 5.5, err
+    assert err[2] < 5e-3, err
+
+
+@pytest.mark.parametrize("name, line", [("er16k_outer_race", "bpfo"), ("cwru_6205_or007_6", "bpfo")])
+def test_two_steps_per_sample_stay_within_the_error_budget(name, line):
+    """The default of 2 steps per output sample against a converged run (32): RMS within 0.5 %
+    and the envelope line within 1.5 % (measured 0.1 / 0.5 % and 0.15 / 0.3 %; the former ETD2
+    needed 4 steps for 0.9 / 2.6 %)."""
+    scene = load_scene(name)
+    ff = scene.bearing.fault_frequencies(scene.shaft_hz)
+    ref, run = accel_y(name, 32), accel_y(name, 2)
+    rms = lambda v: math.sqrt(float(np.mean(v * v)))                       # noqa: E731
+    assert abs(rms(run) / rms(ref) - 1) < 0.005
+    h_run, h_ref = fault_lines(run, FS, ff)[line].height, fault_lines(ref, FS, ff)[line].height
+    assert abs(h_run / h_ref - 1) < 0.015, (h_run, h_ref)
