@@ -31,7 +31,7 @@ def _record_tail(path, max_s: float) -> dict:
     parts: deque = deque()
     held = 0
     speeds: deque = deque()
-    channels, rate, first = None, None, None
+    channels, rate = None, None
     prev = None
     with open_recording(path) as rec:
         topics = rec.topics()
@@ -49,8 +49,6 @@ def _record_tail(path, max_s: float) -> dict:
             if prev is not None and rate is None:
                 rate = prev[1] * NS / (stamp - prev[0])
             prev = (stamp, arr.shape[0])
-            if first is None:
-                first = stamp
             parts.append(arr)
             held += arr.shape[0]
             if rate:
