@@ -39,9 +39,11 @@ Forces (seed 000 Sec. 2, with the corrections of PHYSICS_NOTES):
   a race lands without rattling, as wet impacts at Stokes numbers near 1 do.  The contact
   force never pulls (Q >= 0).
 * Traction (eqs 21-23): slip velocities of the ball surface against each race
-      dv_i = rho theta' - r_b Omega - (rho - e - r_b) omega_s,   dv_o = rho theta' + r_b Omega
+      dv_i = rho theta' - (r_b - delta_i/2) Omega - (rho - e - r_b + delta_i/2) omega_s
+      dv_o = rho theta' + (r_b - delta_o/2) Omega
   (rho - e - r_b: the inner-race radius at the contact, measured from the shaft centre, so the
-  clearance, the shaft offset and a ball inside an inner-race pit all enter the kinematics)
+  clearance, the shaft offset and a ball inside an inner-race pit all enter the kinematics; each
+  body's rolling radius gives up half the contact deflection, as eq. 21's 0.5 d - delta_in)
   and f = -Q mu(dv) with mu(v) = sign(v) [(A + B|v|) exp(-C|v|) + D] the traction curve (eq. 23;
   NOT times the viscosity: eq. 24 is dimensionally wrong).  Its jump A + D at zero slip is
   regularised as (A + D) v / sqrt(v^2 + v_c^2) (``creep_velocity`` v_c); the rest is continuous.
@@ -75,6 +77,7 @@ Jacobian of the stiff per-ball couplings, one step per internal sample.
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 from numba import njit
@@ -97,16 +100,18 @@ B_TH, B_R, B_PSI, B_W, B_V, B_OM = range(NBV)
 
 # per-ball auxiliary values from a right-hand-side evaluation (for the Jacobian)
 (X_KTI, X_KTO, X_CI, X_CO, X_QI, X_QO, X_MUI, X_MUO, X_DMUI, X_DMUO, X_FT, X_DMUP, X_CIN, X_DRAGD,
- X_MUP, X_SFT, X_SARC, X_C, X_S, X_DEDTH, X_DLI, X_DLO, NAUX) = range(23)
+ X_MUP, X_SFT, X_SARC, X_C, X_S, X_DEDTH, X_DLI, X_DLO, X_LOSS, NAUX) = range(24)
 # per-ball diagnostics: contact loads (N), slip velocities (m/s), traction forces on the ball (N)
 (D_QI, D_QO, D_SLI, D_SLO, D_FI, D_FO, NDG) = range(7)
 # film table columns: film thickness inner / outer (m), drag factor (N s^2/rad^2), and the values
 # at the last exact evaluation (film thicknesses, entrainment speeds, loads, revolution speed)
 (F_HI, F_HO, F_DRAG, F_HI0, F_HO0, F_UI0, F_UO0, F_QI0, F_QO0, F_W0, NFILM) = range(11)
 # ramp: chunk start time, duration, speed 0/1, load 0/1 (x, y), shaft angle at chunk start
-(R_T0, R_T, R_S0, R_S1, R_L0X, R_L0Y, R_L1X, R_L1Y, R_A0, NRAMP) = range(10)
+# and the film blend-in after adopting another tier's state (start time, duration; 0 = none)
+(R_T0, R_T, R_S0, R_S1, R_L0X, R_L0Y, R_L1X, R_L1Y, R_A0, R_FB0, R_FBT, NRAMP) = range(12)
 
 DEFECT_EPS = 1e-6    # rad: finite-difference step of the defect-depth slope
+FILM_BLEND = 0.02    # s: film scaled in after adopting the kinematic tier's state
 W_REF = 0.01        # rad/s: regularises the skid-ratio denominators at standstill
 FILM_EXP_U, FILM_EXP_Q = 0.68, -0.073     # Hamrock-Dowson exponents (speed, load)
 
@@ -193,6 +198,15 @@ def _defect_losses(dtab, y, p, sh_ang, scr):
                                          p[P_RB])
             scr[j, 3] = (li2 - li) / DEFECT_EPS
             scr[j, 4] = (lo2 - lo) / DEFECT_EPS
+
+
+@njit(cache=True, inline="always")
+def _film_scale(ramp, t):
+    """Film blend-in factor at time t (1 unless a state was adopted from the kinematic tier)."""
+    if ramp[R_FBT] <= 0.0:
+        return 1.0
+    f = (t - ramp[R_FB0]) / ramp[R_FBT]
+    return 0.0 if f < 0.0 else (1.0 if f > 1.0 else f)
 
 
 @njit(cache=True)
@@ -313,8 +327,12 @@ def _rhs(y, f, ws, sh_ang, fx_ext, fy_ext, p, dtab, wti, wto, film, aux, dg, scr
             kto = 0.0
             co = 0.0
         # traction at both races (force on the ball, along e_t)
-        sli = r * w - rb * om - (r - rb - e) * ws
-        slo = r * w + rb * om
+        # rolling radii at the deformed contacts: each body takes half the deflection (seed 000
+        # eq. 21 writes the ball's as 0.5 d - delta_in)
+        hdi = 0.5 * di if di > 0.0 else 0.0
+        hdo = 0.5 * do if do > 0.0 else 0.0
+        sli = r * w - (rb - hdi) * om - (r - rb - e + hdi) * ws
+        slo = r * w + (rb - hdo) * om
         mui = 0.0
         dmui = 0.0
         muo = 0.0
@@ -356,7 +374,7 @@ def _rhs(y, f, ws, sh_ang, fx_ext, fy_ext, p, dtab, wti, wto, film, aux, dg, scr
         f[b + B_PSI] = w - om
         f[b + B_W] = (fi + fo + ft + fdrag - 2.0 * mb * v * w) / (mb * r) - grav * c / r
         f[b + B_V] = r * w * w + (qi - qo + fr) / mb - grav * s
-        f[b + B_OM] = rb * (fo - fi - fric) / jb
+        f[b + B_OM] = ((rb - hdo) * fo - (rb - hdi) * fi - rb * fric) / jb
         # reactions: on the shaft -Q_i e_r - f_i e_t, on the pedestal +Q_o e_r - f_o e_t
         fsx += -qi * c + fi * s
         fsy += -qi * s - fi * c
@@ -386,6 +404,7 @@ def _rhs(y, f, ws, sh_ang, fx_ext, fy_ext, p, dtab, wti, wto, film, aux, dg, scr
         a[X_DEDTH] = dy * c - dx * s           # d e / d theta: the inner contact moves with the ball
         a[X_DLI] = scr[j, 3] if has_def else 0.0
         a[X_DLO] = scr[j, 4] if has_def else 0.0
+        a[X_LOSS] = scr[j, 0] + scr[j, 1] if has_def else 0.0
         d = dg[j]
         d[D_QI] = qi
         d[D_QO] = qo
@@ -469,10 +488,11 @@ def _drag_factor(film, j, p, w):
 
 
 @njit(cache=True, inline="always")
-def _film_update(y, ws, p, film, aux, from_aux):
+def _film_update(y, ws, p, film, aux, from_aux, fscale=1.0):
     """Film thickness of every contact (Hamrock-Dowson, eq. 12) and drag factor of every ball at
     one grid point.  Loads from ``aux`` (the last right-hand-side evaluation, at the end of the
-    step) if ``from_aux``, else from the geometry (Hertz with the current film)."""
+    step) if ``from_aux``, else from the geometry (Hertz with the current film).  ``fscale``
+    (0-1) scales the film in while a state adopted from the kinematic tier (no film) settles."""
     nb = int(p[P_NB])
     rb = p[P_RB]
     rm = p[P_RM]
@@ -501,6 +521,9 @@ def _film_update(y, ws, p, film, aux, from_aux):
             film[j, F_UO0] = 0.0
         _film_contact(film, j, F_HI, F_HI0, F_UI0, F_QI0, p, p[P_HCI], ui, qi)
         _film_contact(film, j, F_HO, F_HO0, F_UO0, F_QO0, p, p[P_HCO], uo, qo)
+        if fscale < 1.0:
+            film[j, F_HI] *= fscale
+            film[j, F_HO] *= fscale
 
 
 @njit(cache=True)
@@ -901,7 +924,7 @@ def _engine(y, counters, n, m, hs, hstep, ramp, kind, ta_, tb_, tc_, tg_, gamma,
                       wto, film, ynext, kst, ytmp, rtmp, auxs, dgs, wsp, wcage, scr, frc)
                 ws, ang, fx, fyy = _inputs(ramp, ty + hstep)
                 filmn[:, :] = film
-                _film_update(ynext, ws, p, filmn, auxs, True)
+                _film_update(ynext, ws, p, filmn, auxs, True, _film_scale(ramp, ty + hstep))
                 _rhs(ynext, fnext, ws, ang, fx, fyy, p, dtab, wti, wto, filmn, auxn, dgn, scr, frc)
             y[:] = ynext
             fy[:] = fnext
@@ -925,7 +948,7 @@ def _engine(y, counters, n, m, hs, hstep, ramp, kind, ta_, tb_, tc_, tg_, gamma,
                       wto, film, ynext, kst, ytmp, rtmp, auxs, dgs, wsp, wcage, scr, frc)
                 ws1, ang1, fx1, fy1 = _inputs(ramp, ty + hstep)
                 filmn[:, :] = film
-                _film_update(ynext, ws1, p, filmn, auxs, True)
+                _film_update(ynext, ws1, p, filmn, auxs, True, _film_scale(ramp, ty + hstep))
                 _rhs(ynext, fnext, ws1, ang1, fx1, fy1, p, dtab, wti, wto, filmn, auxn, dgn, scr, frc)
                 have_next = True
             th = (ts - ty) / hstep
@@ -1049,7 +1072,7 @@ def _split_core(y, fy, un, aux0, t, hstep, ramp, ta_, tg_, tb_, gamma, p, dtab, 
             for i in range(n):
                 ycur_[i] = ynext[i]
     filmn[:, :] = film
-    _film_update(ynext, ws, p, filmn, auxs, True)
+    _film_update(ynext, ws, p, filmn, auxs, True, _film_scale(ramp, t + hstep))
     _rhs(ynext, fnext, ws, ang, fx, fyy, p, dtab, wti, wto, filmn, auxn, dgn, scr, frc)
     _inputs_split(frc, ynext, kb, fx, fyy, p[P_WS], unext)
     # structure corrector with the input ramped from u_n to u'
@@ -1062,10 +1085,12 @@ def _split_core(y, fy, un, aux0, t, hstep, ramp, ta_, tg_, tb_, gamma, p, dtab, 
 
 @njit(cache=True, inline="always")
 def _contact_changed(a0, a1, nb, pocket):
-    """Whether any ball-race contact (or, with ``pocket``, ball-pocket contact) opened or closed
-    between two evaluations.  Without pocket clearance the pocket spring is always engaged (its
+    """Whether any ball was inside a defect, or any ball-race contact (or, with ``pocket``,
+    ball-pocket contact) opened or closed, at either of two evaluations.  Without pocket clearance the pocket spring is always engaged (its
     flag flickers only where its damping outweighs it), so it is not an event."""
     for j in range(nb):
+        if a0[j, X_LOSS] > 0.0 or a1[j, X_LOSS] > 0.0:      # a ball inside a defect
+            return True
         if (a0[j, X_KTI] > 0.0) != (a1[j, X_KTI] > 0.0):
             return True
         if (a0[j, X_KTO] > 0.0) != (a1[j, X_KTO] > 0.0):
@@ -1401,6 +1426,12 @@ class SkiddingModel:
         self.solver = solver
         self.method = method if method is not None else method_for(solver, rk4_step)
         self.hstep = self.method.step(self.hs)
+        # the split method works on a grid of samples: with several steps per sample it runs on a
+        # finer grid (q points per internal sample) and keeps every q-th
+        self.q = 1
+        if self.method.kind == SPLIT and self.hstep < self.hs * (1.0 - 1e-9):
+            self.q = int(round(self.hs / self.hstep))
+            self.hstep = self.hs / self.q
         self._tableau = self.method.arrays()
         b = scene.bearing
         self.nb = b.balls
@@ -1416,6 +1447,7 @@ class SkiddingModel:
         self.shaft_angle = 0.0
         self._speed = float(shaft_speed)
         nvar = self.y.size
+        self._film_blend = (0.0, 0.0)
         # persistent state of the split method (derivative, structure input, contact values)
         self._fy = np.zeros(nvar)
         self._un = np.zeros(4)
@@ -1459,7 +1491,8 @@ class SkiddingModel:
             kb[:, k] = (self._mean_pedestal_force(dp) - self._mean_pedestal_force(dm)) / (2 * eps)
         self.kb = np.ascontiguousarray(0.5 * (kb + kb.T))
         A, B, self.cacc, self.dacc = structure_system(self.scene, self.kb)
-        kk = int(round(self.hstep / self.hs))
+        hs = self.hs / self.q
+        kk = int(round(self.hstep / hs))
         self.kk = kk
         self.phi, self.g0, self.g1 = propagators(A, B, self.hstep)
         # sensor rows of the sub-step propagators: accel(j hs) = C Phi_j x + C G0_j u0 + C G1_j du + D u
@@ -1468,7 +1501,7 @@ class SkiddingModel:
         self.g1s = np.zeros((kk, 2, 4))
         self.phis[0] = self.cacc
         for j in range(1, kk):
-            ph, gg0, gg1 = propagators(A, B, self.hstep, j * self.hs)
+            ph, gg0, gg1 = propagators(A, B, self.hstep, j * hs)
             self.phis[j], self.g0s[j], self.g1s[j] = self.cacc @ ph, self.cacc @ gg0, self.cacc @ gg1
         self.nball = max(1, int(getattr(self.method, "ball_substeps", 1)))
         self.nsub = int(getattr(self.method, "event_substeps", 1))
@@ -1544,11 +1577,15 @@ class SkiddingModel:
         direction = ext / scale if np.linalg.norm(ext) > 0 else np.array([0.0, -1.0])
         xp0 = ext / kp if kp > 0 else np.zeros(2)
         z0 = np.concatenate([xp0 + direction * dmag, xp0]) * 1e6
-        for _ in range(2):                                   # second pass with the film
+        # at light loads the law is flat near the clearance and fsolve may stop short of xtol; a
+        # start a fraction of a micron off equilibrium only costs a short settling transient
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            for _ in range(2):                               # second pass with the film
+                z = fsolve(residual, z0, xtol=1e-12)
+                _film_update(y, speed, p, self.film, self._aux, False)
+                z0 = z
             z = fsolve(residual, z0, xtol=1e-12)
-            _film_update(y, speed, p, self.film, self._aux, False)
-            z0 = z
-        z = fsolve(residual, z0, xtol=1e-12)
         y[:4] = z * 1e-6
         y[4] = y[3]                         # the resonator spring carries no static load
         y[5:10] = 0.0
@@ -1569,24 +1606,32 @@ class SkiddingModel:
             self.y[:] = other.y
             self.film[:, :] = other.film
             return
+        # the kinematic tier has no oil film; scaling it in over FILM_BLEND s avoids a jump in the
+        # bearing force of k * h (tens of N) at the switch
         self._settle(self._speed)
+        self.film[:, [F_HI, F_HO]] = 0.0
+        _settle_balls(self.p, self.y, self.shaft_angle, self.dtab, self.wti, self.wto, self.film)
+        self._film_blend = (self.counters[1] * self.hs / self.q, FILM_BLEND)
 
     # ---- TierModel interface -----------------------------------------------------------------
     def advance(self, n_steps: int, speed0: float, speed1: float, load0, load1) -> TierOutput:
         from ..errors import UserError
 
-        n = int(n_steps)
-        m = self.decimation
+        q = self.q
+        n = int(n_steps) * q
+        m = self.decimation * q
+        hs = self.hs / q
         nb = self.nb
         nd = (n + m - 1) // m
         ramp = np.zeros(NRAMP)
-        ramp[R_T0] = self.counters[1] * self.hs
-        ramp[R_T] = n * self.hs
+        ramp[R_T0] = self.counters[1] * hs
+        ramp[R_T] = n * hs
         ramp[R_S0], ramp[R_S1] = float(speed0), float(speed1)
         ramp[R_L0X], ramp[R_L0Y] = float(load0[0]), float(load0[1])
         ramp[R_L1X], ramp[R_L1Y] = float(load1[0]), float(load1[1])
         # shaft angle at the chunk start (the state may sit a little earlier on the step grid)
         ramp[R_A0] = self.shaft_angle
+        ramp[R_FB0], ramp[R_FBT] = self._film_blend
         acc = np.empty((n, 2))
         qi = np.empty((nd, nb))
         qo = np.empty((nd, nb))
@@ -1605,25 +1650,27 @@ class SkiddingModel:
             if self.kk < 1 or m % self.kk != 0:
                 raise ValueError("the split method needs a step of 1, 2 or 4 internal samples")
             status = _engine_split(self.y, self._fy, self._un, self._aux0, self._dg0, self.film,
-                                   self.counters, n, m, self.hs, self.kk, ramp, ta_, tg_, tb_, gamma,
+                                   self.counters, n, m, hs, self.kk, ramp, ta_, tg_, tb_, gamma,
                                    self.p, self.dtab, self.wti, self.wto, self.phi, self.g0, self.g1,
                                    self.phis, self.g0s, self.g1s, self.phie, self.g0e, self.g1e,
                                    self.nsub, self.nball, self.cacc, self.dacc, self.kb, acc, qi, qo, cage, bs,
                                    cs, sli, slo, fi, fo)
         else:
-                status = _engine(self.y, self.counters, n, m, self.hs, self.hstep, ramp, kind, ta_, tb_,
-                             tc_, tg_, gamma, self.p, self.dtab, self.wti, self.wto, self.film, acc, qi,
-                             qo, cage, bs, cs, sli, slo, fi, fo)
+            status = _engine(self.y, self.counters, n, m, hs, self.hstep, ramp, kind, ta_, tb_, tc_, tg_,
+                             gamma, self.p, self.dtab, self.wti, self.wto, self.film, acc, qi, qo, cage,
+                             bs, cs, sli, slo, fi, fo)
         if status != 0:
-            t_bad = (self.counters[1] + self.counters[2]) * self.hs
+            t_bad = (self.counters[1] + self.counters[2]) * hs
             if self.solver == "rk4":
                 raise UserError(
                     f"rk4_step = {self.hstep:g} s: the fixed-step RK4 diverged at t = {t_bad:.4g} s "
                     f"(step beyond its stability limit for this load/speed); use solver='default' "
                     f"or a smaller rk4_step")
             raise SolverDiverged(f"skidding solver {self.solver!r} diverged at t = {t_bad:.4g} s")
-        self.shaft_angle = ramp[R_A0] + 0.5 * (speed0 + speed1) * n * self.hs
+        self.shaft_angle = ramp[R_A0] + 0.5 * (speed0 + speed1) * n * hs
         self._speed = float(speed1)
+        if q > 1:
+            acc = np.ascontiguousarray(acc[::q])
         extras = {"ball_skid": bs, "cage_skid": cs, "slip_inner": sli, "slip_outer": slo,
                   "friction_inner": fi, "friction_outer": fo}
         return TierOutput(accel=acc, inner_force=qi, outer_force=qo, cage_speed=cage, extras=extras)
@@ -1633,3 +1680,45 @@ class SkiddingModel:
         th = y[NS0 + B_TH::NBV][: self.nb].copy()
         w = y[NS0 + B_W::NBV][: self.nb].copy()
         return KinematicSnapshot(self.shaft_angle, self._speed, float(y[10]), float(y[11]), th, w)
+
+
+# ---------------------------------------------------------------------------------------------
+# benchmark hooks
+#: settings of this tier that ``bearing-sim bench`` times beside each other: (label, family,
+#: Simulator keyword arguments).  RK4 runs only at steps it survives on the benchmark scenes
+#: (seed 000's 1e-5 s diverges on this model, see docs/readme/skidding.md).
+BENCH_CONFIGS = [
+    ("rk4 h=2e-06", "skidding rk4", {"solver": "rk4", "rk4_step": 2.0e-6}),
+    ("rk4 h=1e-06", "skidding rk4", {"solver": "rk4", "rk4_step": 1.0e-6}),
+    ("default", "skidding default", {"solver": "default"}),
+]
+
+
+def measure(scene, seconds: float, solver: str = "default", rk4_step: float | None = None,
+            settle: float = 0.05, sample_rate: float = 15000.0, seed: int = 0) -> dict:
+    """Time the skidding tier through the Simulator (sensor noise off) on ``scene`` (a Scene or a
+    shipped name): ``settle`` s untimed, then ``seconds`` timed.  Returns the real-time factor
+    (simulated s per wall s, this process's CPU time), the output accel (n, axes), the mean cage
+    speed (rad/s) and the mean ball and cage skid ratios (%)."""
+    import time
+    from dataclasses import replace
+
+    from ..scene import Scene, load_scene
+    from ..simulator import Simulator
+
+    if not isinstance(scene, Scene):
+        scene = load_scene(scene)
+    scene = replace(scene, sensor=replace(scene.sensor, noise_density=0.0))
+    sim = Simulator(scene, sample_rate=sample_rate, fidelity="skidding", seed=seed, solver=solver,
+                    rk4_step=rk4_step)
+    sim.advance(max(4, int(round(settle * sample_rate)) // 4 * 4))
+    t0 = time.process_time()
+    b = sim.advance(max(4, int(round(seconds * sample_rate)) // 4 * 4))
+    cpu = time.process_time() - t0
+    return {
+        "real_time_factor": b.n / sample_rate / max(cpu, 1e-9),
+        "accel": b.accel,
+        "cage_speed": float(np.mean(b.cage_speed)),
+        "ball_skid": float(np.mean(b.extras["ball_skid"])),
+        "cage_skid": float(np.mean(b.extras["cage_skid"])),
+    }
