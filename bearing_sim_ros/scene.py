@@ -59,6 +59,10 @@ class Defect:
     bottom of the bearing is -pi/2): fixed for "outer", at t = 0 for "inner"; for "ball" the
     initial spin angle of the defect on the ball.
     profile: depth seen by a ball crossing the defect (seed 001 Sec. 3.3 / seed 000 eqs 5-6).
+    wander_turns: ball defects only: the ball's spin axis wanders, so the defect's latitude on the
+    ball changes and it meets the races only while it lies within the contact ellipse; a new
+    independent latitude every ``wander_turns`` spin revolutions (linear in between, seeded).
+    0 = a fixed spin axis: the defect stays on the rolling track (physics/defects.py).
     """
 
     kind: str
@@ -68,6 +72,7 @@ class Defect:
     angle: float = -0.5 * math.pi
     profile: str = "geometric"
     ball: int = 0
+    wander_turns: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -307,7 +312,8 @@ def _defects(top: _Section, bearing: Bearing) -> tuple:
     out = []
     for i, raw in enumerate(top.items("defects")):
         d = _Section(raw, f"defects[{i}]",
-                     ("kind", "width_mm", "depth_mm", "length_mm", "clock", "angle_deg", "profile", "ball"),
+                     ("kind", "width_mm", "depth_mm", "length_mm", "clock", "angle_deg", "profile", "ball",
+                      "wander_turns"),
                      required=("kind", "width_mm", "depth_mm"))
         kind = d.choice("kind", DEFECT_KINDS)
         # a local defect: at most a quarter of the ball spacing wide, so one ball meets it at a time
@@ -323,7 +329,12 @@ def _defects(top: _Section, bearing: Bearing) -> tuple:
         else:
             angle = math.radians(d.number("angle_deg", -90.0, lo=-360.0, hi=360.0))
         ball = int(d.number("ball", 0, lo=0, hi=bearing.balls - 1, integer=True))
-        out.append(Defect(kind, width, depth, length, angle, d.choice("profile", DEPTH_PROFILES, "geometric"), ball))
+        wander = d.number("wander_turns", 0.0, lo=0.0, hi=1e4)
+        if wander and kind != "ball":
+            raise SceneError(f"{d.key('wander_turns')} = {wander:g}: only a ball defect has a spin axis "
+                             f"to wander (this one is kind {kind})")
+        out.append(Defect(kind, width, depth, length, angle, d.choice("profile", DEPTH_PROFILES, "geometric"), ball,
+                          wander))
     return tuple(out)
 
 

@@ -26,13 +26,20 @@ import math
 import numpy as np
 from numba import njit
 
+from .rng import uniform
+
 KIND_INNER, KIND_OUTER, KIND_BALL = 0, 1, 2
 PROFILE_CODES = {"geometric": 0, "rectangular": 1, "half_sine": 2, "piecewise": 3}
 KIND_CODES = {"inner": KIND_INNER, "outer": KIND_OUTER, "ball": KIND_BALL}
 
 # columns of the defect table (float64, one row per defect)
 D_KIND, D_HALF, D_DEPTH, D_ANGLE, D_PROFILE, D_BALL, D_RHO_I, D_RHO_O, D_HMAX_I, D_HMAX_O, D_RAMP_I, D_RAMP_O = range(12)
-DEFECT_COLUMNS = 12
+# ball defects with a wandering spin axis: spin turns between latitude draws (0 = fixed axis),
+# seed of the draws, and the reach of the contact ellipse in sin(latitude) (full / ramp width)
+D_WANDER, D_WSEED, D_WREACH, D_WRAMP = range(12, 16)
+DEFECT_COLUMNS = 16
+WANDER_STREAM = 3000           # rng stream of defect k's latitude draws: WANDER_STREAM + k
+NOMINAL_BALL_LOAD = 100.0      # N: ball load for the contact ellipse when the caller gives none
 
 
 def resolve_profile(defect, ball_diameter: float) -> str:
@@ -55,11 +62,13 @@ def _sag(rho: float, s: float, depth: float) -> float:
     return min(depth, rho - math.sqrt(rho * rho - s * s))
 
 
-def defect_table(defects, bearing) -> np.ndarray:
+def defect_table(defects, bearing, seed: int = 0, ball_load: float | None = None) -> np.ndarray:
     """Pack scene defects into the float table the kernels read.
 
     Half-span D_HALF is an angle on the defect's own body: on the race (rad about the bearing
     axis) for race defects, on the ball (rad about the ball centre) for a ball defect.
+    ``seed`` draws the latitudes of a wandering ball defect; ``ball_load`` (N, default
+    NOMINAL_BALL_LOAD) sizes the contact ellipse that the defect must lie within to be met.
     """
     r = 0.5 * bearing.ball_diameter
     ri = 0.5 * bearing.inner_race_diameter
@@ -86,7 +95,40 @@ def defect_table(defects, bearing) -> np.ndarray:
         # arc length over which the geometric drop reaches its largest value (piecewise ramps)
         for col, rho, hmax in ((D_RAMP_I, rho_i, row[D_HMAX_I]), (D_RAMP_O, rho_o, row[D_HMAX_O])):
             row[col] = min(0.5 * d.width, math.sqrt(max(2.0 * rho * hmax - hmax * hmax, 0.0)))
+        wander = getattr(d, "wander_turns", 0.0)
+        if kind == KIND_BALL and wander > 0.0:
+            # the defect (axial extent `length`) is met while its centre lies within the contact
+            # ellipse's transverse semi-axis a (+ half its length) of the rolling track
+            load = NOMINAL_BALL_LOAD if ball_load is None else max(float(ball_load), 1e-3)
+            a = max(bearing.inner_contact.a_coeff, bearing.outer_contact.a_coeff) * load ** (1.0 / 3.0)
+            row[D_WANDER] = wander
+            row[D_WSEED] = seed
+            row[D_WREACH] = min((a + 0.5 * d.length) / r, 1.0)
+            row[D_WRAMP] = max(min(d.length, a) / r, 1e-9)
     return table
+
+
+@njit(cache=True, inline="always")
+def wander_reach(table, k, ball_spin):
+    """How much of ball defect k's interference loss applies (0..1) at the ball's spin angle
+    (rad): 1 for a fixed spin axis.  With a wandering axis the defect's latitude, as
+    s = sin(latitude), is a linear interpolation of independent uniform draws on [-1, 1]
+    (isotropic axis) made every D_WANDER spin turns, hashed from (seed, k, turn index), so it is
+    a function of the spin angle alone (chunk-invariant, the same in both tiers).  The loss
+    applies fully while |s| < reach - ramp, fades linearly to 0 at |s| = reach (the defect
+    sliding out of the contact ellipse)."""
+    turns = table[k, D_WANDER]
+    if turns <= 0.0:
+        return 1.0
+    q = ball_spin / (2.0 * math.pi * turns)
+    kq = math.floor(q)
+    f = q - kq
+    seed = np.int64(table[k, D_WSEED])
+    ki = np.int64(kq)
+    s0 = 2.0 * uniform(seed, WANDER_STREAM + k, np.uint64(ki)) - 1.0
+    s1 = 2.0 * uniform(seed, WANDER_STREAM + k, np.uint64(ki + 1)) - 1.0
+    g = (table[k, D_WREACH] - abs(s0 + (s1 - s0) * f)) / table[k, D_WRAMP]
+    return 0.0 if g <= 0.0 else (1.0 if g >= 1.0 else g)
 
 
 def waviness_table(waviness) -> np.ndarray:
@@ -150,12 +192,12 @@ def interference_loss(table, j, theta, shaft_angle, ball_spin, r_inner, r_outer,
             psi = ball_spin + table[k, D_ANGLE]
             u = wrap(psi)
             if abs(u) < half:
-                loss_o += _profile_drop(prof, u, half, r_ball, table[k, D_RHO_O],
-                                        table[k, D_HMAX_O], table[k, D_RAMP_O], depth)
+                loss_o += wander_reach(table, k, ball_spin) * _profile_drop(
+                    prof, u, half, r_ball, table[k, D_RHO_O], table[k, D_HMAX_O], table[k, D_RAMP_O], depth)
             u = wrap(psi - math.pi)
             if abs(u) < half:
-                loss_i += _profile_drop(prof, u, half, r_ball, table[k, D_RHO_I],
-                                        table[k, D_HMAX_I], table[k, D_RAMP_I], depth)
+                loss_i += wander_reach(table, k, ball_spin) * _profile_drop(
+                    prof, u, half, r_ball, table[k, D_RHO_I], table[k, D_HMAX_I], table[k, D_RAMP_I], depth)
     return loss_i, loss_o
 
 
@@ -191,12 +233,12 @@ def add_defect_losses(table, cage_angle, spacing, nb, eps, shaft_angle, ball_spi
             psi = ball_spin + table[k, D_ANGLE]
             u = wrap(psi)
             if abs(u) < half:
-                loss_o[j] += _profile_drop(prof, u, half, r_ball, table[k, D_RHO_O],
-                                           table[k, D_HMAX_O], table[k, D_RAMP_O], depth)
+                loss_o[j] += wander_reach(table, k, ball_spin) * _profile_drop(
+                    prof, u, half, r_ball, table[k, D_RHO_O], table[k, D_HMAX_O], table[k, D_RAMP_O], depth)
             u = wrap(psi - math.pi)
             if abs(u) < half:
-                loss_i[j] += _profile_drop(prof, u, half, r_ball, table[k, D_RHO_I],
-                                           table[k, D_HMAX_I], table[k, D_RAMP_I], depth)
+                loss_i[j] += wander_reach(table, k, ball_spin) * _profile_drop(
+                    prof, u, half, r_ball, table[k, D_RHO_I], table[k, D_HMAX_I], table[k, D_RAMP_I], depth)
             continue
         centre = table[k, D_ANGLE] + (shaft_angle if kind == KIND_INNER else 0.0)
         rel = wrap(centre - cage_angle)            # where the defect is, seen from ball 0

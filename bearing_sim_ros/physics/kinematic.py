@@ -35,8 +35,9 @@ from numba import njit
 
 from . import KinematicSnapshot, TierOutput
 from .defects import (D_ANGLE, D_BALL, D_DEPTH, D_HALF, D_HMAX_I, D_HMAX_O, D_KIND, D_PROFILE,
-                      D_RAMP_I, D_RAMP_O, D_RHO_I, D_RHO_O, KIND_BALL, KIND_INNER, _profile_drop,
-                      add_defect_losses, defect_table, waviness_gain, wrap)
+                      D_RAMP_I, D_RAMP_O, D_RHO_I, D_RHO_O, D_WANDER, DEFECT_COLUMNS, KIND_BALL,
+                      KIND_INNER, _profile_drop, add_defect_losses, defect_table, wander_reach,
+                      waviness_gain, wrap)
 from .rng import uniform
 
 G = 9.80665
@@ -336,14 +337,16 @@ def advance_kernel(x, ang, trig, step, hist, geom, n, m, d, s0, s1, l0x, l0y, l1
                 if kind == KIND_BALL:
                     j = int(dtab[kd, D_BALL])
                     psi = spin_angle + dtab[kd, D_ANGLE]
+                    # a wandering spin axis: the defect is met only near the rolling track
+                    reach = wander_reach(dtab, kd, spin_angle) if dtab[kd, D_WANDER] > 0.0 else 1.0
                     uu = wrap(psi)
                     if abs(uu) < half:
-                        goff[j] += _profile_drop(prof, uu, half, r_ball, dtab[kd, D_RHO_O],
-                                                 dtab[kd, D_HMAX_O], dtab[kd, D_RAMP_O], depth)
+                        goff[j] += reach * _profile_drop(prof, uu, half, r_ball, dtab[kd, D_RHO_O],
+                                                         dtab[kd, D_HMAX_O], dtab[kd, D_RAMP_O], depth)
                     uu = wrap(psi - math.pi)
                     if abs(uu) < half:
-                        goff[j] += _profile_drop(prof, uu, half, r_ball, dtab[kd, D_RHO_I],
-                                                 dtab[kd, D_HMAX_I], dtab[kd, D_RAMP_I], depth)
+                        goff[j] += reach * _profile_drop(prof, uu, half, r_ball, dtab[kd, D_RHO_I],
+                                                         dtab[kd, D_HMAX_I], dtab[kd, D_RAMP_I], depth)
                     continue
                 inner = kind == KIND_INNER
                 centre = dtab[kd, D_ANGLE] + (shaft_angle if inner else 0.0)
@@ -449,7 +452,7 @@ class KinematicModel:
         self.geo[P_GRAV] = st.shaft_mass * G if scene.gravity else 0.0
         a = 2.0 * np.pi * np.arange(nb) / nb
         self.cj, self.sj = np.cos(a), np.sin(a)
-        self.dtab = defect_table(scene.defects, b)
+        self.dtab = defect_table(scene.defects, b)      # final table after the equilibrium (below)
         from .defects import waviness_table
 
         self.wtab = waviness_table(scene.waviness)
@@ -462,6 +465,8 @@ class KinematicModel:
         self.x = np.zeros(NSTATE)
         self._lin_load = None
         self._linearise(np.asarray(radial_load, dtype=float), initial=True)
+        # a wandering ball defect is met within the contact ellipse of the most loaded ball
+        self.dtab = defect_table(scene.defects, b, seed=self.seed, ball_load=self.static_ball_load)
 
     # ---- linearisation and propagators ---------------------------------------------------------
     def _mean_force(self, d: np.ndarray) -> np.ndarray:
@@ -472,7 +477,7 @@ class KinematicModel:
         geo = self.geo.copy()
         geo[P_SLIP] = 0.0
         q = np.zeros(nb)
-        empty = np.zeros((0, 12))
+        empty = np.zeros((0, DEFECT_COLUMNS))
         f = np.zeros(2)
         for c in cage:
             fx, fy = bearing_force(geo, self.cj, self.sj, empty, np.zeros((0, 4)), 0, d[0], d[1], 0.0, c,
@@ -509,6 +514,10 @@ class KinematicModel:
         st = self.scene.structure
         eq = self._equilibrium(load)
         d0 = eq[:2] - eq[2:]
+        q = np.zeros(int(self.geo[P_NB]))
+        bearing_force(self.geo, self.cj, self.sj, np.zeros((0, DEFECT_COLUMNS)), np.zeros((0, 4)), 0,
+                      d0[0], d0[1], 0.0, 0.0, 0.0, q)
+        self.static_ball_load = float(q.max())      # N, most loaded ball at the equilibrium
         # secant stiffness of the averaged law (robust where the tangent is zero or steep)
         kb = np.zeros((2, 2))
         eps = 2e-7
