@@ -141,7 +141,7 @@ class SplitROS2(ROS2):
     name = "split-ros2"
     kind = SPLIT
 
-    def __init__(self, step: float | None = None, per_sample: float = 1, event_substeps: int = 16,
+    def __init__(self, step: float | None = None, per_sample: float = 1, event_substeps: int = 4,
                  ball_substeps: int = 1):
         super().__init__(step, per_sample)
         self.event_substeps = int(event_substeps)
