@@ -238,7 +238,7 @@ def _ball_scene(wander):
 def test_wandering_ball_defect_loses_its_2bsf_line_and_periodicity():
     """With a fixed spin axis the ball defect strikes both races every spin turn: a strong
     2 x BSF line and an envelope that repeats period after period.  A wandering axis brings the
-    defect into the contact ellipse only now and then (~15 % of the time for the CWRU ball),
+    defect into the contact ellipse only now and then (14 % of the time for the CWRU ball),
     so the line nearly vanishes and the envelope forgets its period (issue 7: the CWRU ball
     recording has no 2 x BSF line)."""
     from scipy.signal import butter, hilbert, sosfiltfilt

@@ -10,7 +10,7 @@ import pytest
 
 from bearing_sim_ros import Simulator, load_scene
 from bearing_sim_ros.analysis.envelope import fault_lines
-from bearing_sim_ros.physics.kinematic import (CORRECTOR_NODES, X_BLOCK, Y_BLOCK, KinematicModel)
+from bearing_sim_ros.physics.kinematic import KinematicModel
 
 FS = 15000.0
 
@@ -33,6 +33,8 @@ def test_propagators_integrate_a_parabolic_residual_exactly():
     structure driven by a residual that is exactly the parabola through the three nodes and an
     external force that is exactly linear: they must agree to round-off."""
     from scipy.integrate import solve_ivp
+
+    from bearing_sim_ros.physics.kinematic import CORRECTOR_NODES, X_BLOCK, Y_BLOCK
 
     scene = load_scene("er16k_outer_race")
     model = KinematicModel(scene, FS, 2, 0, scene.shaft_speed, np.array(scene.radial_load))
@@ -91,3 +93,50 @@ def test_two_steps_per_sample_stay_within_the_error_budget(name, line):
     assert abs(rms(run) / rms(ref) - 1) < 0.005
     h_run, h_ref = fault_lines(run, FS, ff)[line].height, fault_lines(ref, FS, ff)[line].height
     assert abs(h_run / h_ref - 1) < 0.015, (h_run, h_ref)
+
+
+# ---- the study behind docs/readme/kinematic_speed.md: python test/test_kinematic_speed.py ------
+# (it uses only names that older versions have, so PYTHONPATH=<old checkout> runs "before")
+def study(oversamples=(1, 2, 4, 8), reference=32, settle=0.3, seconds=2.0, repeats=7):
+    """Error of each setting against the converged kinematic run (``reference`` steps per sample;
+    the skidding tier's reference would add the model difference), on `bearing-sim bench`'s
+    scenarios with sensor noise off; and its speed: model-only ns per step and whole-simulator
+    real-time factor, process time, minimum of ``repeats`` (the machine may be shared)."""
+    import time
+
+    from bearing_sim_ros import bench
+
+    print(f"{'scenario':34s} {'setting':>7s} {'RMS':>7s} {'lines':>7s} {'wave':>6s} {'ns/step':>8s} {'RTF':>7s}")
+    for sc in bench.SCENARIOS:
+        scene = sc.build()
+
+        def run(m):
+            sim = Simulator(scene, sample_rate=FS, fidelity="kinematic", oversample=m)
+            sim.advance(int(settle * FS))
+            b = sim.advance(int(seconds * FS))
+            return bench.Run(b.accel[:, -1].copy(), float(np.mean(b.cage_speed)), 0.0, 1.0, [])
+
+        ref = run(reference)
+        for m in oversamples:
+            e = bench.errors(run(m), ref, scene, FS)
+            model = KinematicModel(scene, FS, m, 0, scene.shaft_speed, np.array(scene.radial_load))
+            c = int(round(model.internal_rate / FS))
+            load = np.array(scene.radial_load)
+            n = int(0.25 * FS)
+            model.advance(150 * c, scene.shaft_speed, scene.shaft_speed, load, load)
+            sim = Simulator(scene, sample_rate=FS, fidelity="kinematic", oversample=m)
+            sim.advance(1500)
+            t_model = t_sim = math.inf
+            for _ in range(repeats):
+                t0 = time.process_time()
+                model.advance(n * c, scene.shaft_speed, scene.shaft_speed, load, load)
+                t_model = min(t_model, time.process_time() - t0)
+                t0 = time.process_time()
+                sim.advance(n)
+                t_sim = min(t_sim, time.process_time() - t0)
+            print(f"{sc.label:34s} {'x%d' % m:>7s} {e['rms']:7.2%} {e['lines']:7.2%} {e['waveform']:6.3f} "
+                  f"{t_model / (n * m) * 1e9:8.1f} {n / FS / t_sim:6.0f}x", flush=True)
+
+
+if __name__ == "__main__":
+    study()

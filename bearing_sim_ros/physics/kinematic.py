@@ -665,7 +665,8 @@ class KinematicModel:
                        self.feed, self.dense_x,
                        self.dense_y, acc, q, cage)
         self._last_speed = float(speed1)
-        return TierOutput(accel=acc, inner_force=q, outer_force=q.copy(), cage_speed=cage)
+        # a massless ball presses on both races alike: one array for both (read-only use)
+        return TierOutput(accel=acc, inner_force=q, outer_force=q, cage_speed=cage)
 
     def adopt_state(self, other) -> None:
         """Continue from another tier's state (same ``x`` layout and ``angles``): the switch
