@@ -1,5 +1,6 @@
-"""Kinematic tier physics: fault lines against theory, healthy vibration, speed following,
-chunk invariance, defect geometry."""
+"""Kinematic tier physics: fault lines against theory, healthy vibration, speed following, chunk
+invariance, defect geometry, the wandering ball defect.  Every simulator here asks for
+fidelity="kinematic": "auto" may choose the other tier for a scene."""
 import math
 from functools import lru_cache
 
@@ -100,7 +101,7 @@ def test_speed_change_is_ramped_not_stepped():
     """The command ramps over the next advance.  The physics runs ``lookahead`` samples (the
     anti-aliasing filter's delay) ahead of the published samples, so the ramp shows up in the
     samples that late, and then rises in equal steps with no jump."""
-    sim = Simulator("er16k_outer_race")
+    sim = Simulator("er16k_outer_race", fidelity="kinematic")
     sim.advance(1500)
     w0 = sim.shaft_speed
     b = sim.advance(150, shaft_speed=2 * w0)
@@ -119,8 +120,8 @@ def test_speed_change_is_ramped_not_stepped():
                                                ("cwru_6205_or007_6", 1), ("er16k_inner_race", 2)])
 def test_chunked_equals_continuous(scene, oversample):
     total = 4500
-    one = Simulator(scene, seed=3, oversample=oversample).advance(total)
-    sim = Simulator(scene, seed=3, oversample=oversample)
+    one = Simulator(scene, seed=3, oversample=oversample, fidelity="kinematic").advance(total)
+    sim = Simulator(scene, seed=3, oversample=oversample, fidelity="kinematic")
     sizes = [150, 37, 1, 613, 2000]
     sizes.append(total - sum(sizes))
     parts = [sim.advance(n) for n in sizes]
@@ -131,16 +132,16 @@ def test_chunked_equals_continuous(scene, oversample):
 
 
 def test_seed_changes_noise_and_slip_but_not_the_physics():
-    a = Simulator("er16k_outer_race", seed=1).advance(3000).accel
-    b = Simulator("er16k_outer_race", seed=1).advance(3000).accel
-    c = Simulator("er16k_outer_race", seed=2).advance(3000).accel
+    a = Simulator("er16k_outer_race", seed=1, fidelity="kinematic").advance(3000).accel
+    b = Simulator("er16k_outer_race", seed=1, fidelity="kinematic").advance(3000).accel
+    c = Simulator("er16k_outer_race", seed=2, fidelity="kinematic").advance(3000).accel
     np.testing.assert_array_equal(a, b)
     assert not np.array_equal(a, c)
     assert np.std(c) == pytest.approx(np.std(a), rel=0.2)
 
 
 def test_batch_shapes_channels_and_static_load():
-    sim = Simulator("er16k_outer_race")
+    sim = Simulator("er16k_outer_race", fidelity="kinematic")
     b = sim.advance(150)
     nb = sim.bearing.balls
     assert b.accel.shape == (150, 2) and b.accel_channels == ("accel_x", "accel_y")
@@ -157,7 +158,7 @@ def test_batch_shapes_channels_and_static_load():
 
 
 def test_contact_forces_vanish_out_of_the_load_zone():
-    sim = Simulator("er16k_healthy")
+    sim = Simulator("er16k_healthy", fidelity="kinematic")
     sim.advance(7500)
     b = sim.advance(7500)
     f = b.contact_forces[:, :sim.bearing.balls]
@@ -193,7 +194,7 @@ def test_every_depth_profile_gives_the_outer_line(profile, tmp_path):
     text = load_scene("er16k_outer_race").source_text.replace("profile: geometric", f"profile: {profile}")
     path = tmp_path / f"er16k_outer_{profile}.yaml"
     path.write_text(text)
-    sim = Simulator(str(path))
+    sim = Simulator(str(path), fidelity="kinematic")
     sim.advance(3000)
     y = sim.advance(30000).accel[:, 1]
     line = fault_lines(y, 15000.0, sim.bearing.fault_frequencies(sim.scene.shaft_hz))["bpfo"]
@@ -215,7 +216,7 @@ def test_waviness_adds_its_own_line(tmp_path):
         paths.append(str(path))
 
     def direct_line(p):
-        sim = Simulator(p, sample_rate=12000.0)
+        sim = Simulator(p, sample_rate=12000.0, fidelity="kinematic")
         sim.advance(6000)
         y = sim.advance(48000).accel[:, 1]
         spec = np.abs(np.fft.rfft(y * np.hanning(y.size)))
@@ -264,11 +265,11 @@ def test_wandering_ball_defect_loses_its_2bsf_line_and_periodicity():
 
 def test_wander_is_seeded_and_chunk_invariant():
     scene = _ball_scene(3.0)
-    one = Simulator(scene, seed=4).advance(6000).accel
-    sim = Simulator(scene, seed=4)
+    one = Simulator(scene, seed=4, fidelity="kinematic").advance(6000).accel
+    sim = Simulator(scene, seed=4, fidelity="kinematic")
     parts = [sim.advance(n).accel for n in (1000, 7, 2993, 2000)]
     np.testing.assert_array_equal(np.concatenate(parts), one)
-    other = Simulator(scene, seed=5).advance(6000).accel
+    other = Simulator(scene, seed=5, fidelity="kinematic").advance(6000).accel
     assert not np.allclose(other, one)
 
 
