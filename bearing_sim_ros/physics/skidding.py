@@ -112,7 +112,6 @@ B_TH, B_R, B_PSI, B_W, B_V, B_OM = range(NBV)
 
 DEFECT_EPS = 1e-6    # rad: finite-difference step of the defect-depth slope
 FILM_BLEND = 0.02    # s: film scaled in after adopting the kinematic tier's state
-EVENT_LOAD = 0.02    # contact changes below this fraction of the bearing load are no events
 W_REF = 0.01        # rad/s: regularises the skid-ratio denominators at standstill
 FILM_EXP_U, FILM_EXP_Q = 0.68, -0.073     # Hamrock-Dowson exponents (speed, load)
 
@@ -1085,18 +1084,16 @@ def _split_core(y, fy, un, aux0, t, hstep, ramp, ta_, tg_, tb_, gamma, p, dtab, 
 
 
 @njit(cache=True, inline="always")
-def _contact_changed(a0, a1, nb, pocket, qev):
-    """Whether any ball was inside a defect, or any ball-race contact carrying more than ``qev``
-    (N) on either side (or, with ``pocket``, a ball-pocket contact) opened or closed, at either
-    of two evaluations.  A ball grazing a race under its centrifugal force alone is not an event:
-    its on-off contact moves nothing the sensor sees.  Without pocket clearance the pocket spring is always engaged (its
+def _contact_changed(a0, a1, nb, pocket):
+    """Whether any ball was inside a defect, or any ball-race contact (or, with ``pocket``,
+    ball-pocket contact) opened or closed, at either of two evaluations.  Without pocket clearance the pocket spring is always engaged (its
     flag flickers only where its damping outweighs it), so it is not an event."""
     for j in range(nb):
         if a0[j, X_LOSS] > 0.0 or a1[j, X_LOSS] > 0.0:      # a ball inside a defect
             return True
-        if (a0[j, X_KTI] > 0.0) != (a1[j, X_KTI] > 0.0) and max(a0[j, X_QI], a1[j, X_QI]) > qev:
+        if (a0[j, X_KTI] > 0.0) != (a1[j, X_KTI] > 0.0):
             return True
-        if (a0[j, X_KTO] > 0.0) != (a1[j, X_KTO] > 0.0) and max(a0[j, X_QO], a1[j, X_QO]) > qev:
+        if (a0[j, X_KTO] > 0.0) != (a1[j, X_KTO] > 0.0):
             return True
         if pocket and a0[j, X_CIN] != a1[j, X_CIN]:
             return True
@@ -1120,8 +1117,7 @@ def _split_step(y, fy, un, aux0, kstep, kk, hs, ramp, ta_, tg_, tb_, gamma, p, d
     _split_core(y, fy, un, aux0, t, hstep, ramp, ta_, tg_, tb_, gamma, p, dtab, wti, wto, film,
                 phi, g0, g1, kb, ynext, fnext, unext, auxn, dgn, filmn, kst, ytmp, rtmp, auxs, dgs,
                 wsp, wcage, scr, frc, xpred, nball, ybl, fbl, xbl, auxbl)
-    qev = EVENT_LOAD * (math.hypot(ramp[R_L1X], ramp[R_L1Y]) + p[P_WS])
-    if nsub <= 1 or not _contact_changed(aux0, auxn, nb, p[P_CPK] > 0.0, qev):
+    if nsub <= 1 or not _contact_changed(aux0, auxn, nb, p[P_CPK] > 0.0):
         return
     flag[0] = 1
     hsub = hstep / nsub
