@@ -65,7 +65,7 @@ class Simulator:
     sample_rate: output rate (Hz).  fidelity: "auto" | "kinematic" | "skidding".
     seed: random slip and sensor noise.  solver: "default" | "rk4" | "reference" (skidding tier).
     rk4_step: step of the "rk4" solver (s).  oversample: internal steps per output sample of the
-    kinematic tier (accuracy knob; default 4).
+    kinematic tier (accuracy knob; default ``physics.kinematic.DEFAULT_OVERSAMPLE`` = 2).
     """
 
     def __init__(self, scene, sample_rate: float = 15000.0, fidelity: str = "auto", seed: int = 0,
@@ -106,9 +106,9 @@ class Simulator:
     # ---- construction ---------------------------------------------------------------------
     def _build_model(self, tier: str):
         if tier == "kinematic":
-            from .physics.kinematic import KinematicModel
+            from .physics.kinematic import DEFAULT_OVERSAMPLE, KinematicModel
 
-            m = self._oversample or 4
+            m = self._oversample or DEFAULT_OVERSAMPLE
             return KinematicModel(self.scene, self.sample_rate, m, self.seed,
                                   self._shaft_speed, self._radial_load)
         from .physics.skidding import SkiddingModel

@@ -38,7 +38,6 @@ EXPECTED = {
     "er16k_outer_race": ["bpfo"],
     "cwru_6205_ir007": ["bpfi"],
     "cwru_6205_or007_6": ["bpfo"],
-    "cwru_6205_b007": ["2bsf"],
     "b6307_seed001": ["bpfo"],
     "b6205_ball_inner": ["2bsf", "bpfi"],
     "b6205_ball_outer": ["2bsf", "bpfo"],

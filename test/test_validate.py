@@ -257,15 +257,19 @@ def test_simulation_and_recording_agree_on_verdict_kurtosis_and_rms_ratio(compar
 
 
 def test_ball_fault_is_reported_as_it_is(compared):
-    """The ball recording shows no 2xBSF envelope line; the simulation (fixed ball spin axis)
-    does.  The report says so; the check is not counted as required."""
+    """The ball recording shows no 2xBSF envelope line.  The scene's ball defect has a wandering
+    spin axis (wander_turns), so it meets the races only part of the time and, like the
+    recording, shows no detectable line either; its faulty/healthy RMS ratio stays near the
+    recording's.  The verdict is still reported, not counted as required."""
     rows, out = compared
     r = rows["cwru_6205_b007"]
     assert r["real"]["lines"]["2bsf"]["prominence"] < 2.0 and r["real"]["verdict"] != "ball"
-    assert r["sim"]["verdict"] == "ball"
+    assert r["sim"]["lines"]["2bsf"]["prominence"] < 10.0 and r["sim"]["verdict"] == r["real"]["verdict"]
+    rr = r["rms_ratio"]
+    assert 0.5 < rr["sim"] / rr["real"] < 2.0, rr
     assert r["criteria"]["verdict"]["required"] is False
     md = (out / "validation.md").read_text()
-    assert "| ball | healthy / ball |" in md
+    assert f"| ball | {r['real']['verdict']} / {r['sim']['verdict']} |" in md
 
 
 def test_report_files_are_written(compared):
