@@ -1722,3 +1722,68 @@ def measure(scene, seconds: float, solver: str = "default", rk4_step: float | No
         "ball_skid": float(np.mean(b.extras["ball_skid"])),
         "cage_skid": float(np.mean(b.extras["cage_skid"])),
     }
+
+
+#: scenarios of :func:`speed_study` (label, scene, rpm, radial load N)
+STUDY_SCENARIOS = [
+    ("ER-16K healthy 2000 rpm 200 N", "er16k_skidding", 2000.0, 200.0),
+    ("ER-16K healthy 2000 rpm 2000 N", "er16k_skidding", 2000.0, 2000.0),
+    ("ER-16K healthy 10000 rpm 10 N", "er16k_skidding", 10000.0, 10.0),
+    ("ER-16K inner race 1600 rpm 50 N", "er16k_inner_race", 1600.0, 50.0),
+    ("ER-16K outer race 1600 rpm 50 N", "er16k_outer_race", 1600.0, 50.0),
+]
+
+
+def speed_study(seconds: float = 0.2, settle: float = 0.05, scenarios=None, sample_rate: float = 15000.0):
+    """Real-time factor (CPU time of this process, tier + accelerometer chain, sensor noise off)
+    and error against the reference of each solver setting on each scenario: RMS of both output
+    axes and mean cage speed (relative; ``err`` the largest of the three).  Prints a table and
+    returns the rows.  ``python -m bearing_sim_ros.physics.skidding [seconds]`` runs it."""
+    import time
+    from dataclasses import replace
+
+    from ..scene import RPM, load_scene
+    from .integrators import RK4, SplitROS2
+    from .sensor import AccelerometerChain
+
+    methods = [("reference", lambda: RK4(per_sample=32)), ("rk4 h=3e-6", lambda: RK4(step=3e-6)),
+               ("rk4 h=2e-6", lambda: RK4(step=2e-6)), ("default", lambda: SplitROS2(per_sample=1)),
+               ("split, 2 samples/step", lambda: SplitROS2(per_sample=0.5))]
+    rows = []
+    for label, name, rpm, load in scenarios or STUDY_SCENARIOS:
+        sc = load_scene(name)
+        sc = replace(sc, shaft_speed=rpm * RPM, radial_load=(0.0, -load),
+                     sensor=replace(sc.sensor, noise_density=0.0))
+        w, lv = sc.shaft_speed, np.array(sc.radial_load)
+        ref = None
+        for mlabel, make in methods:
+            model = SkiddingModel(sc, sample_rate, 0, w, lv, method=make())
+            chain = AccelerometerChain(sc.sensor, sample_rate, 4, 0)
+            chain.prime(np.zeros((chain.lookahead_samples * 4, 2)))
+            n0, n = int(settle * sample_rate), int(seconds * sample_rate)
+            chain.process(model.advance(4 * n0, w, w, lv, lv).accel, 0)
+            t0 = time.process_time()
+            out = model.advance(4 * n, w, w, lv, lv)
+            acc = chain.process(out.accel, n0)
+            cpu = time.process_time() - t0
+            rms = np.sqrt(np.mean(acc ** 2, axis=0))
+            row = {"scenario": label, "method": mlabel, "real_time_factor": seconds / cpu,
+                   "rms": rms.tolist(), "cage_speed": float(out.cage_speed.mean()),
+                   "cage_skid": float(out.extras["cage_skid"].mean()),
+                   "ball_skid": float(out.extras["ball_skid"].mean())}
+            if ref is None:
+                ref = row
+            else:
+                e = [abs(a / b - 1.0) for a, b in zip(row["rms"], ref["rms"])]
+                e.append(abs(row["cage_speed"] / ref["cage_speed"] - 1.0))
+                row["err"] = max(e)
+            rows.append(row)
+            print(f"{label:33s} {mlabel:22s} {row['real_time_factor']:7.2f}x real time  "
+                  f"error {row.get('err', 0.0):7.2%}  cage skid {row['cage_skid']:.3f} %", flush=True)
+    return rows
+
+
+if __name__ == "__main__":  # pragma: no cover
+    import sys
+
+    speed_study(float(sys.argv[1]) if len(sys.argv) > 1 else 0.2)
