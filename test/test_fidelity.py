@@ -1,0 +1,79 @@
+"""Fidelity selection: the cheapest tier whose estimated error is within the tolerance."""
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from bearing_sim_ros import Simulator, load_scene
+from bearing_sim_ros.bench import Config, Scenario, errors, reference_config, run_config
+from bearing_sim_ros.fidelity import calibration, kinematic_error_estimate, select_tier, skid_index
+from bearing_sim_ros.scene import RPM
+
+
+def test_skid_index_follows_seed000_trends():
+    """Fig. 17: skidding falls as the radial load rises and rises with speed."""
+    scene = load_scene("er16k_skidding")
+    by_load = [skid_index(scene, 2000 * RPM, (0.0, -w)) for w in (50, 200, 1000, 2000)]
+    by_speed = [skid_index(scene, n * RPM, (0.0, -200.0)) for n in (2000, 3000, 4000, 5000)]
+    assert all(a > b for a, b in zip(by_load, by_load[1:]))
+    assert all(a < b for a, b in zip(by_speed, by_speed[1:]))
+
+
+def test_calibration_is_shipped_and_monotonic():
+    cal = calibration()
+    assert cal["source"].startswith("bearing-sim bench") and len(cal["points"]) >= 6
+    assert cal["scale"] > 0 and cal["power"] > 0
+    scene = load_scene("er16k_skidding")
+    light, heavy = (kinematic_error_estimate(scene, 5000 * RPM, (0.0, -50.0))[0],
+                    kinematic_error_estimate(scene, 600 * RPM, (0.0, -2000.0))[0])
+    assert light > heavy
+
+
+def test_a_scene_asking_for_skid_ratios_gets_the_skidding_tier():
+    sim = Simulator("er16k_skidding")
+    assert sim.tier == "skidding" and "skid ratios" in sim.selection.reason
+    assert Simulator("er16k_skidding", fidelity="kinematic").tier == "kinematic"
+
+
+def test_heavy_load_low_speed_gets_kinematic_with_an_honest_estimate():
+    """ER-16K at 1000 rpm and 2000 N barely skids: the kinematic tier is chosen, and its
+    estimated error is within a factor of 2 of the cage-speed error the study measures."""
+    sc = Scenario("heavy, slow", "er16k_healthy", rpm=1000.0, load_n=2000.0)
+    scene = sc.build()
+    sel = select_tier(scene, "auto", scene.shaft_speed, scene.radial_load, scene.fidelity_tolerance)
+    assert sel.tier == "kinematic", sel
+    ref = run_config(reference_config(), scene, 15000.0, 0.2, 0.3, 1)
+    kin = run_config(Config("kinematic", "kinematic", "kinematic"), scene, 15000.0, 0.2, 0.3, 1)
+    measured = errors(kin, ref, scene, 15000.0)["cage"]
+    assert 0.5 < sel.estimated_error / measured < 2.0, (sel.estimated_error, measured)
+
+
+def test_light_load_high_speed_gets_skidding():
+    scene = load_scene("er16k_healthy")
+    sel = select_tier(scene, "auto", 10000 * RPM, (0.0, -10.0), 0.05)
+    assert sel.tier == "skidding" and sel.estimated_error > 0.05
+
+
+def test_a_speed_ramp_across_the_boundary_switches_without_a_jump():
+    """Ramp the healthy ER-16K from 2000 to 8000 rpm at 10 N with a tolerance that puts the
+    boundary inside the ramp: the simulator switches tier once, and the sample-to-sample step at
+    the switch is no larger than the signal's own peak-to-peak."""
+    base = load_scene("er16k_healthy")
+    lo, hi = (kinematic_error_estimate(base, w * RPM, (0.0, -10.0))[0] for w in (2000, 8000))
+    tolerance = float(np.sqrt(lo * hi))
+    scene = replace(base, radial_load=(0.0, -10.0), shaft_speed=2000 * RPM, fidelity_tolerance=tolerance)
+    sim = Simulator(scene)
+    assert sim.tier == "kinematic"
+    sim.advance(1500)
+    accel, tiers = [], []
+    for rpm in np.linspace(2000, 8000, 40):
+        b = sim.advance(150, shaft_speed=rpm * RPM)
+        accel.append(b.accel[:, 1])
+        tiers.append(sim.tier)
+    assert sim.tier_switches >= 1 and tiers[0] == "kinematic" and tiers[-1] == "skidding"
+    k = tiers.index("skidding")
+    y = np.concatenate(accel)
+    steps = np.abs(np.diff(y))
+    around = steps[max(0, (k - 1) * 150):(k + 2) * 150]
+    assert np.all(np.isfinite(y))
+    assert around.max() <= np.ptp(np.concatenate(accel[max(0, k - 4):k])) + 1e-12
