@@ -70,9 +70,13 @@ a defect on the ball), averaged over ALL balls (the paper plots one ball over ti
 loaded and unloaded zone).  The denominators are regularised as w_t / (w_t^2 + w_ref^2) with
 w_ref = 0.01 rad/s so that a standing shaft gives 0 instead of a division by zero.
 
-Solvers: see :mod:`.integrators`.  ``"rk4"``: classic RK4 at 1e-5 s (seed 000); ``"reference"``:
-RK4 at 1/32 of the internal sample spacing; ``"default"``: ROS2 Rosenbrock-W with a block
-Jacobian of the stiff per-ball couplings, one step per internal sample.
+Solvers: see :mod:`.integrators`.  ``"rk4"``: classic RK4 at 1e-5 s (seed 000; it diverges on
+this model: the squeeze film and the cage on its pocket springs need <= 3e-6 s); ``"reference"``:
+RK4 at 1/32 of the internal sample spacing; ``"default"``: :class:`~.integrators.SplitROS2`, the
+structure propagated exactly, balls and cage by ROS2 Rosenbrock-W with a block Jacobian of the
+stiff per-ball couplings and the forcing's time column, one step per internal sample, event
+sub-steps where a contact opens or closes or a ball is inside a defect.  Engines:
+:func:`_engine` (explicit RK, whole-state Rosenbrock) and :func:`_engine_split`.
 """
 from __future__ import annotations
 
