@@ -77,3 +77,26 @@ def test_a_speed_ramp_across_the_boundary_switches_without_a_jump():
     around = steps[max(0, (k - 1) * 150):(k + 2) * 150]
     assert np.all(np.isfinite(y))
     assert around.max() <= np.ptp(np.concatenate(accel[max(0, k - 4):k])) + 1e-12
+
+
+def test_a_speed_ramp_down_switches_back_to_kinematic():
+    """The reverse switch: skidding -> kinematic when the operating point comes back under the
+    tolerance (with hysteresis), again without a jump."""
+    base = load_scene("er16k_healthy")
+    lo, hi = (kinematic_error_estimate(base, w * RPM, (0.0, -10.0))[0] for w in (2000, 8000))
+    tolerance = float(np.sqrt(lo * hi))
+    scene = replace(base, radial_load=(0.0, -10.0), shaft_speed=8000 * RPM, fidelity_tolerance=tolerance)
+    sim = Simulator(scene)
+    assert sim.tier == "skidding"
+    sim.advance(1500)
+    accel, tiers = [], []
+    for rpm in np.linspace(8000, 2000, 40):
+        b = sim.advance(150, shaft_speed=rpm * RPM)
+        accel.append(b.accel[:, 1])
+        tiers.append(sim.tier)
+    assert tiers[-1] == "kinematic" and sim.tier_switches >= 1
+    k = tiers.index("kinematic")
+    y = np.concatenate(accel)
+    around = np.abs(np.diff(y))[max(0, (k - 1) * 150):(k + 2) * 150]
+    assert np.all(np.isfinite(y))
+    assert around.max() <= np.ptp(np.concatenate(accel[max(0, k - 4):k])) + 1e-12

@@ -43,7 +43,7 @@ class TierOutput:
     """What a tier produced over ``n`` internal steps (arrays at the internal rate).
 
     accel: (n, 2) acceleration of the sensor mount, x horizontal and y vertical (m/s^2), at the
-    end of each step; inner_force, outer_force: (n, Nb) contact force of each ball on the inner
+    start of each internal sample interval; inner_force, outer_force: (n, Nb) contact force of each ball on the inner
     and the outer race (N); cage_speed: (n,) rad/s; extras: further per-step series of a tier
     (e.g. "ball_skid", "cage_skid" ratios for the skidding tier).
     """
