@@ -19,7 +19,6 @@ Error metrics (all relative to the reference; README "Speed against error"):
 from __future__ import annotations
 
 import json
-import math
 import os
 import platform
 import statistics as stats
@@ -31,7 +30,7 @@ import numpy as np
 
 from .analysis.envelope import fault_lines
 from .errors import UserError
-from .scene import RPM, Sensor, load_scene
+from .scene import RPM, load_scene
 
 
 @dataclass(frozen=True)
@@ -80,16 +79,11 @@ KINEMATIC = [Config(f"kinematic x{m}", "kinematic", "kinematic", (("oversample",
 
 
 def skidding_configs(quick: bool) -> list:
-    """Settings of the skidding tier's solvers, if the tier is available: its module may list
-    them as ``BENCH_CONFIGS`` [(label, family, kwargs dict)]; else rk4 at three steps."""
-    try:
-        from .physics import skidding
-    except ImportError:
-        return []
-    listed = getattr(skidding, "BENCH_CONFIGS", None)
-    if listed is None:
-        listed = [(f"rk4 h={h:g}", "skidding rk4", {"solver": "rk4", "rk4_step": h}) for h in (1e-5, 5e-6, 2.5e-6)]
-        listed.append(("default", "skidding default", {"solver": "default"}))
+    """Settings of the skidding tier's solvers: the tier lists them as ``BENCH_CONFIGS``
+    [(label, family, kwargs)]; the full study adds the papers' RK4 at 1e-5 s."""
+    from .physics.skidding import BENCH_CONFIGS
+
+    listed = list(BENCH_CONFIGS)
     if quick:
         listed = listed[:1] + [c for c in listed if c[1] == "skidding default"][:1]
     configs = [Config(label, family, "skidding", tuple(kw.items())) for label, family, kw in listed]
@@ -100,11 +94,8 @@ def skidding_configs(quick: bool) -> list:
 
 
 def reference_config() -> Config:
-    try:
-        from .physics import skidding  # noqa: F401
-        return Config("reference", "reference", "skidding", (("solver", "reference"),))
-    except ImportError:
-        return Config("reference (kinematic x32)", "reference", "kinematic", (("oversample", 32),))
+    """The converged solution errors are measured against: the skidding tier's reference."""
+    return Config("reference", "reference", "skidding", (("solver", "reference"),))
 
 
 @dataclass

@@ -2,7 +2,6 @@
 from dataclasses import replace
 
 import numpy as np
-import pytest
 
 from bearing_sim_ros import Simulator, load_scene
 from bearing_sim_ros.bench import Config, Scenario, errors, reference_config, run_config

@@ -7,7 +7,6 @@ only with BEARING_SIM_SLOW=1.
 """
 from __future__ import annotations
 
-import math
 import os
 from dataclasses import replace
 

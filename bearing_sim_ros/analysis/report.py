@@ -58,7 +58,7 @@ class _Data:
         self.truncated_analysis = False
         state_t, shaft_w, cage_w = [], [], []
         cmd_t, cmd_speed, load_t, load_xy = [], [], [], []
-        diag_t, diag = [], {}
+        diag = {}
         samples = 0
         fs_meta = None
         try:
@@ -123,8 +123,8 @@ class _Data:
 
     def _rate_from_stamps(self) -> float:
         if self.stamps.size < 2 or self.stamps[-1] == self.stamps[0]:
-            raise UserError(f"cannot tell the sample rate: one waveform table and no sample_rate "
-                            f"parameter in the metadata")
+            raise UserError("cannot tell the sample rate: one waveform table and no sample_rate "
+                            "parameter in the metadata")
         return float((self.widths[:-1].sum()) * NS / (self.stamps[-1] - self.stamps[0]))
 
     def _gaps(self) -> int:

@@ -39,6 +39,7 @@ from .defects import (D_ANGLE, D_BALL, D_DEPTH, D_HALF, D_HMAX_I, D_HMAX_O, D_KI
                       KIND_INNER, _profile_drop, add_defect_losses, defect_table, wander_reach,
                       waviness_gain, wrap)
 from .rng import uniform
+from .structure import structure_system
 
 G = 9.80665
 NSTATE = 10   # xs, ys, xp, yp, yr, vxs, vys, vxp, vyp, vyr
@@ -509,9 +510,6 @@ class KinematicModel:
         return z * 1e-6
 
     def _linearise(self, load: np.ndarray, initial: bool = False):
-        from scipy.linalg import expm
-
-        st = self.scene.structure
         eq = self._equilibrium(load)
         d0 = eq[:2] - eq[2:]
         q = np.zeros(int(self.geo[P_NB]))
@@ -529,47 +527,20 @@ class KinematicModel:
             kb[:, k] = (self._mean_force(dp) - self._mean_force(dm)) / (2 * eps)
         kb = 0.5 * (kb + kb.T)
         self.kb = kb
-        ms, mp = st.shaft_mass, st.pedestal_mass
-        has_res = st.has_resonator
-        mr = st.resonator_mass if has_res else 1.0
-        kr, cr = (st.resonator_stiffness, st.resonator_damping) if has_res else (0.0, 0.0)
-        mass = np.array([ms, ms, mp, mp, mr])
-        kmat = np.zeros((5, 5))
-        cmat = np.zeros((5, 5))
-        # shaft (0, 1) and pedestal (2, 3) springs to ground, resonator (4) on the pedestal's y
-        kmat[0, 0] = kmat[1, 1] = st.shaft_stiffness
-        kmat[2, 2] = kmat[3, 3] = st.pedestal_stiffness
-        cmat[0, 0] = cmat[1, 1] = st.shaft_damping
-        cmat[2, 2] = cmat[3, 3] = st.pedestal_damping
-        kmat[3, 3] += kr
-        kmat[4, 4] += kr
-        kmat[3, 4] = kmat[4, 3] = -kr
-        cmat[3, 3] += cr
-        cmat[4, 4] += cr
-        cmat[3, 4] = cmat[4, 3] = -cr
-        # linearised bearing between shaft (0,1) and pedestal (2,3): force on pedestal kb (s - p).
-        # Only its diagonal goes into the linear part (the residual takes the rest, so the model
-        # is the same): then the horizontal and the vertical blocks of the state decouple, and
-        # the off-diagonal term is ~1e-15 of the diagonal for any vertical load anyway.
+        # linearised bearing between shaft and pedestal: force on pedestal kb (s - p).  Only its
+        # diagonal goes into the linear part (the residual takes the rest, so the model is the
+        # same): then the horizontal and the vertical blocks of the state decouple, and the
+        # off-diagonal term is ~1e-15 of the diagonal for any vertical load anyway.
         self.kbx, self.kby = float(kb[0, 0]), float(kb[1, 1])
-        for a_, k_ in ((0, self.kbx), (1, self.kby)):
-            kmat[a_, a_] += k_
-            kmat[2 + a_, 2 + a_] += k_
-            kmat[a_, 2 + a_] -= k_
-            kmat[2 + a_, a_] -= k_
-        minv = 1.0 / mass
-        A = np.zeros((NSTATE, NSTATE))
-        A[:5, 5:] = np.eye(5)
-        A[5:, :5] = -minv[:, None] * kmat
-        A[5:, 5:] = -minv[:, None] * cmat
-        B = np.zeros((NSTATE, NINPUT))
-        B[5, 0] = -1.0 / ms     # residual bearing force acts -on the shaft, +on the pedestal
-        B[6, 1] = -1.0 / ms
-        B[7, 0] = 1.0 / mp
-        B[8, 1] = 1.0 / mp
-        B[5, 2] = 1.0 / ms      # external force on the shaft
-        B[6, 3] = 1.0 / ms
-        rows = [7, 9 if has_res else 8]
+        A, b_forces, _, _ = structure_system(self.scene, np.diag([self.kbx, self.kby]))
+        # this tier's inputs: the residual bearing force (acting -on the shaft, +on the pedestal)
+        # and the external force on the shaft; b_forces takes forces on shaft x, y, pedestal x, y
+        to_forces = np.array([[-1.0, 0.0, 1.0, 0.0],
+                              [0.0, -1.0, 0.0, 1.0],
+                              [1.0, 0.0, 0.0, 0.0],
+                              [0.0, 1.0, 0.0, 0.0]])
+        B = b_forces @ to_forces
+        rows = [7, 9 if self.scene.structure.has_resonator else 8]
         self._propagators(A, B, A[rows], B[rows])
         self.hist[2] = 0.0       # the residual's definition changed: restart its history
         self._lin_load = load.copy()
