@@ -53,49 +53,42 @@ def test_light_load_high_speed_gets_skidding():
     assert sel.tier == "skidding" and sel.estimated_error > 0.05
 
 
-def test_a_speed_ramp_across_the_boundary_switches_without_a_jump():
-    """Ramp the healthy ER-16K from 2000 to 8000 rpm at 10 N with a tolerance that puts the
-    boundary inside the ramp: the simulator switches tier once, and the sample-to-sample step at
-    the switch is no larger than the signal's own peak-to-peak."""
+def ramp_across_the_boundary(start_rpm, end_rpm):
+    """Ramp the healthy ER-16K at 10 N from ``start_rpm`` to ``end_rpm`` in 40 batches, with a
+    tolerance that puts the tier boundary inside the ramp.  Returns (tiers per batch, accel_y
+    per batch, the simulator)."""
     base = load_scene("er16k_healthy")
     lo, hi = (kinematic_error_estimate(base, w * RPM, (0.0, -10.0))[0] for w in (2000, 8000))
-    tolerance = float(np.sqrt(lo * hi))
-    scene = replace(base, radial_load=(0.0, -10.0), shaft_speed=2000 * RPM, fidelity_tolerance=tolerance)
+    scene = replace(base, radial_load=(0.0, -10.0), shaft_speed=start_rpm * RPM,
+                    fidelity_tolerance=float(np.sqrt(lo * hi)))
     sim = Simulator(scene)
-    assert sim.tier == "kinematic"
+    first = sim.tier
     sim.advance(1500)
     accel, tiers = [], []
-    for rpm in np.linspace(2000, 8000, 40):
-        b = sim.advance(150, shaft_speed=rpm * RPM)
-        accel.append(b.accel[:, 1])
+    for rpm in np.linspace(start_rpm, end_rpm, 40):
+        accel.append(sim.advance(150, shaft_speed=rpm * RPM).accel[:, 1])
         tiers.append(sim.tier)
-    assert sim.tier_switches >= 1 and tiers[0] == "kinematic" and tiers[-1] == "skidding"
-    k = tiers.index("skidding")
+    return first, tiers, accel, sim
+
+
+def assert_no_jump_at(k, accel):
+    """The sample-to-sample step around batch k is no larger than the signal's own
+    peak-to-peak before it."""
     y = np.concatenate(accel)
-    steps = np.abs(np.diff(y))
-    around = steps[max(0, (k - 1) * 150):(k + 2) * 150]
     assert np.all(np.isfinite(y))
+    around = np.abs(np.diff(y))[max(0, (k - 1) * 150):(k + 2) * 150]
     assert around.max() <= np.ptp(np.concatenate(accel[max(0, k - 4):k])) + 1e-12
+
+
+def test_a_speed_ramp_across_the_boundary_switches_without_a_jump():
+    """2000 -> 8000 rpm: kinematic, then skidding once the estimate passes the tolerance."""
+    first, tiers, accel, sim = ramp_across_the_boundary(2000, 8000)
+    assert first == "kinematic" and tiers[-1] == "skidding" and sim.tier_switches >= 1
+    assert_no_jump_at(tiers.index("skidding"), accel)
 
 
 def test_a_speed_ramp_down_switches_back_to_kinematic():
-    """The reverse switch: skidding -> kinematic when the operating point comes back under the
-    tolerance (with hysteresis), again without a jump."""
-    base = load_scene("er16k_healthy")
-    lo, hi = (kinematic_error_estimate(base, w * RPM, (0.0, -10.0))[0] for w in (2000, 8000))
-    tolerance = float(np.sqrt(lo * hi))
-    scene = replace(base, radial_load=(0.0, -10.0), shaft_speed=8000 * RPM, fidelity_tolerance=tolerance)
-    sim = Simulator(scene)
-    assert sim.tier == "skidding"
-    sim.advance(1500)
-    accel, tiers = [], []
-    for rpm in np.linspace(8000, 2000, 40):
-        b = sim.advance(150, shaft_speed=rpm * RPM)
-        accel.append(b.accel[:, 1])
-        tiers.append(sim.tier)
-    assert tiers[-1] == "kinematic" and sim.tier_switches >= 1
-    k = tiers.index("kinematic")
-    y = np.concatenate(accel)
-    around = np.abs(np.diff(y))[max(0, (k - 1) * 150):(k + 2) * 150]
-    assert np.all(np.isfinite(y))
-    assert around.max() <= np.ptp(np.concatenate(accel[max(0, k - 4):k])) + 1e-12
+    """8000 -> 2000 rpm: the reverse switch (with hysteresis), again without a jump."""
+    first, tiers, accel, sim = ramp_across_the_boundary(8000, 2000)
+    assert first == "skidding" and tiers[-1] == "kinematic" and sim.tier_switches >= 1
+    assert_no_jump_at(tiers.index("kinematic"), accel)
