@@ -62,8 +62,10 @@ class Selection:
                 f"{self.estimated_error:.1%} against tolerance {self.tolerance:.1%})")
 
 
+@lru_cache(maxsize=64)
 def traction_peak(lub) -> float:
-    """Largest traction coefficient of the curve mu(v) = (A + B v) exp(-C v) + D, v >= 0."""
+    """Largest traction coefficient of the curve mu(v) = (A + B v) exp(-C v) + D, v >= 0
+    (cached: ``Lubrication`` is frozen, and the node asks at every batch)."""
     v = np.linspace(0.0, 20.0, 4001)
     mu = (lub.traction_a + lub.traction_b * v) * np.exp(-lub.traction_c * v) + lub.traction_d
     return float(max(np.max(np.abs(mu)), 1e-3))

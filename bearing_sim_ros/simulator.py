@@ -210,6 +210,8 @@ class Simulator:
         without a discontinuity (the new tier starts from the old one's state)."""
         if self.requested_fidelity != "auto" or self.scene.fidelity != "auto":
             return False
+        if shaft_speed == self._shaft_speed and np.array_equal(radial_load, self._radial_load):
+            return False            # same operating point: same choice
         from .fidelity import select_tier
 
         sel = select_tier(self.scene, "auto", shaft_speed, np.asarray(radial_load),
