@@ -1,0 +1,36 @@
+"""`bearing-sim bench --quick`: the speed-against-error study end to end (table, JSON, plot)."""
+import json
+import math
+import subprocess
+
+
+def test_quick_bench_writes_table_json_and_plot(tmp_path, bearing_sim_exe):
+    out = tmp_path / "bench"
+    run = subprocess.run([bearing_sim_exe, "bench", "--quick", "--out", str(out)],
+                         capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr[-2000:]
+    result = json.loads((out / "bench.json").read_text())
+    rows = [r for r in result["rows"] if "diverged" not in r]
+    families = {r["family"] for r in rows}
+    assert {"kinematic", "skidding default"} <= families
+    assert result["reference"] == "reference" and result["machine"]["threads_used"] == 1
+    for r in rows:
+        assert r["real_time_factor"] > 0 and math.isfinite(r["error"])
+        assert r["error"] == max(r["rms"], r["lines"], r["cage"])
+    # the skidding tier's default solver is close to its own reference; the kinematic tier is
+    # faster than the skidding tier on the same scenario
+    for scenario in {r["scenario"] for r in rows}:
+        kin = max(r["real_time_factor"] for r in rows if r["scenario"] == scenario and r["family"] == "kinematic")
+        skid = [r for r in rows if r["scenario"] == scenario and r["family"] == "skidding default"][0]
+        assert skid["error"] < 0.05 and kin > skid["real_time_factor"]
+    table = (out / "bench.md").read_text()
+    assert "| scenario | setting | real-time factor |" in table
+    assert (out / "bench.png").stat().st_size > 10_000
+
+
+def test_bench_bad_out_is_one_line(tmp_path, bearing_sim_exe):
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    run = subprocess.run([bearing_sim_exe, "bench", "--quick", "--out", str(blocker / "sub")],
+                         capture_output=True, text=True, timeout=120)
+    assert run.returncode == 2 and len(run.stderr.strip().splitlines()) == 1, run.stderr
