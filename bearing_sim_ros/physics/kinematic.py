@@ -39,7 +39,7 @@ from .defects import (D_ANGLE, D_BALL, D_DEPTH, D_HALF, D_HMAX_I, D_HMAX_O, D_KI
                       KIND_INNER, _profile_drop, add_defect_losses, defect_table, wander_reach,
                       waviness_gain, wrap)
 from .rng import uniform
-from .structure import structure_system
+from .structure import secant_stiffness, structure_system
 
 G = 9.80665
 NSTATE = 10   # xs, ys, xp, yp, yr, vxs, vys, vxp, vyp, vyr
@@ -516,16 +516,7 @@ class KinematicModel:
         bearing_force(self.geo, self.cj, self.sj, np.zeros((0, DEFECT_COLUMNS)), np.zeros((0, 4)), 0,
                       d0[0], d0[1], 0.0, 0.0, 0.0, q)
         self.static_ball_load = float(q.max())      # N, most loaded ball at the equilibrium
-        # secant stiffness of the averaged law (robust where the tangent is zero or steep)
-        kb = np.zeros((2, 2))
-        eps = 2e-7
-        for k in range(2):
-            dp = d0.copy()
-            dm = d0.copy()
-            dp[k] += eps
-            dm[k] -= eps
-            kb[:, k] = (self._mean_force(dp) - self._mean_force(dm)) / (2 * eps)
-        kb = 0.5 * (kb + kb.T)
+        kb = secant_stiffness(self._mean_force, d0)       # of the averaged load-deflection law
         self.kb = kb
         # linearised bearing between shaft and pedestal: force on pedestal kb (s - p).  Only its
         # diagonal goes into the linear part (the residual takes the rest, so the model is the

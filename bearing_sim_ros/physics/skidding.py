@@ -90,7 +90,7 @@ from . import KinematicSnapshot, TierOutput
 from .defects import (D_ANGLE, D_BALL, D_KIND, KIND_BALL, KIND_INNER, defect_table, interference_loss,
                       waviness_gain, waviness_table)
 from .integrators import EXPLICIT, SPLIT, method_for
-from .structure import structure_system
+from .structure import secant_stiffness, structure_system
 
 G = 9.80665
 NS0 = 12            # structure (10) + cage (2)
@@ -1445,15 +1445,7 @@ class SkiddingModel:
         """Bearing stiffness at the current shaft-pedestal offset (secant over +-0.2 um) and the
         structure's propagators for the step and every sample inside it."""
         d0 = self.y[0:2] - self.y[2:4]
-        kb = np.zeros((2, 2))
-        eps = 2e-7
-        for k in range(2):
-            dp = d0.copy()
-            dm = d0.copy()
-            dp[k] += eps
-            dm[k] -= eps
-            kb[:, k] = (self._mean_pedestal_force(dp) - self._mean_pedestal_force(dm)) / (2 * eps)
-        self.kb = np.ascontiguousarray(0.5 * (kb + kb.T))
+        self.kb = np.ascontiguousarray(secant_stiffness(self._mean_pedestal_force, d0))
         A, B, self.cacc, self.dacc = structure_system(self.scene, self.kb)
         hs = self.hs / self.q
         kk = int(round(self.hstep / hs))

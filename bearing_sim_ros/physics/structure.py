@@ -48,3 +48,18 @@ def structure_system(scene, kb: np.ndarray):
     B[7, 2] = B[8, 3] = 1.0 / mp
     rows = [7, 9 if has_res else 8]
     return A, B, np.ascontiguousarray(A[rows]), np.ascontiguousarray(B[rows])
+
+
+def secant_stiffness(mean_force, d0: np.ndarray, step: float = 2e-7) -> np.ndarray:
+    """Linearised bearing stiffness (2x2, N/m, symmetrised) at a shaft-pedestal offset ``d0``
+    (m): central secant of ``mean_force(d) -> (2,)`` N over +-``step``.  A secant, not the
+    tangent, because the Hertz law's tangent is zero at the edge of contact and steep just
+    inside it."""
+    kb = np.zeros((2, 2))
+    for k in range(2):
+        dp = np.array(d0, dtype=float)
+        dm = np.array(d0, dtype=float)
+        dp[k] += step
+        dm[k] -= step
+        kb[:, k] = (mean_force(dp) - mean_force(dm)) / (2.0 * step)
+    return 0.5 * (kb + kb.T)
