@@ -16,7 +16,7 @@ from __future__ import annotations
 import struct
 from functools import lru_cache
 
-from .schemas import PRIMITIVES, _ARRAY, _BOUND, _split_type, msg_text
+from .schemas import PRIMITIVES, _ARRAY, _BOUND, _split_type, msg_text, qualified_type
 
 SIZES = {"bool": 1, "byte": 1, "char": 1, "int8": 1, "uint8": 1, "int16": 2, "uint16": 2,
          "int32": 4, "uint32": 4, "float32": 4, "int64": 8, "uint64": 8, "float64": 8}
@@ -44,13 +44,7 @@ def _fields(msg_type: str) -> tuple:
             token = token[:m.start()]
         token = _BOUND.sub("", token)
         if token not in PRIMITIVES:
-            if "/" in token:
-                pkg, tname = _split_type(token)
-            elif token == "Header":
-                pkg, tname = "std_msgs", "Header"
-            else:
-                pkg, tname = package, token
-            token = f"{pkg}/msg/{tname}"
+            token = qualified_type(token, package)
         out.append((token, array))
     if not out:                            # an empty ROS 2 message carries one uint8
         out.append(("uint8", None))

@@ -35,6 +35,18 @@ _ARRAY = re.compile(r"\[[^\]]*\]$")      # [], [3], [<=3]
 _BOUND = re.compile(r"<=\d+$")           # string<=10
 
 
+def qualified_type(token: str, package: str) -> str:
+    """``pkg/msg/Name`` of a non-primitive field type written in a .msg file of ``package``
+    (``Name``, ``pkg/Name``, ``pkg/msg/Name``; the bare ``Header`` is std_msgs')."""
+    if "/" in token:
+        pkg, name = _split_type(token)
+    elif token == "Header":
+        pkg, name = "std_msgs", "Header"
+    else:
+        pkg, name = package, token
+    return f"{pkg}/msg/{name}"
+
+
 def _split_type(msg_type: str) -> tuple:
     """'sensor_msgs/msg/PointCloud2' or 'sensor_msgs/PointCloud2' -> ('sensor_msgs', 'PointCloud2')."""
     parts = msg_type.strip().split("/")
@@ -83,13 +95,7 @@ def field_types(text: str, package: str) -> list:
         token = _BOUND.sub("", _ARRAY.sub("", token))
         if token in PRIMITIVES:
             continue
-        if "/" in token:
-            pkg, name = _split_type(token)
-        elif token == "Header":
-            pkg, name = "std_msgs", "Header"
-        else:
-            pkg, name = package, token
-        out.append(f"{pkg}/msg/{name}")
+        out.append(qualified_type(token, package))
     return out
 
 
