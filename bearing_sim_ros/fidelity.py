@@ -57,10 +57,6 @@ class Selection:
     tolerance: float
     skid_index: float = float("nan")
 
-    def describe(self) -> str:
-        return (f"{self.tier} tier ({self.reason}; kinematic error estimate "
-                f"{self.estimated_error:.1%} against tolerance {self.tolerance:.1%})")
-
 
 @lru_cache(maxsize=64)
 def traction_peak(lub) -> float:

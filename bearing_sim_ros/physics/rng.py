@@ -5,9 +5,6 @@ one call or in many chunks, and a tier may be rebuilt mid-run (fidelity switchin
 the sample index gives that for free.  splitmix64 (Steele, Lea, Flood 2014) passes BigCrush
 when used as a hash of a counter.
 """
-import math
-
-import numpy as np
 from numba import njit, uint64
 
 _GOLDEN = uint64(0x9E3779B97F4A7C15)
@@ -29,24 +26,3 @@ def uniform(seed, stream, index):
     z = _mix(uint64(seed) * _GOLDEN + uint64(stream) * _M2 + uint64(0x632BE59BD9B4E019))
     z = _mix(z + uint64(index) * _GOLDEN)
     return float(z >> uint64(11)) * _INV53
-
-
-@njit(cache=True, inline="always")
-def normal(seed, stream, index):
-    """Standard normal (Box-Muller on two counter-based uniforms)."""
-    u1 = uniform(seed, 2 * stream, index)
-    u2 = uniform(seed, 2 * stream + 1, index)
-    return math.sqrt(-2.0 * math.log(1.0 - u1)) * math.cos(2.0 * math.pi * u2)
-
-
-@njit(cache=True)
-def normal_block(seed, stream, start, out):
-    """Fill ``out`` (1-D) with normals for indices start, start+1, ..."""
-    for i in range(out.shape[0]):
-        out[i] = normal(seed, stream, start + i)
-
-
-def normals(seed: int, stream: int, start: int, n: int) -> np.ndarray:
-    out = np.empty(n)
-    normal_block(seed, stream, start, out)
-    return out
