@@ -21,6 +21,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from numba import njit
+
 from .errors import UserError
 from .scene import Scene, load_scene
 
@@ -56,6 +58,18 @@ class Batch:
 
 def contact_channel_names(balls: int) -> tuple:
     return tuple(f"inner_{j:02d}" for j in range(balls)) + tuple(f"outer_{j:02d}" for j in range(balls))
+
+
+@njit(cache=True)
+def _ramp(speed, load, s0, s1, l0x, l0y, l1x, l1y):
+    """Shaft speed (rad/s) and load (N, x and y) in use at each of the n output samples of a
+    batch over which they move linearly from (s0, l0) to (s1, l1): row k at k / n of the way."""
+    n = speed.shape[0]
+    for k in range(n):
+        f = k / n
+        speed[k] = s0 + (s1 - s0) * f
+        load[k, 0] = l0x + (l1x - l0x) * f
+        load[k, 1] = l0y + (l1y - l0y) * f
 
 
 class Simulator:
@@ -123,16 +137,15 @@ class Simulator:
         self.chain = AccelerometerChain(self.scene.sensor, self.sample_rate, self.oversample, self.seed)
         self.accel_channels = tuple(f"accel_{a}" for a in self.scene.sensor.axes)
         self.contact_channels = contact_channel_names(self.bearing.balls)
+        cols = self.chain.axis_columns
+        self._columns = None if cols == [0, 1] else cols     # None: the chain's output as it is
         # run the physics ahead by the FIR group delay; keep the per-output-sample series that
-        # belong to those future samples until their time comes
-        self._pending = None
+        # belong to those future samples (rows of _pending) until their time comes
+        self._pending = self._series(0)
         ahead = self.chain.lookahead_samples
         if ahead:
-            out = self._model.advance(ahead * self.oversample, self._shaft_speed, self._shaft_speed,
-                                      self._radial_load, self._radial_load)
-            self.chain.prime(out.accel)
-            self._pending = self._per_sample(out, self._shaft_speed, self._shaft_speed,
-                                             self._radial_load, self._radial_load, ahead)
+            s, (lx, ly) = self._shaft_speed, self._radial_load
+            self._pending = self._run(ahead, s, s, lx, ly, lx, ly, None)
 
     # ---- stepping ---------------------------------------------------------------------------
     @property
@@ -148,16 +161,42 @@ class Simulator:
         """Time of the next output sample (s)."""
         return self.index / self.sample_rate
 
-    def _per_sample(self, out, s0, s1, l0, l1, n):
+    def _series(self, rows: int) -> dict:
+        """Empty per-output-sample series: contact forces (N), cage and shaft speed (rad/s),
+        load (N, x and y)."""
+        return {"forces": np.empty((rows, 2 * self.bearing.balls)), "cage_speed": np.empty(rows),
+                "shaft_speed": np.empty(rows), "load": np.empty((rows, 2))}
+
+    def _run(self, n, s0, s1, l0x, l0y, l1x, l1y, index0):
+        """Step the tier by ``n`` output samples' worth (speed in rad/s and load in N ramped
+        from the first to the second value) and feed the accelerometer chain.  Returns the
+        series of every row: the pending ones first, then the n new ones (views of one new
+        array per series, so that a batch never shares memory with a later one); with
+        ``index0`` (absolute output index), also the chain's n output samples (n, 2)."""
         m = self.oversample
-        frac = (np.arange(n) * m) / (n * m)
-        speed = s0 + (s1 - s0) * frac
-        load = l0[None, :] + (l1 - l0)[None, :] * frac[:, None]
-        forces = np.concatenate([out.inner_force, out.outer_force], axis=1)
-        series = {"forces": forces, "cage_speed": out.cage_speed, "shaft_speed": speed, "load": load}
-        for key, val in out.extras.items():
-            series["x_" + key] = val
-        return series
+        pend = self._pending
+        p = pend["cage_speed"].shape[0]
+        series = self._series(p + n)
+        for key, val in series.items():
+            val[:p] = pend[key]
+        acc = self.chain.input_view(n * m)
+        loads = ((l0x, l0y), (l1x, l1y))
+        if hasattr(self._model, "advance_into"):       # writes into the buffers: no copies
+            self._model.advance_into(n * m, s0, s1, *loads, acc, series["forces"][p:],
+                                     series["cage_speed"][p:])
+        else:
+            out = self._model.advance(n * m, s0, s1, np.array(loads[0]), np.array(loads[1]))
+            acc[:] = out.accel
+            nb = self.bearing.balls
+            series["forces"][p:, :nb] = out.inner_force
+            series["forces"][p:, nb:] = out.outer_force
+            series["cage_speed"][p:] = out.cage_speed
+            for key, val in out.extras.items():
+                old = pend.get("x_" + key)
+                series["x_" + key] = val if old is None else np.concatenate([old, val], axis=0)
+        _ramp(series["shaft_speed"][p:], series["load"][p:], s0, s1, l0x, l0y, l1x, l1y)
+        accel = self.chain.commit(n * m, index0)
+        return series if index0 is None else (series, accel)
 
     def advance(self, n: int, shaft_speed: float | None = None, radial_load=None) -> Batch:
         """Advance by ``n`` output samples.  ``shaft_speed`` (rad/s) and ``radial_load`` (N, (x, y))
@@ -165,44 +204,37 @@ class Simulator:
         if not isinstance(n, (int, np.integer)) or n <= 0:
             raise UserError(f"n = {n!r}: expected a whole number of samples > 0")
         s0 = self._shaft_speed
-        l0 = self._radial_load.copy()
+        l0x, l0y = self._radial_load
         s1 = s0 if shaft_speed is None else float(shaft_speed)
-        l1 = l0 if radial_load is None else np.asarray(radial_load, dtype=float).reshape(2)
-        if not math.isfinite(s1) or not np.all(np.isfinite(l1)):
-            raise UserError(f"shaft_speed / radial_load = {s1!r} / {l1!r}: must be finite")
-        self.maybe_switch_tier(s1, l1)
-        out = self._model.advance(n * self.oversample, s0, s1, l0, l1)
-        accel = self.chain.process(out.accel, self.index)
-        fresh = self._per_sample(out, s0, s1, l0, l1, n)
-        series = self._take(fresh, n)
-        self._shaft_speed, self._radial_load = s1, l1
+        if radial_load is None:
+            l1x, l1y = l0x, l0y
+        else:
+            l1 = np.asarray(radial_load, dtype=float).reshape(2)
+            l1x, l1y = float(l1[0]), float(l1[1])
+        if not (math.isfinite(s1) and math.isfinite(l1x) and math.isfinite(l1y)):
+            raise UserError(f"shaft_speed / radial_load = {s1!r} / {(l1x, l1y)!r}: must be finite")
+        self.maybe_switch_tier(s1, (l1x, l1y))
+        n = int(n)
+        series, accel = self._run(n, s0, s1, l0x, l0y, l1x, l1y, self.index)
+        self._pending = {k: v[n:] for k, v in series.items()}
+        self._shaft_speed = s1
+        self._radial_load = np.array([l1x, l1y])
         batch = Batch(
             t0=self.index / self.sample_rate,
             index0=self.index,
             sample_rate=self.sample_rate,
-            accel=accel[:, self.chain.axis_columns],
+            accel=accel if self._columns is None else accel[:, self._columns],
             accel_channels=self.accel_channels,
-            contact_forces=series["forces"],
+            contact_forces=series["forces"][:n],
             contact_channels=self.contact_channels,
-            cage_speed=series["cage_speed"],
-            shaft_speed=series["shaft_speed"],
-            radial_load=series["load"],
+            cage_speed=series["cage_speed"][:n],
+            shaft_speed=series["shaft_speed"][:n],
+            radial_load=series["load"][:n],
             tier=self.tier,
-            extras={k[2:]: v for k, v in series.items() if k.startswith("x_")},
+            extras={k[2:]: v[:n] for k, v in series.items() if k.startswith("x_")},
         )
         self.index += n
         return batch
-
-    def _take(self, fresh: dict, n: int) -> dict:
-        """The n oldest per-sample rows (pending from the lookahead first), keeping the rest."""
-        if self._pending is None:
-            return fresh
-        joined = {}
-        for key, val in fresh.items():
-            old = self._pending.get(key)
-            joined[key] = val if old is None else np.concatenate([old, val], axis=0)
-        self._pending = {k: v[n:] for k, v in joined.items()}
-        return {k: v[:n] for k, v in joined.items()}
 
     # ---- fidelity -----------------------------------------------------------------------------
     def maybe_switch_tier(self, shaft_speed: float, radial_load) -> bool:
@@ -210,7 +242,8 @@ class Simulator:
         without a discontinuity (the new tier starts from the old one's state)."""
         if self.requested_fidelity != "auto" or self.scene.fidelity != "auto":
             return False
-        if shaft_speed == self._shaft_speed and np.array_equal(radial_load, self._radial_load):
+        if (shaft_speed == self._shaft_speed and radial_load[0] == self._radial_load[0]
+                and radial_load[1] == self._radial_load[1]):
             return False            # same operating point: same choice
         from .fidelity import select_tier
 

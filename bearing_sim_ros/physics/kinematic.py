@@ -180,7 +180,8 @@ def advance_kernel(x, ang, trig, step, hist, geom, n, m, d, s0, s1, l0x, l0y, l1
     unused): state, residual at the three corrector nodes, external force.
 
     Writes d acceleration samples per step to out_acc (n * d, 2) and, every m-th step, the ball
-    loads at the step start to out_q (n // m, Nb) and the cage speed to out_cage.
+    loads at the step start to out_q (n // m, 2 Nb: the inner contacts, then the outer ones, the
+    same values as a ball is massless) and the cage speed to out_cage.
 
     fastmath "contract" only (no reassociation, no finite-math assumptions): the compiler may fuse
     a * b + c into one FMA instruction.  15-20 % faster (the step is a chain of multiply-adds);
@@ -257,6 +258,7 @@ def advance_kernel(x, ang, trig, step, hist, geom, n, m, d, s0, s1, l0x, l0y, l1
                 fy += qj * gs[j]
             if record:
                 out_q[o, j] = qj
+                out_q[o, nb + j] = qj
         rx = fx - kbx * dx
         ry = fy - kby * dy
         if not have_prev:
@@ -534,7 +536,7 @@ class KinematicModel:
         rows = [7, 9 if self.scene.structure.has_resonator else 8]
         self._propagators(A, B, A[rows], B[rows])
         self.hist[2] = 0.0       # the residual's definition changed: restart its history
-        self._lin_load = load.copy()
+        self._lin_load = (float(load[0]), float(load[1]))
         if initial:
             self.x[:4] = eq
             self.x[4] = eq[3]          # the resonator spring carries no static load
@@ -602,33 +604,37 @@ class KinematicModel:
             self.dense_y[sd] = np.concatenate([cphi[1, yb], [nd[1, 1] for nd in node],
                                                [(C @ Et[0])[1, 3], (C @ Et[1])[1, 3]]])
 
-    def _needs_relinearising(self, load: np.ndarray) -> bool:
-        ref = self._lin_load
-        scale = max(np.linalg.norm(ref), 10.0)
-        return np.linalg.norm(load - ref) > 0.2 * scale
+    def _needs_relinearising(self, lx: float, ly: float) -> bool:
+        """Has the load (N) moved by more than 20 % of the one linearised at (10 N at least)?"""
+        rx, ry = self._lin_load
+        return math.hypot(lx - rx, ly - ry) > 0.2 * max(math.hypot(rx, ry), 10.0)
 
     # ---- TierModel interface --------------------------------------------------------------------
     def advance(self, n_steps, speed0, speed1, load0, load1) -> TierOutput:
-        load1 = np.asarray(load1, dtype=float)
-        if self._needs_relinearising(load1):
-            self._linearise(load1)
         nb = int(self.geo[P_NB])
-        m = self.decimation
+        n_out = n_steps // (self.dense * self.decimation)
+        acc = np.empty((n_steps, 2))
+        q = np.empty((n_out, 2 * nb))
+        cage = np.empty(n_out)
+        self.advance_into(n_steps, speed0, speed1, load0, load1, acc, q, cage)
+        # a massless ball presses on both races alike
+        return TierOutput(accel=acc, inner_force=q[:, :nb], outer_force=q[:, nb:], cage_speed=cage)
+
+    def advance_into(self, n_steps, speed0, speed1, load0, load1, acc, forces, cage) -> None:
+        """``advance`` writing into the caller's arrays (no allocation): acc (n_steps, 2) m/s^2,
+        forces (n_steps / chain oversample, 2 Nb) N (inner contacts, then outer), cage (same rows)
+        rad/s; speeds in rad/s, loads (x, y) in N."""
+        l1x, l1y = float(load1[0]), float(load1[1])
+        if self._needs_relinearising(l1x, l1y):
+            self._linearise(np.array([l1x, l1y]))
         d = self.dense
-        n = n_steps // d                      # integration steps (n_steps: chain samples)
-        acc = np.empty((n * d, 2))
-        q = np.empty((n // m, nb))
-        cage = np.empty(n // m)
-        advance_kernel(self.x, self.angles, self.trig, self.step, self.hist, self.geom, n, m, d,
-                       float(speed0), float(speed1), float(load0[0]), float(load0[1]),
-                       float(load1[0]), float(load1[1]), self.h, self.geo, self.cj, self.sj,
+        advance_kernel(self.x, self.angles, self.trig, self.step, self.hist, self.geom, n_steps // d,
+                       self.decimation, d, float(speed0), float(speed1), float(load0[0]),
+                       float(load0[1]), l1x, l1y, self.h, self.geo, self.cj, self.sj,
                        self.dtab, self.wtab, self.seed, self.slip_cache, self.kbx, self.kby,
                        self.px, self.py, self.wx, self.wy, self.ex, self.ey, self.cx, self.cy,
-                       self.feed, self.dense_x,
-                       self.dense_y, acc, q, cage)
+                       self.feed, self.dense_x, self.dense_y, acc, forces, cage)
         self._last_speed = float(speed1)
-        # a massless ball presses on both races alike: one array for both (read-only use)
-        return TierOutput(accel=acc, inner_force=q, outer_force=q, cage_speed=cage)
 
     def adopt_state(self, other) -> None:
         """Continue from another tier's state (same ``x`` layout and ``angles``): the switch

@@ -182,43 +182,61 @@ class AccelerometerChain:
         self._taps2 = self._taps2.reshape(-1, 8)
         self._tail = (self._taps2.size - 2 * nt + 1) // 2   # rows the zero-padded taps read past the data
         self.lookahead_samples = self.half // self.m
-        # internal samples held for the FIR: start index of buf (absolute internal index)
-        self._buf = np.zeros((self.half, 2))     # x[-D .. -1] = 0: at rest before t = 0
-        self._nvalid = self.half                 # rows of _buf that hold samples
+        # internal samples held for the FIR in one buffer that lives as long as the chain (rows
+        # [0, _nvalid) hold samples, the first of them is absolute internal index _buf_start;
+        # rows after them are where the next samples go, written there by the tier directly):
+        # no allocation and no copy of the input per batch
+        self._buf = np.zeros((self.half + self._tail + 4096, 2))   # x[-D .. -1] = 0: at rest before t = 0
+        self._nvalid = self.half
         self._buf_start = -self.half
         self._next_internal = 0                  # absolute internal index of the next input
         self._sigma = sensor.noise_density * math.sqrt(0.5 * self.sample_rate)
 
-    def _push(self, acc_internal: np.ndarray):
-        """Append the new samples (through the sensor resonance) to the held ones: one copy, and
-        zero rows after them for the FIR's padded taps to read."""
+    def input_view(self, n: int) -> np.ndarray:
+        """A writable (n, 2) view of the buffer where the next n internal samples go (m/s^2 of
+        the sensor mount; x, y); fill it, then call ``commit``.  Valid until the next call."""
+        need = self._nvalid + n + self._tail
+        if need > self._buf.shape[0]:
+            buf = np.zeros((max(need, 2 * self._buf.shape[0]), 2))
+            buf[:self._nvalid] = self._buf[:self._nvalid]
+            self._buf = buf
+        return self._buf[self._nvalid:self._nvalid + n]
+
+    def commit(self, n: int, index0: int | None = None) -> np.ndarray | None:
+        """Take the n samples written into ``input_view(n)`` (through the sensor resonance).
+        ``index0`` None: only feed them (the lookahead); otherwise return the n / m output
+        samples starting at output index ``index0`` (m/s^2, (n / m, 2), a new array)."""
         keep = self._nvalid
-        n = acc_internal.shape[0]
-        buf = np.empty((keep + n + self._tail, 2))
-        buf[:keep] = self._buf[:keep]
-        buf[keep:keep + n] = acc_internal
-        buf[keep + n:] = 0.0
         if self._bq is not None:
             b, a, zi = self._bq
-            _biquad2(buf[keep:keep + n], b, a, zi)
-        self._buf = buf
+            _biquad2(self._buf[keep:keep + n], b, a, zi)
         self._nvalid = keep + n
         self._next_internal += n
-
-    def prime(self, acc_internal: np.ndarray):
-        """Feed the lookahead (the first D internal samples) without producing output."""
-        self._push(acc_internal)
-
-    def process(self, acc_internal: np.ndarray, index0: int) -> np.ndarray:
-        """Feed n*m internal samples; return the n output samples starting at ``index0``."""
-        self._push(acc_internal)
-        n = acc_internal.shape[0] // self.m
-        out = np.empty((n, 2))
+        if index0 is None:
+            return None
+        # zero rows after the samples: the FIR's zero-padded taps read up to _tail rows past them
+        self._buf[self._nvalid:self._nvalid + self._tail] = 0.0
+        n_out = n // self.m
+        out = np.empty((n_out, 2))
         first = index0 * self.m - self.half          # absolute internal index of the first tap
-        _polyphase(self._buf.ravel(), self._taps2, self.m, first - self._buf_start, n, out)
-        keep_from = (index0 + n) * self.m - self.half
-        self._buf = self._buf[keep_from - self._buf_start:self._nvalid]
-        self._nvalid = self._buf.shape[0]
+        _polyphase(self._buf.ravel(), self._taps2, self.m, first - self._buf_start, n_out, out)
+        # keep what the next outputs' taps reach back to, moved to the front of the buffer
+        keep_from = (index0 + n_out) * self.m - self.half
+        lo = keep_from - self._buf_start
+        self._buf[:self._nvalid - lo] = self._buf[lo:self._nvalid]
+        self._nvalid -= lo
         self._buf_start = keep_from
         _noise_clip(out, index0, self.seed, self._sigma, self.sensor.range)
         return out
+
+    def prime(self, acc_internal: np.ndarray):
+        """Feed the lookahead (the first D internal samples) without producing output."""
+        n = acc_internal.shape[0]
+        self.input_view(n)[:] = acc_internal
+        self.commit(n)
+
+    def process(self, acc_internal: np.ndarray, index0: int) -> np.ndarray:
+        """Feed n*m internal samples; return the n output samples starting at ``index0``."""
+        n = acc_internal.shape[0]
+        self.input_view(n)[:] = acc_internal
+        return self.commit(n, index0)
