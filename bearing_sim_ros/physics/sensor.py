@@ -117,6 +117,32 @@ def _noise_clip(out, index0, seed, sigma, limit):
         out[i, 1] = min(max(y, -limit), limit)
 
 
+@njit(cache=True)
+def _commit(buf, nvalid, n, bq_b, bq_a, bq_z, tail, taps2, m, first, out, index0, seed, sigma, limit):
+    """``AccelerometerChain.commit`` in one compiled call (a batch of the node is ~150 output
+    samples: the Python around a handful of small calls cost as much as the FIR).
+
+    buf (rows, 2): rows [0, nvalid) held samples, the next n rows new ones; bq_*: the resonance
+    biquad (b empty: none); first: buffer row of the first output's first tap; out (n_out, 2):
+    n_out may be 0 (only feed).  Returns the number of rows held afterwards: the rows the next
+    outputs' taps reach back to, moved to the front of the buffer."""
+    if bq_b.shape[0] > 0:
+        _biquad2(buf[nvalid:nvalid + n], bq_b, bq_a, bq_z)
+    nvalid += n
+    n_out = out.shape[0]
+    if n_out == 0:
+        return nvalid
+    # zero rows after the samples: the FIR's zero-padded taps read up to ``tail`` rows past them
+    buf[nvalid:nvalid + tail] = 0.0
+    _polyphase(buf.ravel(), taps2, m, first, n_out, out)
+    lo = first + n_out * m
+    for r in range(nvalid - lo):
+        buf[r, 0] = buf[lo + r, 0]
+        buf[r, 1] = buf[lo + r, 1]
+    _noise_clip(out, index0, seed, sigma, limit)
+    return nvalid - lo
+
+
 def design_antialias(oversample: int) -> np.ndarray:
     """Kaiser low-pass taps at the internal rate for decimation by ``oversample``; odd length
     2D+1 with D a multiple of ``oversample`` (so the delay is a whole number of output samples)."""
@@ -168,6 +194,8 @@ class AccelerometerChain:
         if 0.0 < f < 0.45 * internal:
             b, a = design_resonance(f, sensor.damping_ratio, internal, AA_STOP * self.sample_rate)
             self._bq = (b, a, np.zeros((2, 2)))
+        # for the compiled commit: an empty numerator means "no resonance"
+        self._bq_b, self._bq_a, self._bq_z = self._bq or (np.zeros(0), np.zeros(3), np.zeros((2, 2)))
         # 2. anti-aliasing FIR
         if self.m > 1:
             self.taps = design_antialias(self.m)
@@ -206,27 +234,16 @@ class AccelerometerChain:
         """Take the n samples written into ``input_view(n)`` (through the sensor resonance).
         ``index0`` None: only feed them (the lookahead); otherwise return the n / m output
         samples starting at output index ``index0`` (m/s^2, (n / m, 2), a new array)."""
-        keep = self._nvalid
-        if self._bq is not None:
-            b, a, zi = self._bq
-            _biquad2(self._buf[keep:keep + n], b, a, zi)
-        self._nvalid = keep + n
+        n_out = 0 if index0 is None else n // self.m
+        out = np.empty((n_out, 2))
+        first = 0 if index0 is None else index0 * self.m - self.half - self._buf_start
+        self._nvalid = _commit(self._buf, self._nvalid, n, self._bq_b, self._bq_a, self._bq_z,
+                               self._tail, self._taps2, self.m, first, out, 0 if index0 is None else index0,
+                               self.seed, self._sigma, self.sensor.range)
         self._next_internal += n
         if index0 is None:
             return None
-        # zero rows after the samples: the FIR's zero-padded taps read up to _tail rows past them
-        self._buf[self._nvalid:self._nvalid + self._tail] = 0.0
-        n_out = n // self.m
-        out = np.empty((n_out, 2))
-        first = index0 * self.m - self.half          # absolute internal index of the first tap
-        _polyphase(self._buf.ravel(), self._taps2, self.m, first - self._buf_start, n_out, out)
-        # keep what the next outputs' taps reach back to, moved to the front of the buffer
-        keep_from = (index0 + n_out) * self.m - self.half
-        lo = keep_from - self._buf_start
-        self._buf[:self._nvalid - lo] = self._buf[lo:self._nvalid]
-        self._nvalid -= lo
-        self._buf_start = keep_from
-        _noise_clip(out, index0, self.seed, self._sigma, self.sensor.range)
+        self._buf_start = (index0 + n_out) * self.m - self.half
         return out
 
     def prime(self, acc_internal: np.ndarray):
