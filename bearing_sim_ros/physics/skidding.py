@@ -1020,74 +1020,6 @@ def _forcing_increment(y, xpred, aux, p, ws, hstep, dlt):
         dlt[b + B_OM] = -rb * dfi / jb
 
 
-@njit(cache=True)
-def _split_core(y, fy, un, aux0, t, hstep, ramp, ta_, tg_, tb_, gamma, p, dtab, wti, wto, film,
-                phi, g0, g1, kb, ynext, fnext, unext, auxn, dgn, filmn, kst, ytmp, rtmp, auxs, dgs,
-                wsp, wcage, scr, frc, xpred, nball, ycur_, fcur_, xb_, auxb_):
-    """One step of :class:`~.integrators.SplitROS2` of ``hstep`` s from (t, y) with the structure
-    propagators (phi, g0, g1) of that step (see its docstring)."""
-    n = y.shape[0]
-    # structure predictor with the input held
-    for r in range(10):
-        acc = 0.0
-        for c in range(10):
-            acc += phi[r, c] * y[c]
-        for c in range(4):
-            acc += g0[r, c] * un[c]
-        xpred[r] = acc
-    # ROS2 on balls and cage, the structure given (going linearly from x_n to x*), in nball
-    # sub-steps (multirate: the balls' stiff forced response converges at first order in their
-    # step where the forcing is rough, the exact structure needs no sub-steps)
-    MB = nball
-    hb = hstep / MB
-    hg = hb * gamma
-    for i in range(n):
-        ycur_[i] = y[i]
-        fcur_[i] = fy[i]
-    auxb_[:, :] = aux0
-    for sb in range(MB):
-        for i in range(10):
-            xb_[i] = y[i] + (sb + 1.0) / MB * (xpred[i] - y[i])
-        ws0, _a0, _x0, _y0 = _inputs(ramp, t + sb * hb)
-        _w_factor(ycur_, auxb_, p, hg, ws0, wsp, wcage)
-        _forcing_increment(ycur_, xb_, auxb_, p, ws0, hb, ytmp)
-        for i in range(n):
-            rtmp[i] = fcur_[i] + gamma * ytmp[i]
-            ytmp[i] = -gamma * ytmp[i]
-        _w_apply(p, hg, wsp, wcage, rtmp, kst[0])
-        for i in range(n):
-            rtmp[i] = ytmp[i]
-        for i in range(n):
-            ytmp[i] = ycur_[i] + hb * ta_[1, 0] * kst[0, i]
-        for i in range(10):
-            ytmp[i] = xb_[i]
-        ws, ang, fx, fyy = _inputs(ramp, t + (sb + 1) * hb)
-        for i in range(n):
-            kst[1, i] = rtmp[i]
-        _rhs(ytmp, rtmp, ws, ang, fx, fyy, p, dtab, wti, wto, film, auxs, dgs, scr, frc)
-        for i in range(n):
-            rtmp[i] += tg_[1, 0] * kst[0, i] + kst[1, i]
-        _w_apply(p, hg, wsp, wcage, rtmp, kst[1])
-        for i in range(n):
-            ynext[i] = ycur_[i] + hb * (tb_[0] * kst[0, i] + tb_[1] * kst[1, i])
-        for i in range(10):
-            ynext[i] = xb_[i]
-        if sb < MB - 1:
-            _rhs(ynext, fcur_, ws, ang, fx, fyy, p, dtab, wti, wto, film, auxb_, dgs, scr, frc)
-            for i in range(n):
-                ycur_[i] = ynext[i]
-    filmn[:, :] = film
-    _film_update(ynext, ws, p, filmn, auxs, True, _film_scale(ramp, t + hstep))
-    _rhs(ynext, fnext, ws, ang, fx, fyy, p, dtab, wti, wto, filmn, auxn, dgn, scr, frc)
-    _inputs_split(frc, ynext, kb, fx, fyy, p[P_WS], unext)
-    # structure corrector with the input ramped from u_n to u'
-    for r in range(10):
-        acc = xpred[r]
-        for c in range(4):
-            acc += g1[r, c] * (unext[c] - un[c])
-        ynext[r] = acc
-
-
 @njit(cache=True, inline="always")
 def _contact_changed(a0, a1, nb, pocket):
     """Whether any ball was inside a defect, or any ball-race contact (or, with ``pocket``,
@@ -1106,52 +1038,6 @@ def _contact_changed(a0, a1, nb, pocket):
 
 
 @njit(cache=True)
-def _split_step(y, fy, un, aux0, kstep, kk, hs, ramp, ta_, tg_, tb_, gamma, p, dtab, wti, wto, film,
-                phi, g0, g1, phie, g0e, g1e, nsub, kb, ynext, fnext, unext, auxn, dgn, filmn, kst,
-                ytmp, rtmp, auxs, dgs, wsp, wcage, scr, frc, xpred, ycur, fcur, ucur, auxc, filmc,
-                xsmp, usmp, flag, nball, ybl, fbl, xbl, auxbl):
-    """One grid step (kk samples) of the split method, event-aware: if a contact opened or
-    closed during the step, the step is redone as ``nsub`` sub-steps (structure propagators
-    phie, g0e, g1e of one sub-step), so that the instant of the change is resolved to H / nsub.
-    With sub-steps, the structure state and input at the samples inside the step are stored
-    in xsmp, usmp (flag[0] = 1)."""
-    hstep = kk * hs
-    t = kstep * hstep
-    nb = int(p[P_NB])
-    flag[0] = 0
-    _split_core(y, fy, un, aux0, t, hstep, ramp, ta_, tg_, tb_, gamma, p, dtab, wti, wto, film,
-                phi, g0, g1, kb, ynext, fnext, unext, auxn, dgn, filmn, kst, ytmp, rtmp, auxs, dgs,
-                wsp, wcage, scr, frc, xpred, nball, ybl, fbl, xbl, auxbl)
-    if nsub <= 1 or not _contact_changed(aux0, auxn, nb, p[P_CPK] > 0.0):
-        return
-    flag[0] = 1
-    hsub = hstep / nsub
-    per_sample = nsub // kk
-    ycur[:] = y
-    fcur[:] = fy
-    ucur[:] = un
-    auxc[:, :] = aux0
-    filmc[:, :] = film
-    for sidx in range(nsub):
-        _split_core(ycur, fcur, ucur, auxc, t + sidx * hsub, hsub, ramp, ta_, tg_, tb_, gamma, p,
-                    dtab, wti, wto, filmc, phie, g0e, g1e, kb, ynext, fnext, unext, auxn, dgn,
-                    filmn, kst, ytmp, rtmp, auxs, dgs, wsp, wcage, scr, frc, xpred, 1, ybl, fbl, xbl,
-                    auxbl)
-        ycur[:] = ynext
-        fcur[:] = fnext
-        ucur[:] = unext
-        auxc[:, :] = auxn
-        filmc[:, :] = filmn
-        done = sidx + 1
-        if done < nsub and done % per_sample == 0:
-            jj = done // per_sample
-            for r in range(10):
-                xsmp[jj, r] = ycur[r]
-            for c in range(4):
-                usmp[jj, c] = ucur[c]
-
-
-@njit(cache=True)
 def _engine_split(y, fy, un, aux0, dg0, film, counters, n, m, hs, kk, ramp, ta_, tg_, tb_, gamma,
                   p, dtab, wti, wto, phi, g0, g1, phis, g0s, g1s, phie, g0e, g1e, nsub, nball, cacc,
                   dacc, kb, out_acc, out_qi, out_qo, out_cage, out_bs, out_cs, out_sli, out_slo, out_fi,
@@ -1159,7 +1045,22 @@ def _engine_split(y, fy, un, aux0, dg0, film, counters, n, m, hs, kk, ramp, ta_,
     """Advance ``n`` internal samples with :class:`~.integrators.SplitROS2`, one step per ``kk``
     samples.  The state (y, its derivative fy, the structure input un, aux0, dg0, film) persists
     between calls, so chunking does not change the result; counters as in :func:`_engine`
-    (counters[3] = 1 once fy/un are valid)."""
+    (counters[3] = 1 once fy/un are valid).
+
+    One step (see :class:`~.integrators.SplitROS2`):
+
+        x* = Phi x_n + G0 u_n                      structure predictor (input held)
+        ROS2 step of the balls/cage with the structure going linearly from x_n to x*
+        u' = ball forces at (z_{n+1}, x*)
+        x_{n+1} = x* + G1 (u' - u_n)               structure corrector (input ramped)
+
+    Event-aware: if a contact opened or closed during the step (or a ball is inside a defect),
+    the step is redone as ``nsub`` sub-steps (propagators phie, g0e, g1e of one sub-step), and
+    the structure state and input at the samples inside the step are kept (xsmp, usmp).
+
+    The step is written out here rather than in helper functions on purpose: a numba call costs
+    about 18 ns per array argument (reference counting and the array struct), and a step whose
+    ~40 work arrays went down two call levels spent more time in calls than in physics."""
     nvar = y.shape[0]
     nb = int(p[P_NB])
     ynext = np.empty(nvar)
@@ -1187,11 +1088,12 @@ def _engine_split(y, fy, un, aux0, dg0, film, counters, n, m, hs, kk, ramp, ta_,
     filmc = np.empty_like(film)
     xsmp = np.empty((kk, 10))
     usmp = np.empty((kk, 4))
-    flag = np.zeros(1, dtype=np.int64)
     ybl = np.empty(nvar)
     fbl = np.empty(nvar)
     xbl = np.empty(10)
     auxbl = np.empty((nb, NAUX))
+    pocket = p[P_CPK] > 0.0
+    hstep = kk * hs
     kstep = counters[0]
     i0 = counters[1]
     if counters[3] == 0:
@@ -1200,21 +1102,140 @@ def _engine_split(y, fy, un, aux0, dg0, film, counters, n, m, hs, kk, ramp, ta_,
         _inputs_split(frc, y, kb, fx, fyy, p[P_WS], un)
         counters[3] = 1
     have_next = False
+    substepped = False
     for i in range(n):
         gi = i0 + i
-        while (kstep + 1) * kk <= gi:
+        while True:
+            accept = (kstep + 1) * kk <= gi
+            if not accept and gi == kstep * kk:
+                break                        # a sample on the grid: no step needed
             if not have_next:
-                _split_step(y, fy, un, aux0, kstep, kk, hs, ramp, ta_, tg_, tb_, gamma, p, dtab, wti,
-                            wto, film, phi, g0, g1, phie, g0e, g1e, nsub, kb, ynext, fnext, unext,
-                            auxn, dgn, filmn, kst, ytmp, rtmp, auxs, dgs, wsp, wcage, scr, frc, xpred,
-                            ycur, fcur, ucur, auxc, filmc, xsmp, usmp, flag, nball, ybl, fbl, xbl,
-                            auxbl)
-            y[:] = ynext
-            fy[:] = fnext
-            un[:] = unext
-            film[:, :] = filmn
-            aux0[:, :] = auxn
-            dg0[:, :] = dgn
+                # ---- one grid step from (t, y): first whole, then in nsub sub-steps if a
+                # contact changed; the result in ynext, fnext, unext, auxn, dgn, filmn
+                t = kstep * hstep
+                substepped = False
+                nsteps = 1
+                yc, fc, uc, ac, flc = y, fy, un, aux0, film
+                ph, gz, gl = phi, g0, g1
+                mball = nball
+                for attempt in range(2):
+                    hcur = hstep / nsteps
+                    for sidx in range(nsteps):
+                        tc = t + sidx * hcur
+                        # structure predictor with the input held
+                        for r in range(10):
+                            acc = 0.0
+                            for c in range(10):
+                                acc += ph[r, c] * yc[c]
+                            for c in range(4):
+                                acc += gz[r, c] * uc[c]
+                            xpred[r] = acc
+                        # ROS2 on balls and cage, the structure given (going linearly from x_n
+                        # to x*), in mball sub-steps (multirate: the balls' stiff forced response
+                        # converges at first order in their step where the forcing is rough)
+                        hb = hcur / mball
+                        hg = hb * gamma
+                        for q in range(nvar):
+                            ybl[q] = yc[q]
+                            fbl[q] = fc[q]
+                        for jb_ in range(nb):
+                            for q in range(NAUX):
+                                auxbl[jb_, q] = ac[jb_, q]
+                        for sb in range(mball):
+                            for q in range(10):
+                                xbl[q] = yc[q] + (sb + 1.0) / mball * (xpred[q] - yc[q])
+                            ws0, _a0, _x0, _y0 = _inputs(ramp, tc + sb * hb)
+                            _w_factor(ybl, auxbl, p, hg, ws0, wsp, wcage)
+                            _forcing_increment(ybl, xbl, auxbl, p, ws0, hb, ytmp)
+                            for q in range(nvar):
+                                rtmp[q] = fbl[q] + gamma * ytmp[q]
+                                ytmp[q] = -gamma * ytmp[q]
+                            _w_apply(p, hg, wsp, wcage, rtmp, kst[0])
+                            for q in range(nvar):
+                                rtmp[q] = ytmp[q]
+                            for q in range(nvar):
+                                ytmp[q] = ybl[q] + hb * ta_[1, 0] * kst[0, q]
+                            for q in range(10):
+                                ytmp[q] = xbl[q]
+                            ws, ang, fx, fyy = _inputs(ramp, tc + (sb + 1) * hb)
+                            for q in range(nvar):
+                                kst[1, q] = rtmp[q]
+                            _rhs(ytmp, rtmp, ws, ang, fx, fyy, p, dtab, wti, wto, flc, auxs, dgs, scr, frc)
+                            for q in range(nvar):
+                                rtmp[q] += tg_[1, 0] * kst[0, q] + kst[1, q]
+                            _w_apply(p, hg, wsp, wcage, rtmp, kst[1])
+                            for q in range(nvar):
+                                ynext[q] = ybl[q] + hb * (tb_[0] * kst[0, q] + tb_[1] * kst[1, q])
+                            for q in range(10):
+                                ynext[q] = xbl[q]
+                            if sb < mball - 1:
+                                _rhs(ynext, fbl, ws, ang, fx, fyy, p, dtab, wti, wto, flc, auxbl, dgs, scr,
+                                     frc)
+                                for q in range(nvar):
+                                    ybl[q] = ynext[q]
+                        for jb_ in range(nb):
+                            for q in range(NFILM):
+                                filmn[jb_, q] = flc[jb_, q]
+                        _film_update(ynext, ws, p, filmn, auxs, True, _film_scale(ramp, tc + hcur))
+                        _rhs(ynext, fnext, ws, ang, fx, fyy, p, dtab, wti, wto, filmn, auxn, dgn, scr, frc)
+                        _inputs_split(frc, ynext, kb, fx, fyy, p[P_WS], unext)
+                        # structure corrector with the input ramped from u_n to u'
+                        for r in range(10):
+                            acc = xpred[r]
+                            for c in range(4):
+                                acc += gl[r, c] * (unext[c] - uc[c])
+                            ynext[r] = acc
+                        if nsteps > 1:
+                            for q in range(nvar):
+                                ycur[q] = ynext[q]
+                                fcur[q] = fnext[q]
+                            for q in range(4):
+                                ucur[q] = unext[q]
+                            for jb_ in range(nb):
+                                for q in range(NAUX):
+                                    auxc[jb_, q] = auxn[jb_, q]
+                                for q in range(NFILM):
+                                    filmc[jb_, q] = filmn[jb_, q]
+                            done = sidx + 1
+                            if done < nsteps and done % (nsteps // kk) == 0:
+                                jj = done // (nsteps // kk)
+                                for r in range(10):
+                                    xsmp[jj, r] = ycur[r]
+                                for c in range(4):
+                                    usmp[jj, c] = ucur[c]
+                    if attempt == 1 or nsub <= 1 or not _contact_changed(aux0, auxn, nb, pocket):
+                        break
+                    # redo the step in nsub sub-steps from the same start
+                    substepped = True
+                    nsteps = nsub
+                    ph, gz, gl = phie, g0e, g1e
+                    mball = 1
+                    for q in range(nvar):
+                        ycur[q] = y[q]
+                        fcur[q] = fy[q]
+                    for q in range(4):
+                        ucur[q] = un[q]
+                    for jb_ in range(nb):
+                        for q in range(NAUX):
+                            auxc[jb_, q] = aux0[jb_, q]
+                        for q in range(NFILM):
+                            filmc[jb_, q] = film[jb_, q]
+                    yc, fc, uc, ac, flc = ycur, fcur, ucur, auxc, filmc
+                have_next = True
+            if not accept:
+                break
+            for q in range(nvar):
+                y[q] = ynext[q]
+                fy[q] = fnext[q]
+            for q in range(4):
+                un[q] = unext[q]
+            for jb_ in range(nb):
+                for q in range(NFILM):
+                    film[jb_, q] = filmn[jb_, q]
+                for q in range(NAUX):
+                    aux0[jb_, q] = auxn[jb_, q]
+                for q in range(NDG):
+                    dg0[jb_, q] = dgn[jb_, q]
             kstep += 1
             have_next = False
             if not np.isfinite(y[11]) or not np.isfinite(y[3]) or not np.isfinite(fy[8]):
@@ -1229,15 +1250,8 @@ def _engine_split(y, fy, un, aux0, dg0, film, counters, n, m, hs, kk, ramp, ta_,
             for c in range(4):
                 uu[c] = un[c]
         else:
-            if not have_next:
-                _split_step(y, fy, un, aux0, kstep, kk, hs, ramp, ta_, tg_, tb_, gamma, p, dtab, wti,
-                            wto, film, phi, g0, g1, phie, g0e, g1e, nsub, kb, ynext, fnext, unext,
-                            auxn, dgn, filmn, kst, ytmp, rtmp, auxs, dgs, wsp, wcage, scr, frc, xpred,
-                            ycur, fcur, ucur, auxc, filmc, xsmp, usmp, flag, nball, ybl, fbl, xbl,
-                            auxbl)
-                have_next = True
             fr = jj / kk
-            if flag[0] == 1:
+            if substepped:
                 for r in range(10):
                     xs[r] = xsmp[jj, r]
                 for c in range(4):
@@ -1252,7 +1266,7 @@ def _engine_split(y, fy, un, aux0, dg0, film, counters, n, m, hs, kk, ramp, ta_,
                         du = unext[c] - un[c]
                         acc += g0s[jj, r, c] * un[c] + g1s[jj, r, c] * du + dacc[r, c] * (un[c] + fr * du)
                     out_acc[i, r] = acc
-        if jj == 0 or flag[0] == 1:
+        if jj == 0 or substepped:
             for r in range(2):
                 acc = 0.0
                 for c in range(10):
