@@ -103,29 +103,31 @@ class Run:
     accel: np.ndarray
     cage_speed: float
     cage_skid: float
-    wall: float              # s per second of signal (median)
+    cpu: float               # CPU s of this process per second of signal (median)
     repeats: list
 
 
 def run_config(cfg: Config, scene, sample_rate: float, settle: float, seconds: float, repeats: int,
                seed: int = 0) -> Run:
-    """Simulate ``settle + seconds`` and time the ``seconds`` part, ``repeats`` times."""
+    """Simulate ``settle + seconds`` and time the ``seconds`` part, ``repeats`` times.  Timed in CPU
+    time of this process (single-threaded), so that work on the machine's other cores does not
+    count against the simulator."""
     n_settle = int(settle * sample_rate)
     n = int(seconds * sample_rate)
-    walls, result = [], None
+    cpus, result = [], None
     warm = cfg.simulator(scene, sample_rate, seed)          # compile outside the timing
     warm.advance(max(1, int(0.002 * sample_rate)))
     for _ in range(repeats):
         sim = cfg.simulator(scene, sample_rate, seed)
         sim.advance(n_settle)
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         batch = sim.advance(n)
-        walls.append(time.perf_counter() - t0)
+        cpus.append(time.process_time() - t0)
         result = batch
     skid = result.extras.get("cage_skid")
     return Run(accel=result.accel[:, -1].copy(), cage_speed=float(np.mean(result.cage_speed)),
                cage_skid=float(np.mean(skid)) if skid is not None else 0.0,
-               wall=stats.median(walls) / seconds, repeats=[w / seconds for w in walls])
+               cpu=stats.median(cpus) / seconds, repeats=[c / seconds for c in cpus])
 
 
 def scene_lines(scene) -> list:
@@ -166,7 +168,7 @@ def study(quick: bool = False, sample_rate: float = 15000.0, progress=None) -> d
         scene = sc.build()
         ref = run_config(ref_cfg, scene, sample_rate, settle, seconds, 1)
         if progress:
-            progress(f"{sc.label}: reference {1 / ref.wall:.2f}x real time")
+            progress(f"{sc.label}: reference {1 / ref.cpu:.2f}x real time")
         for cfg in configs:
             try:
                 run = run_config(cfg, scene, sample_rate, settle, seconds, repeats)
@@ -178,9 +180,9 @@ def study(quick: bool = False, sample_rate: float = 15000.0, progress=None) -> d
                 continue
             err = errors(run, ref, scene, sample_rate)
             row = {"scenario": sc.label, "config": cfg.label, "family": cfg.family,
-                   "real_time_factor": 1.0 / run.wall, "rtf_repeats": [1.0 / w for w in run.repeats],
+                   "real_time_factor": 1.0 / run.cpu, "rtf_repeats": [1.0 / w for w in run.repeats],
                    **err, "cage_skid": run.cage_skid, "reference_cage_skid": ref.cage_skid,
-                   "reference_real_time_factor": 1.0 / ref.wall}
+                   "reference_real_time_factor": 1.0 / ref.cpu}
             rows.append(row)
             if progress:
                 progress(f"  {cfg.label:<24} {row['real_time_factor']:8.1f}x  error {row['error']:.2%}")
@@ -219,7 +221,8 @@ def markdown(result: dict) -> str:
         "",
         f"Machine: {m['cpu']}, {m['cores']} cores (one used), Python {m['python']}, numba {m['numba']}. "
         f"{result['seconds']:g} s of signal at {result['sample_rate']:g} Hz after {result['settle']:g} s of "
-        f"settling, median of {result['repeats']} run(s); errors against `{result['reference']}`, sensor noise off.",
+        f"settling, median of {result['repeats']} run(s) in CPU time of one process; errors against "
+        f"`{result['reference']}`, sensor noise off.",
         "",
         "| scenario | setting | real-time factor | error | RMS | lines | cage speed | cage skid (pp) | waveform |",
         "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |",
@@ -232,7 +235,41 @@ def markdown(result: dict) -> str:
             f"| {r['scenario']} | {r['config']} | {r['real_time_factor']:.1f}x | {r['error']:.2%} | {r['rms']:.2%} | "
             f"{r['lines']:.2%} | {r['cage']:.2%} | {r['skid']:.2f} | {r['waveform']:.2f} |")
     lines.append("")
+    summary = default_against_rk4(result["rows"])
+    if summary:
+        lines += ["## The default solver against fixed-step RK4", "",
+                  "RK4 at equal error: the fastest RK4 row that did not diverge and is at least as accurate "
+                  "as the default (RK4 cannot go faster: beyond its stability limit it diverges).", "",
+                  "| scenario | default | default error | RK4 at equal error | its error | default ahead by |",
+                  "| --- | ---: | ---: | --- | ---: | ---: |"]
+        for s in summary:
+            rk = f"{s['rk4']} ({s['rk4_rtf']:.2f}x)" if s["rk4"] else "none as accurate"
+            ahead = f"{s['ahead']:.1f}x" if s["ahead"] else "-"
+            rk_err = f"{s['rk4_error']:.2%}" if s["rk4"] else "-"
+            lines.append(f"| {s['scenario']} | {s['rtf']:.1f}x | {s['error']:.2%} | {rk} | {rk_err} | {ahead} |")
+        lines.append("")
     return "\n".join(lines)
+
+
+def default_against_rk4(rows: list) -> list:
+    """Per scenario: the default solver's real-time factor and error, and the fastest stable RK4
+    row with an error at most the default's (the equal-error comparison of the work-precision
+    plot, conservative for RK4 where every stable RK4 row is more accurate than the default)."""
+    out = []
+    for sc in dict.fromkeys(r["scenario"] for r in rows):
+        mine = [r for r in rows if r["scenario"] == sc and r["family"] == "skidding default" and "diverged" not in r]
+        if not mine:
+            continue
+        d = mine[0]
+        rk = [r for r in rows if r["scenario"] == sc and r["family"] == "skidding rk4" and "diverged" not in r
+              and r["error"] <= d["error"]]
+        best = max(rk, key=lambda r: r["real_time_factor"]) if rk else None
+        out.append({"scenario": sc, "rtf": d["real_time_factor"], "error": d["error"],
+                    "rk4": best["config"] if best else None,
+                    "rk4_rtf": best["real_time_factor"] if best else None,
+                    "rk4_error": best["error"] if best else None,
+                    "ahead": d["real_time_factor"] / best["real_time_factor"] if best else None})
+    return out
 
 
 def plot(result: dict, path: Path) -> None:
@@ -351,6 +388,7 @@ def bench_command(args) -> int:
               f"(worst point off by x{result['worst_factor']:.2f}); wrote {target}")
         return 0
     result = study(quick=args.quick, progress=say)
+    result["default_against_rk4"] = default_against_rk4(result["rows"])
     (out / "bench.json").write_text(json.dumps(result, indent=2))
     (out / "bench.md").write_text(markdown(result))
     plot(result, out / "bench.png")

@@ -25,6 +25,18 @@ def test_quick_bench_writes_table_json_and_plot(tmp_path, bearing_sim_exe):
         assert skid["error"] < 0.05 and kin > skid["real_time_factor"]
     table = (out / "bench.md").read_text()
     assert "| scenario | setting | real-time factor |" in table
+    # the equal-error comparison: the fastest stable RK4 row at least as accurate as the default
+    summary = result["default_against_rk4"]
+    assert {s["scenario"] for s in summary} == {r["scenario"] for r in rows}
+    for s in summary:
+        rk4 = [r for r in rows if r["scenario"] == s["scenario"] and r["family"] == "skidding rk4"
+               and r["error"] <= s["error"]]
+        if rk4:
+            best = max(rk4, key=lambda r: r["real_time_factor"])
+            assert s["rk4"] == best["config"] and math.isclose(s["ahead"], s["rtf"] / best["real_time_factor"])
+        else:
+            assert s["rk4"] is None and s["ahead"] is None
+    assert "## The default solver against fixed-step RK4" in table
     assert (out / "bench.png").stat().st_size > 10_000
 
 

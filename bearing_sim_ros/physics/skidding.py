@@ -1658,6 +1658,7 @@ class SkiddingModel:
 #: Simulator keyword arguments).  RK4 runs only at steps it survives on the benchmark scenes
 #: (seed 000's 1e-5 s diverges on this model, see docs/readme/skidding.md).
 BENCH_CONFIGS = [
+    ("rk4 h=4e-06", "skidding rk4", {"solver": "rk4", "rk4_step": 4.0e-6}),
     ("rk4 h=2e-06", "skidding rk4", {"solver": "rk4", "rk4_step": 2.0e-6}),
     ("rk4 h=1e-06", "skidding rk4", {"solver": "rk4", "rk4_step": 1.0e-6}),
     ("default", "skidding default", {"solver": "default"}),
