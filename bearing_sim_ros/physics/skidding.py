@@ -1669,7 +1669,7 @@ def measure(scene, seconds: float, solver: str = "default", rk4_step: float | No
             settle: float = 0.05, sample_rate: float = 15000.0, seed: int = 0) -> dict:
     """Time the skidding tier through the Simulator (sensor noise off) on ``scene`` (a Scene or a
     shipped name): ``settle`` s untimed, then ``seconds`` timed.  Returns the real-time factor
-    (simulated s per wall s, this process's CPU time), the output accel (n, axes), the mean cage
+    (simulated s per CPU s of the calling thread), the output accel (n, axes), the mean cage
     speed (rad/s) and the mean ball and cage skid ratios (%)."""
     import time
     from dataclasses import replace
@@ -1683,9 +1683,9 @@ def measure(scene, seconds: float, solver: str = "default", rk4_step: float | No
     sim = Simulator(scene, sample_rate=sample_rate, fidelity="skidding", seed=seed, solver=solver,
                     rk4_step=rk4_step)
     sim.advance(max(4, int(round(settle * sample_rate)) // 4 * 4))
-    t0 = time.process_time()
+    t0 = time.thread_time()
     b = sim.advance(max(4, int(round(seconds * sample_rate)) // 4 * 4))
-    cpu = time.process_time() - t0
+    cpu = time.thread_time() - t0
     return {
         "real_time_factor": b.n / sample_rate / max(cpu, 1e-9),
         "accel": b.accel,
@@ -1706,7 +1706,7 @@ STUDY_SCENARIOS = [
 
 
 def speed_study(seconds: float = 0.2, settle: float = 0.05, scenarios=None, sample_rate: float = 15000.0):
-    """Real-time factor (CPU time of this process, tier + accelerometer chain, sensor noise off)
+    """Real-time factor (CPU time of the calling thread, tier + accelerometer chain, sensor noise off)
     and error against the reference of each solver setting on each scenario: RMS of both output
     axes and mean cage speed (relative; ``err`` the largest of the three).  Prints a table and
     returns the rows.  ``python -m bearing_sim_ros.physics.skidding [seconds]`` runs it."""
@@ -1733,10 +1733,10 @@ def speed_study(seconds: float = 0.2, settle: float = 0.05, scenarios=None, samp
             chain.prime(np.zeros((chain.lookahead_samples * 4, 2)))
             n0, n = int(settle * sample_rate), int(seconds * sample_rate)
             chain.process(model.advance(4 * n0, w, w, lv, lv).accel, 0)
-            t0 = time.process_time()
+            t0 = time.thread_time()
             out = model.advance(4 * n, w, w, lv, lv)
             acc = chain.process(out.accel, n0)
-            cpu = time.process_time() - t0
+            cpu = time.thread_time() - t0
             rms = np.sqrt(np.mean(acc ** 2, axis=0))
             row = {"scenario": label, "method": mlabel, "real_time_factor": seconds / cpu,
                    "rms": rms.tolist(), "cage_speed": float(out.cage_speed.mean()),
