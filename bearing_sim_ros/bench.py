@@ -103,7 +103,7 @@ class Run:
     accel: np.ndarray
     cage_speed: float
     cage_skid: float
-    cpu: float               # CPU s of this process per second of signal (median)
+    cpu: float               # CPU s of the simulating thread per second of signal (median)
     repeats: list
 
 
@@ -255,7 +255,8 @@ def markdown(result: dict) -> str:
 def default_against_rk4(rows: list) -> list:
     """Per scenario: the default solver's real-time factor and error, and the fastest stable RK4
     row with an error at most the default's (the equal-error comparison of the work-precision
-    plot, conservative for RK4 where every stable RK4 row is more accurate than the default)."""
+    plot).  RK4 cannot take a step beyond its stability limit, so where every stable RK4 row is
+    more accurate than the default the comparison is at that limit."""
     out = []
     for sc in dict.fromkeys(r["scenario"] for r in rows):
         mine = [r for r in rows if r["scenario"] == sc and r["family"] == "skidding default" and "diverged" not in r]
