@@ -531,13 +531,13 @@ def _film_update(y, ws, p, film, aux, from_aux, fscale=1.0):
             film[j, F_HO] *= fscale
 
 
-@njit(cache=True)
-def _ball_radial_force(p, y, j, sh_ang, dtab, wti, wto, film, r):
-    """Quasi-static radial force (N, outward) on ball j at radius r with the rest of ``y`` fixed:
-    Hertz (with film), centrifugal, gravity.  Decreasing in r."""
+@njit(cache=True, inline="always")
+def _static_loads(p, y, j, sh_ang, dtab, wti, wto, film, r):
+    """Hertz loads (N) of ball j at radius r at its inner and outer contact, with the film, the
+    defects' interference losses and the waviness, the rest of ``y`` fixed and no damping; and
+    the cos / sin of the ball's angle: the quasi-static contact law of the set-up."""
     b = NS0 + NBV * j
     th = y[b + B_TH]
-    w = y[b + B_W]
     c = math.cos(th)
     s = math.sin(th)
     e = (y[0] - y[2]) * c + (y[1] - y[3]) * s
@@ -553,6 +553,15 @@ def _ball_radial_force(p, y, j, sh_ang, dtab, wti, wto, film, r):
         do += waviness_gain(wto, th, sh_ang)
     qi = p[P_KI] * di * math.sqrt(di) if di > 0.0 else 0.0
     qo = p[P_KO] * do * math.sqrt(do) if do > 0.0 else 0.0
+    return qi, qo, c, s
+
+
+@njit(cache=True)
+def _ball_radial_force(p, y, j, sh_ang, dtab, wti, wto, film, r):
+    """Quasi-static radial force (N, outward) on ball j at radius r with the rest of ``y`` fixed:
+    Hertz (with film), centrifugal, gravity.  Decreasing in r."""
+    qi, qo, _c, s = _static_loads(p, y, j, sh_ang, dtab, wti, wto, film, r)
+    w = y[NS0 + NBV * j + B_W]
     return qi - qo + p[P_MB] * r * w * w - p[P_MB] * p[P_G] * s
 
 
@@ -593,24 +602,7 @@ def _quasi_static_forces(p, y, sh_ang, dtab, wti, wto, film, out):
     _settle_balls(p, y, sh_ang, dtab, wti, wto, film)
     out[:] = 0.0
     for j in range(nb):
-        b = NS0 + NBV * j
-        th = y[b + B_TH]
-        r = y[b + B_R]
-        c = math.cos(th)
-        s = math.sin(th)
-        e = (y[0] - y[2]) * c + (y[1] - y[3]) * s
-        di = e + p[P_RM] - 0.5 * p[P_CR] - r + film[j, F_HI]
-        do = r - p[P_RM] - 0.5 * p[P_CR] + film[j, F_HO]
-        if dtab.shape[0] > 0:
-            li, lo = interference_loss(dtab, j, th, sh_ang, y[b + B_PSI], p[P_RI], p[P_RO], p[P_RB])
-            di -= li
-            do -= lo
-        if wti.shape[0] > 0:
-            di += waviness_gain(wti, th, sh_ang)
-        if wto.shape[0] > 0:
-            do += waviness_gain(wto, th, sh_ang)
-        qi = p[P_KI] * di * math.sqrt(di) if di > 0.0 else 0.0
-        qo = p[P_KO] * do * math.sqrt(do) if do > 0.0 else 0.0
+        qi, qo, c, s = _static_loads(p, y, j, sh_ang, dtab, wti, wto, film, y[NS0 + NBV * j + B_R])
         out[0] -= qi * c
         out[1] -= qi * s
         out[2] += qo * c
