@@ -1657,36 +1657,6 @@ BENCH_CONFIGS = [
 ]
 
 
-def measure(scene, seconds: float, solver: str = "default", rk4_step: float | None = None,
-            settle: float = 0.05, sample_rate: float = 15000.0, seed: int = 0) -> dict:
-    """Time the skidding tier through the Simulator (sensor noise off) on ``scene`` (a Scene or a
-    shipped name): ``settle`` s untimed, then ``seconds`` timed.  Returns the real-time factor
-    (simulated s per CPU s of the calling thread), the output accel (n, axes), the mean cage
-    speed (rad/s) and the mean ball and cage skid ratios (%)."""
-    import time
-    from dataclasses import replace
-
-    from ..scene import Scene, load_scene
-    from ..simulator import Simulator
-
-    if not isinstance(scene, Scene):
-        scene = load_scene(scene)
-    scene = replace(scene, sensor=replace(scene.sensor, noise_density=0.0))
-    sim = Simulator(scene, sample_rate=sample_rate, fidelity="skidding", seed=seed, solver=solver,
-                    rk4_step=rk4_step)
-    sim.advance(max(4, int(round(settle * sample_rate)) // 4 * 4))
-    t0 = time.thread_time()
-    b = sim.advance(max(4, int(round(seconds * sample_rate)) // 4 * 4))
-    cpu = time.thread_time() - t0
-    return {
-        "real_time_factor": b.n / sample_rate / max(cpu, 1e-9),
-        "accel": b.accel,
-        "cage_speed": float(np.mean(b.cage_speed)),
-        "ball_skid": float(np.mean(b.extras["ball_skid"])),
-        "cage_skid": float(np.mean(b.extras["cage_skid"])),
-    }
-
-
 #: scenarios of :func:`speed_study` (label, scene, rpm, radial load N)
 STUDY_SCENARIOS = [
     ("ER-16K healthy 2000 rpm 200 N", "er16k_skidding", 2000.0, 200.0),
@@ -1697,11 +1667,14 @@ STUDY_SCENARIOS = [
 ]
 
 
-def speed_study(seconds: float = 0.2, settle: float = 0.05, scenarios=None, sample_rate: float = 15000.0):
+def speed_study(seconds: float = 0.2, settle: float = 0.05, scenarios=None, sample_rate: float = 15000.0,
+                squeeze_film: bool = True):
     """Real-time factor (CPU time of the calling thread, tier + accelerometer chain, sensor noise off)
     and error against the reference of each solver setting on each scenario: RMS of both output
     axes and mean cage speed (relative; ``err`` the largest of the three).  Prints a table and
-    returns the rows.  ``python -m bearing_sim_ros.physics.skidding [seconds]`` runs it."""
+    returns the rows.  ``squeeze_film=False`` removes the squeeze-film damping from every run
+    (reference included; the EHL film stays) to show how much of the error it causes.
+    ``python -m bearing_sim_ros.physics.skidding [seconds] [--no-squeeze-film]`` runs it."""
     import time
     from dataclasses import replace
 
@@ -1721,6 +1694,8 @@ def speed_study(seconds: float = 0.2, settle: float = 0.05, scenarios=None, samp
         ref = None
         for mlabel, make in methods:
             model = SkiddingModel(sc, sample_rate, 0, w, lv, method=make())
+            if not squeeze_film:
+                model.p[P_SQI] = model.p[P_SQO] = 0.0
             chain = AccelerometerChain(sc.sensor, sample_rate, 4, 0)
             chain.prime(np.zeros((chain.lookahead_samples * 4, 2)))
             n0, n = int(settle * sample_rate), int(seconds * sample_rate)
@@ -1749,4 +1724,5 @@ def speed_study(seconds: float = 0.2, settle: float = 0.05, scenarios=None, samp
 if __name__ == "__main__":  # pragma: no cover
     import sys
 
-    speed_study(float(sys.argv[1]) if len(sys.argv) > 1 else 0.2)
+    args = [a for a in sys.argv[1:] if not a.startswith("--")]
+    speed_study(float(args[0]) if args else 0.2, squeeze_film="--no-squeeze-film" not in sys.argv)
