@@ -1,5 +1,5 @@
 """Numerics of the fast kinematic tier: the ETD3 propagators, its order, and the error budget that
-lets it run at 2 steps per output sample (docs/readme/kinematic_speed.md).  Speed itself is
+lets it run at 2 steps per output sample (README "Kinematic tier: speed and accuracy").  Speed itself is
 measured by `bearing-sim bench` and the study in the README, not asserted here."""
 import math
 from dataclasses import replace
@@ -95,7 +95,7 @@ def test_two_steps_per_sample_stay_within_the_error_budget(name, line):
     assert abs(h_run / h_ref - 1) < 0.015, (h_run, h_ref)
 
 
-# ---- the study behind docs/readme/kinematic_speed.md: python test/test_kinematic_speed.py ------
+# ---- the study behind the README's "Kinematic tier: speed and accuracy": python test/test_kinematic_speed.py
 # (it uses only names that older versions have, so PYTHONPATH=<old checkout> runs "before")
 def study(oversamples=(1, 2, 4, 8), reference=32, settle=0.3, seconds=2.0, repeats=7):
     """Error of each setting against the converged kinematic run (``reference`` steps per sample;

@@ -317,7 +317,7 @@ def test_healthy_skid_ratios_are_of_the_papers_order():
 
 def test_cage_skid_falls_with_load_and_rises_with_speed():
     """Seed 000 Fig. 17(a, b).  Between 1000 and 2000 N the slip part is below the rolling-radius
-    change of the deflected contacts (docs/readme/skidding.md): there it only has to stay level."""
+    change of the deflected contacts (README "The skidding tier"): there it only has to stay level."""
     by_load = [_skid("er16k_skidding", 2000, w)[1] for w in (50, 200, 1000, 2000)]
     assert by_load[0] > by_load[1] > by_load[2], by_load
     assert by_load[3] < by_load[1] and abs(by_load[3] - by_load[2]) < 0.03, by_load

@@ -5,7 +5,7 @@ Recipe (PHYSICS_NOTES): band-pass around the structural resonance (2-5 kHz by de
 envelope, spectrum of the envelope, and at each fault frequency the height of the line against
 the median level of its neighbourhood.
 
-Choices, checked on the CWRU recordings (``bearing-sim validate``, docs/readme/validation.md):
+Choices, checked on the CWRU recordings (``bearing-sim validate``, README "Validation against real recordings"):
 
 * Band 2-5 kHz (clipped below 0.9 x Nyquist).  The CWRU housing resonances that the defect
   impacts ring sit at 2.3-3.6 kHz (plus 5.2 kHz for the outer-race fault); the healthy machine's

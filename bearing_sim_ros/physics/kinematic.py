@@ -50,7 +50,7 @@ Y_BLOCK = (1, 3, 4, 6, 8, 9)    # ys, yp, yr, vys, vyp, vyr: the vertical block
 CORRECTOR_NODES = (1.0, 0.0, -1.0)   # residual at the step end (predicted), start, previous start
 PREDICTOR_NODES = (0.0, -1.0)
 DEFAULT_OVERSAMPLE = 2  # steps per output sample the Simulator should use by default: ETD3 at x2
-                        # beats the former ETD2 at x4 on every bench scenario (docs/readme/kinematic_speed.md)
+                        # beats the former ETD2 at x4 on every bench scenario (README, "Kinematic tier: speed ...")
 CHAIN_OVERSAMPLE = 4   # accelerometer chain rate / output rate at least (the skidding tier's rate,
                        # so that a switch of tiers keeps the chain and the signal has no seam)
 

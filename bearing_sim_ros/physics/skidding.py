@@ -1648,7 +1648,7 @@ class SkiddingModel:
 # benchmark hooks
 #: settings of this tier that ``bearing-sim bench`` times beside each other: (label, family,
 #: Simulator keyword arguments).  RK4 runs only at steps it survives on the benchmark scenes
-#: (seed 000's 1e-5 s diverges on this model, see docs/readme/skidding.md).
+#: (seed 000's 1e-5 s diverges on this model, README "The skidding tier", "Solvers").
 BENCH_CONFIGS = [
     ("rk4 h=4e-06", "skidding rk4", {"solver": "rk4", "rk4_step": 4.0e-6}),
     ("rk4 h=2e-06", "skidding rk4", {"solver": "rk4", "rk4_step": 2.0e-6}),
