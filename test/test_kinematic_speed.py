@@ -100,13 +100,16 @@ def test_two_steps_per_sample_stay_within_the_error_budget(name, line):
 def study(oversamples=(1, 2, 4, 8), reference=32, settle=0.3, seconds=2.0, repeats=7):
     """Error of each setting against the converged kinematic run (``reference`` steps per sample;
     the skidding tier's reference would add the model difference), on `bearing-sim bench`'s
-    scenarios with sensor noise off; and its speed: model-only ns per step and whole-simulator
-    real-time factor, process time, minimum of ``repeats`` (the machine may be shared)."""
+    scenarios with sensor noise off; and its speed: the tier alone in ns per step, and the whole
+    simulator's real-time factor in 0.25 s batches and in the node's 150-sample batches (the
+    difference to the tier is the accelerometer chain and the per-batch glue); CPU time of this
+    thread, minimum of ``repeats`` (the machine may be shared)."""
     import time
 
     from bearing_sim_ros import bench
 
-    print(f"{'scenario':34s} {'setting':>7s} {'RMS':>7s} {'lines':>7s} {'wave':>6s} {'ns/step':>8s} {'RTF':>7s}")
+    print(f"{'scenario':34s} {'setting':>7s} {'RMS':>7s} {'lines':>7s} {'wave':>6s} {'ns/step':>8s} {'RTF':>7s} "
+          f"{'RTF/150':>8s}")
     for sc in bench.SCENARIOS:
         scene = sc.build()
 
@@ -126,7 +129,7 @@ def study(oversamples=(1, 2, 4, 8), reference=32, settle=0.3, seconds=2.0, repea
             model.advance(150 * c, scene.shaft_speed, scene.shaft_speed, load, load)
             sim = Simulator(scene, sample_rate=FS, fidelity="kinematic", oversample=m)
             sim.advance(1500)
-            t_model = t_sim = math.inf
+            t_model = t_sim = t_node = math.inf
             for _ in range(repeats):
                 t0 = time.thread_time()
                 model.advance(n * c, scene.shaft_speed, scene.shaft_speed, load, load)
@@ -134,8 +137,13 @@ def study(oversamples=(1, 2, 4, 8), reference=32, settle=0.3, seconds=2.0, repea
                 t0 = time.thread_time()
                 sim.advance(n)
                 t_sim = min(t_sim, time.thread_time() - t0)
+                t0 = time.thread_time()
+                for _ in range(n // 150):
+                    sim.advance(150)
+                t_node = min(t_node, time.thread_time() - t0)
             print(f"{sc.label:34s} {'x%d' % m:>7s} {e['rms']:7.2%} {e['lines']:7.2%} {e['waveform']:6.3f} "
-                  f"{t_model / (n * m) * 1e9:8.1f} {n / FS / t_sim:6.0f}x", flush=True)
+                  f"{t_model / (n * m) * 1e9:8.1f} {n / FS / t_sim:6.0f}x {(n // 150) * 150 / FS / t_node:7.0f}x",
+                  flush=True)
 
 
 if __name__ == "__main__":
