@@ -72,7 +72,7 @@ def skid_index(scene, shaft_speed: float, radial_load) -> float:
     (shaft speed rad/s, load (x, y) N)."""
     b = scene.bearing
     lub = scene.lubrication
-    w_cage = abs(shaft_speed) * 0.5 * (1.0 - b.diameter_ratio)
+    w_cage = b.cage_speed(abs(shaft_speed))
     r_m = 0.5 * b.pitch_diameter
     drag_ball = (lub.drag_coefficient * math.pi * lub.fluid_density * b.ball_diameter ** 2
                  * (b.pitch_diameter * w_cage) ** 1.95 / 32.0)

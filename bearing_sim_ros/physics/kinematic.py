@@ -441,7 +441,6 @@ class KinematicModel:
         b = scene.bearing
         st = scene.structure
         nb = b.balls
-        gam = b.diameter_ratio
         self.geo = np.zeros(10)
         self.geo[P_NB] = nb
         self.geo[P_K] = b.combined_stiffness
@@ -449,8 +448,8 @@ class KinematicModel:
         self.geo[P_RB] = 0.5 * b.ball_diameter
         self.geo[P_RI] = 0.5 * b.inner_race_diameter
         self.geo[P_RO] = 0.5 * b.outer_race_diameter
-        self.geo[P_CAGE] = 0.5 * (1.0 - gam)
-        self.geo[P_SPIN] = 0.5 * b.pitch_diameter / b.ball_diameter * (1.0 - gam * gam)
+        self.geo[P_CAGE] = b.cage_speed(1.0)        # pure-rolling speeds per shaft rad/s
+        self.geo[P_SPIN] = b.ball_spin_speed(1.0)
         self.geo[P_SLIP] = scene.random_slip
         self.geo[P_GRAV] = st.shaft_mass * G if scene.gravity else 0.0
         a = 2.0 * np.pi * np.arange(nb) / nb

@@ -1321,7 +1321,6 @@ def parameters(scene) -> np.ndarray:
     st = scene.structure
     lub = scene.lubrication
     p = np.zeros(NPAR)
-    gam = b.diameter_ratio
     ic, oc = b.inner_contact, b.outer_contact
     p[P_NB] = b.balls
     p[P_RB] = 0.5 * b.ball_diameter
@@ -1364,8 +1363,8 @@ def parameters(scene) -> np.ndarray:
     p[P_SQI] = 6.0 * math.pi * lub.viscosity * ic.rx * ic.ry if lub.ehl_film else 0.0
     p[P_SQO] = 6.0 * math.pi * lub.viscosity * oc.rx * oc.ry if lub.ehl_film else 0.0
     p[P_ROUGH] = lub.surface_roughness
-    p[P_CAGER] = 0.5 * (1.0 - gam)
-    p[P_SPINR] = 0.5 * b.pitch_diameter / b.ball_diameter * (1.0 - gam * gam)
+    p[P_CAGER] = b.cage_speed(1.0)          # pure-rolling cage and ball-spin speeds per shaft rad/s
+    p[P_SPINR] = b.ball_spin_speed(1.0)
     a = 2.0 * np.pi * np.arange(b.balls) / b.balls
     return np.concatenate([p, np.cos(a), np.sin(a)])       # pocket directions follow
 
