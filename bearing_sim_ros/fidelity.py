@@ -37,15 +37,15 @@ differences; those come mostly from the EHL squeeze film, which only the skiddin
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
 
+from .catalog import G
 from .paths import config_dir
+from .physics.skidding import drag_coefficient
 
-G = 9.80665
 HYSTERESIS = 0.7
 
 
@@ -74,8 +74,7 @@ def skid_index(scene, shaft_speed: float, radial_load) -> float:
     lub = scene.lubrication
     w_cage = b.cage_speed(abs(shaft_speed))
     r_m = 0.5 * b.pitch_diameter
-    drag_ball = (lub.drag_coefficient * math.pi * lub.fluid_density * b.ball_diameter ** 2
-                 * (b.pitch_diameter * w_cage) ** 1.95 / 32.0)
+    drag_ball = drag_coefficient(scene) * (b.pitch_diameter * w_cage) ** 1.95
     cage_drag = getattr(lub, "cage_drag", 0.0) * w_cage / r_m
     weight = scene.structure.shaft_mass * G if scene.gravity else 0.0
     load = np.asarray(radial_load, dtype=float) + np.array([0.0, -weight])

@@ -22,9 +22,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..catalog import G                       # m/s^2 per g
 from ..errors import UserError
 
-G = 9.80665                                   # m/s^2 per g
 NORMAL_BASELINE_RATE = 48000.0                # Hz: CWRU normal baseline files (see module doc)
 # shaft speed of the CWRU rig by motor load (hp), when a file has no RPM variable (rpm)
 NOMINAL_RPM = {0: 1797.0, 1: 1772.0, 2: 1750.0, 3: 1730.0}

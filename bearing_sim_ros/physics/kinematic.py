@@ -39,9 +39,9 @@ from .defects import (D_ANGLE, D_BALL, D_DEPTH, D_HALF, D_HMAX_I, D_HMAX_O, D_KI
                       KIND_INNER, _profile_drop, add_defect_losses, defect_table, wander_reach,
                       waviness_gain, wrap)
 from .rng import uniform
+from ..catalog import G
 from .structure import secant_stiffness, structure_system
 
-G = 9.80665
 NSTATE = 10   # xs, ys, xp, yp, yr, vxs, vys, vxp, vyp, vyr
 ANCHOR_STEPS = 4096   # re-anchor the rotated cage direction to cos/sin this often
 NINPUT = 4    # residual bearing force on the pedestal (x, y); external force on the shaft (x, y)

@@ -86,13 +86,13 @@ import warnings
 import numpy as np
 from numba import njit
 
+from ..catalog import G
 from . import KinematicSnapshot, TierOutput
 from .defects import (D_ANGLE, D_BALL, D_KIND, KIND_BALL, KIND_INNER, defect_table, interference_loss,
                       waviness_gain, waviness_table)
 from .integrators import EXPLICIT, SPLIT, method_for
 from .structure import secant_stiffness, structure_system
 
-G = 9.80665
 NS0 = 12            # structure (10) + cage (2)
 NBV = 6             # per-ball state entries
 B_TH, B_R, B_PSI, B_W, B_V, B_OM = range(NBV)
@@ -1292,6 +1292,14 @@ def propagators(A: np.ndarray, B: np.ndarray, h: float, tau: float | None = None
 
 
 # ---------------------------------------------------------------------------------------------
+def drag_coefficient(scene) -> float:
+    """Harris' lubricant drag on one ball in SI, F_v = drag_coefficient * (D_m theta')^1.95 (N,
+    D_m theta' in m/s): c_v pi xi d^2 / 32 (seed 000 eq. 30 with d^2 for d and without its
+    stray g)."""
+    b, lub = scene.bearing, scene.lubrication
+    return lub.drag_coefficient * math.pi * lub.fluid_density * b.ball_diameter ** 2 / 32.0
+
+
 def _film_coefficient(contact, lub, e_eff: float) -> float:
     """C in h = C u^0.68 Q^-0.073 (m, with u in m/s and Q in N): Hamrock-Dowson (1977) minimum
     film thickness h = 3.63 U^0.68 G^0.49 W^-0.073 (1 - exp(-0.68 k)) R_x, U = eta0 u / (E' R_x),
@@ -1347,8 +1355,7 @@ def parameters(scene) -> np.ndarray:
     p[P_CDO] = 2.0 * zeta * math.sqrt(1.5 * oc.stiffness * b.ball_mass)
     p[P_TA], p[P_TB], p[P_TC], p[P_TD] = lub.traction_a, lub.traction_b, lub.traction_c, lub.traction_d
     p[P_VC] = lub.creep_velocity
-    # Harris' drag in SI: F = c_v pi xi d^2 (D_m w)^1.95 / 32 (N); the kernel multiplies by D_m^1.95 w^1.95
-    p[P_DRAG] = lub.drag_coefficient * math.pi * lub.fluid_density * b.ball_diameter ** 2 / 32.0
+    p[P_DRAG] = drag_coefficient(scene)    # the kernel multiplies by D_m^1.95 w^1.95
     p[P_G] = G if scene.gravity else 0.0
     p[P_WS] = st.shaft_mass * G if scene.gravity else 0.0
     p[P_RI] = 0.5 * b.inner_race_diameter
