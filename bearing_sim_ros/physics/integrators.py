@@ -63,9 +63,6 @@ class Method:
         return (self.kind, np.ascontiguousarray(self.a, dtype=float), np.ascontiguousarray(self.b, dtype=float),
                 np.ascontiguousarray(self.c, dtype=float), np.ascontiguousarray(g, dtype=float), float(self.gamma))
 
-    def describe(self, sample_spacing: float) -> str:
-        return f"{self.name} (order {self.order}, {self.stages} stages, step {self.step(sample_spacing):.3g} s)"
-
 
 class RK4(Method):
     """The classic fourth-order Runge-Kutta method (Kutta 1901), as in seed 000 Sec. 3.1 (fixed
