@@ -85,7 +85,7 @@ def skidding_configs(quick: bool) -> list:
 
     listed = list(BENCH_CONFIGS)
     if quick:
-        listed = listed[:1] + [c for c in listed if c[1] == "skidding default"][:1]
+        listed = listed[:1] + [c for c in listed if c[0] == "default"]
     configs = [Config(label, family, "skidding", tuple(kw.items())) for label, family, kw in listed]
     if not quick:   # the papers' method at the papers' step, to show where it stands
         configs.insert(0, Config("rk4 h=1e-05 (seed 000)", "skidding rk4", "skidding",
@@ -259,7 +259,7 @@ def default_against_rk4(rows: list) -> list:
     more accurate than the default the comparison is at that limit."""
     out = []
     for sc in dict.fromkeys(r["scenario"] for r in rows):
-        mine = [r for r in rows if r["scenario"] == sc and r["family"] == "skidding default" and "diverged" not in r]
+        mine = [r for r in rows if r["scenario"] == sc and r["config"] == "default" and "diverged" not in r]
         if not mine:
             continue
         d = mine[0]

@@ -78,8 +78,10 @@ class Simulator:
     scene: a :class:`~bearing_sim_ros.scene.Scene` or a shipped name / YAML path.
     sample_rate: output rate (Hz).  fidelity: "auto" | "kinematic" | "skidding".
     seed: random slip and sensor noise.  solver: "default" | "rk4" | "reference" (skidding tier).
-    rk4_step: step of the "rk4" solver (s).  oversample: internal steps per output sample of the
-    kinematic tier (accuracy knob; default ``physics.kinematic.DEFAULT_OVERSAMPLE`` = 2).
+    rk4_step: step of the "rk4" solver (s).  oversample: integration steps per output sample
+    (the accuracy knob: 1, 2 or a multiple of 4 up to 64; by default each tier's own,
+    ``physics.kinematic.DEFAULT_OVERSAMPLE`` = 2 and, for the skidding tier's "default" solver,
+    ``physics.skidding.DEFAULT_OVERSAMPLE`` = 4; "rk4" and "reference" keep their steps).
     """
 
     def __init__(self, scene, sample_rate: float = 15000.0, fidelity: str = "auto", seed: int = 0,
@@ -93,6 +95,9 @@ class Simulator:
             raise UserError(f"fidelity = {fidelity!r}: allowed values are {', '.join(FIDELITIES)}")
         if solver not in SOLVERS:
             raise UserError(f"solver = {solver!r}: allowed values are {', '.join(SOLVERS)}")
+        if oversample is not None and not (isinstance(oversample, int) and not isinstance(oversample, bool)
+                                           and (oversample in (1, 2) or (oversample % 4 == 0 and 4 <= oversample <= 64))):
+            raise UserError(f"oversample = {oversample!r}: allowed values are 1, 2 or a multiple of 4 up to 64")
         if not isinstance(seed, int) or seed < 0:
             raise UserError(f"seed = {seed!r}: expected a whole number >= 0")
         self.scene = scene
@@ -110,6 +115,11 @@ class Simulator:
         from .fidelity import select_tier
 
         request = scene.fidelity if fidelity == "auto" else fidelity
+        if request == "auto" and oversample is not None and oversample > 4:
+            # above 4 the kinematic tier's sensor chain runs faster than the skidding tier's, and a
+            # switch at run time needs the same chain on both sides
+            raise UserError(f"oversample = {oversample!r}: with fidelity auto allowed values are 1, 2 or 4 "
+                            f"(or choose fidelity kinematic or skidding)")
         self.selection = select_tier(scene, request, self._shaft_speed, self._radial_load,
                                      tolerance if tolerance is not None else scene.fidelity_tolerance)
         self.tier = self.selection.tier
@@ -128,7 +138,8 @@ class Simulator:
         from .physics.skidding import SkiddingModel
 
         return SkiddingModel(self.scene, self.sample_rate, self.seed, self._shaft_speed,
-                             self._radial_load, solver=self.solver, rk4_step=self.rk4_step)
+                             self._radial_load, solver=self.solver, rk4_step=self.rk4_step,
+                             oversample=self._oversample)
 
     def _build_chain(self):
         from .physics.sensor import AccelerometerChain

@@ -153,6 +153,26 @@ def test_simulator_contract_and_chunk_invariance():
     np.testing.assert_array_equal(np.concatenate([p.cage_speed for p in parts]), b.cage_speed)
 
 
+def test_oversample_sets_the_default_solvers_step():
+    """``oversample`` = steps of the default per output sample: 2 takes one step per two internal
+    samples (the ones between from the structure's exact response), still chunk-invariant, and
+    close to the shipped 4; a value the step grid cannot take is a one-line error."""
+    sc = make_scene()
+    with pytest.raises(UserError, match=r"^oversample = 3: allowed values are 1, 2 or a multiple of 4 up to 64$"):
+        Simulator(sc, fidelity="skidding", oversample=3)
+    # a switch of tiers at run time needs the same sensor-chain rate in both (4 per sample)
+    with pytest.raises(UserError, match=r"^oversample = 8: with fidelity auto allowed values are 1, 2 or 4"):
+        Simulator(sc, fidelity="auto", oversample=8)
+    assert Simulator(sc, fidelity="skidding", oversample=8).oversample == 4
+    whole = Simulator(sc, fidelity="skidding", oversample=2).advance(600).accel
+    sim = Simulator(sc, fidelity="skidding", oversample=2)
+    parts = [sim.advance(n) for n in (201, 199, 200)]
+    np.testing.assert_array_equal(np.concatenate([p.accel for p in parts]), whole)
+    shipped = Simulator(sc, fidelity="skidding").advance(600).accel
+    assert not np.array_equal(whole, shipped)             # the setting reaches the solver
+    assert np.all(np.abs(rms(whole[150:]) / rms(shipped[150:]) - 1) < 0.02)
+
+
 def test_rk4_at_the_papers_step_reports_divergence_in_one_line():
     sc = make_scene()
     with pytest.raises(UserError, match=r"^rk4_step = 1e-05 s: .*diverged.*solver='default'"):

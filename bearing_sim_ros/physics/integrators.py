@@ -145,12 +145,14 @@ class SplitROS2(ROS2):
         self.ball_substeps = int(ball_substeps)
 
 
-def method_for(solver: str, rk4_step: float | None, reference_per_sample: int = 32) -> Method:
-    """The method behind a ``solver=`` name."""
+def method_for(solver: str, rk4_step: float | None, reference_per_sample: int = 32,
+               default_per_sample: float = 1.0) -> Method:
+    """The method behind a ``solver=`` name; ``default_per_sample``: steps of the default per
+    internal sample (a fraction: several samples per step)."""
     if solver == "rk4":
         return RK4(step=1.0e-5 if rk4_step is None else float(rk4_step))
     if solver == "reference":
         return RK4(per_sample=reference_per_sample)
     if solver == "default":
-        return SplitROS2(per_sample=1)
+        return SplitROS2(per_sample=default_per_sample)
     raise ValueError(solver)

@@ -118,6 +118,8 @@ B_TH, B_R, B_PSI, B_W, B_V, B_OM = range(NBV)
 DEFECT_EPS = 1e-6    # rad: finite-difference step of the defect-depth slope
 FILM_BLEND = 0.02    # s: film scaled in after adopting the kinematic tier's state
 W_REF = 0.01        # rad/s: regularises the skid-ratio denominators at standstill
+DEFAULT_OVERSAMPLE = 4   # steps of the default solver per output sample (one per internal sample);
+                         # 2 halves the cost at up to 5 % RMS error on the hard cases (README, bench)
 FILM_EXP_U, FILM_EXP_Q = 0.68, -0.073     # Hamrock-Dowson exponents (speed, load)
 
 
@@ -1387,9 +1389,14 @@ class SkiddingModel:
     decimation = 4
 
     def __init__(self, scene, sample_rate: float, seed: int, shaft_speed: float, radial_load,
-                 solver: str = "default", rk4_step: float | None = None, method=None):
-        """``method``: an :class:`~.integrators.Method` instance overriding ``solver`` (for
-        studies of step size and method; the Simulator does not use it)."""
+                 solver: str = "default", rk4_step: float | None = None, method=None,
+                 oversample: int | None = None):
+        """``oversample``: steps of the ``"default"`` solver per output sample (default
+        ``DEFAULT_OVERSAMPLE``, one per internal sample; 1 or 2 take a step every 4 or 2 internal
+        samples, the ones between from the structure's exact response; a multiple of 4 takes
+        several steps per internal sample).  ``method``: an :class:`~.integrators.Method`
+        instance overriding ``solver`` (for studies of step size and method; the Simulator does
+        not use it)."""
         from ..errors import UserError
 
         self.scene = scene
@@ -1400,7 +1407,9 @@ class SkiddingModel:
         if rk4_step is not None and not (isinstance(rk4_step, (int, float)) and 1e-9 <= rk4_step <= 1e-3):
             raise UserError(f"rk4_step = {rk4_step!r}: allowed range is [1e-09, 0.001] s")
         self.solver = solver
-        self.method = method if method is not None else method_for(solver, rk4_step)
+        self.oversample = int(oversample or DEFAULT_OVERSAMPLE)
+        self.method = method if method is not None else method_for(
+            solver, rk4_step, default_per_sample=self.oversample / self.decimation)
         self.hstep = self.method.step(self.hs)
         # the split method works on a grid of samples: with several steps per sample it runs on a
         # finer grid (q points per internal sample) and keeps every q-th
@@ -1654,12 +1663,16 @@ class SkiddingModel:
 # benchmark hooks
 #: settings of this tier that ``bearing-sim bench`` times beside each other: (label, family,
 #: Simulator keyword arguments).  RK4 runs only at steps it survives on the benchmark scenes
-#: (seed 000's 1e-5 s diverges on this model, README "The skidding tier", "Solvers").
+#: (seed 000's 1e-5 s diverges on this model, README "The skidding tier", "Solvers"); the default
+#: at 1, 2, 4 (its own setting, "default") and 8 steps per output sample.
 BENCH_CONFIGS = [
     ("rk4 h=4e-06", "skidding rk4", {"solver": "rk4", "rk4_step": 4.0e-6}),
     ("rk4 h=2e-06", "skidding rk4", {"solver": "rk4", "rk4_step": 2.0e-6}),
     ("rk4 h=1e-06", "skidding rk4", {"solver": "rk4", "rk4_step": 1.0e-6}),
+    ("default x1", "skidding default", {"solver": "default", "oversample": 1}),
+    ("default x2", "skidding default", {"solver": "default", "oversample": 2}),
     ("default", "skidding default", {"solver": "default"}),
+    ("default x8", "skidding default", {"solver": "default", "oversample": 8}),
 ]
 
 
