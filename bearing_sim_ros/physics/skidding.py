@@ -75,7 +75,8 @@ this model: the squeeze film and the cage on its pocket springs need <= 3e-6 s);
 RK4 at 1/32 of the internal sample spacing; ``"default"``: :class:`~.integrators.SplitROS2`, the
 structure propagated exactly, balls and cage by ROS2 Rosenbrock-W with a block Jacobian of the
 stiff per-ball couplings and the forcing's time column, one step per internal sample, event
-sub-steps where a contact opens or closes or a ball is inside a defect.  Engines:
+sub-steps where a ball is inside a defect, a step redone with the stiffer Jacobian where a contact
+opens or closes.  Engines:
 :func:`_engine` (explicit RK, whole-state Rosenbrock) and :func:`_engine_split`.
 """
 from __future__ import annotations
@@ -1014,21 +1015,24 @@ def _forcing_increment(y, xpred, aux, p, ws, hstep, dlt):
         dlt[b + B_OM] = -rb * dfi / jb
 
 
+NO_EVENT, CONTACT_EVENT, DEFECT_EVENT = 0, 1, 2
+
+
 @njit(cache=True, inline="always")
-def _contact_changed(a0, a1, nb, pocket):
-    """Whether any ball was inside a defect, or any ball-race contact (or, with ``pocket``,
-    ball-pocket contact) opened or closed, at either of two evaluations.  Without pocket clearance the pocket spring is always engaged (its
-    flag flickers only where its damping outweighs it), so it is not an event."""
+def _step_event(a0, a1, nb, pocket):
+    """What a step went through, from the contact values at its two ends: DEFECT_EVENT if a ball
+    was inside a defect at either end; else CONTACT_EVENT if a ball-race contact (or, with
+    ``pocket``, a ball-pocket contact) opened or closed; else NO_EVENT.  Without pocket clearance
+    the pocket spring is always engaged (its flag flickers only where its damping outweighs it),
+    so it is not an event."""
+    event = NO_EVENT
     for j in range(nb):
         if a0[j, X_LOSS] > 0.0 or a1[j, X_LOSS] > 0.0:      # a ball inside a defect
-            return True
-        if (a0[j, X_KTI] > 0.0) != (a1[j, X_KTI] > 0.0):
-            return True
-        if (a0[j, X_KTO] > 0.0) != (a1[j, X_KTO] > 0.0):
-            return True
-        if pocket and a0[j, X_CIN] != a1[j, X_CIN]:
-            return True
-    return False
+            return DEFECT_EVENT
+        if ((a0[j, X_KTI] > 0.0) != (a1[j, X_KTI] > 0.0) or (a0[j, X_KTO] > 0.0) != (a1[j, X_KTO] > 0.0)
+                or (pocket and a0[j, X_CIN] != a1[j, X_CIN])):
+            event = CONTACT_EVENT
+    return event
 
 
 @njit(cache=True)
@@ -1048,9 +1052,11 @@ def _engine_split(y, fy, un, aux0, dg0, film, counters, n, m, hs, kk, ramp, ta_,
         u' = ball forces at (z_{n+1}, x*)
         x_{n+1} = x* + G1 (u' - u_n)               structure corrector (input ramped)
 
-    Event-aware: if a contact opened or closed during the step (or a ball is inside a defect),
-    the step is redone as ``nsub`` sub-steps (propagators phie, g0e, g1e of one sub-step), and
-    the structure state and input at the samples inside the step are kept (xsmp, usmp).
+    Event-aware: if a ball is inside a defect, the step is redone as ``nsub`` sub-steps
+    (propagators phie, g0e, g1e of one sub-step), and the structure state and input at the
+    samples inside the step are kept (xsmp, usmp).  If a contact opened or closed, so is a step
+    of several samples (``kk`` > 1); a step of one sample is redone once, with each ball's
+    Jacobian from the stiffer end of the step.
 
     The step is written out here rather than in helper functions on purpose: a numba call costs
     about 18 ns per array argument (reference counting and the array struct), and a step whose
@@ -1197,23 +1203,42 @@ def _engine_split(y, fy, un, aux0, dg0, film, counters, n, m, hs, kk, ramp, ta_,
                                     xsmp[jj, r] = ycur[r]
                                 for c in range(4):
                                     usmp[jj, c] = ucur[c]
-                    if attempt == 1 or nsub <= 1 or not _contact_changed(aux0, auxn, nb, pocket):
+                    if attempt == 1 or nsub <= 1:
                         break
-                    # redo the step in nsub sub-steps from the same start
-                    substepped = True
-                    nsteps = nsub
-                    ph, gz, gl = phie, g0e, g1e
-                    mball = 1
+                    event = _step_event(aux0, auxn, nb, pocket)
+                    if event == NO_EVENT:
+                        break
+                    # redo the step from the same start
                     for q in range(nvar):
                         ycur[q] = y[q]
                         fcur[q] = fy[q]
                     for q in range(4):
                         ucur[q] = un[q]
                     for jb_ in range(nb):
-                        for q in range(NAUX):
-                            auxc[jb_, q] = aux0[jb_, q]
                         for q in range(NFILM):
                             filmc[jb_, q] = film[jb_, q]
+                    if event == CONTACT_EVENT and kk == 1:
+                        # a contact opened or closed in a step of one sample: once more, each
+                        # ball's Jacobian from the end of the step where its contacts are stiffer
+                        # (from an open contact that closes during the step, W would leave the
+                        # step explicit in its stiffness).  The end of a longer step is too far
+                        # off to take a Jacobian from (two and four samples per step diverged)
+                        for jb_ in range(nb):
+                            src = aux0
+                            if auxn[jb_, X_KTI] + auxn[jb_, X_KTO] > aux0[jb_, X_KTI] + aux0[jb_, X_KTO]:
+                                src = auxn
+                            for q in range(NAUX):
+                                auxc[jb_, q] = src[jb_, q]
+                    else:
+                        # a ball inside a defect (or a contact event in a longer step): nsub
+                        # sub-steps, each from its own start
+                        substepped = True
+                        nsteps = nsub
+                        ph, gz, gl = phie, g0e, g1e
+                        mball = 1
+                        for jb_ in range(nb):
+                            for q in range(NAUX):
+                                auxc[jb_, q] = aux0[jb_, q]
                     yc, fc, uc, ac, flc = ycur, fcur, ucur, auxc, filmc
                 have_next = True
             if not accept:
