@@ -1026,6 +1026,15 @@ NO_EVENT, CONTACT_EVENT, DEFECT_EVENT = 0, 1, 2
 
 
 @njit(inline="always", **KERNEL)
+def _inside_defect(a, nb):
+    """Whether a ball is inside a defect, from the contact values ``a`` of one instant."""
+    for j in range(nb):
+        if a[j, X_LOSS] > 0.0:
+            return True
+    return False
+
+
+@njit(inline="always", **KERNEL)
 def _step_event(a0, a1, nb, pocket):
     """What a step went through, from the contact values at its two ends: DEFECT_EVENT if a ball
     was inside a defect at either end; else CONTACT_EVENT if a ball-race contact (or, with
@@ -1117,15 +1126,55 @@ def _engine_split(y, fy, un, aux0, dg0, film, counters, n, m, hs, kk, ramp, ta_,
             if not accept and gi == kstep * kk:
                 break                        # a sample on the grid: no step needed
             if not have_next:
-                # ---- one grid step from (t, y): first whole, then in nsub sub-steps if a
-                # contact changed; the result in ynext, fnext, unext, auxn, dgn, filmn
+                # ---- one grid step from (t, y): first whole (at once in sub-steps if it starts
+                # inside a defect), then redone if an event happened (see the docstring); the
+                # result in ynext, fnext, unext, auxn, dgn, filmn
                 t = kstep * hstep
                 substepped = False
                 nsteps = 1
                 yc, fc, uc, ac, flc = y, fy, un, aux0, film
                 ph, gz, gl = phi, g0, g1
                 mball = nball
+                # a step that starts with a ball inside a defect is a defect event whatever its
+                # end: straight to the sub-steps (the whole step would be thrown away)
+                event = NO_EVENT
+                if nsub > 1 and _inside_defect(aux0, nb):
+                    event = DEFECT_EVENT
                 for attempt in range(2):
+                    if event != NO_EVENT:
+                        # redo the step (or do it at once) from the same start
+                        for q in range(nvar):
+                            ycur[q] = y[q]
+                            fcur[q] = fy[q]
+                        for q in range(4):
+                            ucur[q] = un[q]
+                        for jb_ in range(nb):
+                            for q in range(NFILM):
+                                filmc[jb_, q] = film[jb_, q]
+                        if event == CONTACT_EVENT and kk == 1:
+                            # a contact opened or closed in a step of one sample: once more, each
+                            # ball's Jacobian from the end of the step where its contacts are
+                            # stiffer (from an open contact that closes during the step, W would
+                            # leave the step explicit in its stiffness).  The end of a longer step
+                            # is too far off to take a Jacobian from (two and four samples per
+                            # step diverged)
+                            for jb_ in range(nb):
+                                src = aux0
+                                if auxn[jb_, X_KTI] + auxn[jb_, X_KTO] > aux0[jb_, X_KTI] + aux0[jb_, X_KTO]:
+                                    src = auxn
+                                for q in range(NAUX):
+                                    auxc[jb_, q] = src[jb_, q]
+                        else:
+                            # a ball inside a defect (or a contact event in a longer step): nsub
+                            # sub-steps, each from its own start
+                            substepped = True
+                            nsteps = nsub
+                            ph, gz, gl = phie, g0e, g1e
+                            mball = 1
+                            for jb_ in range(nb):
+                                for q in range(NAUX):
+                                    auxc[jb_, q] = aux0[jb_, q]
+                        yc, fc, uc, ac, flc = ycur, fcur, ucur, auxc, filmc
                     hcur = hstep / nsteps
                     for sidx in range(nsteps):
                         tc = t + sidx * hcur
@@ -1210,43 +1259,11 @@ def _engine_split(y, fy, un, aux0, dg0, film, counters, n, m, hs, kk, ramp, ta_,
                                     xsmp[jj, r] = ycur[r]
                                 for c in range(4):
                                     usmp[jj, c] = ucur[c]
-                    if attempt == 1 or nsub <= 1:
+                    if event != NO_EVENT or nsub <= 1:
                         break
                     event = _step_event(aux0, auxn, nb, pocket)
                     if event == NO_EVENT:
                         break
-                    # redo the step from the same start
-                    for q in range(nvar):
-                        ycur[q] = y[q]
-                        fcur[q] = fy[q]
-                    for q in range(4):
-                        ucur[q] = un[q]
-                    for jb_ in range(nb):
-                        for q in range(NFILM):
-                            filmc[jb_, q] = film[jb_, q]
-                    if event == CONTACT_EVENT and kk == 1:
-                        # a contact opened or closed in a step of one sample: once more, each
-                        # ball's Jacobian from the end of the step where its contacts are stiffer
-                        # (from an open contact that closes during the step, W would leave the
-                        # step explicit in its stiffness).  The end of a longer step is too far
-                        # off to take a Jacobian from (two and four samples per step diverged)
-                        for jb_ in range(nb):
-                            src = aux0
-                            if auxn[jb_, X_KTI] + auxn[jb_, X_KTO] > aux0[jb_, X_KTI] + aux0[jb_, X_KTO]:
-                                src = auxn
-                            for q in range(NAUX):
-                                auxc[jb_, q] = src[jb_, q]
-                    else:
-                        # a ball inside a defect (or a contact event in a longer step): nsub
-                        # sub-steps, each from its own start
-                        substepped = True
-                        nsteps = nsub
-                        ph, gz, gl = phie, g0e, g1e
-                        mball = 1
-                        for jb_ in range(nb):
-                            for q in range(NAUX):
-                                auxc[jb_, q] = aux0[jb_, q]
-                    yc, fc, uc, ac, flc = ycur, fcur, ucur, auxc, filmc
                 have_next = True
             if not accept:
                 break
