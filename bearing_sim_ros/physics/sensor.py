@@ -78,11 +78,33 @@ def _polyphase(flat, taps2, m, first, n_out, out):
 
     Eight independent partial sums over consecutive elements of ``flat`` (lanes alternate
     between the columns): the compiler packs them into vector registers without reordering any
-    sum (a single running sum is limited by add latency; measured ~5x slower)."""
+    sum (a single running sum is limited by add latency; measured ~5x slower).  The samples are
+    read as rows of eight with constant column indices (no negative-index wraparound checks per
+    element: they block vectorising): with m a multiple of 4 (every chain the simulator builds)
+    through one (rows, 8) view of the whole stretch, output i starting m / 4 rows after output
+    i - 1; else through a view per output, whose reference counting costs about a third more
+    (53 against 80 ns per output sample at 153 taps)."""
     nblk = taps2.shape[0]
+    if m % 4 == 0 and n_out > 0:
+        step = m // 4
+        rows = (n_out - 1) * step + nblk
+        seg = flat[2 * first:2 * first + 8 * rows].reshape((rows, 8))
+        for i in range(n_out):
+            r0 = i * step
+            s0 = s1 = s2 = s3 = s4 = s5 = s6 = s7 = 0.0
+            for k in range(nblk):
+                s0 += taps2[k, 0] * seg[r0 + k, 0]
+                s1 += taps2[k, 1] * seg[r0 + k, 1]
+                s2 += taps2[k, 2] * seg[r0 + k, 2]
+                s3 += taps2[k, 3] * seg[r0 + k, 3]
+                s4 += taps2[k, 4] * seg[r0 + k, 4]
+                s5 += taps2[k, 5] * seg[r0 + k, 5]
+                s6 += taps2[k, 6] * seg[r0 + k, 6]
+                s7 += taps2[k, 7] * seg[r0 + k, 7]
+            out[i, 0] = (s0 + s2) + (s4 + s6)
+            out[i, 1] = (s1 + s3) + (s5 + s7)
+        return
     for i in range(n_out):
-        # a view starting at the first tap, read in rows of eight with constant column indices:
-        # no negative-index wraparound checks per element (they block vectorising)
         seg = flat[2 * (first + i * m):2 * (first + i * m) + 8 * nblk].reshape((nblk, 8))
         s0 = s1 = s2 = s3 = s4 = s5 = s6 = s7 = 0.0
         for k in range(nblk):
