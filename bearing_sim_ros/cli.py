@@ -64,6 +64,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--seed", type=_nonnegative_int, default=0)
     s.add_argument("--sample-rate", type=_positive(float), default=15000.0)
     s.add_argument("--solver", default="default", choices=["default", "rk4", "reference"])
+    s.add_argument("--oversample", type=int, default=None,
+                   help="integration steps per output sample: 1, 2 or a multiple of 4 (default: each tier's own)")
 
     s = sub.add_parser("play", help="republish a recording on its topics")
     s.add_argument("file")

@@ -81,6 +81,8 @@ def test_stamp_checks():
     ({"batch_duration": 0.00333}, ["batch_duration", "whole number"]),
     ({"sample_rate": 15000}, ["sample_rate", "floating-point"]),
     ({"fidelity": "fast"}, ["fidelity", "kinematic"]),
+    ({"oversample": 3}, ["oversample = 3", "multiple of 4"]),
+    ({"oversample": 8}, ["oversample = 8", "fidelity auto"]),
     ({"record": "/no/such/dir/x.mcap"}, ["record", "/no/such/dir/x.mcap"]),
 ])
 def test_bad_parameters_end_the_node_with_one_line(ros_env, bearing_sim_exe, params, words):

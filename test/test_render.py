@@ -77,6 +77,21 @@ def test_every_message_reads_back_with_mcap_and_rclpy(rendered):
     params = rec.parameters()
     assert params["duration"] == 2.0 and params["sample_rate"] == FS and params["fidelity"] == "kinematic"
     assert "bearing-sim render er16k_outer_race" in params["command"]
+    assert params["oversample"] == 0 and "--oversample" not in params["command"]   # each tier's own
+
+
+def test_oversample_reaches_the_simulator_and_the_metadata(rendered, tmp_path):
+    """``--oversample`` changes the integration (another signal) and says so in the file."""
+    path, _ = rendered
+    out = tmp_path / "x4.mcap"
+    render("er16k_outer_race", 2.0, out, fidelity="kinematic", seed=5, progress=False, oversample=4)
+    with open_recording(out) as rec:
+        params = rec.parameters()
+        assert params["oversample"] == 4 and "--oversample 4" in params["command"]
+        mine = [data for topic, _, _, data in rec.messages() if topic == "/accel"]
+    with open_recording(path) as rec:
+        shipped = [data for topic, _, _, data in rec.messages() if topic == "/accel"]
+    assert len(mine) == len(shipped) > 0 and mine != shipped
 
 
 def test_same_seed_same_bytes_other_seed_other_signal(rendered, tmp_path):
@@ -134,6 +149,10 @@ def test_scene_error_and_bad_output_exit_2_with_one_line(tmp_path, capsys):
     code, err = _one_line_error(capsys, ["render", "er16k_healthy", "--duration", "1",
                                          "--out", str(tmp_path / "nodir" / "x.mcap")])
     assert code == 2 and len(err.splitlines()) == 1 and "cannot write there" in err
+    code, err = _one_line_error(capsys, ["render", "er16k_healthy", "--duration", "1", "--oversample", "3",
+                                         "--out", str(tmp_path / "x.mcap")])
+    assert code == 2 and len(err.splitlines()) == 1 and "oversample = 3" in err and "multiple of 4" in err
+    assert not (tmp_path / "x.mcap").exists()
 
 
 def test_console_script_renders_and_reports_exit_2_for_a_bad_scene(bearing_sim_exe, tmp_path, ros_env):

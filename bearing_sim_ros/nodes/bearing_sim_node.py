@@ -139,6 +139,9 @@ def _descriptors():
         "record": ("", d(T.PARAMETER_STRING, "MCAP file to record to; empty = no recording", True)),
         "fidelity": ("auto", d(T.PARAMETER_STRING, "model tier", True, constraints="auto | kinematic | skidding")),
         "seed": (0, d(T.PARAMETER_INTEGER, "seed of random slip and sensor noise", True, 0, 2 ** 31 - 1)),
+        "oversample": (0, d(T.PARAMETER_INTEGER, "integration steps per output sample (speed against "
+                            "accuracy); 0 = each tier's own: kinematic 2, skidding 4", True, 0, 64,
+                            "0, 1, 2 or a multiple of 4; at most 4 where the tier is chosen automatically")),
         "publish_clock": (False, d(T.PARAMETER_BOOL, "publish /clock with the simulation time")),
         "frame_id": ("", d(T.PARAMETER_STRING, "frame of the waveform tables; empty = the scene's sensor frame", True)),
         "state_rate": (50.0, d(T.PARAMETER_DOUBLE, "JointState rate, Hz; 0 = off", False, 0.0, 1000.0,
@@ -155,6 +158,9 @@ def check_config(cfg: dict):
     """None if the parameter set ``cfg`` (name -> value) is usable together, else a one-line reason."""
     if cfg["fidelity"] not in FIDELITIES:
         return f"fidelity = {cfg['fidelity']!r}: allowed values are {', '.join(FIDELITIES)}"
+    m = cfg["oversample"]
+    if not (m in (0, 1, 2) or m % 4 == 0):
+        return f"oversample = {m!r}: allowed values are 0 (each tier's own), 1, 2 or a multiple of 4 up to 64"
     samples = cfg["sample_rate"] * cfg["batch_duration"]
     if abs(samples - round(samples)) > 1e-6 * max(samples, 1.0) or round(samples) < 1:
         return (f"batch_duration = {cfg['batch_duration']!r} s with sample_rate = {cfg['sample_rate']!r} Hz "
@@ -233,7 +239,8 @@ class BearingSimNode(Node):
 
         self.scene = load_scene(cfg["scene"])
         self.sim = Simulator(self.scene, sample_rate=float(cfg["sample_rate"]),
-                             fidelity=cfg["fidelity"], seed=int(cfg["seed"]))
+                             fidelity=cfg["fidelity"], seed=int(cfg["seed"]),
+                             oversample=int(cfg["oversample"]) or None)
         self.limits = InputLimits(self.scene.bearing)
         self.n_batch = int(round(cfg["sample_rate"] * cfg["batch_duration"]))
         self.batch_duration = self.n_batch / self.sim.sample_rate

@@ -128,10 +128,12 @@ class _Progress:
 def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
            sample_rate: float = 15000.0, solver: str = "default",
            batch_duration: float = BATCH_DURATION, state_rate: float = STATE_RATE,
-           progress: bool | None = None) -> dict:
+           progress: bool | None = None, oversample: int | None = None) -> dict:
     """Render ``duration`` seconds of ``scene`` (Scene, shipped name or YAML path) to ``out``.
 
-    Returns a summary: messages, bytes, wall time (s), real-time factor, recorder status."""
+    ``oversample``: integration steps per output sample (None: each tier's own; see
+    :class:`~bearing_sim_ros.Simulator`).  Returns a summary: messages, bytes, wall time (s),
+    real-time factor, recorder status."""
     from .. import Simulator
     from ..scene import load_scene
     from .recorder import Recorder, recording_metadata
@@ -140,7 +142,8 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
         scene = load_scene(scene)
     if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
         raise UserError(f"--duration = {duration!r}: expected seconds > 0")
-    sim = Simulator(scene, sample_rate=sample_rate, fidelity=fidelity, seed=seed, solver=solver)
+    sim = Simulator(scene, sample_rate=sample_rate, fidelity=fidelity, seed=seed, solver=solver,
+                    oversample=oversample)
     from ..messages import BatchMessages
 
     msgs = BatchMessages(sim, start_ns=0)
@@ -148,9 +151,10 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
     total = int(round(duration * sample_rate))
     params = {"mode": "render", "duration": float(duration), "fidelity": fidelity, "seed": int(seed),
               "sample_rate": float(sample_rate), "solver": solver, "batch_duration": float(batch_duration),
-              "state_rate": float(state_rate), "start_time_ns": 0,
+              "state_rate": float(state_rate), "start_time_ns": 0, "oversample": int(oversample or 0),
               "command": (f"bearing-sim render {scene.name} --duration {duration:g} --fidelity {fidelity} "
-                          f"--seed {seed} --sample-rate {sample_rate:g} --solver {solver}")}
+                          f"--seed {seed} --sample-rate {sample_rate:g} --solver {solver}"
+                          + (f" --oversample {oversample}" if oversample else ""))}
     meta = recording_metadata(scene, params, seed, sim.selection)
     attachments = {f"{scene.name}.yaml": scene.source_text.encode("utf-8")} if scene.source_text else {}
     rec = Recorder(out, meta, attachments, start_time_ns=0, argument="--out")
@@ -234,7 +238,8 @@ def render_command(args) -> int:
     scene = load_scene(args.scene)
     out = str(args.out)
     summary = render(scene, float(args.duration), out, fidelity=args.fidelity, seed=int(args.seed),
-                     sample_rate=float(args.sample_rate), solver=getattr(args, "solver", "default"))
+                     sample_rate=float(args.sample_rate), solver=getattr(args, "solver", "default"),
+                     oversample=getattr(args, "oversample", None))
     print(f"{summary['path']}: {summary['signal_s']:g} s of {scene.name} ({summary['tier']} tier), "
           f"{summary['messages']} messages, {summary['bytes'] / 1e6:.1f} MB of messages, "
           f"rendered in {summary['wall_s']:.2f} s = {summary['real_time_factor']:.1f}x real time")
