@@ -107,28 +107,71 @@ class Run:
     repeats: list
 
 
-def run_config(cfg: Config, scene, sample_rate: float, settle: float, seconds: float, repeats: int,
-               seed: int = 0) -> Run:
-    """Simulate ``settle + seconds`` and time the ``seconds`` part, ``repeats`` times.  Timed in CPU
-    time of the calling thread, which does all of the simulator's work: wall time counts other
-    work on the machine, and the process's CPU time counts OpenBLAS's worker threads, which spin
-    on the other core for a while after the BLAS calls of a model's set-up (up to 2x)."""
-    n_settle = int(settle * sample_rate)
-    n = int(seconds * sample_rate)
-    cpus, result = [], None
-    warm = cfg.simulator(scene, sample_rate, seed)          # compile outside the timing
-    warm.advance(max(1, int(0.002 * sample_rate)))
-    for _ in range(repeats):
-        sim = cfg.simulator(scene, sample_rate, seed)
-        sim.advance(n_settle)
-        t0 = time.thread_time()
-        batch = sim.advance(n)
-        cpus.append(time.thread_time() - t0)
-        result = batch
-    skid = result.extras.get("cage_skid")
-    return Run(accel=result.accel[:, -1].copy(), cage_speed=float(np.mean(result.cage_speed)),
+def _timed_run(cfg: Config, scene, sample_rate: float, settle: float, seconds: float, seed: int = 0):
+    """Simulate ``settle + seconds`` and time the ``seconds`` part: (CPU s, the timed batch).
+    Timed in CPU time of the calling thread, which does all of the simulator's work: wall time
+    counts other work on the machine, and the process's CPU time counts OpenBLAS's worker
+    threads, which spin on the other core for a while after the BLAS calls of a model's set-up
+    (up to 2x)."""
+    sim = cfg.simulator(scene, sample_rate, seed)
+    sim.advance(int(settle * sample_rate))
+    t0 = time.thread_time()
+    batch = sim.advance(int(seconds * sample_rate))
+    return time.thread_time() - t0, batch
+
+
+def _warm_up(cfg: Config, scene, sample_rate: float, seed: int = 0) -> None:
+    """Compile (or load from the cache) outside the timing."""
+    cfg.simulator(scene, sample_rate, seed).advance(max(1, int(0.002 * sample_rate)))
+
+
+def _as_run(batch, cpus: list, seconds: float) -> Run:
+    skid = batch.extras.get("cage_skid")
+    return Run(accel=batch.accel[:, -1].copy(), cage_speed=float(np.mean(batch.cage_speed)),
                cage_skid=float(np.mean(skid)) if skid is not None else 0.0,
                cpu=stats.median(cpus) / seconds, repeats=[c / seconds for c in cpus])
+
+
+def run_config(cfg: Config, scene, sample_rate: float, settle: float, seconds: float, repeats: int,
+               seed: int = 0) -> Run:
+    """One setting on one scene, timed ``repeats`` times back to back (see :func:`_timed_run`);
+    the real-time factor from the median."""
+    _warm_up(cfg, scene, sample_rate, seed)
+    cpus, batch = [], None
+    for _ in range(repeats):
+        cpu, batch = _timed_run(cfg, scene, sample_rate, settle, seconds, seed)
+        cpus.append(cpu)
+    return _as_run(batch, cpus, seconds)
+
+
+def run_round_robin(configs: list, scene, sample_rate: float, settle: float, seconds: float,
+                    repeats: int, seed: int = 0) -> dict:
+    """Every setting on one scene, timed ``repeats`` times in turn (setting 1, 2, ..., then again)
+    rather than each ``repeats`` times back to back: a burst of other work on a shared machine
+    then slows one repeat of several settings, which the median drops, instead of every repeat of
+    one setting.  Returns label -> :class:`Run`, or the one-line reason where a setting failed
+    (e.g. RK4 beyond its stability limit)."""
+    out, cpus, last = {}, {}, {}
+    for cfg in configs:
+        try:
+            _warm_up(cfg, scene, sample_rate, seed)
+            cpus[cfg.label] = []
+        except UserError as exc:
+            out[cfg.label] = str(exc)
+    for _ in range(repeats):
+        for cfg in configs:
+            if cfg.label not in cpus:
+                continue
+            try:
+                cpu, last[cfg.label] = _timed_run(cfg, scene, sample_rate, settle, seconds, seed)
+            except UserError as exc:
+                out[cfg.label] = str(exc)
+                del cpus[cfg.label]
+                continue
+            cpus[cfg.label].append(cpu)
+    for label, c in cpus.items():
+        out[label] = _as_run(last[label], c, seconds)
+    return out
 
 
 def scene_lines(scene) -> list:
@@ -170,12 +213,12 @@ def study(quick: bool = False, sample_rate: float = 15000.0, progress=None) -> d
         ref = run_config(ref_cfg, scene, sample_rate, settle, seconds, 1)
         if progress:
             progress(f"{sc.label}: reference {1 / ref.cpu:.2f}x real time")
+        runs = run_round_robin(configs, scene, sample_rate, settle, seconds, repeats)
         for cfg in configs:
-            try:
-                run = run_config(cfg, scene, sample_rate, settle, seconds, repeats)
-            except UserError as exc:          # e.g. RK4 beyond its stability limit
+            run = runs[cfg.label]
+            if isinstance(run, str):          # e.g. RK4 beyond its stability limit
                 rows.append({"scenario": sc.label, "config": cfg.label, "family": cfg.family,
-                             "diverged": str(exc)})
+                             "diverged": run})
                 if progress:
                     progress(f"  {cfg.label:<24} diverged")
                 continue
@@ -222,7 +265,8 @@ def markdown(result: dict) -> str:
         "",
         f"Machine: {m['cpu']}, {m['cores']} cores (one used), Python {m['python']}, numba {m['numba']}. "
         f"{result['seconds']:g} s of signal at {result['sample_rate']:g} Hz after {result['settle']:g} s of "
-        f"settling, median of {result['repeats']} run(s) in CPU time of the simulating thread; errors against "
+        f"settling, median of {result['repeats']} run(s) taken in turn over the settings, in CPU time of the "
+        f"simulating thread; errors against "
         f"`{result['reference']}`, sensor noise off.",
         "",
         "| scenario | setting | real-time factor | error | RMS | lines | cage speed | cage skid (pp) | waveform |",

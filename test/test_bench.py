@@ -46,3 +46,19 @@ def test_bench_bad_out_is_one_line(tmp_path, bearing_sim_exe):
     run = subprocess.run([bearing_sim_exe, "bench", "--quick", "--out", str(blocker / "sub")],
                          capture_output=True, text=True, timeout=120)
     assert run.returncode == 2 and len(run.stderr.strip().splitlines()) == 1, run.stderr
+
+
+def test_round_robin_times_every_setting_in_turn_and_reports_a_divergence():
+    """Each setting gets ``repeats`` timed runs with identical output; a setting that diverges
+    (RK4 at the papers' 1e-5 s) becomes its one-line reason and does not stop the others."""
+    from bearing_sim_ros.bench import Config, Scenario, run_round_robin
+
+    scene = Scenario("ER-16K healthy 2000 rpm 200 N", "er16k_skidding").build()
+    configs = [Config("kinematic x2", "kinematic", "kinematic", (("oversample", 2),)),
+               Config("rk4 h=1e-05", "skidding rk4", "skidding", (("solver", "rk4"), ("rk4_step", 1e-5))),
+               Config("default", "skidding default", "skidding")]
+    runs = run_round_robin(configs, scene, 15000.0, 0.01, 0.02, 2)
+    assert isinstance(runs["rk4 h=1e-05"], str) and "rk4_step" in runs["rk4 h=1e-05"]
+    for label in ("kinematic x2", "default"):
+        run = runs[label]
+        assert len(run.repeats) == 2 and run.cpu > 0 and run.accel.shape == (300,)
