@@ -158,9 +158,6 @@ def check_config(cfg: dict):
     """None if the parameter set ``cfg`` (name -> value) is usable together, else a one-line reason."""
     if cfg["fidelity"] not in FIDELITIES:
         return f"fidelity = {cfg['fidelity']!r}: allowed values are {', '.join(FIDELITIES)}"
-    m = cfg["oversample"]
-    if not (m in (0, 1, 2) or m % 4 == 0):
-        return f"oversample = {m!r}: allowed values are 0 (each tier's own), 1, 2 or a multiple of 4 up to 64"
     samples = cfg["sample_rate"] * cfg["batch_duration"]
     if abs(samples - round(samples)) > 1e-6 * max(samples, 1.0) or round(samples) < 1:
         return (f"batch_duration = {cfg['batch_duration']!r} s with sample_rate = {cfg['sample_rate']!r} Hz "

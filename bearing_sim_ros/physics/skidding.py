@@ -1041,14 +1041,13 @@ def _step_event(a0, a1, nb, pocket):
     ``pocket``, a ball-pocket contact) opened or closed; else NO_EVENT.  Without pocket clearance
     the pocket spring is always engaged (its flag flickers only where its damping outweighs it),
     so it is not an event."""
-    event = NO_EVENT
+    if _inside_defect(a0, nb) or _inside_defect(a1, nb):
+        return DEFECT_EVENT
     for j in range(nb):
-        if a0[j, X_LOSS] > 0.0 or a1[j, X_LOSS] > 0.0:      # a ball inside a defect
-            return DEFECT_EVENT
         if ((a0[j, X_KTI] > 0.0) != (a1[j, X_KTI] > 0.0) or (a0[j, X_KTO] > 0.0) != (a1[j, X_KTO] > 0.0)
                 or (pocket and a0[j, X_CIN] != a1[j, X_CIN])):
-            event = CONTACT_EVENT
-    return event
+            return CONTACT_EVENT
+    return NO_EVENT
 
 
 @njit(**KERNEL)
