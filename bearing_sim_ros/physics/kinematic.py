@@ -21,6 +21,14 @@ evaluations per step, as the former ETD2 (linear interpolation of r_n, r*), whos
 attenuated the forcing by sinc^2(f h): 19 % at the 3.8 kHz resonator at h = 1/15 kHz, the
 largest error of the tier.  The parabola brings x2 (30 kHz steps) below the former x4.
 
+Event sub-steps: a defect's impact is shorter than a step at one step per output sample, and
+no parabola over the step follows it.  A step at whose end a ball is inside a defect, and the
+AFTER_STEPS steps after it (the structure rings after the impact), are done again in one
+sub-step per chain sample, with the same ETD3 and their own propagators.  That makes one step
+per output sample (the default) as accurate as plain ETD3 at two on the defect scenes, for 3-9 %
+of the steps sub-stepped on a race defect (30 % on seed 004's ball defect, which meets a race
+16 % of the time).
+
 Steps and output: ``oversample`` steps per output sample; the accelerometer chain gets
 ``chain_oversample`` (default >= 4) samples per output sample, the ones inside a step from the
 exact solution of the linear part with the corrector's interpolant (dense output, a few
@@ -47,10 +55,14 @@ ANCHOR_STEPS = 4096   # re-anchor the rotated cage direction to cos/sin this oft
 NINPUT = 4    # residual bearing force on the pedestal (x, y); external force on the shaft (x, y)
 X_BLOCK = (0, 2, 5, 7)          # xs, xp, vxs, vxp: the horizontal block of the state
 Y_BLOCK = (1, 3, 4, 6, 8, 9)    # ys, yp, yr, vys, vyp, vyr: the vertical block
+AFTER_STEPS = 3      # event sub-steps go on this many steps after a ball was last inside a defect
+                     # (the structure rings after the impact; 1, 2, 3: inner-race lines 1.8, 0.7,
+                     # 0.3 % at x1)
 CORRECTOR_NODES = (1.0, 0.0, -1.0)   # residual at the step end (predicted), start, previous start
 PREDICTOR_NODES = (0.0, -1.0)
-DEFAULT_OVERSAMPLE = 2  # steps per output sample the Simulator should use by default: ETD3 at x2
-                        # beats the former ETD2 at x4 on every bench scenario (README, "Kinematic tier: speed ...")
+DEFAULT_OVERSAMPLE = 1  # steps per output sample the Simulator should use by default: ETD3 with
+                        # event sub-steps at x1 is as accurate as plain ETD3 at x2 on the defect
+                        # scenes and 1.3-1.5x faster (README, "Kinematic tier: speed ...")
 CHAIN_OVERSAMPLE = 4   # accelerometer chain rate / output rate at least (the skidding tier's rate,
                        # so that a switch of tiers keeps the chain and the signal has no seam)
 
@@ -157,16 +169,176 @@ def bearing_force(geo, cj, sj, dtab, wtab, seed, dx, dy, shaft_angle, cage_angle
     return hertz_force(geo[P_K], gc, gs, goff, dx, dy, q_out)
 
 
+@njit(cache=True, inline="always")
+def _place_balls(geo, cj, sj, dtab, wtab, seed, slip_cache, shaft_angle, cage_angle, spin_angle,
+                 cage_cos, cage_sin, margin_i, margin_o, margin_b, eps, gc, gs, goff):
+    """``ball_geometry`` spelled out for the kernel (see its docstring): fills gc, gs, goff
+    (and eps) for the balls at these angles.  Returns True if a ball is inside a defect or
+    within ``margin_*`` (rad: how far an inner-race, outer-race or ball defect moves against
+    the balls in one step) of one, so that it may enter, leave or cross it within the step."""
+    nb = int(geo[P_NB])
+    cr = geo[P_CR]
+    spacing = 2.0 * math.pi / nb
+    inv_spacing = nb / (2.0 * math.pi)
+    slip_amp = geo[P_SLIP] * spacing
+    fq = 0.0
+    near = False
+    if slip_amp > 0.0:
+        qk = cage_angle * inv_spacing
+        kq = math.floor(qk)
+        fq = qk - kq
+        if slip_cache[0, 0] != kq:      # the cage passed a knot: hash the new ones
+            for j in range(nb):
+                ki = np.int64(kq)
+                slip_cache[j, 0] = kq
+                slip_cache[j, 1] = 2.0 * uniform(seed, 1000 + j, np.uint64(ki)) - 1.0
+                slip_cache[j, 2] = 2.0 * uniform(seed, 1000 + j, np.uint64(ki + 1)) - 1.0
+    for j in range(nb):
+        c = cage_cos * cj[j] - cage_sin * sj[j]
+        sn = cage_sin * cj[j] + cage_cos * sj[j]
+        if slip_amp > 0.0:
+            a = slip_cache[j, 1]
+            e = slip_amp * (a + (slip_cache[j, 2] - a) * fq)
+            eps[j] = e
+            ce = 1.0 - 0.5 * e * e
+            c, sn = c * ce - sn * e, sn * ce + c * e
+        gc[j] = c
+        gs[j] = sn
+        goff[j] = cr
+    n_def = dtab.shape[0]
+    if n_def > 0:
+        r_in, r_out, r_ball = geo[P_RI], geo[P_RO], geo[P_RB]
+        # add_defect_losses, spelled out: each race defect is tested against the ball nearest
+        # to it and that ball's neighbours only
+        for kd in range(n_def):
+            kind = int(dtab[kd, D_KIND])
+            half = dtab[kd, D_HALF]
+            prof = int(dtab[kd, D_PROFILE])
+            depth = dtab[kd, D_DEPTH]
+            if kind == KIND_BALL:
+                j = int(dtab[kd, D_BALL])
+                psi = spin_angle + dtab[kd, D_ANGLE]
+                # a wandering spin axis: the defect is met only near the rolling track
+                reach = wander_reach(dtab, kd, spin_angle) if dtab[kd, D_WANDER] > 0.0 else 1.0
+                # a defect narrower than a step's travel may be crossed within the step
+                reach_near = half + (margin_b if 2.0 * half < margin_b else 0.0)
+                uu = wrap(psi)
+                if abs(uu) < reach_near:
+                    near = True
+                    if abs(uu) < half:
+                        goff[j] += reach * _profile_drop(prof, uu, half, r_ball, dtab[kd, D_RHO_O],
+                                                         dtab[kd, D_HMAX_O], dtab[kd, D_RAMP_O], depth)
+                uu = wrap(psi - math.pi)
+                if abs(uu) < reach_near:
+                    near = True
+                    if abs(uu) < half:
+                        goff[j] += reach * _profile_drop(prof, uu, half, r_ball, dtab[kd, D_RHO_I],
+                                                         dtab[kd, D_HMAX_I], dtab[kd, D_RAMP_I], depth)
+                continue
+            inner = kind == KIND_INNER
+            centre = dtab[kd, D_ANGLE] + (shaft_angle if inner else 0.0)
+            rel = wrap(centre - cage_angle)
+            nearest = int(math.floor(rel * inv_spacing + 0.5))
+            margin = margin_i if inner else margin_o
+            reach_near = half + (margin if 2.0 * half < margin else 0.0)
+            for dj in range(-1, 2):
+                # nearest + dj lies in [-nb/2 - 1, nb/2 + 1]: one wrap by nb, not an
+                # integer division (three per defect per step cost ~20 ns)
+                j = nearest + dj
+                if j < 0:
+                    j += nb
+                elif j >= nb:
+                    j -= nb
+                uu = rel - (nearest + dj) * spacing - eps[j]
+                if abs(uu) < reach_near:
+                    near = True
+                    if abs(uu) < half:
+                        if inner:
+                            goff[j] += _profile_drop(prof, -uu, half, r_in, dtab[kd, D_RHO_I],
+                                                     dtab[kd, D_HMAX_I], dtab[kd, D_RAMP_I], depth)
+                        else:
+                            goff[j] += _profile_drop(prof, -uu, half, r_out, dtab[kd, D_RHO_O],
+                                                     dtab[kd, D_HMAX_O], dtab[kd, D_RAMP_O], depth)
+    if wtab.shape[0] > 0:
+        for j in range(nb):
+            goff[j] -= waviness_gain(wtab, cage_angle + j * spacing + eps[j], shaft_angle)
+    return near
+
+
+@njit(cache=True, inline="always")
+def _residual(kc, kbx, kby, gc, gs, goff, dx, dy):
+    """Residual bearing force (N, x and y): the balls' Hertz forces on the pedestal at the
+    shaft-pedestal offset (dx, dy) m minus the linearised bearing's."""
+    fx = 0.0
+    fy = 0.0
+    for j in range(gc.shape[0]):
+        delta = dx * gc[j] + dy * gs[j] - goff[j]
+        if delta > 0.0:
+            qj = kc * delta * math.sqrt(delta)
+            fx += qj * gc[j]
+            fy += qj * gs[j]
+    return fx - kbx * dx, fy - kby * dy
+
+
+@njit(cache=True, inline="always")
+def _free_response(px, py, ex, ey, a0, a1, a2, a3, b0, b1, b2, b3, b4, b5, exn, eyn, dex, dey):
+    """The x and y blocks after one step of their propagators px, py, plus the external force
+    (value exn, eyn at the step start, change dex, dey over it; exact for a linear ramp)."""
+    return (px[0, 0] * a0 + px[0, 1] * a1 + px[0, 2] * a2 + px[0, 3] * a3 + ex[0, 0] * exn + ex[1, 0] * dex,
+            px[1, 0] * a0 + px[1, 1] * a1 + px[1, 2] * a2 + px[1, 3] * a3 + ex[0, 1] * exn + ex[1, 1] * dex,
+            px[2, 0] * a0 + px[2, 1] * a1 + px[2, 2] * a2 + px[2, 3] * a3 + ex[0, 2] * exn + ex[1, 2] * dex,
+            px[3, 0] * a0 + px[3, 1] * a1 + px[3, 2] * a2 + px[3, 3] * a3 + ex[0, 3] * exn + ex[1, 3] * dex,
+            (py[0, 0] * b0 + py[0, 1] * b1 + py[0, 2] * b2 + py[0, 3] * b3 + py[0, 4] * b4
+             + py[0, 5] * b5 + ey[0, 0] * eyn + ey[1, 0] * dey),
+            (py[1, 0] * b0 + py[1, 1] * b1 + py[1, 2] * b2 + py[1, 3] * b3 + py[1, 4] * b4
+             + py[1, 5] * b5 + ey[0, 1] * eyn + ey[1, 1] * dey),
+            (py[2, 0] * b0 + py[2, 1] * b1 + py[2, 2] * b2 + py[2, 3] * b3 + py[2, 4] * b4
+             + py[2, 5] * b5 + ey[0, 2] * eyn + ey[1, 2] * dey),
+            (py[3, 0] * b0 + py[3, 1] * b1 + py[3, 2] * b2 + py[3, 3] * b3 + py[3, 4] * b4
+             + py[3, 5] * b5 + ey[0, 3] * eyn + ey[1, 3] * dey),
+            (py[4, 0] * b0 + py[4, 1] * b1 + py[4, 2] * b2 + py[4, 3] * b3 + py[4, 4] * b4
+             + py[4, 5] * b5 + ey[0, 4] * eyn + ey[1, 4] * dey),
+            (py[5, 0] * b0 + py[5, 1] * b1 + py[5, 2] * b2 + py[5, 3] * b3 + py[5, 4] * b4
+             + py[5, 5] * b5 + ey[0, 5] * eyn + ey[1, 5] * dey))
+
+
+@njit(cache=True, inline="always")
+def _predicted_offset(wx, wy, r, ca0, ca1, cb0, cb1, rx, rxp, ry, ryp):
+    """Shaft-pedestal offset (m, x and y) at the step end with the residual extrapolated
+    linearly from the step start (rx, ry) and the previous node (rxp, ryp): predictor rows
+    r + 3, r + 4 of the weights."""
+    return ((ca0 + wx[r + 3, 0] * rx + wx[r + 4, 0] * rxp) - (ca1 + wx[r + 3, 1] * rx + wx[r + 4, 1] * rxp),
+            (cb0 + wy[r + 3, 0] * ry + wy[r + 4, 0] * ryp) - (cb1 + wy[r + 3, 1] * ry + wy[r + 4, 1] * ryp))
+
+
+@njit(cache=True, inline="always")
+def _corrected(wx, wy, r, ca0, ca1, ca2, ca3, cb0, cb1, cb2, cb3, cb4, cb5, rxs, rx, rxp, rys, ry, ryp):
+    """The blocks at the step end: free response plus the parabola through the residual at the
+    predicted end (rxs, rys), the start (rx, ry) and the previous node (rxp, ryp), integrated
+    exactly (corrector rows r, r + 1, r + 2 of the weights)."""
+    return (ca0 + wx[r, 0] * rxs + wx[r + 1, 0] * rx + wx[r + 2, 0] * rxp,
+            ca1 + wx[r, 1] * rxs + wx[r + 1, 1] * rx + wx[r + 2, 1] * rxp,
+            ca2 + wx[r, 2] * rxs + wx[r + 1, 2] * rx + wx[r + 2, 2] * rxp,
+            ca3 + wx[r, 3] * rxs + wx[r + 1, 3] * rx + wx[r + 2, 3] * rxp,
+            cb0 + wy[r, 0] * rys + wy[r + 1, 0] * ry + wy[r + 2, 0] * ryp,
+            cb1 + wy[r, 1] * rys + wy[r + 1, 1] * ry + wy[r + 2, 1] * ryp,
+            cb2 + wy[r, 2] * rys + wy[r + 1, 2] * ry + wy[r + 2, 2] * ryp,
+            cb3 + wy[r, 3] * rys + wy[r + 1, 3] * ry + wy[r + 2, 3] * ryp,
+            cb4 + wy[r, 4] * rys + wy[r + 1, 4] * ry + wy[r + 2, 4] * ryp,
+            cb5 + wy[r, 5] * rys + wy[r + 1, 5] * ry + wy[r + 2, 5] * ryp)
+
+
 @njit(cache=True, fastmath={"contract"})
 def advance_kernel(x, ang, trig, step, hist, geom, n, m, d, s0, s1, l0x, l0y, l1x, l1y, h, geo, cj, sj,
                    dtab, wtab, seed, slip_cache, kbx, kby, px, py, wx, wy, ex, ey, cx, cy, feed,
-                   dense_x, dense_y, out_acc, out_q, out_cage):
+                   dense_x, dense_y, psx, psy, wsx, wsy, esx, esy, sub_mode, out_acc, out_q, out_cage):
     """ETD3 over ``n`` steps of ``h`` s (see the module docstring).
 
     x: state (10,); ang: (shaft, cage, ball spin) angles; trig: (cos, sin) of the cage angle;
-    step: (1,) int64 steps taken since t = 0; hist: (4,) residual (x, y) at the previous step's
+    step: (2,) int64 steps taken since t = 0, and of those the ones done in sub-steps;
+    hist: (5,) residual (x, y) at the previous step's
     start, 1.0 if that is valid (0.0 after a start, a relinearisation or a tier switch), 1.0 if
-    ``geom`` is; geom: (4, Nb) the balls' geometry at the current time (cos, sin of each ball's
+    ``geom`` is, steps since a ball was last inside a defect at a step end; geom: (4, Nb) the balls' geometry at the current time (cos, sin of each ball's
     angle, clearance + loss - gain, slip angle), kept from the previous chunk so that a chunk
     boundary cannot change a bit of it (it is computed once, at the first step or a switch).
     Speed and load ramp linearly from (s0, l0) to (s1, l1).  The x block of the state is (xs, xp, vxs, vxp), the y
@@ -178,6 +350,14 @@ def advance_kernel(x, ang, trig, step, hist, geom, n, m, d, s0, s1, l0x, l0y, l1
     sensor-mount acceleration = c . block + feed * residual; dense_x (d, 4 + 3 + 2), dense_y
     (d, 6 + 3 + 2): the same at d - 1 points inside the step (row s at s / d of the step; row 0
     unused): state, residual at the three corrector nodes, external force.
+
+    Event sub-steps (``sub_mode`` 1, with d > 1): a step at whose end a ball is inside a defect
+    (or which a narrow defect may cross within a step), and the AFTER_STEPS steps after it, are
+    done again as d sub-steps of h / d, one per chain sample: an impact shorter than a step, and
+    the structure's ringing after it, are what a parabola over the step cannot follow.  psx, psy,
+    esx, esy: the sub-step's propagators as px, py, ex, ey; wsx (10, 4), wsy (10, 6): its
+    weights as wx, wy, then those of the first sub-step, whose previous node is the previous
+    step's start (d sub-steps back).
 
     Writes d acceleration samples per step to out_acc (n * d, 2) and, every m-th step, the ball
     loads at the step start to out_q (n // m, 2 Nb: the inner contacts, then the outer ones, the
@@ -202,20 +382,19 @@ def advance_kernel(x, ang, trig, step, hist, geom, n, m, d, s0, s1, l0x, l0y, l1
     grav = geo[P_GRAV]
     r_cage = geo[P_CAGE]
     r_spin = geo[P_SPIN]
-    cr = geo[P_CR]
-    spacing = 2.0 * math.pi / nb
-    inv_spacing = nb / (2.0 * math.pi)
-    slip_amp = geo[P_SLIP] * spacing
-    n_def = dtab.shape[0]
-    has_defects = n_def > 0
-    has_wav = wtab.shape[0] > 0
-    r_in, r_out, r_ball = geo[P_RI], geo[P_RO], geo[P_RB]
-    fq = 0.0
     inv_n = 1.0 / n
     dex = (l1x - l0x) * inv_n           # change of the external force over one step (N)
     dey = (l1y - l0y) * inv_n
     fdx = feed[0]
     fdy = feed[1]
+    # how far a defect moves against the balls in one step (rad), at the faster end of the ramp
+    sub_steps = sub_mode > 0 and d > 1 and dtab.shape[0] > 0
+    wmax = max(abs(s0), abs(s1)) * h
+    margin_i = abs(1.0 - r_cage) * wmax if sub_steps else 0.0
+    margin_o = abs(r_cage) * wmax if sub_steps else 0.0
+    margin_b = abs(r_spin) * wmax if sub_steps else 0.0
+    hs = h / d
+    inv_d = 1.0 / d
     # the state as scalars: x block (xs, xp, vxs, vxp), y block (ys, yp, yr, vys, vyp, vyr)
     a0, a1, a2, a3 = x[0], x[2], x[5], x[7]
     b0, b1, b2, b3, b4, b5 = x[1], x[3], x[4], x[6], x[8], x[9]
@@ -228,12 +407,14 @@ def advance_kernel(x, ang, trig, step, hist, geom, n, m, d, s0, s1, l0x, l0y, l1
     cage_sin = trig[1]
     shaft_angle, cage_angle, spin_angle = ang[0], ang[1], ang[2]
     steps = step[0]
+    n_sub = step[1]
     if hist[3] == 0.0:
         ball_geometry(geo, cj, sj, dtab, wtab, seed, shaft_angle, cage_angle, cage_cos, cage_sin,
                       spin_angle, slip_cache, eps, np.zeros(nb), np.zeros(nb), gc, gs, goff)
         hist[3] = 1.0
     o = -1                  # row of out_q / out_cage being written
     until_record = 0        # steps until the next recorded one (no integer division per step)
+    since_near = int(hist[4])     # steps since a ball was last inside a defect at a step end
     for i in range(n):
         f0 = i * inv_n
         f1 = (i + 1) * inv_n
@@ -275,116 +456,80 @@ def advance_kernel(x, ang, trig, step, hist, geom, n, m, d, s0, s1, l0x, l0y, l1
         # free response over the step plus the external force (exact for its linear ramp)
         exn = l0x + (l1x - l0x) * f0
         eyn = l0y + (l1y - l0y) * f0 - grav
-        ca0 = px[0, 0] * a0 + px[0, 1] * a1 + px[0, 2] * a2 + px[0, 3] * a3 + ex[0, 0] * exn + ex[1, 0] * dex
-        ca1 = px[1, 0] * a0 + px[1, 1] * a1 + px[1, 2] * a2 + px[1, 3] * a3 + ex[0, 1] * exn + ex[1, 1] * dex
-        ca2 = px[2, 0] * a0 + px[2, 1] * a1 + px[2, 2] * a2 + px[2, 3] * a3 + ex[0, 2] * exn + ex[1, 2] * dex
-        ca3 = px[3, 0] * a0 + px[3, 1] * a1 + px[3, 2] * a2 + px[3, 3] * a3 + ex[0, 3] * exn + ex[1, 3] * dex
-        cb0 = (py[0, 0] * b0 + py[0, 1] * b1 + py[0, 2] * b2 + py[0, 3] * b3 + py[0, 4] * b4
-               + py[0, 5] * b5 + ey[0, 0] * eyn + ey[1, 0] * dey)
-        cb1 = (py[1, 0] * b0 + py[1, 1] * b1 + py[1, 2] * b2 + py[1, 3] * b3 + py[1, 4] * b4
-               + py[1, 5] * b5 + ey[0, 1] * eyn + ey[1, 1] * dey)
-        cb2 = (py[2, 0] * b0 + py[2, 1] * b1 + py[2, 2] * b2 + py[2, 3] * b3 + py[2, 4] * b4
-               + py[2, 5] * b5 + ey[0, 2] * eyn + ey[1, 2] * dey)
-        cb3 = (py[3, 0] * b0 + py[3, 1] * b1 + py[3, 2] * b2 + py[3, 3] * b3 + py[3, 4] * b4
-               + py[3, 5] * b5 + ey[0, 3] * eyn + ey[1, 3] * dey)
-        cb4 = (py[4, 0] * b0 + py[4, 1] * b1 + py[4, 2] * b2 + py[4, 3] * b3 + py[4, 4] * b4
-               + py[4, 5] * b5 + ey[0, 4] * eyn + ey[1, 4] * dey)
-        cb5 = (py[5, 0] * b0 + py[5, 1] * b1 + py[5, 2] * b2 + py[5, 3] * b3 + py[5, 4] * b4
-               + py[5, 5] * b5 + ey[0, 5] * eyn + ey[1, 5] * dey)
+        ca0, ca1, ca2, ca3, cb0, cb1, cb2, cb3, cb4, cb5 = _free_response(
+            px, py, ex, ey, a0, a1, a2, a3, b0, b1, b2, b3, b4, b5, exn, eyn, dex, dey)
         # predictor (residual extrapolated linearly from the last two starts): only the
         # displacements are needed, for the residual at the step end
-        dx = (ca0 + wx[3, 0] * rx + wx[4, 0] * rxp) - (ca1 + wx[3, 1] * rx + wx[4, 1] * rxp)
-        dy = (cb0 + wy[3, 0] * ry + wy[4, 0] * ryp) - (cb1 + wy[3, 1] * ry + wy[4, 1] * ryp)
+        dx, dy = _predicted_offset(wx, wy, 0, ca0, ca1, cb0, cb1, rx, rxp, ry, ryp)
         # angles and ball geometry at the end of the step (trapezoid on the linear speed ramp)
+        start_angles = (shaft_angle, cage_angle, spin_angle, cage_cos, cage_sin)
         dth = 0.5 * (w0 + w1) * h
         shaft_angle += dth
         cage_angle += r_cage * dth
         spin_angle += r_spin * dth
         steps += 1
-        if steps % ANCHOR_STEPS == 0:
+        anchor = steps % ANCHOR_STEPS == 0
+        if anchor:
             cage_cos = math.cos(cage_angle)
             cage_sin = math.sin(cage_angle)
         else:
             cage_cos, cage_sin = _rotate(cage_cos, cage_sin, r_cage * dth)
-        # (same as ball_geometry, spelled out for the reason in the docstring)
-        if slip_amp > 0.0:
-            qk = cage_angle * inv_spacing
-            kq = math.floor(qk)
-            fq = qk - kq
-            if slip_cache[0, 0] != kq:      # the cage passed a knot: hash the new ones
-                for j in range(nb):
-                    ki = np.int64(kq)
-                    slip_cache[j, 0] = kq
-                    slip_cache[j, 1] = 2.0 * uniform(seed, 1000 + j, np.uint64(ki)) - 1.0
-                    slip_cache[j, 2] = 2.0 * uniform(seed, 1000 + j, np.uint64(ki + 1)) - 1.0
-        for j in range(nb):
-            c = cage_cos * cj[j] - cage_sin * sj[j]
-            sn = cage_sin * cj[j] + cage_cos * sj[j]
-            if slip_amp > 0.0:
-                a = slip_cache[j, 1]
-                e = slip_amp * (a + (slip_cache[j, 2] - a) * fq)
-                eps[j] = e
-                ce = 1.0 - 0.5 * e * e
-                c, sn = c * ce - sn * e, sn * ce + c * e
-            gc[j] = c
-            gs[j] = sn
-            goff[j] = cr
-        if has_defects:
-            # add_defect_losses, spelled out (see the docstring): each defect is tested against
-            # the ball nearest to it and that ball's neighbours only
-            for kd in range(n_def):
-                kind = int(dtab[kd, D_KIND])
-                half = dtab[kd, D_HALF]
-                prof = int(dtab[kd, D_PROFILE])
-                depth = dtab[kd, D_DEPTH]
-                if kind == KIND_BALL:
-                    j = int(dtab[kd, D_BALL])
-                    psi = spin_angle + dtab[kd, D_ANGLE]
-                    # a wandering spin axis: the defect is met only near the rolling track
-                    reach = wander_reach(dtab, kd, spin_angle) if dtab[kd, D_WANDER] > 0.0 else 1.0
-                    uu = wrap(psi)
-                    if abs(uu) < half:
-                        goff[j] += reach * _profile_drop(prof, uu, half, r_ball, dtab[kd, D_RHO_O],
-                                                         dtab[kd, D_HMAX_O], dtab[kd, D_RAMP_O], depth)
-                    uu = wrap(psi - math.pi)
-                    if abs(uu) < half:
-                        goff[j] += reach * _profile_drop(prof, uu, half, r_ball, dtab[kd, D_RHO_I],
-                                                         dtab[kd, D_HMAX_I], dtab[kd, D_RAMP_I], depth)
-                    continue
-                inner = kind == KIND_INNER
-                centre = dtab[kd, D_ANGLE] + (shaft_angle if inner else 0.0)
-                rel = wrap(centre - cage_angle)
-                nearest = int(math.floor(rel * inv_spacing + 0.5))
-                for dj in range(-1, 2):
-                    # nearest + dj lies in [-nb/2 - 1, nb/2 + 1]: one wrap by nb, not an
-                    # integer division (three per defect per step cost ~20 ns)
-                    j = nearest + dj
-                    if j < 0:
-                        j += nb
-                    elif j >= nb:
-                        j -= nb
-                    uu = rel - (nearest + dj) * spacing - eps[j]
-                    if abs(uu) < half:
-                        if inner:
-                            goff[j] += _profile_drop(prof, -uu, half, r_in, dtab[kd, D_RHO_I],
-                                                     dtab[kd, D_HMAX_I], dtab[kd, D_RAMP_I], depth)
-                        else:
-                            goff[j] += _profile_drop(prof, -uu, half, r_out, dtab[kd, D_RHO_O],
-                                                     dtab[kd, D_HMAX_O], dtab[kd, D_RAMP_O], depth)
-        if has_wav:
-            for j in range(nb):
-                goff[j] -= waviness_gain(wtab, cage_angle + j * spacing + eps[j], shaft_angle)
+        near = _place_balls(geo, cj, sj, dtab, wtab, seed, slip_cache, shaft_angle, cage_angle,
+                            spin_angle, cage_cos, cage_sin, margin_i, margin_o, margin_b, eps, gc,
+                            gs, goff)
         # residual at the predicted end of the step
-        fx = 0.0
-        fy = 0.0
-        for j in range(nb):
-            delta = dx * gc[j] + dy * gs[j] - goff[j]
-            if delta > 0.0:
-                qj = kc * delta * math.sqrt(delta)
-                fx += qj * gc[j]
-                fy += qj * gs[j]
-        rxs = fx - kbx * dx
-        rys = fy - kby * dy
+        rxs, rys = _residual(kc, kbx, kby, gc, gs, goff, dx, dy)
+        # sub-steps where a ball is inside a defect at the step end, and in the AFTER_STEPS
+        # steps after (the ball leaves the defect, the structure rings after the impact)
+        since_near = 0 if near else min(since_near + 1, 1000)
+        if sub_steps and since_near <= AFTER_STEPS:
+            # the step again as d sub-steps, one per chain sample
+            n_sub += 1
+            shaft_angle, cage_angle, spin_angle, cage_cos, cage_sin = start_angles
+            rsx = rx
+            rsy = ry
+            rqx = rxp           # residual at the previous node: the previous step's start
+            rqy = ryp
+            first = 5           # first sub-step: weight rows for that node, d sub-steps back
+            for sd in range(d):
+                g0 = (i + sd * inv_d) * inv_n
+                g1 = (i + (sd + 1) * inv_d) * inv_n
+                v0 = s0 + (s1 - s0) * g0
+                v1 = s0 + (s1 - s0) * g1
+                if sd > 0:
+                    # residual and acceleration at the sub-step's start
+                    rsx, rsy = _residual(kc, kbx, kby, gc, gs, goff, a0 - a1, b0 - b1)
+                    out_acc[k + sd, 0] = cx[0] * a0 + cx[1] * a1 + cx[2] * a2 + cx[3] * a3 + fdx * rsx
+                    out_acc[k + sd, 1] = (cy[0] * b0 + cy[1] * b1 + cy[2] * b2 + cy[3] * b3
+                                          + cy[4] * b4 + cy[5] * b5 + fdy * rsy)
+                exs = l0x + (l1x - l0x) * g0
+                eys = l0y + (l1y - l0y) * g0 - grav
+                dexs = dex * inv_d
+                deys = dey * inv_d
+                ca0, ca1, ca2, ca3, cb0, cb1, cb2, cb3, cb4, cb5 = _free_response(
+                    psx, psy, esx, esy, a0, a1, a2, a3, b0, b1, b2, b3, b4, b5, exs, eys, dexs, deys)
+                dx, dy = _predicted_offset(wsx, wsy, first, ca0, ca1, cb0, cb1, rsx, rqx, rsy, rqy)
+                dth = 0.5 * (v0 + v1) * hs
+                shaft_angle += dth
+                cage_angle += r_cage * dth
+                spin_angle += r_spin * dth
+                if anchor and sd == d - 1:
+                    cage_cos = math.cos(cage_angle)
+                    cage_sin = math.sin(cage_angle)
+                else:
+                    cage_cos, cage_sin = _rotate(cage_cos, cage_sin, r_cage * dth)
+                _place_balls(geo, cj, sj, dtab, wtab, seed, slip_cache, shaft_angle, cage_angle,
+                             spin_angle, cage_cos, cage_sin, 0.0, 0.0, 0.0, eps, gc, gs, goff)
+                rxs, rys = _residual(kc, kbx, kby, gc, gs, goff, dx, dy)
+                a0, a1, a2, a3, b0, b1, b2, b3, b4, b5 = _corrected(
+                    wsx, wsy, first, ca0, ca1, ca2, ca3, cb0, cb1, cb2, cb3, cb4, cb5, rxs, rsx, rqx,
+                    rys, rsy, rqy)
+                rqx = rsx
+                rqy = rsy
+                first = 0
+            rxp = rx
+            ryp = ry
+            continue
         # acceleration inside the step (dense output) from the corrector's residual interpolant
         for sd in range(1, d):
             out_acc[k + sd, 0] = (dense_x[sd, 0] * a0 + dense_x[sd, 1] * a1 + dense_x[sd, 2] * a2
@@ -396,25 +541,19 @@ def advance_kernel(x, ang, trig, step, hist, geom, n, m, d, s0, s1, l0x, l0y, l1
                                   + dense_y[sd, 9] * eyn + dense_y[sd, 10] * dey)
         # corrector: the residual interpolated by the parabola through the predicted end, the
         # start and the previous start
-        a0 = ca0 + wx[0, 0] * rxs + wx[1, 0] * rx + wx[2, 0] * rxp
-        a1 = ca1 + wx[0, 1] * rxs + wx[1, 1] * rx + wx[2, 1] * rxp
-        a2 = ca2 + wx[0, 2] * rxs + wx[1, 2] * rx + wx[2, 2] * rxp
-        a3 = ca3 + wx[0, 3] * rxs + wx[1, 3] * rx + wx[2, 3] * rxp
-        b0 = cb0 + wy[0, 0] * rys + wy[1, 0] * ry + wy[2, 0] * ryp
-        b1 = cb1 + wy[0, 1] * rys + wy[1, 1] * ry + wy[2, 1] * ryp
-        b2 = cb2 + wy[0, 2] * rys + wy[1, 2] * ry + wy[2, 2] * ryp
-        b3 = cb3 + wy[0, 3] * rys + wy[1, 3] * ry + wy[2, 3] * ryp
-        b4 = cb4 + wy[0, 4] * rys + wy[1, 4] * ry + wy[2, 4] * ryp
-        b5 = cb5 + wy[0, 5] * rys + wy[1, 5] * ry + wy[2, 5] * ryp
+        a0, a1, a2, a3, b0, b1, b2, b3, b4, b5 = _corrected(
+            wx, wy, 0, ca0, ca1, ca2, ca3, cb0, cb1, cb2, cb3, cb4, cb5, rxs, rx, rxp, rys, ry, ryp)
         rxp = rx
         ryp = ry
     x[0], x[2], x[5], x[7] = a0, a1, a2, a3
     x[1], x[3], x[4], x[6], x[8], x[9] = b0, b1, b2, b3, b4, b5
     ang[0], ang[1], ang[2] = shaft_angle, cage_angle, spin_angle
     step[0] = steps
+    step[1] = n_sub
     hist[0] = rxp
     hist[1] = ryp
     hist[2] = 1.0 if have_prev else 0.0
+    hist[4] = since_near
     trig[0] = cage_cos
     trig[1] = cage_sin
 
@@ -425,7 +564,7 @@ class KinematicModel:
     name = "kinematic"
 
     def __init__(self, scene, output_rate: float, oversample: int, seed: int, shaft_speed: float,
-                 radial_load, chain_oversample: int | None = None):
+                 radial_load, chain_oversample: int | None = None, event_substeps: bool = True):
         """``oversample``: integration steps per output sample; ``chain_oversample``: samples per
         output sample handed to the accelerometer chain (a multiple of ``oversample``; default
         ``max(oversample, CHAIN_OVERSAMPLE)``), the extra ones by dense output."""
@@ -438,6 +577,7 @@ class KinematicModel:
         self.internal_rate = float(output_rate) * chain
         self.h = 1.0 / (float(output_rate) * self.decimation)
         self.seed = int(seed)
+        self.event_substeps = bool(event_substeps)
         b = scene.bearing
         st = scene.structure
         nb = b.balls
@@ -461,8 +601,9 @@ class KinematicModel:
         self.angles = np.zeros(3)   # shaft, cage, ball spin (rad)
         self.slip_cache = np.full((nb, 3), np.nan)
         self.trig = np.array([1.0, 0.0])              # cos, sin of the cage angle
-        self.step = np.zeros(1, dtype=np.int64)
-        self.hist = np.zeros(4)                       # previous residual (x, y), valid flags
+        self.step = np.zeros(2, dtype=np.int64)         # steps since t = 0, of them in sub-steps
+        # previous residual (x, y), valid flags, steps since a ball was last inside a defect
+        self.hist = np.array([0.0, 0.0, 0.0, 0.0, 1000.0])
         self.geom = np.zeros((4, nb))                 # ball geometry at the current time
         self.x = np.zeros(NSTATE)
         self._lin_load = None
@@ -549,17 +690,17 @@ class KinematicModel:
         from scipy.linalg import expm
 
         self.A, self.B, self.C, self.D = A, B, C, D      # kept for tests and studies
-        h = self.h
         order = len(CORRECTOR_NODES)
         nz = NSTATE + order * NINPUT
-        Z = np.zeros((nz, nz))
-        Z[:NSTATE, :NSTATE] = A * h
-        Z[:NSTATE, NSTATE:NSTATE + NINPUT] = B * h
-        for j in range(order - 1):
-            r0 = NSTATE + j * NINPUT
-            Z[r0:r0 + NINPUT, r0 + NINPUT:r0 + 2 * NINPUT] = np.eye(NINPUT)
 
-        def blocks(tau):
+        def blocks(tau, h=self.h):
+            """exp(A h tau) and E_j(tau) for a step of h (s in units of h)"""
+            Z = np.zeros((nz, nz))
+            Z[:NSTATE, :NSTATE] = A * h
+            Z[:NSTATE, NSTATE:NSTATE + NINPUT] = B * h
+            for j in range(order - 1):
+                r0 = NSTATE + j * NINPUT
+                Z[r0:r0 + NINPUT, r0 + NINPUT:r0 + 2 * NINPUT] = np.eye(NINPUT)
             E = expm(tau * Z)
             return E[:NSTATE, :NSTATE], [E[:NSTATE, NSTATE + j * NINPUT:NSTATE + (j + 1) * NINPUT]
                                           * math.factorial(j) for j in range(order)]
@@ -568,14 +709,31 @@ class KinematicModel:
             """inverse Vandermonde: coefficient j of the interpolant = sum_i inv[j, i] u(node_i)"""
             return np.linalg.inv(np.array([[t ** j for j in range(len(nodes))] for t in nodes]))
 
-        vc, vp = lagrange(CORRECTOR_NODES), lagrange(PREDICTOR_NODES)
+        def weights(Es, corrector, predictor):
+            """what the residual at each corrector node, then each predictor node, adds"""
+            vc, vp = lagrange(corrector), lagrange(predictor)
+            wc = [sum(Es[j] * vc[j, i] for j in range(order)) for i in range(order)]
+            wp = [sum(Es[j] * vp[j, i] for j in range(len(predictor))) for i in range(len(predictor))]
+            return wc + wp
+
+        vc = lagrange(CORRECTOR_NODES)
         phi, Es = blocks(1.0)
         xb, yb = list(X_BLOCK), list(Y_BLOCK)
         # the blocks must decouple (diagonal kb, resonator on y only)
         assert not np.any(phi[np.ix_(xb, yb)]) and not np.any(phi[np.ix_(yb, xb)])
-        wc = [sum(Es[j] * vc[j, i] for j in range(order)) for i in range(order)]
-        wp = [sum(Es[j] * vp[j, i] for j in range(len(PREDICTOR_NODES))) for i in range(len(PREDICTOR_NODES))]
-        w = wc + wp                                  # rows of wx / wy, in the kernel's order
+        w = weights(Es, CORRECTOR_NODES, PREDICTOR_NODES)   # rows of wx / wy, in the kernel's order
+        # event sub-steps: one per chain sample; the first one's previous node is the previous
+        # step's start, d sub-steps back
+        d = self.dense
+        phs, Ess = blocks(1.0, self.h / d)
+        ws = (weights(Ess, CORRECTOR_NODES, PREDICTOR_NODES)
+              + weights(Ess, CORRECTOR_NODES[:2] + (-float(d),), PREDICTOR_NODES[:1] + (-float(d),)))
+        self.psx = np.ascontiguousarray(phs[np.ix_(xb, xb)])
+        self.psy = np.ascontiguousarray(phs[np.ix_(yb, yb)])
+        self.wsx = np.ascontiguousarray([wi[xb, 0] for wi in ws])
+        self.wsy = np.ascontiguousarray([wi[yb, 1] for wi in ws])
+        self.esx = np.ascontiguousarray([Ess[0][xb, 2], Ess[1][xb, 2]])
+        self.esy = np.ascontiguousarray([Ess[0][yb, 3], Ess[1][yb, 3]])
         self.px = np.ascontiguousarray(phi[np.ix_(xb, xb)])
         self.py = np.ascontiguousarray(phi[np.ix_(yb, yb)])
         self.wx = np.ascontiguousarray([wi[xb, 0] for wi in w])
@@ -589,7 +747,6 @@ class KinematicModel:
         self.cx = np.ascontiguousarray(C[0, xb])
         self.cy = np.ascontiguousarray(C[1, yb])
         self.feed = np.array([D[0, 0], D[1, 1]])
-        d = self.dense
         self.dense_x = np.zeros((d, 4 + order + 2))
         self.dense_y = np.zeros((d, 6 + order + 2))
         for sd in range(1, d):
@@ -632,7 +789,8 @@ class KinematicModel:
                        float(load0[1]), l1x, l1y, self.h, self.geo, self.cj, self.sj,
                        self.dtab, self.wtab, self.seed, self.slip_cache, self.kbx, self.kby,
                        self.px, self.py, self.wx, self.wy, self.ex, self.ey, self.cx, self.cy,
-                       self.feed, self.dense_x, self.dense_y, acc, forces, cage)
+                       self.feed, self.dense_x, self.dense_y, self.psx, self.psy, self.wsx, self.wsy,
+                       self.esx, self.esy, int(self.event_substeps), acc, forces, cage)
         self._last_speed = float(speed1)
 
     def adopt_state(self, other) -> None:
