@@ -44,7 +44,7 @@ from numba import njit
 from . import KinematicSnapshot, TierOutput
 from .defects import (D_ANGLE, D_BALL, D_DEPTH, D_HALF, D_HMAX_I, D_HMAX_O, D_KIND, D_PROFILE,
                       D_RAMP_I, D_RAMP_O, D_RHO_I, D_RHO_O, D_WANDER, DEFECT_COLUMNS, KIND_BALL,
-                      KIND_INNER, _profile_drop, add_defect_losses, defect_table, wander_reach,
+                      KIND_INNER, _profile_drop, defect_table, wander_reach,
                       waviness_gain, wrap)
 from .rng import uniform
 from ..catalog import G
@@ -71,111 +71,27 @@ CHAIN_OVERSAMPLE = 4   # accelerometer chain rate / output rate at least (the sk
 
 
 @njit(cache=True, inline="always")
-def ball_geometry(geo, cj, sj, dtab, wtab, seed, shaft_angle, cage_angle, c0, s0, spin_angle,
-                  slip_cache, eps, loss_i, loss_o, gc, gs, goff):
+def ball_geometry(geo, cj, sj, dtab, wtab, seed, slip_cache, shaft_angle, cage_angle, spin_angle,
+                  cage_cos, cage_sin, margin_i, margin_o, margin_b, eps, gc, gs, goff):
     """Where each ball is and how much interference it has lost, at one instant.
 
-    ``c0, s0`` = cos, sin of ``cage_angle`` (the caller advances them by rotation).  Fills gc,
-    gs (cos, sin of each ball's angle) and goff (clearance + defect loss - waviness gain, m) so
-    that the ball's deflection is ``dx * gc + dy * gs - goff``.  It depends only on the angles,
-    so one call serves every force evaluation at that instant.
+    ``cage_cos, cage_sin`` = cos, sin of ``cage_angle`` (the caller advances them by rotation).
+    Fills gc, gs (cos, sin of each ball's angle), goff (clearance + defect loss - waviness gain,
+    m) so that the ball's deflection is ``dx * gc + dy * gs - goff``, and eps (each ball's slip
+    angle).  It depends only on the angles, so one call serves every force evaluation at that
+    instant.  Returns True if a ball is inside a defect or within ``margin_*`` (rad: how far an
+    inner-race, outer-race or ball defect moves against the balls in one step) of one that is
+    narrower than that, so that it may cross it within the step.
 
     Random slip (seed 001): each ball is offset by a linear interpolation of uniform(-1, 1)
     knots one ball spacing apart in cage angle, times ``slip * spacing``.  The knots are hashed
     from (seed, ball, knot index), so the offset depends only on where the cage is
     (chunk-invariant); ``slip_cache`` (nb, 3: knot index, value there, value at the next)
     avoids re-hashing until the cage passes a knot.
-    """
-    nb = int(geo[P_NB])
-    cr = geo[P_CR]
-    spacing = 2.0 * math.pi / nb
-    slip_amp = geo[P_SLIP] * spacing
-    if slip_amp > 0.0:
-        q = cage_angle / spacing
-        kq = math.floor(q)
-        f = q - kq
-        for j in range(nb):
-            if slip_cache[j, 0] != kq:
-                ki = np.int64(kq)
-                slip_cache[j, 0] = kq
-                slip_cache[j, 1] = 2.0 * uniform(seed, 1000 + j, np.uint64(ki)) - 1.0
-                slip_cache[j, 2] = 2.0 * uniform(seed, 1000 + j, np.uint64(ki + 1)) - 1.0
-            a = slip_cache[j, 1]
-            eps[j] = slip_amp * (a + (slip_cache[j, 2] - a) * f)
-    for j in range(nb):
-        c = c0 * cj[j] - s0 * sj[j]
-        s = s0 * cj[j] + c0 * sj[j]
-        e = eps[j]
-        if e != 0.0:
-            ce = 1.0 - 0.5 * e * e          # cos/sin of a small angle, error < e^3/6
-            c, s = c * ce - s * e, s * ce + c * e
-        gc[j] = c
-        gs[j] = s
-        goff[j] = cr
-    if dtab.shape[0] > 0:
-        for j in range(nb):
-            loss_i[j] = 0.0
-            loss_o[j] = 0.0
-        add_defect_losses(dtab, cage_angle, spacing, nb, eps, shaft_angle, spin_angle,
-                          geo[P_RI], geo[P_RO], geo[P_RB], loss_i, loss_o)
-        for j in range(nb):
-            goff[j] += loss_i[j] + loss_o[j]
-    if wtab.shape[0] > 0:
-        for j in range(nb):
-            goff[j] -= waviness_gain(wtab, cage_angle + j * spacing + eps[j], shaft_angle)
 
-
-@njit(cache=True, inline="always")
-def _rotate(c, s, dth):
-    """(cos, sin) of angle + dth from those of angle; dth small (< 0.1 rad): Taylor to 5th
-    order, relative error below 1e-9 per call and renormalised at every chunk start."""
-    d2 = dth * dth
-    cd = 1.0 - d2 * (0.5 - d2 * (1.0 / 24.0))
-    sd = dth * (1.0 - d2 * (1.0 / 6.0 - d2 * (1.0 / 120.0)))
-    return c * cd - s * sd, s * cd + c * sd
-
-
-@njit(cache=True, inline="always")
-def hertz_force(kc, gc, gs, goff, dx, dy, q_out):
-    """Force of the balls on the pedestal (N, x and y) for a shaft-pedestal offset (dx, dy) m;
-    each ball's load (N) goes to q_out."""
-    fx = 0.0
-    fy = 0.0
-    for j in range(gc.shape[0]):
-        delta = dx * gc[j] + dy * gs[j] - goff[j]
-        if delta > 0.0:
-            qj = kc * delta * math.sqrt(delta)
-            q_out[j] = qj
-            fx += qj * gc[j]
-            fy += qj * gs[j]
-        else:
-            q_out[j] = 0.0
-    return fx, fy
-
-
-@njit(cache=True)
-def bearing_force(geo, cj, sj, dtab, wtab, seed, dx, dy, shaft_angle, cage_angle, spin_angle, q_out):
-    """Force of the balls on the pedestal at one instant (convenience for set-up code)."""
-    nb = int(geo[P_NB])
-    gc = np.empty(nb)
-    gs = np.empty(nb)
-    goff = np.empty(nb)
-    eps = np.zeros(nb)
-    li = np.zeros(nb)
-    lo = np.zeros(nb)
-    cache = np.full((nb, 3), np.nan)
-    ball_geometry(geo, cj, sj, dtab, wtab, seed, shaft_angle, cage_angle, math.cos(cage_angle),
-                  math.sin(cage_angle), spin_angle, cache, eps, li, lo, gc, gs, goff)
-    return hertz_force(geo[P_K], gc, gs, goff, dx, dy, q_out)
-
-
-@njit(cache=True, inline="always")
-def _place_balls(geo, cj, sj, dtab, wtab, seed, slip_cache, shaft_angle, cage_angle, spin_angle,
-                 cage_cos, cage_sin, margin_i, margin_o, margin_b, eps, gc, gs, goff):
-    """``ball_geometry`` spelled out for the kernel (see its docstring): fills gc, gs, goff
-    (and eps) for the balls at these angles.  Returns True if a ball is inside a defect or
-    within ``margin_*`` (rad: how far an inner-race, outer-race or ball defect moves against
-    the balls in one step) of one, so that it may enter, leave or cross it within the step."""
+    Defects: :func:`~.defects.add_defect_losses` spelled out, because the kernel calls this
+    inline at every step and an array-taking call costs more than its arithmetic, and because
+    it also says whether a ball is near a defect."""
     nb = int(geo[P_NB])
     cr = geo[P_CR]
     spacing = 2.0 * math.pi / nb
@@ -208,8 +124,7 @@ def _place_balls(geo, cj, sj, dtab, wtab, seed, slip_cache, shaft_angle, cage_an
     n_def = dtab.shape[0]
     if n_def > 0:
         r_in, r_out, r_ball = geo[P_RI], geo[P_RO], geo[P_RB]
-        # add_defect_losses, spelled out: each race defect is tested against the ball nearest
-        # to it and that ball's neighbours only
+        # each race defect is tested against the ball nearest to it and its neighbours only
         for kd in range(n_def):
             kind = int(dtab[kd, D_KIND])
             half = dtab[kd, D_HALF]
@@ -263,6 +178,48 @@ def _place_balls(geo, cj, sj, dtab, wtab, seed, slip_cache, shaft_angle, cage_an
         for j in range(nb):
             goff[j] -= waviness_gain(wtab, cage_angle + j * spacing + eps[j], shaft_angle)
     return near
+
+
+@njit(cache=True, inline="always")
+def _rotate(c, s, dth):
+    """(cos, sin) of angle + dth from those of angle; dth small (< 0.1 rad): Taylor to 5th
+    order, relative error below 1e-9 per call and renormalised at every chunk start."""
+    d2 = dth * dth
+    cd = 1.0 - d2 * (0.5 - d2 * (1.0 / 24.0))
+    sd = dth * (1.0 - d2 * (1.0 / 6.0 - d2 * (1.0 / 120.0)))
+    return c * cd - s * sd, s * cd + c * sd
+
+
+@njit(cache=True, inline="always")
+def hertz_force(kc, gc, gs, goff, dx, dy, q_out):
+    """Force of the balls on the pedestal (N, x and y) for a shaft-pedestal offset (dx, dy) m;
+    each ball's load (N) goes to q_out."""
+    fx = 0.0
+    fy = 0.0
+    for j in range(gc.shape[0]):
+        delta = dx * gc[j] + dy * gs[j] - goff[j]
+        if delta > 0.0:
+            qj = kc * delta * math.sqrt(delta)
+            q_out[j] = qj
+            fx += qj * gc[j]
+            fy += qj * gs[j]
+        else:
+            q_out[j] = 0.0
+    return fx, fy
+
+
+@njit(cache=True)
+def bearing_force(geo, cj, sj, dtab, wtab, seed, dx, dy, shaft_angle, cage_angle, spin_angle, q_out):
+    """Force of the balls on the pedestal at one instant (convenience for set-up code)."""
+    nb = int(geo[P_NB])
+    gc = np.empty(nb)
+    gs = np.empty(nb)
+    goff = np.empty(nb)
+    eps = np.zeros(nb)
+    cache = np.full((nb, 3), np.nan)
+    ball_geometry(geo, cj, sj, dtab, wtab, seed, cache, shaft_angle, cage_angle, spin_angle,
+                  math.cos(cage_angle), math.sin(cage_angle), 0.0, 0.0, 0.0, eps, gc, gs, goff)
+    return hertz_force(geo[P_K], gc, gs, goff, dx, dy, q_out)
 
 
 @njit(cache=True, inline="always")
@@ -409,8 +366,8 @@ def advance_kernel(x, ang, trig, step, hist, geom, n, m, d, s0, s1, l0x, l0y, l1
     steps = step[0]
     n_sub = step[1]
     if hist[3] == 0.0:
-        ball_geometry(geo, cj, sj, dtab, wtab, seed, shaft_angle, cage_angle, cage_cos, cage_sin,
-                      spin_angle, slip_cache, eps, np.zeros(nb), np.zeros(nb), gc, gs, goff)
+        ball_geometry(geo, cj, sj, dtab, wtab, seed, slip_cache, shaft_angle, cage_angle, spin_angle,
+                      cage_cos, cage_sin, 0.0, 0.0, 0.0, eps, gc, gs, goff)
         hist[3] = 1.0
     o = -1                  # row of out_q / out_cage being written
     until_record = 0        # steps until the next recorded one (no integer division per step)
@@ -474,9 +431,9 @@ def advance_kernel(x, ang, trig, step, hist, geom, n, m, d, s0, s1, l0x, l0y, l1
             cage_sin = math.sin(cage_angle)
         else:
             cage_cos, cage_sin = _rotate(cage_cos, cage_sin, r_cage * dth)
-        near = _place_balls(geo, cj, sj, dtab, wtab, seed, slip_cache, shaft_angle, cage_angle,
-                            spin_angle, cage_cos, cage_sin, margin_i, margin_o, margin_b, eps, gc,
-                            gs, goff)
+        near = ball_geometry(geo, cj, sj, dtab, wtab, seed, slip_cache, shaft_angle, cage_angle,
+                             spin_angle, cage_cos, cage_sin, margin_i, margin_o, margin_b, eps, gc,
+                             gs, goff)
         # residual at the predicted end of the step
         rxs, rys = _residual(kc, kbx, kby, gc, gs, goff, dx, dy)
         # sub-steps where a ball is inside a defect at the step end, and in the AFTER_STEPS
@@ -518,8 +475,8 @@ def advance_kernel(x, ang, trig, step, hist, geom, n, m, d, s0, s1, l0x, l0y, l1
                     cage_sin = math.sin(cage_angle)
                 else:
                     cage_cos, cage_sin = _rotate(cage_cos, cage_sin, r_cage * dth)
-                _place_balls(geo, cj, sj, dtab, wtab, seed, slip_cache, shaft_angle, cage_angle,
-                             spin_angle, cage_cos, cage_sin, 0.0, 0.0, 0.0, eps, gc, gs, goff)
+                ball_geometry(geo, cj, sj, dtab, wtab, seed, slip_cache, shaft_angle, cage_angle,
+                              spin_angle, cage_cos, cage_sin, 0.0, 0.0, 0.0, eps, gc, gs, goff)
                 rxs, rys = _residual(kc, kbx, kby, gc, gs, goff, dx, dy)
                 a0, a1, a2, a3, b0, b1, b2, b3, b4, b5 = _corrected(
                     wsx, wsy, first, ca0, ca1, ca2, ca3, cb0, cb1, cb2, cb3, cb4, cb5, rxs, rsx, rqx,
