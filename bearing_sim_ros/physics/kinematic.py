@@ -62,7 +62,7 @@ CORRECTOR_NODES = (1.0, 0.0, -1.0)   # residual at the step end (predicted), sta
 PREDICTOR_NODES = (0.0, -1.0)
 DEFAULT_OVERSAMPLE = 1  # steps per output sample the Simulator should use by default: ETD3 with
                         # event sub-steps at x1 is as accurate as plain ETD3 at x2 on the defect
-                        # scenes and 1.3-1.5x faster (README, "Kinematic tier: speed ...")
+                        # scenes and 1.3-1.6x faster (README, "Kinematic tier: speed ...")
 CHAIN_OVERSAMPLE = 4   # accelerometer chain rate / output rate at least (the skidding tier's rate,
                        # so that a switch of tiers keeps the chain and the signal has no seam)
 
