@@ -293,10 +293,10 @@ def advance_kernel(x, ang, trig, step, hist, geom, n, m, d, s0, s1, l0x, l0y, l1
 
     x: state (10,); ang: (shaft, cage, ball spin) angles; trig: (cos, sin) of the cage angle;
     step: (2,) int64 steps taken since t = 0, and of those the ones done in sub-steps;
-    hist: (5,) residual (x, y) at the previous step's
-    start, 1.0 if that is valid (0.0 after a start, a relinearisation or a tier switch), 1.0 if
-    ``geom`` is, steps since a ball was last inside a defect at a step end; geom: (4, Nb) the balls' geometry at the current time (cos, sin of each ball's
-    angle, clearance + loss - gain, slip angle), kept from the previous chunk so that a chunk
+    hist: (5,) residual (x, y) at the previous step's start, 1.0 if that is valid (0.0 after a
+    start, a relinearisation or a tier switch), 1.0 if ``geom`` is, steps since a ball was last
+    inside a defect at a step end; geom: (4, Nb) the balls' geometry at the current time (cos,
+    sin of each ball's angle, clearance + loss - gain, slip angle), kept from the previous chunk so that a chunk
     boundary cannot change a bit of it (it is computed once, at the first step or a switch).
     Speed and load ramp linearly from (s0, l0) to (s1, l1).  The x block of the state is (xs, xp, vxs, vxp), the y
     block (ys, yp, yr, vys, vyp, vyr) (they decouple: see ``_linearise``); px (4, 4), py (6, 6):
