@@ -80,7 +80,7 @@ class Simulator:
     seed: random slip and sensor noise.  solver: "default" | "rk4" | "reference" (skidding tier).
     rk4_step: step of the "rk4" solver (s).  oversample: integration steps per output sample
     (the accuracy knob: 1, 2 or a multiple of 4 up to 64; by default each tier's own,
-    ``physics.kinematic.DEFAULT_OVERSAMPLE`` = 1 and, for the skidding tier's "default" solver,
+    ``physics.kinematic.DEFAULT_OVERSAMPLE`` = 2 and, for the skidding tier's "default" solver,
     ``physics.skidding.DEFAULT_OVERSAMPLE`` = 4; "rk4" and "reference" keep their steps).
     """
 
