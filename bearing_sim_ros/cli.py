@@ -21,26 +21,26 @@ class _Parser(argparse.ArgumentParser):
         raise UserError(f"{self.prog}: {message}")
 
 
-def _positive(kind):
+def _number(kind, allow_zero: bool):
+    """argparse type: a ``kind`` (int or float) > 0, or >= 0 with ``allow_zero``."""
     def parse(text):
         try:
             value = kind(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-        if not value > 0:
-            raise argparse.ArgumentTypeError(f"{text!r} must be > 0")
+            raise argparse.ArgumentTypeError(
+                f"{text!r} is not a {'whole number' if kind is int else 'number'}") from None
+        if not (value >= 0 if allow_zero else value > 0):
+            raise argparse.ArgumentTypeError(f"{text!r} must be {'>=' if allow_zero else '>'} 0")
         return value
     return parse
 
 
-def _nonnegative_int(text):
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"{text!r} must be >= 0")
-    return value
+def _positive(kind):
+    return _number(kind, allow_zero=False)
+
+
+def _nonnegative(kind):
+    return _number(kind, allow_zero=True)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -61,7 +61,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--duration", type=_positive(float), required=True, help="seconds of signal")
     s.add_argument("--out", required=True, help="output .mcap")
     s.add_argument("--fidelity", default="auto", choices=["auto", "kinematic", "skidding"])
-    s.add_argument("--seed", type=_nonnegative_int, default=0)
+    s.add_argument("--seed", type=_nonnegative(int), default=0)
     s.add_argument("--sample-rate", type=_positive(float), default=15000.0)
     s.add_argument("--solver", default="default", choices=["default", "rk4", "reference"])
     s.add_argument("--oversample", type=int, default=None,
@@ -72,6 +72,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--rate", type=_positive(float), default=1.0)
     s.add_argument("--loop", action="store_true")
     s.add_argument("--clock", action="store_true", help="publish /clock from the recording's stamps")
+    s.add_argument("--wait", type=_nonnegative(float), default=5.0, metavar="SECONDS",
+                   help="wait up to this long for a first subscriber before publishing (default 5; "
+                        "DDS discovery can take one 3 s announcement period)")
 
     s = sub.add_parser("report", help="PNG plots and a summary of a recording")
     s.add_argument("file")
@@ -91,7 +94,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     s = sub.add_parser("monitor", help="example condition-monitoring subscriber (envelope analysis)")
     s.add_argument("--window", type=_positive(float), default=4.0, help="seconds of signal per analysis")
-    s.add_argument("--count", type=_nonnegative_int, default=0, help="stop after this many verdicts (0 = never)")
+    s.add_argument("--count", type=_nonnegative(int), default=0, help="stop after this many verdicts (0 = never)")
     s.add_argument("--scene", default=None, help="scene giving the bearing geometry (default: er16k_outer_race)")
     return p
 

@@ -62,6 +62,11 @@ SUBSCRIBER = textwrap.dedent('''
 ''')
 
 
+# every message must arrive, and discovery now and then takes one 3 s announcement period (the
+# default wait): seen in about 1 run in 10, the subscriber then missed the first 50 ms
+WAIT = ["--wait", "15"]
+
+
 @pytest.fixture(scope="module")
 def recording(tmp_path_factory):
     out = tmp_path_factory.mktemp("play") / "one_second.mcap"
@@ -90,8 +95,8 @@ def test_play_delivers_every_message_to_another_process(recording, bearing_sim_e
     path, counts, accel = recording
     sub, result = _subscriber(tmp_path, ros_env, len(accel), 40)
     try:
-        play = subprocess.run([bearing_sim_exe, "play", str(path), "--rate", "2", "--clock"], env=ros_env,
-                              capture_output=True, text=True, timeout=60)
+        play = subprocess.run([bearing_sim_exe, "play", str(path), "--rate", "2", "--clock", *WAIT],
+                              env=ros_env, capture_output=True, text=True, timeout=60)
         assert play.returncode == 0, play.stderr
         sub.wait(timeout=60)
     finally:
@@ -116,7 +121,7 @@ def test_loop_keeps_tables_contiguous_and_sigint_ends_cleanly(recording, bearing
     path, counts, accel = recording
     want = int(2.5 * len(accel))
     sub, result = _subscriber(tmp_path, ros_env, want, 40)
-    play = subprocess.Popen([bearing_sim_exe, "play", str(path), "--rate", "4", "--loop"], env=ros_env,
+    play = subprocess.Popen([bearing_sim_exe, "play", str(path), "--rate", "4", "--loop", *WAIT], env=ros_env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         sub.wait(timeout=60)
@@ -155,3 +160,13 @@ def test_bad_files_exit_2_with_one_line(kind, recording, bearing_sim_exe, ros_en
     lines = r.stderr.strip().splitlines()
     assert r.returncode == 2 and len(lines) == 1, r.stderr
     assert {"not_mcap": "not an MCAP file", "truncated": "truncated", "missing": "no such file"}[kind] in lines[0]
+
+
+@pytest.mark.parametrize("args, named", [(["--wait", "-1"], "--wait"), (["--wait", "soon"], "--wait"),
+                                         (["--rate", "0"], "--rate")])
+def test_bad_arguments_exit_2_with_one_line(args, named, recording, bearing_sim_exe, ros_env):
+    path, _, _ = recording
+    r = subprocess.run([bearing_sim_exe, "play", str(path), *args], env=ros_env, capture_output=True,
+                       text=True, timeout=60)
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 2 and len(lines) == 1 and named in lines[0] and args[1] in lines[0], r.stderr
