@@ -24,7 +24,7 @@ BATCH_NS = 10_000_000          # 150 samples at 15 kHz
 
 @pytest.fixture
 def started(ros_env, bearing_sim_exe, tmp_path):
-    """Start nodes with ``started(params)``; every one is killed at the end of the test."""
+    """Start nodes with ``started(params)``; every one is stopped (SIGINT) at the end of the test."""
     procs = []
 
     def start(params, name="node"):

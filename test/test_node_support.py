@@ -66,6 +66,16 @@ class NodeProcess:
             self.proc.wait(5)
 
     def close(self) -> None:
+        """Stop the node as a user would (SIGINT), SIGKILL only if it hangs: a killed Fast DDS
+        participant leaves its shared-memory segments behind in /dev/shm (45 after one suite
+        run when every node was killed), and with a few hundred of them we saw processes hang
+        at exit (3 in ~110 play runs; none in 40 once they were cleared)."""
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGINT)
+            try:
+                self.proc.wait(10)
+            except subprocess.TimeoutExpired:
+                pass
         self.kill()
         self._log.close()
 
