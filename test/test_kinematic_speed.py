@@ -182,5 +182,40 @@ def study(oversamples=(1, 2, 4, 8), reference=32, settle=0.3, seconds=2.0, repea
                   flush=True)
 
 
+def bearing_mode_hz(model, structure) -> float:
+    """The highest mode of the tier's linearised structure below the unit resonator (Hz): the
+    stiffer the bearing (load), the higher it is and the less one step per sample follows it."""
+    freqs = np.abs(np.linalg.eigvals(model.A).imag) / (2 * math.pi)
+    if structure.has_resonator:
+        resonator = math.sqrt(structure.resonator_stiffness / structure.resonator_mass) / (2 * math.pi)
+        freqs = freqs[freqs < 0.9 * resonator]
+    return float(freqs.max())
+
+
+def study_bearing_mode(seconds=1.0, settle=0.2, reference=32):
+    """The README's x1-against-bearing-mode table: RMS error of x1 and x2 against x32 on healthy
+    and defect scenes from light to heavy load (sensor noise off, ``seconds`` after ``settle``)."""
+    from bearing_sim_ros.bench import Scenario
+
+    scenarios = [Scenario(f"ER-16K 2000 rpm {n:g} N", "er16k_skidding", load_n=n)
+                 for n in (200.0, 500.0, 1000.0, 1500.0, 2000.0, 3000.0)]
+    scenarios += [Scenario("6205 ball+outer 1750 rpm 2000 N", "b6205_ball_outer"),
+                  Scenario("CWRU healthy", "cwru_6205_normal"), Scenario("6307 (seed 001)", "b6307_seed001")]
+    print(f"{'scene':34s} {'mode kHz':>8s} {'x1 RMS':>7s} {'x2 RMS':>7s}")
+    for sc in scenarios:
+        scene = sc.build()
+        rms = {}
+        for m in (1, 2, reference):
+            sim = Simulator(scene, sample_rate=FS, fidelity="kinematic", oversample=m)
+            sim.advance(int(settle * FS))
+            a = sim.advance(int(seconds * FS)).accel[:, -1]
+            rms[m] = math.sqrt(float(np.mean(a * a)))
+        model = KinematicModel(scene, FS, 1, 0, scene.shaft_speed, np.array(scene.radial_load))
+        print(f"{sc.label:34s} {bearing_mode_hz(model, scene.structure) / 1e3:8.2f} "
+              f"{abs(rms[1] / rms[reference] - 1):7.2%} {abs(rms[2] / rms[reference] - 1):7.2%}", flush=True)
+
+
 if __name__ == "__main__":
-    study()
+    import sys
+
+    study_bearing_mode() if sys.argv[1:] == ["bearing-mode"] else study()

@@ -62,8 +62,8 @@ SUBSCRIBER = textwrap.dedent('''
 ''')
 
 
-# every message must arrive, and discovery now and then takes one 3 s announcement period (the
-# default wait): seen in about 1 run in 10, the subscriber then missed the first 50 ms
+# every message must arrive, and discovery now and then takes one 3 s announcement period, or
+# more (with the former fixed 3 s wait about 1 run in 10 missed the first 50 ms); the default is 5 s
 WAIT = ["--wait", "15"]
 
 
