@@ -32,9 +32,11 @@ Forces (seed 000 Sec. 2, with the corrections of PHYSICS_NOTES):
 * Damping (eqs 14, 17-18): in the contact a structural part c_h = 2 zeta sqrt(m_b k_t) (k_t =
   1.5 K delta^0.5 the tangent stiffness, zeta = ``contact_damping_ratio``), and, with the film,
   the squeeze-film damping of the lubricant around the contact on approach, c_oil = dW/du =
-  6 pi eta R_x R_y / (g + h + roughness) (Reynolds' squeeze film of an ellipsoid on a plane; g
-  the gap, 0 in contact), in parallel (eq. 17's inlet term c_r; a series film damper as eq. 17
-  writes it would be short-circuited by the stiff film).  In a flooded groove it is of the order
+  6 pi eta R_x R_y / (|delta| + h + roughness) (Reynolds' squeeze film of an ellipsoid on a
+  plane, module ``film``; |delta| the gap, or the interference in contact: the damping is
+  largest where a ball touches and falls as it is pressed in), in parallel (eq. 17's inlet
+  term c_r; a series film damper as eq. 17 writes it would be short-circuited by the stiff
+  film).  In a flooded groove it is of the order
   of the critical damping of the ball on its contact, so a ball leaving the load zone or meeting
   a race lands without rattling, as wet impacts at Stokes numbers near 1 do.  The contact
   force never pulls (Q >= 0).
@@ -89,6 +91,8 @@ from numba import njit
 
 from ..catalog import G
 from . import KinematicSnapshot, TierOutput
+from .film import (FILM_EXP_Q, FILM_EXP_U, film_coefficient, squeeze_film_coefficient,
+                   structural_damping_coefficient)
 from .defects import (D_ANGLE, D_BALL, D_KIND, KIND_BALL, KIND_INNER, defect_table, interference_loss,
                       waviness_gain, waviness_table)
 from .integrators import EXPLICIT, SPLIT, method_for
@@ -128,7 +132,6 @@ FILM_BLEND = 0.02    # s: film scaled in after adopting the kinematic tier's sta
 W_REF = 0.01        # rad/s: regularises the skid-ratio denominators at standstill
 DEFAULT_OVERSAMPLE = 4   # steps of the default solver per output sample (one per internal sample);
                          # 2 runs 1.5-1.8x faster at up to 4.5 % error (README, "Speed against error")
-FILM_EXP_U, FILM_EXP_Q = 0.68, -0.073     # Hamrock-Dowson exponents (speed, load)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -1350,16 +1353,6 @@ def drag_coefficient(scene) -> float:
     return lub.drag_coefficient * math.pi * lub.fluid_density * b.ball_diameter ** 2 / 32.0
 
 
-def _film_coefficient(contact, lub, e_eff: float) -> float:
-    """C in h = C u^0.68 Q^-0.073 (m, with u in m/s and Q in N): Hamrock-Dowson (1977) minimum
-    film thickness h = 3.63 U^0.68 G^0.49 W^-0.073 (1 - exp(-0.68 k)) R_x, U = eta0 u / (E' R_x),
-    G = alpha E', W = Q / (E' R_x^2)."""
-    rx = contact.rx
-    return (3.63 * rx * (lub.viscosity / (e_eff * rx)) ** FILM_EXP_U
-            * (lub.pressure_viscosity * e_eff) ** 0.49 * (1.0 / (e_eff * rx * rx)) ** FILM_EXP_Q
-            * (1.0 - math.exp(-0.68 * contact.ellipticity)))
-
-
 def cage_inertia(scene) -> float:
     """Cage moment of inertia about the bearing axis (kg m^2): ``lubrication.cage_inertia`` if
     given, else a thin ring at the pitch radius of mass ``cage_mass`` (if given, else 0.3 x the
@@ -1399,10 +1392,8 @@ def parameters(scene) -> np.ndarray:
     p[P_CCD] = 2.0 * lub.pocket_damping_ratio * math.sqrt(lub.cage_stiffness * b.ball_mass)
     p[P_JC] = cage_inertia(scene)
     p[P_CDRAG] = lub.cage_drag
-    zeta = lub.contact_damping_ratio
-    # c = 2 zeta sqrt(m_b k_t), k_t = 1.5 K delta^0.5  ->  c = [2 zeta sqrt(1.5 K m_b)] delta^0.25
-    p[P_CDI] = 2.0 * zeta * math.sqrt(1.5 * ic.stiffness * b.ball_mass)
-    p[P_CDO] = 2.0 * zeta * math.sqrt(1.5 * oc.stiffness * b.ball_mass)
+    p[P_CDI] = structural_damping_coefficient(ic, lub, b.ball_mass)
+    p[P_CDO] = structural_damping_coefficient(oc, lub, b.ball_mass)
     p[P_TA], p[P_TB], p[P_TC], p[P_TD] = lub.traction_a, lub.traction_b, lub.traction_c, lub.traction_d
     p[P_VC] = lub.creep_velocity
     p[P_DRAG] = drag_coefficient(scene)    # the kernel multiplies by D_m^1.95 w^1.95
@@ -1412,13 +1403,11 @@ def parameters(scene) -> np.ndarray:
     p[P_RO] = 0.5 * b.outer_race_diameter
     e_eff = b.effective_modulus
     p[P_FILM] = 1.0 if lub.ehl_film else 0.0
-    p[P_HCI] = _film_coefficient(ic, lub, e_eff)
-    p[P_HCO] = _film_coefficient(oc, lub, e_eff)
+    p[P_HCI] = film_coefficient(ic, lub, e_eff)
+    p[P_HCO] = film_coefficient(oc, lub, e_eff)
     p[P_QMIN] = 0.01          # N: the film formula's W^-0.073 has no limit at zero load
-    # squeeze film (eq. 14: c_oil = dW/du; eq. 17's inlet term c_r): Reynolds' squeeze film
-    # between an ellipsoid of radii R_x, R_y and a plane, F = 6 pi eta R_x R_y u / h
-    p[P_SQI] = 6.0 * math.pi * lub.viscosity * ic.rx * ic.ry if lub.ehl_film else 0.0
-    p[P_SQO] = 6.0 * math.pi * lub.viscosity * oc.rx * oc.ry if lub.ehl_film else 0.0
+    p[P_SQI] = squeeze_film_coefficient(ic, lub)      # Reynolds' squeeze film: module film
+    p[P_SQO] = squeeze_film_coefficient(oc, lub)
     p[P_ROUGH] = lub.surface_roughness
     p[P_CAGER] = b.cage_speed(1.0)          # pure-rolling cage and ball-spin speeds per shaft rad/s
     p[P_SPINR] = b.ball_spin_speed(1.0)
