@@ -36,10 +36,9 @@ Forces (seed 000 Sec. 2, with the corrections of PHYSICS_NOTES):
   plane, module ``film``; |delta| the gap, or the interference in contact: the damping is
   largest where a ball touches and falls as it is pressed in), in parallel (eq. 17's inlet
   term c_r; a series film damper as eq. 17 writes it would be short-circuited by the stiff
-  film).  In a flooded groove it is of the order
-  of the critical damping of the ball on its contact, so a ball leaving the load zone or meeting
-  a race lands without rattling, as wet impacts at Stokes numbers near 1 do.  The contact
-  force never pulls (Q >= 0).
+  film).  In a flooded groove it is of the order of the critical damping of the ball on its
+  contact, so a ball leaving the load zone or meeting a race lands without rattling, as wet
+  impacts at Stokes numbers near 1 do.  The contact force never pulls (Q >= 0).
 * Traction (eqs 21-23): slip velocities of the ball surface against each race
       dv_i = rho theta' - (r_b - delta_i/2) Omega - (rho - e - r_b + delta_i/2) omega_s
       dv_o = rho theta' + (r_b - delta_o/2) Omega
@@ -91,10 +90,10 @@ from numba import njit
 
 from ..catalog import G
 from . import KinematicSnapshot, TierOutput
-from .film import (FILM_EXP_Q, FILM_EXP_U, film_coefficient, squeeze_film_coefficient,
-                   structural_damping_coefficient)
 from .defects import (D_ANGLE, D_BALL, D_KIND, KIND_BALL, KIND_INNER, defect_table, interference_loss,
                       waviness_gain, waviness_table)
+from .film import (FILM_EXP_Q, FILM_EXP_U, film_coefficient, squeeze_film_coefficient,
+                   structural_damping_coefficient)
 from .integrators import EXPLICIT, SPLIT, method_for
 from .structure import secant_stiffness, structure_system
 
