@@ -15,15 +15,21 @@ from bearing_sim_ros.physics.kinematic import DEFAULT_OVERSAMPLE, KinematicModel
 FS = 15000.0
 
 
-def quiet(name):
+def quiet(name, undamped=False):
+    """The shipped scene without sensor noise; ``undamped``: seed 001's contacts (Hertz only: no
+    oil film, no contact damping)."""
     scene = load_scene(name)
-    return replace(scene, sensor=replace(scene.sensor, noise_density=0.0))
+    scene = replace(scene, sensor=replace(scene.sensor, noise_density=0.0))
+    if undamped:
+        scene = replace(scene, lubrication=replace(scene.lubrication, ehl_film=False,
+                                                   contact_damping_ratio=0.0))
+    return scene
 
 
 @lru_cache(maxsize=None)
-def accel_y(name, oversample, seconds=1.0):
+def accel_y(name, oversample, seconds=1.0, undamped=False):
     """accel_y without sensor noise after 0.2 s of settling."""
-    sim = Simulator(quiet(name), fidelity="kinematic", oversample=oversample)
+    sim = Simulator(quiet(name, undamped), fidelity="kinematic", oversample=oversample)
     sim.advance(int(0.2 * FS))
     return sim.advance(int(seconds * FS)).accel[:, 1].copy()
 
@@ -73,12 +79,18 @@ def test_propagators_integrate_a_parabolic_residual_exactly():
 
 
 def test_third_order_convergence_on_a_smooth_scene():
-    """Halving the step divides the waveform error by ~2^3 (ETD3): measured 6.8 per halving on
-    the healthy ER-16K; ETD2 (the former integrator) gave 4."""
-    ref = accel_y("er16k_healthy", 32)
-    err = {m: np.linalg.norm(accel_y("er16k_healthy", m) - ref) / np.linalg.norm(ref) for m in (2, 4)}
-    assert err[2] / err[4] > 5.5, err
-    assert err[2] < 5e-3, err
+    """ETD3 is third order: with seed 001's Hertz-only contacts, halving the step divides the
+    waveform error by ~2^3 (measured 6.8 per halving on the healthy ER-16K; ETD2, the former
+    integrator, gave 4).  The damped contacts (the default) have kinks where the integrator's
+    parabola cannot follow them: where a ball's force is clamped at zero as it lifts off, and
+    where its squeeze film starts to act on approach.  They cost about one order (measured 4.9
+    and 4.1 per halving from x2 to x8), not the waveform error budget at x2."""
+    for undamped, order_gain, err_x2 in ((True, 5.5, 4e-3), (False, 4.0, 8e-3)):
+        ref = accel_y("er16k_healthy", 32, undamped=undamped)
+        err = {m: np.linalg.norm(accel_y("er16k_healthy", m, undamped=undamped) - ref)
+               / np.linalg.norm(ref) for m in (2, 4)}
+        assert err[2] / err[4] > order_gain, (undamped, err)
+        assert err[2] < err_x2, (undamped, err)
 
 
 @pytest.mark.parametrize("oversample", [DEFAULT_OVERSAMPLE, 1])
