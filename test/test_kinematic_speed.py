@@ -98,10 +98,11 @@ def test_third_order_convergence_on_a_smooth_scene():
                                         ("cwru_6205_or007_6", "bpfo")])
 def test_the_default_and_one_step_per_sample_stay_within_the_error_budget(name, line, oversample):
     """The default (two steps per output sample, event sub-steps at the defects) against a
-    converged run (32): RMS within 0.5 % and the envelope line within 1.5 % (measured 0.01 /
-    0.12 %, 0.03 / 0.18 % and 0.05 / 0.01 %; without the sub-steps 0.1 / 0.5 % and 0.15 /
-    0.3 % on the ER-16K and CWRU outer races; one step per sample with them: 0.03 / 0.11 %,
-    0.04 / 0.28 % and 0.16 / 0.23 %: within the budget too on these light-load defect scenes)."""
+    converged run (32): RMS within 0.5 % and the envelope line within 1.5 % (``study()``, 2 s:
+    0.03 / 0.15 %, 0.01 / 0.16 % and 0.08 / 0.07 % on the outer, inner and CWRU outer races;
+    without the sub-steps, with the Hertz-only contacts of the time, 0.1 / 0.5 % and 0.15 / 0.3 %
+    on the ER-16K and CWRU outer races; one step per sample with them: 0.01 / 0.04 %, 0.03 /
+    0.24 % and 0.06 / 0.16 %: within the budget too on these light-load defect scenes)."""
     scene = load_scene(name)
     ff = scene.bearing.fault_frequencies(scene.shaft_hz)
     ref, run = accel_y(name, 32), accel_y(name, oversample)
@@ -227,7 +228,24 @@ def study_bearing_mode(seconds=1.0, settle=0.2, reference=32):
               f"{abs(rms[1] / rms[reference] - 1):7.2%} {abs(rms[2] / rms[reference] - 1):7.2%}", flush=True)
 
 
+def study_convergence(name="er16k_healthy", oversamples=(1, 2, 4, 8), reference=32):
+    """The README's convergence figures: waveform error of accel_y against ``reference`` steps per
+    sample with the damped contacts (the default) and with seed 001's Hertz-only contacts, and
+    the factor per halving of the step (1 s after 0.2 s, sensor noise off; as the order test)."""
+    for undamped in (False, True):
+        ref = accel_y(name, reference, undamped=undamped)
+        err = [np.linalg.norm(accel_y(name, m, undamped=undamped) - ref) / np.linalg.norm(ref)
+               for m in oversamples]
+        gains = [a / b for a, b in zip(err, err[1:])]
+        print(f"{'Hertz-only' if undamped else 'damped':10s} "
+              + "  ".join(f"x{m} {e:.1e}" for m, e in zip(oversamples, err))
+              + "   per halving " + " ".join(f"{g:.1f}" for g in gains), flush=True)
+
+
 if __name__ == "__main__":
     import sys
 
-    study_bearing_mode() if sys.argv[1:] == ["bearing-mode"] else study()
+    studies = {"bearing-mode": study_bearing_mode, "convergence": study_convergence}
+    if sys.argv[1:] and sys.argv[1] not in studies:
+        sys.exit(f"unknown study {sys.argv[1]!r}: expected one of {', '.join(studies)} or none")
+    studies[sys.argv[1]]() if sys.argv[1:] else study()

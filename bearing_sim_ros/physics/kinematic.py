@@ -487,7 +487,7 @@ def advance_kernel(x, ang, trig, step, hist, geom, n, m, d, s0, s1, l0x, l0y, l1
         ca0, ca1, ca2, ca3, cb0, cb1, cb2, cb3, cb4, cb5 = _free_response(
             px, py, ex, ey, a0, a1, a2, a3, b0, b1, b2, b3, b4, b5, exn, eyn, dex, dey)
         # predictor (residual extrapolated linearly from the last two starts): only the
-        # displacements are needed, for the residual at the step end
+        # shaft-pedestal offset and its rate are needed, for the residual at the step end
         dx, dy, dvx, dvy = _predicted_offset(wx, wy, 0, ca0, ca1, ca2, ca3, cb0, cb1, cb3, cb4,
                                              rx, rxp, ry, ryp)
         # angles and ball geometry at the end of the step (trapezoid on the linear speed ramp)

@@ -1631,7 +1631,7 @@ class SkiddingModel:
         # FILM_BLEND s avoids a jump in the bearing force of k * dh (tens of N for the whole film)
         # at the switch
         self._settle(self._speed)
-        hi0, ho0 = other.contact_films(self._speed) if hasattr(other, "contact_films") else (0.0, 0.0)
+        hi0, ho0 = other.contact_films(self._speed)
         self.film[:, F_HI] = hi0
         self.film[:, F_HO] = ho0
         _settle_balls(self.p, self.y, self.shaft_angle, self.dtab, self.wti, self.wto, self.film)
