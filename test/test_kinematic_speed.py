@@ -242,10 +242,30 @@ def study_convergence(name="er16k_healthy", oversamples=(1, 2, 4, 8), reference=
               + "   per halving " + " ".join(f"{g:.1f}" for g in gains), flush=True)
 
 
+def study_film(settle=0.3, seconds=0.6):
+    """The README's heavy-load film figures: accel_y RMS of the kinematic tier and the skidding
+    tier's default solver at 600 rpm / 2000 N (the fidelity calibration's point, defects and
+    sensor noise off), with the EHL film and without it."""
+    from bearing_sim_ros.bench import CALIBRATION_POINTS
+
+    point = CALIBRATION_POINTS[0]
+    base = replace(point.build(), defects=())
+    for film in (True, False):
+        scene = replace(base, lubrication=replace(base.lubrication, ehl_film=film))
+        rms = {}
+        for tier in ("kinematic", "skidding"):
+            sim = Simulator(scene, sample_rate=FS, fidelity=tier)
+            sim.advance(int(settle * FS))
+            a = sim.advance(int(seconds * FS)).accel[:, -1]
+            rms[tier] = math.sqrt(float(np.mean(a * a)))
+        print(f"{point.label}, film {'on ' if film else 'off'}: accel_y RMS kinematic "
+              f"{rms['kinematic']:.4f}, skidding {rms['skidding']:.4f} m/s^2", flush=True)
+
+
 if __name__ == "__main__":
     import sys
 
-    studies = {"bearing-mode": study_bearing_mode, "convergence": study_convergence}
+    studies = {"bearing-mode": study_bearing_mode, "convergence": study_convergence, "film": study_film}
     if sys.argv[1:] and sys.argv[1] not in studies:
         sys.exit(f"unknown study {sys.argv[1]!r}: expected one of {', '.join(studies)} or none")
     studies[sys.argv[1]]() if sys.argv[1:] else study()

@@ -14,6 +14,8 @@ from __future__ import annotations
 import math
 
 FILM_EXP_U, FILM_EXP_Q = 0.68, -0.073     # Hamrock-Dowson exponents (speed, load)
+FILM_LOAD_FLOOR = 0.01   # N: the film formula's W^-0.073 has no limit at zero load; a contact's
+                         # film is taken at this load at least
 
 
 def film_coefficient(contact, lub, e_eff: float) -> float:

@@ -56,7 +56,7 @@ from .defects import (D_ANGLE, D_BALL, D_DEPTH, D_HALF, D_HMAX_I, D_HMAX_O, D_KI
                       D_RAMP_I, D_RAMP_O, D_RHO_I, D_RHO_O, D_WANDER, DEFECT_COLUMNS, KIND_BALL,
                       KIND_INNER, _profile_drop, defect_table, wander_reach,
                       waviness_gain, wrap)
-from .film import (FILM_EXP_Q, FILM_EXP_U, film_coefficient, squeeze_film_coefficient,
+from .film import (FILM_EXP_Q, FILM_EXP_U, FILM_LOAD_FLOOR, film_coefficient, squeeze_film_coefficient,
                    structural_damping_coefficient)
 from .rng import uniform
 from ..catalog import G
@@ -626,7 +626,8 @@ def contact_damping(scene, ball_load: float) -> np.ndarray:
     a_i = (k / ic.stiffness) ** (2.0 / 3.0)
     a_o = (k / oc.stiffness) ** (2.0 / 3.0)
     # structural: c_h,i = cd_i delta_i^0.25 in series with c_h,o at the reference deflection
-    delta_ref = (max(ball_load, 0.01) / k) ** (2.0 / 3.0)
+    q_ref = max(ball_load, FILM_LOAD_FLOOR)
+    delta_ref = (q_ref / k) ** (2.0 / 3.0)
     ch_i = structural_damping_coefficient(ic, lub, b.ball_mass) * (a_i * delta_ref) ** 0.25
     ch_o = structural_damping_coefficient(oc, lub, b.ball_mass) * (a_o * delta_ref) ** 0.25
     ch = ch_i * ch_o / (ch_i + ch_o) if ch_i + ch_o > 0.0 else 0.0
@@ -635,7 +636,7 @@ def contact_damping(scene, ball_load: float) -> np.ndarray:
     # h = C u^0.68 Q^-0.073 with u = r_o * cage speed ratio * |w|: per |w|^0.68
     e_eff = b.effective_modulus
     per_speed = ((0.5 * b.outer_race_diameter * b.cage_speed(1.0)) ** FILM_EXP_U
-                 * max(ball_load, 0.01) ** FILM_EXP_Q) if lub.ehl_film else 0.0
+                 * q_ref ** FILM_EXP_Q) if lub.ehl_film else 0.0
     return np.array([ch / math.sqrt(delta_ref), a_i, a_o, sq_i, sq_o, sq_i * sq_o,
                      film_coefficient(ic, lub, e_eff) * per_speed,
                      film_coefficient(oc, lub, e_eff) * per_speed,

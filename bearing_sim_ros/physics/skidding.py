@@ -92,8 +92,8 @@ from ..catalog import G
 from . import KinematicSnapshot, TierOutput
 from .defects import (D_ANGLE, D_BALL, D_KIND, KIND_BALL, KIND_INNER, defect_table, interference_loss,
                       waviness_gain, waviness_table)
-from .film import (FILM_EXP_Q, FILM_EXP_U, film_coefficient, squeeze_film_coefficient,
-                   structural_damping_coefficient)
+from .film import (FILM_EXP_Q, FILM_EXP_U, FILM_LOAD_FLOOR, film_coefficient,
+                   squeeze_film_coefficient, structural_damping_coefficient)
 from .integrators import EXPLICIT, SPLIT, method_for
 from .structure import secant_stiffness, structure_system
 
@@ -1409,7 +1409,7 @@ def parameters(scene) -> np.ndarray:
     p[P_FILM] = 1.0 if lub.ehl_film else 0.0
     p[P_HCI] = film_coefficient(ic, lub, e_eff)
     p[P_HCO] = film_coefficient(oc, lub, e_eff)
-    p[P_QMIN] = 0.01          # N: the film formula's W^-0.073 has no limit at zero load
+    p[P_QMIN] = FILM_LOAD_FLOOR
     p[P_SQI] = squeeze_film_coefficient(ic, lub)      # Reynolds' squeeze film: module film
     p[P_SQO] = squeeze_film_coefficient(oc, lub)
     p[P_ROUGH] = lub.surface_roughness
