@@ -93,6 +93,27 @@ def test_third_order_convergence_on_a_smooth_scene():
         assert err[2] < err_x2, (undamped, err)
 
 
+def test_film_law_table():
+    """Each ball's film comes from a table of the film law t - t^-a = u (module ``film``): its
+    cubic Hermite interpolation and the fixed-point iterations beyond the table agree with the
+    law's root (by bisection) to 1e-6, and the factor is continuous where the three meet."""
+    from bearing_sim_ros.physics.film import (FILM_LAW_A, FILM_TABLE_U_MAX, FILM_TABLE_U_MIN,
+                                              film_law_root)
+    from bearing_sim_ros.physics.kinematic import _film_factor
+
+    factor = np.vectorize(lambda u: _film_factor.py_func(u, 0.0, -np.inf))
+    rng = np.random.default_rng(0)
+    u = np.concatenate([rng.uniform(-2.9, 300.0, 20000), np.linspace(-1.4, -1.0, 2001),
+                        [-3.5, -3.0, 1e3, 1e5]])
+    exact = film_law_root(u) ** -FILM_LAW_A
+    assert np.max(np.abs(factor(u) / exact - 1.0)) < 1e-6
+    for edge in (FILM_TABLE_U_MIN, FILM_TABLE_U_MAX):
+        inside, outside = factor(edge + 1e-9), factor(edge - 1e-9)
+        assert abs(inside / outside - 1.0) < 1e-6
+    # below u_f a ball's film is the load floor's
+    assert _film_factor.py_func(-2.0, 1.7, -1.5) == 1.7
+
+
 @pytest.mark.parametrize("oversample", [DEFAULT_OVERSAMPLE, 1])
 @pytest.mark.parametrize("name, line", [("er16k_outer_race", "bpfo"), ("er16k_inner_race", "bpfi"),
                                         ("cwru_6205_or007_6", "bpfo")])

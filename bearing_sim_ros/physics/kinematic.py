@@ -7,11 +7,16 @@ Q = K (delta)^1.5 + c(delta) delta' with delta = (x_s - x_p) cos(theta) + (y_s -
 - C_r + h - loss + gain (seed 000 eqs 4 and 10; K of both contacts in series, Hamrock-Brewe),
 and Q >= 0 (a contact never pulls).  The damping c and the film thickness h are the skidding
 tier's lubricated contact (module ``film``, ``contact_damping``): the squeeze films and the
-structural damping of both contacts in series, h held at the most loaded ball's load and
-following the speed.  Without them the tier differed from the skidding reference by 7-42 % on
-the bench's scenes even where nothing skids (the balls' landings went undamped); with them by
-2.2-24 %, for 15-24 % of its speed.  ``lubrication: {ehl_film: false, contact_damping_ratio:
-0}`` gives seed 001's Hertz-only contacts back (c = 0, h = 0), in both tiers.  Gravity on the
+structural damping of both contacts in series, and each ball's own film, which follows its load
+(Q^-0.073) and the speed: a function of the ball's geometric interference alone (module
+``film``'s film law, tabulated), so it is no state and costs a table look-up per ball.  Without
+the damping the tier differed from the skidding reference by 7-42 % on the bench's scenes even
+where nothing skids (the balls' landings went undamped); with one film for every ball (the most
+loaded one's) by 2.2-24 % and 69 % at 600 rpm / 2000 N (a ball entering the load zone touched
+late, through the loaded balls' thinner film); with each ball's own film by 0.7-30 % and 20 %
+there, at 0.65-0.76x the speed of the shared film.  ``lubrication: {ehl_film: false,
+contact_damping_ratio: 0}`` gives seed 001's Hertz-only contacts back (c = 0, h = 0), in both
+tiers.  Gravity on the
 shaft and the radial load act on the shaft; the pedestal's own weight is static and an
 (AC-coupled, piezoelectric) accelerometer does not see it.
 
@@ -56,8 +61,9 @@ from .defects import (D_ANGLE, D_BALL, D_DEPTH, D_HALF, D_HMAX_I, D_HMAX_O, D_KI
                       D_RAMP_I, D_RAMP_O, D_RHO_I, D_RHO_O, D_WANDER, DEFECT_COLUMNS, KIND_BALL,
                       KIND_INNER, _profile_drop, defect_table, wander_reach,
                       waviness_gain, wrap)
-from .film import (FILM_EXP_Q, FILM_EXP_U, FILM_LOAD_FLOOR, film_coefficient, squeeze_film_coefficient,
-                   structural_damping_coefficient)
+from .film import (FILM_EXP_Q, FILM_EXP_U, FILM_LAW_A, FILM_LOAD_FLOOR, FILM_TABLE_PER_U,
+                   FILM_TABLE_U_MAX, FILM_TABLE_U_MIN, film_coefficient,
+                   film_law_table, squeeze_film_coefficient, structural_damping_coefficient)
 from .rng import uniform
 from ..catalog import G
 from .structure import secant_stiffness, structure_system
@@ -79,12 +85,17 @@ DEFAULT_OVERSAMPLE = 2  # steps per output sample the Simulator should use by de
 CHAIN_OVERSAMPLE = 4   # accelerometer chain rate / output rate at least (the skidding tier's rate,
                        # so that a switch of tiers keeps the chain and the signal has no seam)
 
-# geometry vector layout; then the balls' contact damping (``contact_damping``): structural
-# (N s/m per delta^0.5); each contact's share of the deflection; the squeeze films
-# 6 pi eta R_x R_y (N s) of both contacts and their product; film thickness per
-# |shaft speed|^0.68 (m) of both contacts; roughness (m)
+# geometry vector layout; then the balls' contact damping and films (``contact_damping``):
+# structural damping (N s/m per delta^0.5); each contact's share of the deflection; the squeeze
+# films 6 pi eta R_x R_y (N s) of both contacts and their product; the film law's length lambda
+# per |shaft speed|^FILM_W_EXP (m; 0 without film), the inner contact's share of a ball's film,
+# the Hertz deflection at the film's load floor (m); roughness (m)
 (P_NB, P_K, P_CR, P_RB, P_RI, P_RO, P_CAGE, P_SPIN, P_SLIP, P_GRAV,
- P_CDW, P_AI, P_AO, P_SQI, P_SQO, P_SQIO, P_HI, P_HO, P_ROUGH, NGEO) = range(20)
+ P_CDW, P_AI, P_AO, P_SQI, P_SQO, P_SQIO, P_LAM, P_SHI, P_DFLOOR, P_ROUGH, NGEO) = range(21)
+# the film law (module ``film``): lambda^(1 + a) = C |w|^0.68 K^-0.073
+FILM_W_EXP = FILM_EXP_U / (1.0 + FILM_LAW_A)
+FILM_TABLE = film_law_table()       # a global array: numba compiles it in as a constant
+NO_FILM = (0.0, 0.0, 0.0, math.inf, 0.0, 0.0)    # _film_law without a film
 
 
 @njit(cache=True, inline="always")
@@ -208,13 +219,56 @@ def _rotate(c, s, dth):
 
 
 @njit(cache=True, inline="always")
-def hertz_force(kc, gc, gs, goff, dx, dy, q_out):
-    """Force of the balls on the pedestal (N, x and y) for a shaft-pedestal offset (dx, dy) m;
-    each ball's load (N) goes to q_out."""
+def _film_law(geo, w):
+    """The film law's constants at shaft speed ``w`` (rad/s): lambda (m), 1 / lambda (1/m), the
+    film factor phi at the load floor, the u = interference / lambda below which a ball's film
+    is the floor's, and lambda's inner and outer contact shares (m); NO_FILM without a film.  A
+    ball's film is lambda phi(u) (``_film_factor``).  Two logs and two exps: per speed, not
+    per ball."""
+    lam = geo[P_LAM]
+    if lam <= 0.0 or w == 0.0:
+        return NO_FILM
+    lam *= math.exp(FILM_W_EXP * math.log(abs(w)))
+    t_f = geo[P_DFLOOR] / lam
+    phi_f = math.exp(-FILM_LAW_A * math.log(t_f))
+    lam_i = lam * geo[P_SHI]
+    return lam, 1.0 / lam, phi_f, t_f - phi_f, lam_i, lam - lam_i
+
+
+@njit(cache=True, inline="always")
+def _film_factor(u, phi_f, u_f):
+    """A ball's film over lambda at interference u lambda (module ``film``: phi = t^-a, t - t^-a
+    = u): the load floor's ``phi_f`` below ``u_f``, else cubic Hermite in FILM_TABLE (four loads,
+    a few multiply-adds), or two fixed-point iterations outside the table (far from contact onset,
+    where they contract by 1e-4 or better)."""
+    if u < u_f:
+        return phi_f
+    if u >= FILM_TABLE_U_MAX:             # phi = (u + phi)^-a
+        p = math.exp(-FILM_LAW_A * math.log(u))
+        return math.exp(-FILM_LAW_A * math.log(u + p))
+    if u < FILM_TABLE_U_MIN:              # t = (t - u)^(-1/a), phi = t - u
+        t = math.exp(math.log(-u) / -FILM_LAW_A)
+        return math.exp(math.log(t - u) / -FILM_LAW_A) - u
+    x = (u - FILM_TABLE_U_MIN) * FILM_TABLE_PER_U
+    k = int(x)
+    s = x - k
+    p0 = FILM_TABLE[k, 0]
+    m0 = FILM_TABLE[k, 1]
+    dp = FILM_TABLE[k + 1, 0] - p0
+    m1 = FILM_TABLE[k + 1, 1]
+    return p0 + s * (m0 + s * ((3.0 * dp - 2.0 * m0 - m1) + s * (m0 + m1 - 2.0 * dp)))
+
+
+@njit(cache=True, inline="always")
+def hertz_force(kc, gc, gs, goff, law, dx, dy, q_out):
+    """Force of the balls on the pedestal (N, x and y) for a shaft-pedestal offset (dx, dy) m,
+    each ball through its film (``law``: ``_film_law``); each ball's load (N) goes to q_out."""
+    lam, inv_lam, phi_f, u_f = law[0], law[1], law[2], law[3]
     fx = 0.0
     fy = 0.0
     for j in range(gc.shape[0]):
-        delta = dx * gc[j] + dy * gs[j] - goff[j]
+        base = dx * gc[j] + dy * gs[j] - goff[j]
+        delta = base + lam * _film_factor(base * inv_lam, phi_f, u_f)
         if delta > 0.0:
             qj = kc * delta * math.sqrt(delta)
             q_out[j] = qj
@@ -226,8 +280,10 @@ def hertz_force(kc, gc, gs, goff, dx, dy, q_out):
 
 
 @njit(cache=True)
-def bearing_force(geo, cj, sj, dtab, wtab, seed, dx, dy, shaft_angle, cage_angle, spin_angle, q_out):
-    """Force of the balls on the pedestal at one instant (convenience for set-up code)."""
+def bearing_force(geo, cj, sj, dtab, wtab, seed, dx, dy, shaft_angle, cage_angle, spin_angle, q_out,
+                  shaft_speed=0.0):
+    """Force of the balls on the pedestal at one instant (convenience for set-up code), through
+    their films at ``shaft_speed`` (rad/s; none at 0)."""
     nb = int(geo[P_NB])
     gc = np.empty(nb)
     gs = np.empty(nb)
@@ -236,17 +292,7 @@ def bearing_force(geo, cj, sj, dtab, wtab, seed, dx, dy, shaft_angle, cage_angle
     cache = np.full((nb, 3), np.nan)
     ball_geometry(geo, cj, sj, dtab, wtab, seed, cache, shaft_angle, cage_angle, spin_angle,
                   math.cos(cage_angle), math.sin(cage_angle), 0.0, 0.0, 0.0, eps, gc, gs, goff)
-    return hertz_force(geo[P_K], gc, gs, goff, dx, dy, q_out)
-
-
-@njit(cache=True, inline="always")
-def _film_gaps(geo, w):
-    """Film thickness + roughness (m) of the inner and the outer contact, and the film
-    thickness of both (m), at shaft speed ``w`` (rad/s) (``contact_damping``)."""
-    uf = math.pow(abs(w), FILM_EXP_U)
-    hi = geo[P_HI] * uf
-    ho = geo[P_HO] * uf
-    return hi + geo[P_ROUGH], ho + geo[P_ROUGH], hi + ho
+    return hertz_force(geo[P_K], gc, gs, goff, _film_law(geo, shaft_speed), dx, dy, q_out)
 
 
 @njit(cache=True, inline="always")
@@ -267,11 +313,13 @@ def _ball_load(kc, cdw, ai, ao, sqi, sqo, sqio, hri, hro, delta, rate):
 
 
 @njit(cache=True, inline="always")
-def _residual(kc, kbx, kby, gc, gs, goff, dx, dy, dvx, dvy, wc, cdw, ai, ao, sqi, sqo, sqio, hri, hro,
-              film):
+def _residual(kc, kbx, kby, gc, gs, goff, dx, dy, dvx, dvy, wc, cdw, ai, ao, sqi, sqo, sqio, law,
+              rough):
     """Residual bearing force (N, x and y): the balls' forces on the pedestal at the
     shaft-pedestal offset (dx, dy) m and its rate (dvx, dvy) m/s, the balls turning at ``wc``
-    rad/s, through films ``film`` m thick in all, minus the linearised bearing's."""
+    rad/s, each through its own film (``law``: ``_film_law``; plus ``rough`` m of roughness in
+    the squeeze films), minus the linearised bearing's."""
+    lam, inv_lam, phi_f, u_f, lam_i, lam_o = law
     fx = 0.0
     fy = 0.0
     # approach rate of ball j: d/dt (dx cos + dy sin) with its angle turning at wc
@@ -280,9 +328,11 @@ def _residual(kc, kbx, kby, gc, gs, goff, dx, dy, dvx, dvy, wc, cdw, ai, ao, sqi
     for j in range(gc.shape[0]):
         c = gc[j]
         s = gs[j]
-        delta = dx * c + dy * s - goff[j] + film
+        base = dx * c + dy * s - goff[j]
+        phi = _film_factor(base * inv_lam, phi_f, u_f)
         rate = rc * c + rs * s
-        qj = _ball_load(kc, cdw, ai, ao, sqi, sqo, sqio, hri, hro, delta, rate)
+        qj = _ball_load(kc, cdw, ai, ao, sqi, sqo, sqio, lam_i * phi + rough, lam_o * phi + rough,
+                        base + lam * phi, rate)
         fx += qj * c
         fy += qj * s
     return fx - kbx * dx, fy - kby * dy
@@ -398,10 +448,11 @@ def advance_kernel(x, ang, trig, step, hist, geom, n, m, d, s0, s1, l0x, l0y, l1
     sqi = geo[P_SQI]
     sqo = geo[P_SQO]
     sqio = geo[P_SQIO]
-    # the film gaps at the speeds of the last start and end nodes (a pow each), kept while the
-    # speed does not change
+    rough = geo[P_ROUGH]
+    # the film law at the speeds of the last start and end nodes, kept while the speed does not
+    # change (a step's start is the last step's end)
     wf0 = wf1 = math.nan
-    hi0 = ho0 = hf0 = hi1 = ho1 = hf1 = 0.0
+    law0 = law1 = NO_FILM
     inv_n = 1.0 / n
     dex = (l1x - l0x) * inv_n           # change of the external force over one step (N)
     dey = (l1y - l0y) * inv_n
@@ -451,18 +502,21 @@ def advance_kernel(x, ang, trig, step, hist, geom, n, m, d, s0, s1, l0x, l0y, l1
         dvx = a2 - a3
         dvy = b3 - b4
         if w0 != wf0:
+            law0 = law1 if w0 == wf1 else _film_law(geo, w0)
             wf0 = w0
-            hi0, ho0, hf0 = _film_gaps(geo, w0)
         wc = r_cage * w0
         rc = dvx + wc * dy      # the balls' approach rate as in _residual
         rs = dvy - wc * dx
+        lam, inv_lam, phi_f, u_f, lam_i, lam_o = law0
         fx = 0.0
         fy = 0.0
         for j in range(nb):
             c = gc[j]
             s = gs[j]
-            qj = _ball_load(kc, cdw, ai, ao, sqi, sqo, sqio, hi0, ho0, dx * c + dy * s - goff[j] + hf0,
-                            rc * c + rs * s)
+            base = dx * c + dy * s - goff[j]
+            phi = _film_factor(base * inv_lam, phi_f, u_f)
+            qj = _ball_load(kc, cdw, ai, ao, sqi, sqo, sqio, lam_i * phi + rough, lam_o * phi + rough,
+                            base + lam * phi, rc * c + rs * s)
             fx += qj * c
             fy += qj * s
             if record:
@@ -509,9 +563,9 @@ def advance_kernel(x, ang, trig, step, hist, geom, n, m, d, s0, s1, l0x, l0y, l1
         # residual at the predicted end of the step
         if w1 != wf1:
             wf1 = w1
-            hi1, ho1, hf1 = _film_gaps(geo, w1)
+            law1 = _film_law(geo, w1)
         rxs, rys = _residual(kc, kbx, kby, gc, gs, goff, dx, dy, dvx, dvy, r_cage * w1, cdw, ai, ao,
-                             sqi, sqo, sqio, hi1, ho1, hf1)
+                             sqi, sqo, sqio, law1, rough)
         # sub-steps where a ball is inside a defect at the step end, and in the AFTER_STEPS
         # steps after (the ball leaves the defect, the structure rings after the impact)
         since_near = 0 if near else min(since_near + 1, 1000)
@@ -532,11 +586,11 @@ def advance_kernel(x, ang, trig, step, hist, geom, n, m, d, s0, s1, l0x, l0y, l1
                 if sd > 0:
                     # residual and acceleration at the sub-step's start
                     if v0 != wf0:
+                        law0 = law1 if v0 == wf1 else _film_law(geo, v0)
                         wf0 = v0
-                        hi0, ho0, hf0 = _film_gaps(geo, v0)
                     rsx, rsy = _residual(kc, kbx, kby, gc, gs, goff, a0 - a1, b0 - b1, a2 - a3,
-                                         b3 - b4, r_cage * v0, cdw, ai, ao, sqi, sqo, sqio, hi0, ho0,
-                                         hf0)
+                                         b3 - b4, r_cage * v0, cdw, ai, ao, sqi, sqo, sqio, law0,
+                                         rough)
                     out_acc[k + sd, 0] = cx[0] * a0 + cx[1] * a1 + cx[2] * a2 + cx[3] * a3 + fdx * rsx
                     out_acc[k + sd, 1] = (cy[0] * b0 + cy[1] * b1 + cy[2] * b2 + cy[3] * b3
                                           + cy[4] * b4 + cy[5] * b5 + fdy * rsy)
@@ -561,9 +615,9 @@ def advance_kernel(x, ang, trig, step, hist, geom, n, m, d, s0, s1, l0x, l0y, l1
                               spin_angle, cage_cos, cage_sin, 0.0, 0.0, 0.0, eps, gc, gs, goff)
                 if v1 != wf1:
                     wf1 = v1
-                    hi1, ho1, hf1 = _film_gaps(geo, v1)
+                    law1 = _film_law(geo, v1)
                 rxs, rys = _residual(kc, kbx, kby, gc, gs, goff, dx, dy, dvx, dvy, r_cage * v1, cdw,
-                                     ai, ao, sqi, sqo, sqio, hi1, ho1, hf1)
+                                     ai, ao, sqi, sqo, sqio, law1, rough)
                 a0, a1, a2, a3, b0, b1, b2, b3, b4, b5 = _corrected(
                     wsx, wsy, first, ca0, ca1, ca2, ca3, cb0, cb1, cb2, cb3, cb4, cb5, rxs, rsx, rqx,
                     rys, rsy, rqy)
@@ -602,9 +656,9 @@ def advance_kernel(x, ang, trig, step, hist, geom, n, m, d, s0, s1, l0x, l0y, l1
 
 
 def contact_damping(scene, ball_load: float) -> np.ndarray:
-    """The geometry vector's contact-damping entries (P_CDW .. P_ROUGH) for a scene whose most
-    loaded ball carries ``ball_load`` N: the skidding tier's contact damping (module ``film``)
-    for a massless ball, whose two contacts carry the same load in series.
+    """The geometry vector's contact entries (P_CDW .. P_ROUGH) for a scene whose most loaded ball
+    carries ``ball_load`` N: the skidding tier's contact damping and films (module ``film``) for
+    a massless ball, whose two contacts carry the same load in series.
 
     Hertz splits a ball's deflection as delta_i = a_i delta, a_i = (K / K_i)^(2/3) (a_i + a_o =
     1).  The squeeze films, 6 pi eta R_x R_y / (|delta_i| + h + roughness) at each contact as the
@@ -616,9 +670,11 @@ def contact_damping(scene, ball_load: float) -> np.ndarray:
     and on the shipped bearings within 10 %.)  The structural part, 2 zeta sqrt(m_b k_t) per
     contact in series likewise, goes as delta^0.25; here as delta^0.5 scaled to match at the most
     loaded ball (continuous, zero where the ball touches, and no root per ball beyond Hertz's).
-    The film thickness h is held at the most loaded ball's load (it goes as Q^-0.073: 0.85x from
-    10x the load) and follows the speed (as u^0.68, u = r_o w_cage the entrainment speed of pure
-    rolling); both films fill part of the clearance, as in the skidding tier."""
+    Each ball's films fill part of the clearance, as in the skidding tier, and follow its own
+    load (h ~ Q^-0.073: an unloaded ball's is 2.3x that of a 1000 N one) and the speed (h ~
+    u^0.68, u = r_o w_cage the entrainment speed of pure rolling, at both contacts): the film
+    law of module ``film``, whose length lambda = (C K^-0.073)^(1 / (1 + a)) |w|^FILM_W_EXP
+    with h = C |w|^0.68 Q^-0.073 the film of both contacts together."""
     b = scene.bearing
     lub = scene.lubrication
     ic, oc = b.inner_contact, b.outer_contact
@@ -633,14 +689,29 @@ def contact_damping(scene, ball_load: float) -> np.ndarray:
     ch = ch_i * ch_o / (ch_i + ch_o) if ch_i + ch_o > 0.0 else 0.0
     sq_i = squeeze_film_coefficient(ic, lub)
     sq_o = squeeze_film_coefficient(oc, lub)
-    # h = C u^0.68 Q^-0.073 with u = r_o * cage speed ratio * |w|: per |w|^0.68
+    # h = C u^0.68 Q^-0.073 with u = r_o * cage speed ratio * |w|: C per |w|^0.68
     e_eff = b.effective_modulus
-    per_speed = ((0.5 * b.outer_race_diameter * b.cage_speed(1.0)) ** FILM_EXP_U
-                 * q_ref ** FILM_EXP_Q) if lub.ehl_film else 0.0
+    c_i = film_coefficient(ic, lub, e_eff)
+    c_o = film_coefficient(oc, lub, e_eff)
+    per_speed = (0.5 * b.outer_race_diameter * b.cage_speed(1.0)) ** FILM_EXP_U
+    lam = ((c_i + c_o) * per_speed * k ** FILM_EXP_Q) ** (1.0 / (1.0 + FILM_LAW_A)) if lub.ehl_film else 0.0
     return np.array([ch / math.sqrt(delta_ref), a_i, a_o, sq_i, sq_o, sq_i * sq_o,
-                     film_coefficient(ic, lub, e_eff) * per_speed,
-                     film_coefficient(oc, lub, e_eff) * per_speed,
+                     lam, c_i / (c_i + c_o), (FILM_LOAD_FLOOR / k) ** (2.0 / 3.0),
                      lub.surface_roughness])
+
+
+@njit(cache=True)
+def _ball_films(geo, geom, dx, dy, shaft_speed):
+    """Each ball's film (m, inner and outer contact) at the shaft-pedestal offset (dx, dy) m,
+    the balls' geometry ``geom`` and the shaft speed (rad/s)."""
+    lam, inv_lam, phi_f, u_f, lam_i, lam_o = _film_law(geo, shaft_speed)
+    nb = geom.shape[1]
+    out = np.empty((nb, 2))
+    for j in range(nb):
+        phi = _film_factor((dx * geom[0, j] + dy * geom[1, j] - geom[2, j]) * inv_lam, phi_f, u_f)
+        out[j, 0] = lam_i * phi
+        out[j, 1] = lam_o * phi
+    return out
 
 
 class KinematicModel:
@@ -692,7 +763,7 @@ class KinematicModel:
         self.geom = np.zeros((4, nb))                 # ball geometry at the current time
         self.x = np.zeros(NSTATE)
         self._lin_load = None
-        self._film = 0.0             # m, both contacts' film thickness at the linearisation
+        self._lin_speed = float(shaft_speed)      # rad/s, of the films at the linearisation
         self._linearise(np.asarray(radial_load, dtype=float), float(shaft_speed), initial=True)
         # a wandering ball defect is met within the contact ellipse of the most loaded ball
         self.dtab = defect_table(scene.defects, b, seed=self.seed, ball_load=self.static_ball_load)
@@ -709,27 +780,26 @@ class KinematicModel:
         f = np.zeros(2)
         for c in cage:
             fx, fy = bearing_force(geo, self.cj, self.sj, empty, np.zeros((0, 4)), 0, d[0], d[1], 0.0, c,
-                                   0.0, q)
+                                   0.0, q, self._lin_speed)
             f += (fx, fy)
         return f / cage.size
 
     def _static_geo(self) -> np.ndarray:
-        """The geometry vector without slip and with the film at the linearisation: it fills
-        part of the clearance, as the kernel has it (``_film_gaps``)."""
+        """The geometry vector without slip."""
         geo = self.geo.copy()
         geo[P_SLIP] = 0.0
-        geo[P_CR] -= self._film
         return geo
 
-    def contact_films(self, shaft_speed: float) -> tuple[float, float]:
-        """Film thickness (m) of a ball's inner and outer contact at a shaft speed (rad/s), the
-        same for every ball (held at the most loaded ball's load): as ``_film_gaps``."""
-        u = abs(shaft_speed) ** FILM_EXP_U
-        return float(self.geo[P_HI] * u), float(self.geo[P_HO] * u)
-
-    def film_thickness(self, shaft_speed: float) -> float:
-        """Film thickness of a ball's two contacts together (m) at a shaft speed (rad/s)."""
-        return sum(self.contact_films(shaft_speed))
+    def ball_films(self, shaft_speed: float) -> np.ndarray:
+        """(Nb, 2): each ball's film thickness (m) at its inner and outer contact, at the
+        current state and a shaft speed (rad/s): the kernel's film law (``_film_law``)."""
+        if self.hist[3] == 0.0:          # the balls' geometry is not current: compute it
+            ball_geometry(self.geo, self.cj, self.sj, self.dtab, self.wtab, self.seed, self.slip_cache,
+                          self.angles[0], self.angles[1], self.angles[2], self.trig[0], self.trig[1],
+                          0.0, 0.0, 0.0, self.geom[3], self.geom[0], self.geom[1], self.geom[2])
+            self.hist[3] = 1.0
+        return _ball_films(self.geo, self.geom, self.x[0] - self.x[2], self.x[1] - self.x[3],
+                           float(shaft_speed))
 
     def _equilibrium(self, load: np.ndarray) -> np.ndarray:
         """Static positions (xs, ys, xp, yp) under the load (+ shaft weight)."""
@@ -757,17 +827,19 @@ class KinematicModel:
     def _linearise(self, load: np.ndarray, speed: float, initial: bool = False):
         """The static equilibrium under ``load`` (N) at shaft ``speed`` (rad/s), the contact
         damping at its most loaded ball and the propagators of the structure with the bearing
-        linearised there.  The film thickness is held at the most loaded ball's load, which
-        depends on the film in turn: at the start, once without film and once with."""
-        for _ in range(2 if initial else 1):
-            self._film = self.film_thickness(speed)
-            eq = self._equilibrium(load)
-            d0 = eq[:2] - eq[2:]
-            q = np.zeros(int(self.geo[P_NB]))
-            bearing_force(self._static_geo(), self.cj, self.sj, np.zeros((0, DEFECT_COLUMNS)),
-                          np.zeros((0, 4)), 0, d0[0], d0[1], 0.0, 0.0, 0.0, q)
-            self.static_ball_load = float(q.max())      # N, most loaded ball at the equilibrium
-            self.geo[P_CDW:NGEO] = contact_damping(self.scene, self.static_ball_load)
+        linearised there, each ball through its film at that speed.  (The films do not depend on
+        the contact damping's reference load, the most loaded ball's: ``contact_damping`` at a
+        load of 0 gives them.)"""
+        if initial:
+            self.geo[P_CDW:NGEO] = contact_damping(self.scene, 0.0)
+        self._lin_speed = speed
+        eq = self._equilibrium(load)
+        d0 = eq[:2] - eq[2:]
+        q = np.zeros(int(self.geo[P_NB]))
+        bearing_force(self._static_geo(), self.cj, self.sj, np.zeros((0, DEFECT_COLUMNS)),
+                      np.zeros((0, 4)), 0, d0[0], d0[1], 0.0, 0.0, 0.0, q, speed)
+        self.static_ball_load = float(q.max())      # N, most loaded ball at the equilibrium
+        self.geo[P_CDW:NGEO] = contact_damping(self.scene, self.static_ball_load)
         kb = secant_stiffness(self._mean_force, d0)       # of the averaged load-deflection law
         self.kb = kb
         # linearised bearing between shaft and pedestal: force on pedestal kb (s - p).  Only its

@@ -123,12 +123,9 @@ B_TH, B_R, B_PSI, B_W, B_V, B_OM = range(NBV)
 # at the last exact evaluation (film thicknesses, entrainment speeds, loads, revolution speed)
 (F_HI, F_HO, F_DRAG, F_HI0, F_HO0, F_UI0, F_UO0, F_QI0, F_QO0, F_W0, NFILM) = range(11)
 # ramp: chunk start time, duration, speed 0/1, load 0/1 (x, y), shaft angle at chunk start
-# and the film blend-in after adopting another tier's state (start time, duration; 0 = none;
-# the inner and outer film it starts from, m)
-(R_T0, R_T, R_S0, R_S1, R_L0X, R_L0Y, R_L1X, R_L1Y, R_A0, R_FB0, R_FBT, R_FHI, R_FHO, NRAMP) = range(14)
+(R_T0, R_T, R_S0, R_S1, R_L0X, R_L0Y, R_L1X, R_L1Y, R_A0, NRAMP) = range(10)
 
 DEFECT_EPS = 1e-6    # rad: finite-difference step of the defect-depth slope
-FILM_BLEND = 0.02    # s: films blended in from the kinematic tier's after adopting its state
 W_REF = 0.01        # rad/s: regularises the skid-ratio denominators at standstill
 DEFAULT_OVERSAMPLE = 4   # steps of the default solver per output sample (one per internal sample);
                          # 2 runs 1.5-1.8x faster at up to 4.5 % error (README, "Speed against error")
@@ -216,15 +213,6 @@ def _defect_losses(dtab, y, p, sh_ang, scr):
                                          p[P_RB])
             scr[j, 3] = (li2 - li) / DEFECT_EPS
             scr[j, 4] = (lo2 - lo) / DEFECT_EPS
-
-
-@njit(inline="always", **KERNEL)
-def _film_scale(ramp, t):
-    """Film blend-in factor at time t (1 unless a state was adopted from the kinematic tier)."""
-    if ramp[R_FBT] <= 0.0:
-        return 1.0
-    f = (t - ramp[R_FB0]) / ramp[R_FBT]
-    return 0.0 if f < 0.0 else (1.0 if f > 1.0 else f)
 
 
 @njit(**KERNEL)
@@ -506,12 +494,10 @@ def _drag_factor(film, j, p, w):
 
 
 @njit(inline="always", **KERNEL)
-def _film_update(y, ws, p, film, aux, from_aux, fscale=1.0, hi0=0.0, ho0=0.0):
+def _film_update(y, ws, p, film, aux, from_aux):
     """Film thickness of every contact (Hamrock-Dowson, eq. 12) and drag factor of every ball at
     one grid point.  Loads from ``aux`` (the last right-hand-side evaluation, at the end of the
-    step) if ``from_aux``, else from the geometry (Hertz with the current film).  ``fscale``
-    (0-1) blends the film in from the kinematic tier's (hi0, ho0 m at the inner and outer
-    contact, the same for every ball) while a state adopted from that tier settles."""
+    step) if ``from_aux``, else from the geometry (Hertz with the current film)."""
     nb = int(p[P_NB])
     rb = p[P_RB]
     rm = p[P_RM]
@@ -540,9 +526,6 @@ def _film_update(y, ws, p, film, aux, from_aux, fscale=1.0, hi0=0.0, ho0=0.0):
             film[j, F_UO0] = 0.0
         _film_contact(film, j, F_HI, F_HI0, F_UI0, F_QI0, p, p[P_HCI], ui, qi)
         _film_contact(film, j, F_HO, F_HO0, F_UO0, F_QO0, p, p[P_HCO], uo, qo)
-        if fscale < 1.0:
-            film[j, F_HI] = hi0 + fscale * (film[j, F_HI] - hi0)
-            film[j, F_HO] = ho0 + fscale * (film[j, F_HO] - ho0)
 
 
 @njit(inline="always", **KERNEL)
@@ -935,8 +918,7 @@ def _engine(y, counters, n, m, hs, hstep, ramp, kind, ta_, tb_, tc_, tg_, gamma,
                       wto, film, ynext, kst, ytmp, rtmp, auxs, dgs, wsp, wcage, scr, frc)
                 ws, ang, fx, fyy = _inputs(ramp, ty + hstep)
                 filmn[:, :] = film
-                _film_update(ynext, ws, p, filmn, auxs, True, _film_scale(ramp, ty + hstep),
-                             ramp[R_FHI], ramp[R_FHO])
+                _film_update(ynext, ws, p, filmn, auxs, True)
                 _rhs(ynext, fnext, ws, ang, fx, fyy, p, dtab, wti, wto, filmn, auxn, dgn, scr, frc)
             y[:] = ynext
             fy[:] = fnext
@@ -960,8 +942,7 @@ def _engine(y, counters, n, m, hs, hstep, ramp, kind, ta_, tb_, tc_, tg_, gamma,
                       wto, film, ynext, kst, ytmp, rtmp, auxs, dgs, wsp, wcage, scr, frc)
                 ws1, ang1, fx1, fy1 = _inputs(ramp, ty + hstep)
                 filmn[:, :] = film
-                _film_update(ynext, ws1, p, filmn, auxs, True, _film_scale(ramp, ty + hstep),
-                             ramp[R_FHI], ramp[R_FHO])
+                _film_update(ynext, ws1, p, filmn, auxs, True)
                 _rhs(ynext, fnext, ws1, ang1, fx1, fy1, p, dtab, wti, wto, filmn, auxn, dgn, scr, frc)
                 have_next = True
             th = (ts - ty) / hstep
@@ -1237,8 +1218,7 @@ def _engine_split(y, fy, un, aux0, dg0, film, counters, n, m, hs, kk, ramp, ta_,
                         for jb_ in range(nb):
                             for q in range(NFILM):
                                 filmn[jb_, q] = flc[jb_, q]
-                        _film_update(ynext, ws, p, filmn, auxs, True, _film_scale(ramp, tc + hcur),
-                                     ramp[R_FHI], ramp[R_FHO])
+                        _film_update(ynext, ws, p, filmn, auxs, True)
                         _rhs(ynext, fnext, ws, ang, fx, fyy, p, dtab, wti, wto, filmn, auxn, dgn, scr, frc)
                         _inputs_split(frc, ynext, kb, fx, fyy, p[P_WS], unext)
                         # structure corrector with the input ramped from u_n to u'
@@ -1475,7 +1455,6 @@ class SkiddingModel:
         self.shaft_angle = 0.0
         self._speed = float(shaft_speed)
         nvar = self.y.size
-        self._film_blend = (0.0, 0.0, 0.0, 0.0)   # start (s), length (s), films from (m)
         # persistent state of the split method (derivative, structure input, contact values)
         self._fy = np.zeros(nvar)
         self._un = np.zeros(4)
@@ -1626,16 +1605,13 @@ class SkiddingModel:
             self.y[:] = other.y
             self.film[:, :] = other.film
             return
-        # the kinematic tier holds one film thickness for every ball (its most loaded ball's, or
-        # none with seed 001's contacts); blending from it to this tier's per-ball films over
-        # FILM_BLEND s avoids a jump in the bearing force of k * dh (tens of N for the whole film)
-        # at the switch
+        # the kinematic tier's balls have their films from their loads as this tier's do (massless
+        # balls, the entrainment speed of pure rolling at both contacts): start from them
         self._settle(self._speed)
-        hi0, ho0 = other.contact_films(self._speed)
-        self.film[:, F_HI] = hi0
-        self.film[:, F_HO] = ho0
+        films = other.ball_films(self._speed)
+        self.film[:, F_HI] = films[:, 0]
+        self.film[:, F_HO] = films[:, 1]
         _settle_balls(self.p, self.y, self.shaft_angle, self.dtab, self.wti, self.wto, self.film)
-        self._film_blend = (self.counters[1] * self.hs / self.q, FILM_BLEND, hi0, ho0)
 
     # ---- TierModel interface -----------------------------------------------------------------
     def advance(self, n_steps: int, speed0: float, speed1: float, load0, load1) -> TierOutput:
@@ -1655,7 +1631,6 @@ class SkiddingModel:
         ramp[R_L1X], ramp[R_L1Y] = float(load1[0]), float(load1[1])
         # shaft angle at the chunk start (the state may sit a little earlier on the step grid)
         ramp[R_A0] = self.shaft_angle
-        ramp[R_FB0], ramp[R_FBT], ramp[R_FHI], ramp[R_FHO] = self._film_blend
         acc = np.empty((n, 2))
         qi = np.empty((nd, nb))
         qo = np.empty((nd, nb))
