@@ -83,9 +83,10 @@ def test_third_order_convergence_on_a_smooth_scene():
     waveform error by ~2^3 (measured 6.8 per halving on the healthy ER-16K; ETD2, the former
     integrator, gave 4).  The damped contacts (the default) have kinks where the integrator's
     parabola cannot follow them: where a ball's force is clamped at zero as it lifts off, and
-    where its squeeze film starts to act on approach.  They cost about one order (measured 4.9
-    and 4.1 per halving from x2 to x8), not the waveform error budget at x2."""
-    for undamped, order_gain, err_x2 in ((True, 5.5, 4e-3), (False, 4.0, 8e-3)):
+    where its squeeze film starts to act on approach.  They cost up to one order (measured 4.7
+    and 3.8 per halving from x2 to x8, waveform error 1.5e-3 at x2; 4.9 and 4.1, 5.8e-3, while
+    every ball had the most loaded ball's film), not the waveform error budget at x2."""
+    for undamped, order_gain, err_x2 in ((True, 5.5, 4e-3), (False, 4.0, 4e-3)):
         ref = accel_y("er16k_healthy", 32, undamped=undamped)
         err = {m: np.linalg.norm(accel_y("er16k_healthy", m, undamped=undamped) - ref)
                / np.linalg.norm(ref) for m in (2, 4)}
@@ -120,10 +121,10 @@ def test_film_law_table():
 def test_the_default_and_one_step_per_sample_stay_within_the_error_budget(name, line, oversample):
     """The default (two steps per output sample, event sub-steps at the defects) against a
     converged run (32): RMS within 0.5 % and the envelope line within 1.5 % (``study()``, 2 s:
-    0.03 / 0.15 %, 0.01 / 0.16 % and 0.08 / 0.07 % on the outer, inner and CWRU outer races;
+    0.01 / 0.12 %, 0.00 / 0.09 % and 0.08 / 0.07 % on the outer, inner and CWRU outer races;
     without the sub-steps, with the Hertz-only contacts of the time, 0.1 / 0.5 % and 0.15 / 0.3 %
-    on the ER-16K and CWRU outer races; one step per sample with them: 0.01 / 0.04 %, 0.03 /
-    0.24 % and 0.06 / 0.16 %: within the budget too on these light-load defect scenes)."""
+    on the ER-16K and CWRU outer races; one step per sample with them: 0.00 / 0.14 %, 0.01 /
+    0.11 % and 0.07 / 0.18 %: within the budget too on these light-load defect scenes)."""
     scene = load_scene(name)
     ff = scene.bearing.fault_frequencies(scene.shaft_hz)
     ref, run = accel_y(name, 32), accel_y(name, oversample)

@@ -79,8 +79,8 @@ AFTER_STEPS = 3      # event sub-steps go on this many steps after a ball was la
 CORRECTOR_NODES = (1.0, 0.0, -1.0)   # residual at the step end (predicted), start, previous start
 PREDICTOR_NODES = (0.0, -1.0)
 DEFAULT_OVERSAMPLE = 2  # steps per output sample the Simulator should use by default: ETD3 with
-                        # event sub-steps.  x1 is 1.3-1.6x faster and as accurate on light loads,
-                        # but 0.4-2.7 % off in RMS where the bearing mode is stiff (ER-16K at
+                        # event sub-steps.  x1 is 1.35-1.7x faster and as accurate on light loads,
+                        # but 0.4-2.9 % off in RMS where the bearing mode is stiff (ER-16K at
                         # 500 N and up, the healthy CWRU scene; README, "Kinematic tier: speed ...")
 CHAIN_OVERSAMPLE = 4   # accelerometer chain rate / output rate at least (the skidding tier's rate,
                        # so that a switch of tiers keeps the chain and the signal has no seam)
