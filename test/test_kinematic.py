@@ -210,15 +210,16 @@ def test_each_ball_has_the_film_of_its_own_load():
 
 def test_heavy_load_low_speed_signal_follows_the_skidding_tier():
     """At 600 rpm / 2000 N (the fidelity calibration's heaviest point, where ``auto`` picks this
-    tier) its accel_y RMS is within 35 % of the skidding tier's (measured 19 % over 0.3 s, 22 %
-    over 0.6 s: ``python test/test_kinematic_speed.py film``).  With one film for every ball, the
-    most loaded one's, it was 73 % above: a ball entering the load zone touched late and hard.
-    With the film off both tiers agree within 5 % (measured 1 %)."""
+    tier) its accel_y RMS is within 10 % of the skidding tier's (measured 1.6 % over 0.6 s:
+    ``python test/test_kinematic_speed.py film``).  With one film for every ball, the most loaded
+    one's, it was 73 % above (a ball entering the load zone touched late and hard), and 22 % while
+    the skidding tier's films followed the whole contact load, its dampers' included.  With the
+    film off both tiers agree within 5 % (measured 1 %)."""
     from bearing_sim_ros.bench import CALIBRATION_POINTS
 
     base = replace(CALIBRATION_POINTS[0].build(), defects=())
     assert base.shaft_speed == pytest.approx(600 * 2 * math.pi / 60)
-    for film, tol in ((True, 0.35), (False, 0.05)):
+    for film, tol in ((True, 0.10), (False, 0.05)):
         scene = replace(base, lubrication=replace(base.lubrication, ehl_film=film))
         rms = {}
         for tier in ("kinematic", "skidding"):

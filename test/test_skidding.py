@@ -250,7 +250,7 @@ def test_adopt_state_from_the_kinematic_tier_is_seamless():
     a_kin = kin.advance(40, w, w, load, load).accel
     a_sk = skid.advance(40, w, w, load, load).accel
     # same structure, same bearing forces, each ball's film from the kinematic tier's: no jump
-    # (measured 0.26 m/s^2; a wrong static state shows |W| / m_p = 84 m/s^2, films from none 21,
+    # (measured 0.37 m/s^2; a wrong static state shows |W| / m_p = 84 m/s^2, films from none 21,
     # every ball's film from the kinematic tier's one common film 0.7 unless blended over 20 ms)
     assert np.max(np.abs(a_sk - a_kin)) < 0.5
     # the reverse direction reads the same layout

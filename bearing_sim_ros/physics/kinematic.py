@@ -13,8 +13,9 @@ structural damping of both contacts in series, and each ball's own film, which f
 the damping the tier differed from the skidding reference by 7-42 % on the bench's scenes even
 where nothing skids (the balls' landings went undamped); with one film for every ball (the most
 loaded one's) by 2.2-24 % and 69 % at 600 rpm / 2000 N (a ball entering the load zone touched
-late, through the loaded balls' thinner film); with each ball's own film by 0.7-30 % and 20 %
-there, at 0.65-0.76x the speed of the shared film.  ``lubrication: {ehl_film: false,
+late, through the loaded balls' thinner film); with each ball's own film by 0.8-30 % and 0.7 %
+there (the skidding tier's films following the Hertz load too), at 0.65-0.76x the speed of the
+shared film.  ``lubrication: {ehl_film: false,
 contact_damping_ratio: 0}`` gives seed 001's Hertz-only contacts back (c = 0, h = 0), in both
 tiers.  Gravity on the
 shaft and the radial load act on the shaft; the pedestal's own weight is static and an

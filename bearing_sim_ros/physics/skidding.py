@@ -114,9 +114,10 @@ B_TH, B_R, B_PSI, B_W, B_V, B_OM = range(NBV)
  P_G, P_WS, P_RI, P_RO, P_HCI, P_HCO, P_FILM, P_QMIN, P_CAGER, P_SPINR, P_CDRAG, P_DM, P_SQI,
  P_SQO, P_ROUGH, NPAR) = range(46)
 
-# per-ball auxiliary values from a right-hand-side evaluation (for the Jacobian)
+# per-ball auxiliary values from a right-hand-side evaluation (for the Jacobian; the contacts'
+# Hertz deflections X_DHI, X_DHO for their films)
 (X_KTI, X_KTO, X_CI, X_CO, X_QI, X_QO, X_MUI, X_MUO, X_DMUI, X_DMUO, X_FT, X_DMUP, X_CIN, X_DRAGD,
- X_MUP, X_SFT, X_SARC, X_C, X_S, X_DEDTH, X_DLI, X_DLO, X_LOSS, NAUX) = range(24)
+ X_MUP, X_SFT, X_SARC, X_C, X_S, X_DEDTH, X_DLI, X_DLO, X_LOSS, X_DHI, X_DHO, NAUX) = range(26)
 # per-ball diagnostics: contact loads (N), slip velocities (m/s), traction forces on the ball (N)
 (D_QI, D_QO, D_SLI, D_SLO, D_FI, D_FO, NDG) = range(7)
 # film table columns: film thickness inner / outer (m), drag factor (N s^2/rad^2), and the values
@@ -128,7 +129,7 @@ B_TH, B_R, B_PSI, B_W, B_V, B_OM = range(NBV)
 DEFECT_EPS = 1e-6    # rad: finite-difference step of the defect-depth slope
 W_REF = 0.01        # rad/s: regularises the skid-ratio denominators at standstill
 DEFAULT_OVERSAMPLE = 4   # steps of the default solver per output sample (one per internal sample);
-                         # 2 runs 1.5-1.8x faster at up to 4.5 % error (README, "Speed against error")
+                         # 2 runs 1.5-1.8x faster at up to 2.5 % error (README, "Speed against error")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -394,6 +395,8 @@ def _rhs(y, f, ws, sh_ang, fx_ext, fy_ext, p, dtab, wti, wto, film, aux, dg, scr
         a[X_CO] = co
         a[X_QI] = qi
         a[X_QO] = qo
+        a[X_DHI] = di if di > 0.0 else 0.0
+        a[X_DHO] = do if do > 0.0 else 0.0
         a[X_MUI] = mui
         a[X_MUO] = muo
         a[X_DMUI] = dmui
@@ -459,27 +462,43 @@ def _film_exact(p, coef, u, q):
 
 
 @njit(inline="always", **KERNEL)
-def _film_contact(film, j, col_h, col_h0, col_u0, col_q0, p, coef, u, q):
-    """Update one contact's film thickness: a second-order Taylor step of h ~ u^0.68 Q^-0.073
-    from the last exact value while u and Q stay within 2 % / 5 % of it, else exactly."""
+def _film_target(film, j, col_h0, col_u0, col_q0, p, coef, u, q):
+    """One contact's Hamrock-Dowson film at entrainment speed u and load q: a second-order Taylor
+    step of h ~ u^0.68 Q^-0.073 from the last exact value while u and Q stay within 2 % / 5 % of
+    it, else exactly."""
     q = max(q, p[P_QMIN])
     u0 = film[j, col_u0]
     q0 = film[j, col_q0]
     if p[P_FILM] <= 0.0:
-        film[j, col_h] = 0.0
-        return
+        return 0.0
     if u0 > 1e-9 and u > 1e-9:
         x = u / u0 - 1.0
         z = q / q0 - 1.0
         if abs(x) < 0.02 and abs(z) < 0.05:
-            film[j, col_h] = film[j, col_h0] * (1.0 + x * (FILM_EXP_U + 0.5 * FILM_EXP_U * (FILM_EXP_U - 1.0) * x)) \
+            return film[j, col_h0] * (1.0 + x * (FILM_EXP_U + 0.5 * FILM_EXP_U * (FILM_EXP_U - 1.0) * x)) \
                 * (1.0 + z * (FILM_EXP_Q + 0.5 * FILM_EXP_Q * (FILM_EXP_Q - 1.0) * z))
-            return
     h = _film_exact(p, coef, u, q)
-    film[j, col_h] = h
     film[j, col_h0] = h
     film[j, col_u0] = u
     film[j, col_q0] = q
+    return h
+
+
+@njit(inline="always", **KERNEL)
+def _film_contact(film, j, col_h, col_h0, col_u0, col_q0, p, coef, k, u, d):
+    """Update one contact's film thickness from its Hertz deflection d (m, 0 out of contact) and
+    stiffness k (N/m^1.5): the film and the Hertz spring are in series and carry the Hertz load
+    (the contact's dampers act in parallel and do not thin it).  The film is held over a step, and
+    one that followed its load one step late would be a loop of gain 0.11 h / d, unstable where
+    the ball begins to touch (d < 0.11 h); so it takes the Newton step of the fixed point
+    h = h(Q(d + dh)), stable at any gain and the whole step where the gain is small."""
+    h = film[j, col_h]
+    q = k * d * math.sqrt(d)
+    target = _film_target(film, j, col_h0, col_u0, col_q0, p, coef, u, q)
+    if d > 0.0 and q > p[P_QMIN]:
+        film[j, col_h] = h + (target - h) * d / (d - 1.5 * FILM_EXP_Q * h)
+    else:
+        film[j, col_h] = target
 
 
 @njit(inline="always", **KERNEL)
@@ -496,8 +515,8 @@ def _drag_factor(film, j, p, w):
 @njit(inline="always", **KERNEL)
 def _film_update(y, ws, p, film, aux, from_aux):
     """Film thickness of every contact (Hamrock-Dowson, eq. 12) and drag factor of every ball at
-    one grid point.  Loads from ``aux`` (the last right-hand-side evaluation, at the end of the
-    step) if ``from_aux``, else from the geometry (Hertz with the current film)."""
+    one grid point.  Hertz deflections from ``aux`` (the last right-hand-side evaluation, at the
+    end of the step) if ``from_aux``, else from the geometry (with the current film)."""
     nb = int(p[P_NB])
     rb = p[P_RB]
     rm = p[P_RM]
@@ -515,17 +534,15 @@ def _film_update(y, ws, p, film, aux, from_aux):
             e = dx * math.cos(th) + dy * math.sin(th)
         ui, uo = _entrainment(y, b, e, ws, rb)
         if from_aux:
-            qi = aux[j, X_QI]
-            qo = aux[j, X_QO]
+            di = aux[j, X_DHI]
+            do = aux[j, X_DHO]
         else:
-            di = e + rm - half_cr - r + film[j, F_HI]
-            do = r - rm - half_cr + film[j, F_HO]
-            qi = p[P_KI] * di * math.sqrt(di) if di > 0.0 else 0.0
-            qo = p[P_KO] * do * math.sqrt(do) if do > 0.0 else 0.0
+            di = max(e + rm - half_cr - r + film[j, F_HI], 0.0)
+            do = max(r - rm - half_cr + film[j, F_HO], 0.0)
             film[j, F_UI0] = 0.0          # force exact values
             film[j, F_UO0] = 0.0
-        _film_contact(film, j, F_HI, F_HI0, F_UI0, F_QI0, p, p[P_HCI], ui, qi)
-        _film_contact(film, j, F_HO, F_HO0, F_UO0, F_QO0, p, p[P_HCO], uo, qo)
+        _film_contact(film, j, F_HI, F_HI0, F_UI0, F_QI0, p, p[P_HCI], p[P_KI], ui, di)
+        _film_contact(film, j, F_HO, F_HO0, F_UO0, F_QO0, p, p[P_HCO], p[P_KO], uo, do)
 
 
 @njit(inline="always", **KERNEL)
