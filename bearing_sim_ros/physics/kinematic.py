@@ -14,7 +14,7 @@ the damping the tier differed from the skidding reference by 7-42 % on the bench
 where nothing skids (the balls' landings went undamped); with one film for every ball (the most
 loaded one's) by 2.2-24 % and 69 % at 600 rpm / 2000 N (a ball entering the load zone touched
 late, through the loaded balls' thinner film); with each ball's own film by 0.8-30 % and 0.7 %
-there (the skidding tier's films following the Hertz load too), at 0.65-0.76x the speed of the
+there (the skidding tier's films following the Hertz load too), at 0.73-0.82x the speed of the
 shared film.  ``lubrication: {ehl_film: false,
 contact_damping_ratio: 0}`` gives seed 001's Hertz-only contacts back (c = 0, h = 0), in both
 tiers.  Gravity on the
@@ -239,8 +239,8 @@ def _film_law(geo, w):
 @njit(cache=True, inline="always")
 def _film_factor(u, phi_f, u_f):
     """A ball's film over lambda at interference u lambda (module ``film``: phi = t^-a, t - t^-a
-    = u): the load floor's ``phi_f`` below ``u_f``, else cubic Hermite in FILM_TABLE (four loads,
-    a few multiply-adds), or two fixed-point iterations outside the table (far from contact onset,
+    = u): the load floor's ``phi_f`` below ``u_f``, else a cubic from FILM_TABLE (four loads,
+    three multiply-adds), or two fixed-point iterations outside the table (far from contact onset,
     where they contract by 1e-4 or better)."""
     if u < u_f:
         return phi_f
@@ -253,11 +253,7 @@ def _film_factor(u, phi_f, u_f):
     x = (u - FILM_TABLE_U_MIN) * FILM_TABLE_PER_U
     k = int(x)
     s = x - k
-    p0 = FILM_TABLE[k, 0]
-    m0 = FILM_TABLE[k, 1]
-    dp = FILM_TABLE[k + 1, 0] - p0
-    m1 = FILM_TABLE[k + 1, 1]
-    return p0 + s * (m0 + s * ((3.0 * dp - 2.0 * m0 - m1) + s * (m0 + m1 - 2.0 * dp)))
+    return FILM_TABLE[k, 0] + s * (FILM_TABLE[k, 1] + s * (FILM_TABLE[k, 2] + s * FILM_TABLE[k, 3]))
 
 
 @njit(cache=True, inline="always")
