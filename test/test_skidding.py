@@ -321,18 +321,27 @@ def test_one_minute_without_drift():
 def test_envelope_line_at_theory(name, key):
     """1600 rpm / 50 N, 1 s through the Simulator with sensor noise: the fault line stands out and
     sits within 1 % of theory (seed 000: BPFI 144.8 Hz, BPFO 95.25 Hz)."""
+    line, theory = _envelope_line(name, key)
+    assert line.prominence > 4.0
+    assert abs(line.found_hz / theory - 1) < 0.01
+
+
+def _envelope_line(name, key, lub=None):
+    """The shipped scene's envelope line ``key`` (1 s after 0.05 s, sensor noise on) and its
+    theoretical frequency (Hz); ``lub``: lubrication changes."""
     sc = load_scene(name)
+    if lub:
+        sc = replace(sc, lubrication=replace(sc.lubrication, **lub))
     sim = Simulator(sc, fidelity="skidding")
     sim.advance(750)
     y = sim.advance(15000).accel[:, -1]
     ff = sc.bearing.fault_frequencies(sc.shaft_hz)
-    line = fault_lines(y, FS, ff)[key]
-    assert line.prominence > 4.0
-    assert abs(line.found_hz / ff[key] - 1) < 0.01
+    return fault_lines(y, FS, ff)[key], ff[key]
 
 
-def _skid(name, rpm, load, settle=0.15, seconds=0.1):
-    r = run(make_scene(name, rpm=rpm, load=load), [(settle, rpm, load), (seconds, rpm, load)])
+def _skid(name, rpm, load, settle=0.15, seconds=0.1, lub=None):
+    """Mean (ball, cage) skid ratios (%) over ``seconds`` after ``settle``."""
+    r = run(make_scene(name, rpm=rpm, load=load, lub=lub), [(settle, rpm, load), (seconds, rpm, load)])
     k = int(settle * FS)
     return r.cat("bskid")[k:].mean(), r.cat("cskid")[k:].mean()
 
@@ -359,3 +368,35 @@ def test_a_defect_raises_the_cage_skid():
     inner = _skid("er16k_inner_race", 2000, 200)[1]
     outer = _skid("er16k_outer_race", 2000, 200)[1]
     assert inner > healthy and outer > healthy
+
+
+def study_seed000():
+    """The README's "Seed 000's numbers, side by side": envelope lines at 1600 rpm / 50 N, the
+    healthy skid ratios at 2000 rpm / 200 N, the cage skid's trends with load, speed and defect,
+    and the same with Harris' effective density at the full oil density (870 kg/m^3)."""
+    for name, key in (("er16k_inner_race", "bpfi"), ("er16k_outer_race", "bpfo")):
+        line, theory = _envelope_line(name, key)
+        print(f"{name} {key}: {line.found_hz:.2f} Hz ({line.found_hz / theory - 1:+.2%}), "
+              f"prominence {line.prominence:.0f}", flush=True)
+    ball, cage = _skid("er16k_skidding", 2000, 200)
+    print(f"skid ratios 2000 rpm / 200 N: ball {ball:.3f} %, cage {cage:.3f} %", flush=True)
+    print("cage skid % at 2000 rpm, 50 / 200 / 1000 / 2000 N:",
+          " ".join(f"{_skid('er16k_skidding', 2000, w)[1]:.3f}" for w in (50, 200, 1000, 2000)), flush=True)
+    print("cage skid % at 200 N, 2000 / 3000 / 4000 / 5000 rpm:",
+          " ".join(f"{_skid('er16k_skidding', n, 200)[1]:.3f}" for n in (2000, 3000, 4000, 5000)), flush=True)
+    for name in ("er16k_skidding", "er16k_inner_race", "er16k_outer_race"):
+        ball, cage = _skid(name, 2000, 200)
+        print(f"{name} 2000 rpm / 200 N: cage skid {cage:.5f} %, ball skid {ball:.3f} %", flush=True)
+    flooded = {"fluid_density": 870.0}
+    ball, cage = _skid("er16k_skidding", 2000, 200, lub=flooded)
+    line, theory = _envelope_line("er16k_outer_race", "bpfo", lub=flooded)
+    print(f"flooded (870 kg/m^3): ball {ball:.2f} %, cage {cage:.2f} %, BPFO at 1600 rpm / 50 N "
+          f"{line.found_hz / theory - 1:+.2%}", flush=True)
+
+
+if __name__ == "__main__":
+    import sys
+
+    if sys.argv[1:] != ["seed000"]:
+        sys.exit("usage: python test/test_skidding.py seed000")
+    study_seed000()

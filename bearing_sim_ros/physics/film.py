@@ -23,6 +23,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+
 FILM_EXP_U, FILM_EXP_Q = 0.68, -0.073     # Hamrock-Dowson exponents (speed, load)
 FILM_LOAD_FLOOR = 0.01   # N: the film formula's W^-0.073 has no limit at zero load; a contact's
                          # film is taken at this load at least
@@ -53,9 +54,9 @@ FILM_LAW_A = -1.5 * FILM_EXP_Q     # 0.1095: along Hertz (Q ~ delta^1.5) the fil
 # the table of the film law: phi(u) = t^-a, t - t^-a = u, on a grid of FILM_TABLE_PER_U points per
 # unit of u: per cell the four coefficients of its cubic Hermite interpolant (value and slope at
 # both ends) in the cell's own coordinate, so a look-up is three multiply-adds (half the time of
-# forming them from values and slopes); relative error below 1e-6, test_film_law_table; the law
-# bends most near u = -1.2, t = 0.2); outside [FILM_TABLE_U_MIN,
-# FILM_TABLE_U_MAX] two fixed-point iterations are exact to 1e-7.  A grid uniform in u costs no
+# forming them from values and slopes); relative error below 1e-6 (test_film_law_table; the law
+# bends most near u = -1.2, t = 0.2); outside [FILM_TABLE_U_MIN, FILM_TABLE_U_MAX] two
+# fixed-point iterations are exact to 1e-7.  A grid uniform in u costs no
 # root per look-up; FILM_TABLE_U_MAX = 256 covers a 1500 N ball on the ER-16K down to 300 rpm.
 FILM_TABLE_U_MIN = -2.9       # t = 6e-5: below it only with a load floor's film 1e4 x its deflection
 FILM_TABLE_U_MAX = 256.0

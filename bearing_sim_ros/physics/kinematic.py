@@ -15,11 +15,10 @@ where nothing skids (the balls' landings went undamped); with one film for every
 loaded one's) by 2.2-24 % and 69 % at 600 rpm / 2000 N (a ball entering the load zone touched
 late, through the loaded balls' thinner film); with each ball's own film by 0.8-30 % and 0.7 %
 there (the skidding tier's films following the Hertz load too), at 0.73-0.82x the speed of the
-shared film.  ``lubrication: {ehl_film: false,
-contact_damping_ratio: 0}`` gives seed 001's Hertz-only contacts back (c = 0, h = 0), in both
-tiers.  Gravity on the
-shaft and the radial load act on the shaft; the pedestal's own weight is static and an
-(AC-coupled, piezoelectric) accelerometer does not see it.
+shared film.  ``lubrication: {ehl_film: false, contact_damping_ratio: 0}`` gives seed 001's
+Hertz-only contacts back (c = 0, h = 0), in both tiers.  Gravity on the shaft and the radial load
+act on the shaft; the pedestal's own weight is static and an (AC-coupled, piezoelectric)
+accelerometer does not see it.
 
 Integrator: exponential time differencing with a parabolic residual (ETD3, a predictor-corrector
 of the Adams type; Cox & Matthews 2002, Hochbruck & Ostermann 2010).  The structure plus the
@@ -86,7 +85,8 @@ DEFAULT_OVERSAMPLE = 2  # steps per output sample the Simulator should use by de
 CHAIN_OVERSAMPLE = 4   # accelerometer chain rate / output rate at least (the skidding tier's rate,
                        # so that a switch of tiers keeps the chain and the signal has no seam)
 
-# geometry vector layout; then the balls' contact damping and films (``contact_damping``):
+# geometry vector layout; then the balls' contact damping (``contact_damping``) and films
+# (``film_law``):
 # structural damping (N s/m per delta^0.5); each contact's share of the deflection; the squeeze
 # films 6 pi eta R_x R_y (N s) of both contacts and their product; the film law's length lambda
 # per |shaft speed|^FILM_W_EXP (m; 0 without film), the inner contact's share of a ball's film,
@@ -653,9 +653,9 @@ def advance_kernel(x, ang, trig, step, hist, geom, n, m, d, s0, s1, l0x, l0y, l1
 
 
 def contact_damping(scene, ball_load: float) -> np.ndarray:
-    """The geometry vector's contact entries (P_CDW .. P_ROUGH) for a scene whose most loaded ball
-    carries ``ball_load`` N: the skidding tier's contact damping and films (module ``film``) for
-    a massless ball, whose two contacts carry the same load in series.
+    """The geometry vector's contact-damping entries (P_CDW .. P_SQIO) for a scene whose most
+    loaded ball carries ``ball_load`` N: the skidding tier's contact damping (module ``film``)
+    for a massless ball, whose two contacts carry the same load in series.
 
     Hertz splits a ball's deflection as delta_i = a_i delta, a_i = (K / K_i)^(2/3) (a_i + a_o =
     1).  The squeeze films, 6 pi eta R_x R_y / (|delta_i| + h + roughness) at each contact as the
@@ -666,12 +666,7 @@ def contact_damping(scene, ball_load: float) -> np.ndarray:
     motion with c = a_i^2 c_i + a_o^2 c_o instead; with a_i = a_o and equal films the two agree,
     and on the shipped bearings within 10 %.)  The structural part, 2 zeta sqrt(m_b k_t) per
     contact in series likewise, goes as delta^0.25; here as delta^0.5 scaled to match at the most
-    loaded ball (continuous, zero where the ball touches, and no root per ball beyond Hertz's).
-    Each ball's films fill part of the clearance, as in the skidding tier, and follow its own
-    load (h ~ Q^-0.073: an unloaded ball's is 2.3x that of a 1000 N one) and the speed (h ~
-    u^0.68, u = r_o w_cage the entrainment speed of pure rolling, at both contacts): the film
-    law of module ``film``, whose length lambda = (C K^-0.073)^(1 / (1 + a)) |w|^FILM_W_EXP
-    with h = C |w|^0.68 Q^-0.073 the film of both contacts together."""
+    loaded ball (continuous, zero where the ball touches, and no root per ball beyond Hertz's)."""
     b = scene.bearing
     lub = scene.lubrication
     ic, oc = b.inner_contact, b.outer_contact
@@ -686,15 +681,25 @@ def contact_damping(scene, ball_load: float) -> np.ndarray:
     ch = ch_i * ch_o / (ch_i + ch_o) if ch_i + ch_o > 0.0 else 0.0
     sq_i = squeeze_film_coefficient(ic, lub)
     sq_o = squeeze_film_coefficient(oc, lub)
+    return np.array([ch / math.sqrt(delta_ref), a_i, a_o, sq_i, sq_o, sq_i * sq_o])
+
+
+def film_law(scene) -> np.ndarray:
+    """The geometry vector's film entries (P_LAM .. P_ROUGH) for a scene.  Each ball's films fill
+    part of the clearance, as in the skidding tier, and follow its own Hertz load (h ~ Q^-0.073:
+    an unloaded ball's is 2.3x that of a 1000 N one) and the speed (h ~ u^0.68, u = r_o w_cage
+    the entrainment speed of pure rolling, at both contacts): the film law of module ``film``,
+    whose length lambda = (C K^-0.073)^(1 / (1 + a)) |w|^FILM_W_EXP with h = C |w|^0.68 Q^-0.073
+    the film of both contacts together."""
+    b = scene.bearing
+    lub = scene.lubrication
+    k = b.combined_stiffness
     # h = C u^0.68 Q^-0.073 with u = r_o * cage speed ratio * |w|: C per |w|^0.68
-    e_eff = b.effective_modulus
-    c_i = film_coefficient(ic, lub, e_eff)
-    c_o = film_coefficient(oc, lub, e_eff)
+    c_i = film_coefficient(b.inner_contact, lub, b.effective_modulus)
+    c_o = film_coefficient(b.outer_contact, lub, b.effective_modulus)
     per_speed = (0.5 * b.outer_race_diameter * b.cage_speed(1.0)) ** FILM_EXP_U
     lam = ((c_i + c_o) * per_speed * k ** FILM_EXP_Q) ** (1.0 / (1.0 + FILM_LAW_A)) if lub.ehl_film else 0.0
-    return np.array([ch / math.sqrt(delta_ref), a_i, a_o, sq_i, sq_o, sq_i * sq_o,
-                     lam, c_i / (c_i + c_o), (FILM_LOAD_FLOOR / k) ** (2.0 / 3.0),
-                     lub.surface_roughness])
+    return np.array([lam, c_i / (c_i + c_o), (FILM_LOAD_FLOOR / k) ** (2.0 / 3.0), lub.surface_roughness])
 
 
 @njit(cache=True)
@@ -745,6 +750,7 @@ class KinematicModel:
         self.geo[P_SPIN] = b.ball_spin_speed(1.0)
         self.geo[P_SLIP] = scene.random_slip
         self.geo[P_GRAV] = st.shaft_mass * G if scene.gravity else 0.0
+        self.geo[P_LAM:NGEO] = film_law(scene)       # the damping entries: at the linearisation
         a = 2.0 * np.pi * np.arange(nb) / nb
         self.cj, self.sj = np.cos(a), np.sin(a)
         self.dtab = defect_table(scene.defects, b)      # final table after the equilibrium (below)
@@ -824,11 +830,7 @@ class KinematicModel:
     def _linearise(self, load: np.ndarray, speed: float, initial: bool = False):
         """The static equilibrium under ``load`` (N) at shaft ``speed`` (rad/s), the contact
         damping at its most loaded ball and the propagators of the structure with the bearing
-        linearised there, each ball through its film at that speed.  (The films do not depend on
-        the contact damping's reference load, the most loaded ball's: ``contact_damping`` at a
-        load of 0 gives them.)"""
-        if initial:
-            self.geo[P_CDW:NGEO] = contact_damping(self.scene, 0.0)
+        linearised there, each ball through its film at that speed."""
         self._lin_speed = speed
         eq = self._equilibrium(load)
         d0 = eq[:2] - eq[2:]
@@ -836,7 +838,7 @@ class KinematicModel:
         bearing_force(self._static_geo(), self.cj, self.sj, np.zeros((0, DEFECT_COLUMNS)),
                       np.zeros((0, 4)), 0, d0[0], d0[1], 0.0, 0.0, 0.0, q, speed)
         self.static_ball_load = float(q.max())      # N, most loaded ball at the equilibrium
-        self.geo[P_CDW:NGEO] = contact_damping(self.scene, self.static_ball_load)
+        self.geo[P_CDW:P_LAM] = contact_damping(self.scene, self.static_ball_load)
         kb = secant_stiffness(self._mean_force, d0)       # of the averaged load-deflection law
         self.kb = kb
         # linearised bearing between shaft and pedestal: force on pedestal kb (s - p).  Only its
