@@ -76,8 +76,7 @@ this model: the squeeze film and the cage on its pocket springs need <= 3e-6 s);
 RK4 at 1/32 of the internal sample spacing; ``"default"``: :class:`~.integrators.SplitROS2`, the
 structure propagated exactly, balls and cage by ROS2 Rosenbrock-W with a block Jacobian of the
 stiff per-ball couplings and the forcing's time column, one step per internal sample, event
-sub-steps where a ball is inside a defect, a step redone with the stiffer Jacobian where a contact
-opens or closes.  Engines:
+sub-steps where a ball is inside a defect under a contact or a contact opens or closes.  Engines:
 :func:`_engine` (explicit RK, whole-state Rosenbrock) and :func:`_engine_split`.
 """
 from __future__ import annotations
@@ -413,7 +412,15 @@ def _rhs(y, f, ws, sh_ang, fx_ext, fy_ext, p, dtab, wti, wto, film, aux, dg, scr
         a[X_DEDTH] = dy * c - dx * s           # d e / d theta: the inner contact moves with the ball
         a[X_DLI] = scr[j, 3] if has_def else 0.0
         a[X_DLO] = scr[j, 4] if has_def else 0.0
-        a[X_LOSS] = scr[j, 0] + scr[j, 1] if has_def else 0.0
+        # a defect's loss where it changes a contact: one that would be closed without it (a pit
+        # passing a ball that does not touch that race changes nothing, and is not an event)
+        loss = 0.0
+        if has_def:
+            if di + scr[j, 0] > 0.0:
+                loss += scr[j, 0]
+            if do + scr[j, 1] > 0.0:
+                loss += scr[j, 1]
+        a[X_LOSS] = loss
         d = dg[j]
         d[D_QI] = qi
         d[D_QO] = qo
@@ -1031,7 +1038,8 @@ NO_EVENT, CONTACT_EVENT, DEFECT_EVENT = 0, 1, 2
 
 @njit(inline="always", **KERNEL)
 def _inside_defect(a, nb):
-    """Whether a ball is inside a defect, from the contact values ``a`` of one instant."""
+    """Whether a ball is inside a defect under a contact it changes (see ``X_LOSS`` in
+    :func:`_rhs`), from the contact values ``a`` of one instant."""
     for j in range(nb):
         if a[j, X_LOSS] > 0.0:
             return True
@@ -1071,11 +1079,10 @@ def _engine_split(y, fy, un, aux0, dg0, film, counters, n, m, hs, kk, ramp, ta_,
         u' = ball forces at (z_{n+1}, x*)
         x_{n+1} = x* + G1 (u' - u_n)               structure corrector (input ramped)
 
-    Event-aware: if a ball is inside a defect, the step is redone as ``nsub`` sub-steps
-    (propagators phie, g0e, g1e of one sub-step), and the structure state and input at the
-    samples inside the step are kept (xsmp, usmp).  If a contact opened or closed, so is a step
-    of several samples (``kk`` > 1); a step of one sample is redone once, with each ball's
-    Jacobian from the stiffer end of the step.
+    Event-aware: if a ball is inside a defect under a contact it changes, or a contact opened or
+    closed, the step is redone as ``nsub`` sub-steps (propagators phie, g0e, g1e of one
+    sub-step), and the structure state and input at the samples inside the step are kept (xsmp,
+    usmp).
 
     The step is written out here rather than in helper functions on purpose: a numba call costs
     about 18 ns per array argument (reference counting and the array struct), and a step whose
@@ -1154,29 +1161,14 @@ def _engine_split(y, fy, un, aux0, dg0, film, counters, n, m, hs, kk, ramp, ta_,
                         for jb_ in range(nb):
                             for q in range(NFILM):
                                 filmc[jb_, q] = film[jb_, q]
-                        if event == CONTACT_EVENT and kk == 1:
-                            # a contact opened or closed in a step of one sample: once more, each
-                            # ball's Jacobian from the end of the step where its contacts are
-                            # stiffer (from an open contact that closes during the step, W would
-                            # leave the step explicit in its stiffness).  The end of a longer step
-                            # is too far off to take a Jacobian from (two and four samples per
-                            # step diverged)
-                            for jb_ in range(nb):
-                                src = aux0
-                                if auxn[jb_, X_KTI] + auxn[jb_, X_KTO] > aux0[jb_, X_KTI] + aux0[jb_, X_KTO]:
-                                    src = auxn
-                                for q in range(NAUX):
-                                    auxc[jb_, q] = src[jb_, q]
-                        else:
-                            # a ball inside a defect (or a contact event in a longer step): nsub
-                            # sub-steps, each from its own start
-                            substepped = True
-                            nsteps = nsub
-                            ph, gz, gl = phie, g0e, g1e
-                            mball = 1
-                            for jb_ in range(nb):
-                                for q in range(NAUX):
-                                    auxc[jb_, q] = aux0[jb_, q]
+                        # nsub sub-steps, each with the Jacobian from its own start
+                        substepped = True
+                        nsteps = nsub
+                        ph, gz, gl = phie, g0e, g1e
+                        mball = 1
+                        for jb_ in range(nb):
+                            for q in range(NAUX):
+                                auxc[jb_, q] = aux0[jb_, q]
                         yc, fc, uc, ac, flc = ycur, fcur, ucur, auxc, filmc
                     hcur = hstep / nsteps
                     for sidx in range(nsteps):
