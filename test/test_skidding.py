@@ -208,6 +208,21 @@ def test_default_follows_the_reference_where_the_load_hands_over():
     assert np.all(np.abs(rms(r.cat("accel")[150:]) / rms(ref.cat("accel")[150:]) - 1) < 0.005)
 
 
+def test_default_within_one_percent_on_the_bench_scene_it_finds_hardest():
+    """The bench's error (the largest of RMS, envelope line heights and mean cage speed, against
+    the reference, on the bench's window) of the default on the ER-16K inner-race scene, its
+    largest on the bench, stays under 1 %: 1.29 % while every ball in a pit was a defect event
+    and such steps took 4 sub-steps, 0.74 % now."""
+    from bearing_sim_ros import bench
+
+    scenario = next(s for s in bench.SCENARIOS if s.scene == "er16k_inner_race")
+    scene = scenario.build()
+    ref = bench.run_config(bench.reference_config(), scene, FS, 0.2, 0.5, 1)
+    default = bench.run_config(bench.Config("default", "skidding default", "skidding"), scene, FS, 0.2, 0.5, 1)
+    err = bench.errors(default, ref, scene, FS)
+    assert err["error"] < 0.01, err
+
+
 # ---------------------------------------------------------------------------------------------
 # physics
 def test_static_balance_and_stribeck_load_without_clearance():
