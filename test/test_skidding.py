@@ -208,6 +208,44 @@ def test_default_follows_the_reference_where_the_load_hands_over():
     assert np.all(np.abs(rms(r.cat("accel")[150:]) / rms(ref.cat("accel")[150:]) - 1) < 0.005)
 
 
+def test_structure_propagators_are_exact_for_a_parabolic_input():
+    """x(tau) = Phi x0 + G0 u0 + G1 (u1 - u0) + G2 a for u = u0 + (u1 - u0) r + a (r^2 - r),
+    r = s / h, against a fine RK4 integration, at the step's end and inside it."""
+    rng = np.random.default_rng(3)
+    n, k, h = 6, 3, 2.0e-4
+    A = rng.normal(size=(n, n)) * 3e3 - 5e3 * np.eye(n)
+    B = rng.normal(size=(n, k)) * 1e2
+    x0, u0, u1, a = rng.normal(size=n), rng.normal(size=k), rng.normal(size=k), rng.normal(size=k)
+
+    def u(s):
+        r = s / h
+        return u0 + (u1 - u0) * r + a * (r * r - r)
+
+    for tau in (h, 0.4 * h):
+        phi, g0, g1, g2 = sk.propagators(A, B, h, tau)
+        x, m = x0.copy(), 4000
+        dt = tau / m
+        for i in range(m):
+            t = i * dt
+            k1 = A @ x + B @ u(t)
+            k2 = A @ (x + 0.5 * dt * k1) + B @ u(t + 0.5 * dt)
+            k3 = A @ (x + 0.5 * dt * k2) + B @ u(t + 0.5 * dt)
+            k4 = A @ (x + dt * k3) + B @ u(t + dt)
+            x = x + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        np.testing.assert_allclose(phi @ x0 + g0 @ u0 + g1 @ (u1 - u0) + g2 @ a, x, rtol=1e-9, atol=1e-12)
+
+
+def test_two_samples_per_step_pass_the_resonator_band():
+    """At two samples per step a force held linear over each step would lose about 6 % at the
+    resonator's 4 kHz ((pi f h)^2 / 3); on the parabola through the last three grid points it
+    does not: at 2000 N the RMS stays within 0.3 % of the reference (0.84 % with the ramp)."""
+    sc = make_scene()
+    seg = [(0.06, 2000, 2000)]
+    ref = run(sc, seg, solver="reference")
+    r = run(sc, seg, method=it.SplitROS2(per_sample=0.5))
+    assert np.all(np.abs(rms(r.cat("accel")[150:]) / rms(ref.cat("accel")[150:]) - 1) < 0.003)
+
+
 def test_default_within_one_percent_on_the_bench_scene_it_finds_hardest():
     """The bench's error (the largest of RMS, envelope line heights and mean cage speed, against
     the reference, on the bench's window) of the default on the ER-16K inner-race scene, its
