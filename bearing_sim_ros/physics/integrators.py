@@ -137,8 +137,8 @@ class SplitROS2(ROS2):
     ramped input at that time (precomputed sub-step propagators).
 
     Event-aware: a step in which a ball is inside a defect (its depth profile, with edges, under
-    a contact that the defect changes: one that would be closed without it) is redone as
-    ``event_substeps`` sub-steps.  Without that the method converges only to first order there
+    a contact that the defect changes: one that would be closed without it) is redone in
+    ``event_substeps`` sub-steps per internal sample (a step of two samples in twice as many).  Without that the method converges only to first order there
     (a smooth method across a kink), and the impacts, which make the defect's envelope line,
     come out wrong.  A step in which a ball-race or ball-pocket contact opens or closes (the load
     handing over from ball to ball, a lightly loaded ball touching and leaving a race) is

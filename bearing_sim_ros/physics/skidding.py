@@ -1533,9 +1533,13 @@ class SkiddingModel:
             self.phis[j], self.g0s[j], self.g1s[j] = self.cacc @ ph, self.cacc @ gg0, self.cacc @ gg1
             self.g2s[j] = self.cacc @ gg2
         self.nball = max(1, int(getattr(self.method, "ball_substeps", 1)))
+        # event sub-steps are per internal sample: a step of kk samples with an event is redone in
+        # kk times as many, so that the sub-step, which sets the error of a defect's impacts, is
+        # the same at every oversample (at two samples per step, 6 sub-steps per step left the
+        # ER-16K inner-race line 1.37 % off, 12 leave 0.13 %)
         self.nsub = int(getattr(self.method, "event_substeps", 1))
         if self.nsub > 1:
-            self.nsub = max(kk, (self.nsub // kk) * kk)
+            self.nsub = self.nsub * kk
             self.phie, self.g0e, self.g1e, _g2e = propagators(A, B, self.hstep / self.nsub)
         else:
             self.phie, self.g0e, self.g1e = self.phi, self.g0, self.g1
