@@ -81,8 +81,7 @@ class Simulator:
     rk4_step: step of the "rk4" solver (s).  oversample: integration steps per output sample
     (the accuracy knob: 1, 2 or a multiple of 4 up to 64; by default each tier's own,
     ``physics.kinematic.DEFAULT_OVERSAMPLE`` = 2 and, for the skidding tier's "default" solver,
-    ``physics.skidding.default_oversample``: 2, or 4 without the EHL film; "rk4" and "reference"
-    keep their steps).
+    ``physics.skidding.DEFAULT_OVERSAMPLE`` = 2; "rk4" and "reference" keep their steps).
     """
 
     def __init__(self, scene, sample_rate: float = 15000.0, fidelity: str = "auto", seed: int = 0,

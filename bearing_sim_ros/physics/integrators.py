@@ -138,10 +138,12 @@ class SplitROS2(ROS2):
 
     Event-aware: a step in which a ball is inside a defect (its depth profile, with edges, under
     a contact that the defect changes: one that would be closed without it) is redone in
-    ``event_substeps`` sub-steps per internal sample (a step of two samples in twice as many).  Without that the method converges only to first order there
-    (a smooth method across a kink), and the impacts, which make the defect's envelope line,
-    come out wrong.  A step in which a ball-race or ball-pocket contact opens or closes (the load
-    handing over from ball to ball, a lightly loaded ball touching and leaving a race) is
+    ``event_substeps`` sub-steps per internal sample (a step of two samples in twice as many).
+    Without that the method converges only to first order there (a smooth method across a kink),
+    and the impacts, which make the defect's envelope line, come out wrong.  A step in which a
+    ball-race or ball-pocket contact opens or closes (the load handing over from ball to ball, a
+    lightly loaded ball touching and leaving a race; seen at the step's end or at its second
+    stage's point, so that a contact that closes and opens again inside the step counts) is
     sub-stepped too: from an open contact that closes during the step, W would leave the step
     explicit in the contact's stiffness (without any redo, two samples per step went 38 % and
     230 % off in RMS at 200 and 2000 N).  Such steps are 0.4-5 % of all on the bench scenes

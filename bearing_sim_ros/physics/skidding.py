@@ -128,17 +128,8 @@ B_TH, B_R, B_PSI, B_W, B_V, B_OM = range(NBV)
 DEFECT_EPS = 1e-6    # rad: finite-difference step of the defect-depth slope
 W_REF = 0.01        # rad/s: regularises the skid-ratio denominators at standstill
 DEFAULT_OVERSAMPLE = 2   # steps of the default solver per output sample (one per two internal
-                         # samples): 0.04-0.5 % bench error, 1.2-1.8x the speed of 4 (0.02-0.8 %);
-                         # 1 is not within 1 % at 2000 N (README, "Speed against error")
-DRY_OVERSAMPLE = 4       # the same without the EHL film: its squeeze film is what damps a ball's
-                         # contact as it closes; without it two samples per step let the balls
-                         # rattle (600 rpm / 2000 N: RMS 0.06 -> up to 7.5 m/s^2), one does not
-
-
-def default_oversample(scene) -> int:
-    """Steps of the ``"default"`` solver per output sample for ``scene`` when none is asked for:
-    ``DEFAULT_OVERSAMPLE`` with the EHL film (every shipped scene), ``DRY_OVERSAMPLE`` without."""
-    return DEFAULT_OVERSAMPLE if scene.lubrication.ehl_film else DRY_OVERSAMPLE
+                         # samples): 0.05-0.4 % bench error at 1.2-1.8x the speed of 4; 1 is not
+                         # within 1 % at 2000 N (README, "Speed against error")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -1058,11 +1049,11 @@ def _inside_defect(a, nb):
 
 @njit(inline="always", **KERNEL)
 def _step_event(a0, a1, nb, pocket):
-    """What a step went through, from the contact values at its two ends: DEFECT_EVENT if a ball
-    was inside a defect at either end; else CONTACT_EVENT if a ball-race contact (or, with
-    ``pocket``, a ball-pocket contact) opened or closed; else NO_EVENT.  Without pocket clearance
-    the pocket spring is always engaged (its flag flickers only where its damping outweighs it),
-    so it is not an event."""
+    """What a step went through, from the contact values at two of its points (its ends, or its
+    start and its second stage's point): DEFECT_EVENT if a ball was inside a defect at either;
+    else CONTACT_EVENT if a ball-race contact (or, with ``pocket``, a ball-pocket contact) opened
+    or closed; else NO_EVENT.  Without pocket clearance the pocket spring is always engaged (its
+    flag flickers only where its damping outweighs it), so it is not an event."""
     if _inside_defect(a0, nb) or _inside_defect(a1, nb):
         return DEFECT_EVENT
     for j in range(nb):
@@ -1277,6 +1268,12 @@ def _engine_split(y, fy, un, up, aux0, dg0, film, counters, n, m, hs, kk, ramp, 
                         break
                     event = _step_event(aux0, auxn, nb, pocket)
                     if event == NO_EVENT:
+                        # a contact that closes and opens again inside the step shows at neither
+                        # end but at the second stage's point (the step's end as the first stage
+                        # predicts it): without this, two samples per step let undamped balls
+                        # rattle (no EHL film, 600 rpm / 2000 N: RMS 0.06 -> up to 7.5 m/s^2)
+                        event = _step_event(aux0, auxs, nb, pocket)
+                    if event == NO_EVENT:
                         break
                 have_next = True
             if not accept:
@@ -1450,10 +1447,9 @@ class SkiddingModel:
                  solver: str = "default", rk4_step: float | None = None, method=None,
                  oversample: int | None = None):
         """``oversample``: steps of the ``"default"`` solver per output sample (default
-        :func:`default_oversample`: one step per two internal samples with the EHL film, one per
-        internal sample without; 1 takes one every 4 internal samples, 4 one per internal sample,
-        a multiple of 4 several; the samples between grid points come from the structure's exact
-        response).  ``method``: an :class:`~.integrators.Method` instance overriding ``solver``
+        ``DEFAULT_OVERSAMPLE``, one step per two internal samples; 1 takes one every 4 internal
+        samples, 4 one per internal sample, a multiple of 4 several; the samples between grid
+        points come from the structure's exact response).  ``method``: an :class:`~.integrators.Method` instance overriding ``solver``
         (for studies of step size and method; the Simulator does not use it)."""
         from ..errors import UserError
 
@@ -1465,7 +1461,7 @@ class SkiddingModel:
         if rk4_step is not None and not (isinstance(rk4_step, (int, float)) and 1e-9 <= rk4_step <= 1e-3):
             raise UserError(f"rk4_step = {rk4_step!r}: allowed range is [1e-09, 0.001] s")
         self.solver = solver
-        self.oversample = int(oversample or default_oversample(scene))
+        self.oversample = int(oversample or DEFAULT_OVERSAMPLE)
         if not (self.oversample in (1, 2) or self.oversample % 4 == 0):
             raise UserError(f"oversample = {oversample!r}: allowed values are 1, 2 or a multiple of 4")
         self.method = method if method is not None else method_for(
