@@ -1449,8 +1449,9 @@ class SkiddingModel:
         """``oversample``: steps of the ``"default"`` solver per output sample (default
         ``DEFAULT_OVERSAMPLE``, one step per two internal samples; 1 takes one every 4 internal
         samples, 4 one per internal sample, a multiple of 4 several; the samples between grid
-        points come from the structure's exact response).  ``method``: an :class:`~.integrators.Method` instance overriding ``solver``
-        (for studies of step size and method; the Simulator does not use it)."""
+        points come from the structure's exact response).  ``method``: an
+        :class:`~.integrators.Method` instance overriding ``solver`` (for studies of step size
+        and method; the Simulator does not use it)."""
         from ..errors import UserError
 
         self.scene = scene
