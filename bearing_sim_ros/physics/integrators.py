@@ -118,8 +118,8 @@ class SplitROS2(ROS2):
     through its values at the last two grid points and the step's end (linearly after a step
     with events, where the input has a kink).  A ramp alone passes a force at frequency f with
     a relative error of about (pi f h)^2 / 3, 6 % at the resonator's 4 kHz at two samples per
-    step, which was most of the default's error on the healthy scenes (bench error at 2000 N:
-    1.49 -> 0.50 % at two samples per step, 0.48 -> 0.13 % at one).  The balls and the cage see
+    step, which was most of the default's error on the healthy scenes (README, "Solvers").  The
+    balls and the cage see
     the structure's displacement as a given function over the step and take one ROS2 step with
     the per-ball block Jacobian (the stiff ball-radial, ball-cage and traction couplings).  Per
     step:
