@@ -102,6 +102,13 @@ from .structure import secant_stiffness, structure_system
 # report it as a divergence) instead of a test and branch at every division to raise
 # ZeroDivisionError.  Together 10-16 % of the step (measured on the bench scenes).
 KERNEL = dict(cache=True, fastmath={"contract"}, error_model="numpy")
+# the kernels that run at every step also run without numba's runtime (NRT), whose reference
+# counts on every array argument of a compiled call (and on many array assignments inside one) are
+# atomic instructions, the hottest ones in a perf profile of the step: without them the healthy
+# ER-16K step at two samples per step takes 1.70 instead of 2.98 us (AMD host), with bit for bit
+# the same results.  Such a kernel cannot allocate, so each engine allocates its work arrays in a
+# thin wrapper and passes them in.
+STEP_KERNEL = dict(KERNEL, _nrt=False)
 
 NS0 = 12            # structure (10) + cage (2)
 NBV = 6             # per-ball state entries
@@ -216,7 +223,7 @@ def _defect_losses(dtab, y, p, sh_ang, scr):
             scr[j, 4] = (lo2 - lo) / DEFECT_EPS
 
 
-@njit(**KERNEL)
+@njit(**STEP_KERNEL)
 def _rhs(y, f, ws, sh_ang, fx_ext, fy_ext, p, dtab, wti, wto, film, aux, dg, scr, frc):
     """Time derivative ``f`` of the state ``y`` (see module docstring) at shaft speed ``ws``
     (rad/s), shaft angle ``sh_ang`` (rad) and external force (fx_ext, fy_ext) on the shaft (N).
@@ -808,7 +815,7 @@ def _w_apply(p, hg, wsp, wcage, rhs_vec, k):
 
 # ---------------------------------------------------------------------------------------------
 # the stepping engine
-@njit(**KERNEL)
+@njit(**STEP_KERNEL)
 def _step(kind, ta_, tb_, tc_, tg_, gamma, y, fy, aux0, t, hstep, ramp, p, dtab, wti, wto, film,
           ynew, kst, ytmp, rtmp, auxs, dgs, wsp, wcage, scr, frc):
     """One step of ``hstep`` s from (t, y) with f(t, y) = fy given; result in ynew."""
@@ -856,7 +863,7 @@ def _step(kind, ta_, tb_, tc_, tg_, gamma, y, fy, aux0, t, hstep, ramp, p, dtab,
         ynew[i] = acc
 
 
-@njit(**KERNEL)
+@njit(**STEP_KERNEL)
 def _record(i, m, y, fy, dg, ws, p, out_acc, out_qi, out_qo, out_cage, out_bs, out_cs,
             out_sli, out_slo, out_fi, out_fo):
     """Sensor-mount acceleration of sample i from the derivative fy; every m-th sample the
@@ -893,6 +900,22 @@ def _record_diag(i, m, y, dg, ws, p, out_qi, out_qo, out_cage, out_bs, out_cs, o
         out_bs[o] = 100.0 * (acc / nb) * wbt / (wbt * wbt + W_REF * W_REF)
 
 
+@njit(inline="always", **KERNEL)
+def _copy1(dst, src):
+    """dst[:] = src without numpy's overlap check, which may allocate (the engines' loops run
+    without numba's runtime: ``STEP_KERNEL``)."""
+    for q in range(dst.shape[0]):
+        dst[q] = src[q]
+
+
+@njit(inline="always", **KERNEL)
+def _copy2(dst, src):
+    """dst[:, :] = src, as :func:`_copy1`."""
+    for r in range(dst.shape[0]):
+        for q in range(dst.shape[1]):
+            dst[r, q] = src[r, q]
+
+
 @njit(**KERNEL)
 def _engine(y, counters, n, m, hs, hstep, ramp, kind, ta_, tb_, tc_, tg_, gamma, p, dtab, wti,
             wto, film, out_acc, out_qi, out_qo, out_cage, out_bs, out_cs, out_sli, out_slo,
@@ -927,6 +950,19 @@ def _engine(y, counters, n, m, hs, hstep, ramp, kind, ta_, tb_, tc_, tg_, gamma,
     wcage = np.empty(1)
     scr = np.zeros((nb, 5))
     frc = np.empty(4)
+    return _engine_steps(y, counters, n, m, hs, hstep, ramp, kind, ta_, tb_, tc_, tg_, gamma,
+        p, dtab, wti, wto, film, out_acc, out_qi, out_qo, out_cage, out_bs, out_cs, out_sli,
+        out_slo, out_fi, out_fo, fy, ynext, fnext, yint, fint, ytmp, rtmp, kst, aux0, auxn,
+        auxs, dg0, dgn, dgs, filmn, wsp, wcage, scr, frc)
+
+
+@njit(**STEP_KERNEL)
+def _engine_steps(y, counters, n, m, hs, hstep, ramp, kind, ta_, tb_, tc_, tg_, gamma, p, dtab,
+                  wti, wto, film, out_acc, out_qi, out_qo, out_cage, out_bs, out_cs, out_sli,
+                  out_slo, out_fi, out_fo, fy, ynext, fnext, yint, fint, ytmp, rtmp, kst, aux0,
+                  auxn, auxs, dg0, dgn, dgs, filmn, wsp, wcage, scr, frc):
+    """The stepping loop of :func:`_engine`, which allocates its work arrays (``STEP_KERNEL``)."""
+    nvar = y.shape[0]
     kstep = counters[0]
     i0 = counters[1]
     ty = kstep * hstep
@@ -942,14 +978,14 @@ def _engine(y, counters, n, m, hs, hstep, ramp, kind, ta_, tb_, tc_, tg_, gamma,
                 _step(kind, ta_, tb_, tc_, tg_, gamma, y, fy, aux0, ty, hstep, ramp, p, dtab, wti,
                       wto, film, ynext, kst, ytmp, rtmp, auxs, dgs, wsp, wcage, scr, frc)
                 ws, ang, fx, fyy = _inputs(ramp, ty + hstep)
-                filmn[:, :] = film
+                _copy2(filmn, film)
                 _film_update(ynext, ws, p, filmn, auxs, True)
                 _rhs(ynext, fnext, ws, ang, fx, fyy, p, dtab, wti, wto, filmn, auxn, dgn, scr, frc)
-            y[:] = ynext
-            fy[:] = fnext
-            film[:, :] = filmn
-            aux0[:, :] = auxn
-            dg0[:, :] = dgn
+            _copy1(y, ynext)
+            _copy1(fy, fnext)
+            _copy2(film, filmn)
+            _copy2(aux0, auxn)
+            _copy2(dg0, dgn)
             kstep += 1
             ty = kstep * hstep
             have_next = False
@@ -966,7 +1002,7 @@ def _engine(y, counters, n, m, hs, hstep, ramp, kind, ta_, tb_, tc_, tg_, gamma,
                 _step(kind, ta_, tb_, tc_, tg_, gamma, y, fy, aux0, ty, hstep, ramp, p, dtab, wti,
                       wto, film, ynext, kst, ytmp, rtmp, auxs, dgs, wsp, wcage, scr, frc)
                 ws1, ang1, fx1, fy1 = _inputs(ramp, ty + hstep)
-                filmn[:, :] = film
+                _copy2(filmn, film)
                 _film_update(ynext, ws1, p, filmn, auxs, True)
                 _rhs(ynext, fnext, ws1, ang1, fx1, fy1, p, dtab, wti, wto, filmn, auxn, dgn, scr, frc)
                 have_next = True
@@ -1087,9 +1123,10 @@ def _engine_split(y, fy, un, up, aux0, dg0, film, counters, n, m, hs, kk, ramp, 
     sub-step), and the structure state and input at the samples inside the step are kept (xsmp,
     usmp).
 
-    The step is written out here rather than in helper functions on purpose: a numba call costs
-    about 18 ns per array argument (reference counting and the array struct), and a step whose
-    ~40 work arrays went down two call levels spent more time in calls than in physics."""
+    The step is written out in :func:`_engine_split_steps` rather than in helper functions on
+    purpose: a numba call cost about 18 ns per array argument (the array struct and, before the
+    loop ran without numba's runtime, its reference count), and a step whose ~40 work arrays went
+    down two call levels spent more time in calls than in physics."""
     nvar = y.shape[0]
     nb = int(p[P_NB])
     ynext = np.empty(nvar)
@@ -1122,6 +1159,25 @@ def _engine_split(y, fy, un, up, aux0, dg0, film, counters, n, m, hs, kk, ramp, 
     fbl = np.empty(nvar)
     xbl = np.empty(10)
     auxbl = np.empty((nb, NAUX))
+    return _engine_split_steps(y, fy, un, up, aux0, dg0, film, counters, n, m, hs, kk, ramp, ta_,
+        tg_, tb_, gamma, p, dtab, wti, wto, phi, g0, g1, g2, phis, g0s, g1s, g2s, phie, g0e, g1e,
+        nsub, nball, cacc, dacc, kb, out_acc, out_qi, out_qo, out_cage, out_bs, out_cs, out_sli,
+        out_slo, out_fi, out_fo, ynext, fnext, unext, ytmp, rtmp, kst, auxn, auxs, dgn, dgs, filmn,
+        wsp, wcage, scr, frc, xpred, xs, uu, qa, ycur, fcur, ucur, auxc, filmc, xsmp, usmp, ybl,
+        fbl, xbl, auxbl)
+
+
+@njit(**STEP_KERNEL)
+def _engine_split_steps(y, fy, un, up, aux0, dg0, film, counters, n, m, hs, kk, ramp, ta_, tg_,
+                        tb_, gamma, p, dtab, wti, wto, phi, g0, g1, g2, phis, g0s, g1s, g2s, phie,
+                        g0e, g1e, nsub, nball, cacc, dacc, kb, out_acc, out_qi, out_qo, out_cage,
+                        out_bs, out_cs, out_sli, out_slo, out_fi, out_fo, ynext, fnext, unext, ytmp,
+                        rtmp, kst, auxn, auxs, dgn, dgs, filmn, wsp, wcage, scr, frc, xpred, xs, uu,
+                        qa, ycur, fcur, ucur, auxc, filmc, xsmp, usmp, ybl, fbl, xbl, auxbl):
+    """The stepping loop of :func:`_engine_split`, which allocates its work arrays (this kernel
+    runs without numba's runtime: ``STEP_KERNEL``)."""
+    nvar = y.shape[0]
+    nb = int(p[P_NB])
     pocket = p[P_CPK] > 0.0
     hstep = kk * hs
     kstep = counters[0]
