@@ -429,9 +429,10 @@ def advance_kernel(x, ang, trig, step, hist, geom, n, m, d, s0, s1, l0x, l0y, l1
     samples, and stay deterministic: the same compiled code gives the same bits, chunked or not.
 
     Why the body spells everything out (states as scalars, Hertz sums inline): every call of a
-    compiled function that takes arrays pays reference counting on each array, and states kept
-    in arrays are stored and reloaded at every step (the compiler cannot prove that the output
-    arrays do not alias them); both cost more than the arithmetic.
+    compiled function that takes arrays passes each array's struct (and, with numba's runtime,
+    which this kernel runs without, counted a reference on each), and states kept in arrays are
+    stored and reloaded at every step (the compiler cannot prove that the output arrays do not
+    alias them); both cost more than the arithmetic.
     """
     nb = int(geo[P_NB])
     kc = geo[P_K]
