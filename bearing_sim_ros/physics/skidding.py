@@ -106,8 +106,10 @@ KERNEL = dict(cache=True, fastmath={"contract"}, error_model="numpy")
 # counts on every array argument of a compiled call (and on many array assignments inside one) are
 # atomic instructions, the hottest ones in a perf profile of the step: without them the healthy
 # ER-16K step at two samples per step takes 1.70 instead of 2.98 us (AMD host), with bit for bit
-# the same results.  Such a kernel cannot allocate, so each engine allocates its work arrays in a
-# thin wrapper and passes them in.
+# the same results.  Such a kernel cannot allocate: the model allocates each engine's work arrays
+# once (:func:`split_work`, :func:`engine_work`) and passes them in.  (A compiled wrapper that
+# allocated them per call made the first compilation 12 -> 17 s, presumably because LLVM inlined
+# the whole engine into it and optimised it again.)
 STEP_KERNEL = dict(KERNEL, _nrt=False)
 
 NS0 = 12            # structure (10) + cage (2)
@@ -916,52 +918,30 @@ def _copy2(dst, src):
             dst[r, q] = src[r, q]
 
 
-@njit(**KERNEL)
-def _engine(y, counters, n, m, hs, hstep, ramp, kind, ta_, tb_, tc_, tg_, gamma, p, dtab, wti,
-            wto, film, out_acc, out_qi, out_qo, out_cage, out_bs, out_cs, out_sli, out_slo,
-            out_fi, out_fo):
+def engine_work(nvar: int, nb: int, stages: int) -> tuple:
+    """Work arrays of :func:`_engine` for a state of ``nvar`` entries, ``nb`` balls and a method
+    of ``stages`` stages, allocated once per model (the engine runs without numba's runtime and
+    cannot allocate); ``scr``, the one allocated with zeros, must be zero at each call."""
+    e = np.empty
+    return (e(nvar), e(nvar), e(nvar), e(nvar), e(nvar), e(nvar), e(nvar), e((stages, nvar)),
+            e((nb, NAUX)), e((nb, NAUX)), e((nb, NAUX)), e((nb, NDG)), e((nb, NDG)), e((nb, NDG)),
+            e((nb, NFILM)), e((nb, NW)), e(1), np.zeros((nb, 5)), e(4))
+
+
+@njit(**STEP_KERNEL)
+def _engine(y, counters, n, m, hs, hstep, ramp, kind, ta_, tb_, tc_, tg_, gamma, p, dtab,
+            wti, wto, film, out_acc, out_qi, out_qo, out_cage, out_bs, out_cs, out_sli,
+            out_slo, out_fi, out_fo, fy, ynext, fnext, yint, fint, ytmp, rtmp, kst, aux0,
+            auxn, auxs, dg0, dgn, dgs, filmn, wsp, wcage, scr, frc):
     """Advance ``n`` internal samples of spacing ``hs`` with fixed steps of ``hstep``.
 
     counters[0]: global step count k (the state y is at time k * hstep); counters[1]: global
     index of the first sample of this chunk (at time index * hs).  The step grid is global, so
     chunking does not change the steps; a step that straddles the end of the chunk is taken with
     the inputs held at their final values and recomputed by the next call.  Returns 0, or 1 if
-    the state stopped being finite (with counters[2] = the sample where it happened).
+    the state stopped being finite (with counters[2] = the sample where it happened).  Work
+    arrays (fy ... frc): :func:`engine_work`.
     """
-    nvar = y.shape[0]
-    nb = int(p[P_NB])
-    ns = tb_.shape[0]
-    fy = np.empty(nvar)
-    ynext = np.empty(nvar)
-    fnext = np.empty(nvar)
-    yint = np.empty(nvar)
-    fint = np.empty(nvar)
-    ytmp = np.empty(nvar)
-    rtmp = np.empty(nvar)
-    kst = np.empty((ns, nvar))
-    aux0 = np.empty((nb, NAUX))
-    auxn = np.empty((nb, NAUX))
-    auxs = np.empty((nb, NAUX))
-    dg0 = np.empty((nb, NDG))
-    dgn = np.empty((nb, NDG))
-    dgs = np.empty((nb, NDG))
-    filmn = np.empty_like(film)
-    wsp = np.empty((nb, NW))
-    wcage = np.empty(1)
-    scr = np.zeros((nb, 5))
-    frc = np.empty(4)
-    return _engine_steps(y, counters, n, m, hs, hstep, ramp, kind, ta_, tb_, tc_, tg_, gamma,
-        p, dtab, wti, wto, film, out_acc, out_qi, out_qo, out_cage, out_bs, out_cs, out_sli,
-        out_slo, out_fi, out_fo, fy, ynext, fnext, yint, fint, ytmp, rtmp, kst, aux0, auxn,
-        auxs, dg0, dgn, dgs, filmn, wsp, wcage, scr, frc)
-
-
-@njit(**STEP_KERNEL)
-def _engine_steps(y, counters, n, m, hs, hstep, ramp, kind, ta_, tb_, tc_, tg_, gamma, p, dtab,
-                  wti, wto, film, out_acc, out_qi, out_qo, out_cage, out_bs, out_cs, out_sli,
-                  out_slo, out_fi, out_fo, fy, ynext, fnext, yint, fint, ytmp, rtmp, kst, aux0,
-                  auxn, auxs, dg0, dgn, dgs, filmn, wsp, wcage, scr, frc):
-    """The stepping loop of :func:`_engine`, which allocates its work arrays (``STEP_KERNEL``)."""
     nvar = y.shape[0]
     kstep = counters[0]
     i0 = counters[1]
@@ -1099,11 +1079,25 @@ def _step_event(a0, a1, nb, pocket):
     return NO_EVENT
 
 
-@njit(**KERNEL)
-def _engine_split(y, fy, un, up, aux0, dg0, film, counters, n, m, hs, kk, ramp, ta_, tg_, tb_,
-                  gamma, p, dtab, wti, wto, phi, g0, g1, g2, phis, g0s, g1s, g2s, phie, g0e, g1e,
-                  nsub, nball, cacc, dacc, kb, out_acc, out_qi, out_qo, out_cage, out_bs, out_cs,
-                  out_sli, out_slo, out_fi, out_fo):
+def split_work(nvar: int, nb: int, kk: int) -> tuple:
+    """Work arrays of :func:`_engine_split` for a state of ``nvar`` entries, ``nb`` balls and
+    ``kk`` internal samples per step, allocated once per model (the engine runs without numba's
+    runtime and cannot allocate); ``scr`` and ``qa``, the ones allocated with zeros, must be zero
+    at each call."""
+    e = np.empty
+    return (e(nvar), e(nvar), e(4), e(nvar), e(nvar), e((2, nvar)), e((nb, NAUX)), e((nb, NAUX)),
+            e((nb, NDG)), e((nb, NDG)), e((nb, NFILM)), e((nb, NW)), e(1), np.zeros((nb, 5)), e(4),
+            e(10), e(10), e(4), np.zeros(4), e(nvar), e(nvar), e(4), e((nb, NAUX)), e((nb, NFILM)),
+            e((kk, 10)), e((kk, 4)), e(nvar), e(nvar), e(10), e((nb, NAUX)))
+
+
+@njit(**STEP_KERNEL)
+def _engine_split(y, fy, un, up, aux0, dg0, film, counters, n, m, hs, kk, ramp, ta_, tg_,
+                 tb_, gamma, p, dtab, wti, wto, phi, g0, g1, g2, phis, g0s, g1s, g2s, phie,
+                 g0e, g1e, nsub, nball, cacc, dacc, kb, out_acc, out_qi, out_qo, out_cage,
+                 out_bs, out_cs, out_sli, out_slo, out_fi, out_fo, ynext, fnext, unext, ytmp,
+                 rtmp, kst, auxn, auxs, dgn, dgs, filmn, wsp, wcage, scr, frc, xpred, xs, uu,
+                 qa, ycur, fcur, ucur, auxc, filmc, xsmp, usmp, ybl, fbl, xbl, auxbl):
     """Advance ``n`` internal samples with :class:`~.integrators.SplitROS2`, one step per ``kk``
     samples.  The state (y, its derivative fy, the structure input un, aux0, dg0, film) persists
     between calls, so chunking does not change the result; counters as in :func:`_engine`
@@ -1123,59 +1117,12 @@ def _engine_split(y, fy, un, up, aux0, dg0, film, counters, n, m, hs, kk, ramp, 
     sub-step), and the structure state and input at the samples inside the step are kept (xsmp,
     usmp).
 
-    The step is written out in :func:`_engine_split_steps` rather than in helper functions on
-    purpose: a numba call cost about 18 ns per array argument (the array struct and, before the
-    loop ran without numba's runtime, its reference count), and a step whose ~40 work arrays went
-    down two call levels spent more time in calls than in physics."""
-    nvar = y.shape[0]
-    nb = int(p[P_NB])
-    ynext = np.empty(nvar)
-    fnext = np.empty(nvar)
-    unext = np.empty(4)
-    ytmp = np.empty(nvar)
-    rtmp = np.empty(nvar)
-    kst = np.empty((2, nvar))
-    auxn = np.empty((nb, NAUX))
-    auxs = np.empty((nb, NAUX))
-    dgn = np.empty((nb, NDG))
-    dgs = np.empty((nb, NDG))
-    filmn = np.empty_like(film)
-    wsp = np.empty((nb, NW))
-    wcage = np.empty(1)
-    scr = np.zeros((nb, 5))
-    frc = np.empty(4)
-    xpred = np.empty(10)
-    xs = np.empty(10)
-    uu = np.empty(4)
-    qa = np.zeros(4)          # the input's parabola coefficient in the step just taken (0: a ramp)
-    ycur = np.empty(nvar)
-    fcur = np.empty(nvar)
-    ucur = np.empty(4)
-    auxc = np.empty((nb, NAUX))
-    filmc = np.empty_like(film)
-    xsmp = np.empty((kk, 10))
-    usmp = np.empty((kk, 4))
-    ybl = np.empty(nvar)
-    fbl = np.empty(nvar)
-    xbl = np.empty(10)
-    auxbl = np.empty((nb, NAUX))
-    return _engine_split_steps(y, fy, un, up, aux0, dg0, film, counters, n, m, hs, kk, ramp, ta_,
-        tg_, tb_, gamma, p, dtab, wti, wto, phi, g0, g1, g2, phis, g0s, g1s, g2s, phie, g0e, g1e,
-        nsub, nball, cacc, dacc, kb, out_acc, out_qi, out_qo, out_cage, out_bs, out_cs, out_sli,
-        out_slo, out_fi, out_fo, ynext, fnext, unext, ytmp, rtmp, kst, auxn, auxs, dgn, dgs, filmn,
-        wsp, wcage, scr, frc, xpred, xs, uu, qa, ycur, fcur, ucur, auxc, filmc, xsmp, usmp, ybl,
-        fbl, xbl, auxbl)
+    The step is written out here rather than in helper functions on purpose: a numba call cost
+    about 18 ns per array argument (the array struct and, before the loop ran without numba's
+    runtime, its reference count), and a step whose ~40 work arrays went down two call levels
+    spent more time in calls than in physics.
 
-
-@njit(**STEP_KERNEL)
-def _engine_split_steps(y, fy, un, up, aux0, dg0, film, counters, n, m, hs, kk, ramp, ta_, tg_,
-                        tb_, gamma, p, dtab, wti, wto, phi, g0, g1, g2, phis, g0s, g1s, g2s, phie,
-                        g0e, g1e, nsub, nball, cacc, dacc, kb, out_acc, out_qi, out_qo, out_cage,
-                        out_bs, out_cs, out_sli, out_slo, out_fi, out_fo, ynext, fnext, unext, ytmp,
-                        rtmp, kst, auxn, auxs, dgn, dgs, filmn, wsp, wcage, scr, frc, xpred, xs, uu,
-                        qa, ycur, fcur, ucur, auxc, filmc, xsmp, usmp, ybl, fbl, xbl, auxbl):
-    """The stepping loop of :func:`_engine_split`, which allocates its work arrays (this kernel
-    runs without numba's runtime: ``STEP_KERNEL``)."""
+    Work arrays (ynext ... auxbl): :func:`split_work`."""
     nvar = y.shape[0]
     nb = int(p[P_NB])
     pocket = p[P_CPK] > 0.0
@@ -1540,6 +1487,7 @@ class SkiddingModel:
         self.wto = np.ascontiguousarray(wt[wt[:, 0] == 1]) if wt.size else np.zeros((0, 4))
         self.y = np.zeros(NS0 + NBV * self.nb)
         self.film = np.zeros((self.nb, NFILM))
+        self._work = None         # the engine's work arrays, allocated at the first advance
         self._aux = np.zeros((self.nb, NAUX))
         self.counters = np.zeros(4, dtype=np.int64)
         self.shaft_angle = 0.0
@@ -1745,16 +1693,26 @@ class SkiddingModel:
                 self._linearise(l1)
             if self.kk < 1 or m % self.kk != 0:
                 raise ValueError("the split method needs a step of 1, 2 or 4 internal samples")
+            if self._work is None:
+                self._work = split_work(self.y.shape[0], nb, self.kk)
+            work = self._work
+            work[13][:] = 0.0      # scr
+            work[18][:] = 0.0      # qa
             status = _engine_split(self.y, self._fy, self._un, self._up, self._aux0, self._dg0,
                                    self.film, self.counters, n, m, hs, self.kk, ramp, ta_, tg_, tb_,
                                    gamma, self.p, self.dtab, self.wti, self.wto, self.phi, self.g0,
                                    self.g1, self.g2, self.phis, self.g0s, self.g1s, self.g2s,
                                    self.phie, self.g0e, self.g1e, self.nsub, self.nball, self.cacc,
-                                   self.dacc, self.kb, acc, qi, qo, cage, bs, cs, sli, slo, fi, fo)
+                                   self.dacc, self.kb, acc, qi, qo, cage, bs, cs, sli, slo, fi, fo,
+                                   *work)
         else:
+            if self._work is None:
+                self._work = engine_work(self.y.shape[0], nb, tb_.shape[0])
+            work = self._work
+            work[17][:] = 0.0      # scr
             status = _engine(self.y, self.counters, n, m, hs, self.hstep, ramp, kind, ta_, tb_, tc_, tg_,
                              gamma, self.p, self.dtab, self.wti, self.wto, self.film, acc, qi, qo, cage,
-                             bs, cs, sli, slo, fi, fo)
+                             bs, cs, sli, slo, fi, fo, *work)
         if status != 0:
             t_bad = (self.counters[1] + self.counters[2]) * hs
             if self.solver == "rk4":
