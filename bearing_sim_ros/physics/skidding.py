@@ -921,11 +921,15 @@ def _copy2(dst, src):
 def engine_work(nvar: int, nb: int, stages: int) -> tuple:
     """Work arrays of :func:`_engine` for a state of ``nvar`` entries, ``nb`` balls and a method
     of ``stages`` stages, allocated once per model (the engine runs without numba's runtime and
-    cannot allocate); ``scr``, the one allocated with zeros, must be zero at each call."""
+    cannot allocate); ``scr``, the one allocated with zeros (``ENGINE_WORK_ZEROED``), must be
+    zero at each call."""
     e = np.empty
     return (e(nvar), e(nvar), e(nvar), e(nvar), e(nvar), e(nvar), e(nvar), e((stages, nvar)),
             e((nb, NAUX)), e((nb, NAUX)), e((nb, NAUX)), e((nb, NDG)), e((nb, NDG)), e((nb, NDG)),
             e((nb, NFILM)), e((nb, NW)), e(1), np.zeros((nb, 5)), e(4))
+
+
+ENGINE_WORK_ZEROED = (17,)          # scr
 
 
 @njit(**STEP_KERNEL)
@@ -1082,13 +1086,17 @@ def _step_event(a0, a1, nb, pocket):
 def split_work(nvar: int, nb: int, kk: int) -> tuple:
     """Work arrays of :func:`_engine_split` for a state of ``nvar`` entries, ``nb`` balls and
     ``kk`` internal samples per step, allocated once per model (the engine runs without numba's
-    runtime and cannot allocate); ``scr`` and ``qa``, the ones allocated with zeros, must be zero
-    at each call."""
+    runtime and cannot allocate); ``scr`` and ``qa``, the ones allocated with zeros
+    (``SPLIT_WORK_ZEROED``), must be zero at each call."""
     e = np.empty
     return (e(nvar), e(nvar), e(4), e(nvar), e(nvar), e((2, nvar)), e((nb, NAUX)), e((nb, NAUX)),
             e((nb, NDG)), e((nb, NDG)), e((nb, NFILM)), e((nb, NW)), e(1), np.zeros((nb, 5)), e(4),
             e(10), e(10), e(4), np.zeros(4), e(nvar), e(nvar), e(4), e((nb, NAUX)), e((nb, NFILM)),
             e((kk, 10)), e((kk, 4)), e(nvar), e(nvar), e(10), e((nb, NAUX)))
+
+
+# scr; qa, the input's parabola coefficient in the step just taken (0: a ramp)
+SPLIT_WORK_ZEROED = (13, 18)
 
 
 @njit(**STEP_KERNEL)
@@ -1696,8 +1704,8 @@ class SkiddingModel:
             if self._work is None:
                 self._work = split_work(self.y.shape[0], nb, self.kk)
             work = self._work
-            work[13][:] = 0.0      # scr
-            work[18][:] = 0.0      # qa
+            for k in SPLIT_WORK_ZEROED:
+                work[k][:] = 0.0
             status = _engine_split(self.y, self._fy, self._un, self._up, self._aux0, self._dg0,
                                    self.film, self.counters, n, m, hs, self.kk, ramp, ta_, tg_, tb_,
                                    gamma, self.p, self.dtab, self.wti, self.wto, self.phi, self.g0,
@@ -1709,7 +1717,8 @@ class SkiddingModel:
             if self._work is None:
                 self._work = engine_work(self.y.shape[0], nb, tb_.shape[0])
             work = self._work
-            work[17][:] = 0.0      # scr
+            for k in ENGINE_WORK_ZEROED:
+                work[k][:] = 0.0
             status = _engine(self.y, self.counters, n, m, hs, self.hstep, ramp, kind, ta_, tb_, tc_, tg_,
                              gamma, self.p, self.dtab, self.wti, self.wto, self.film, acc, qi, qo, cage,
                              bs, cs, sli, slo, fi, fo, *work)
