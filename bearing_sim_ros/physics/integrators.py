@@ -119,10 +119,9 @@ class SplitROS2(ROS2):
     with events, where the input has a kink).  A ramp alone passes a force at frequency f with
     a relative error of about (pi f h)^2 / 3, 6 % at the resonator's 4 kHz at two samples per
     step, which was most of the default's error on the healthy scenes (README, "Solvers").  The
-    balls and the cage see
-    the structure's displacement as a given function over the step and take one ROS2 step with
-    the per-ball block Jacobian (the stiff ball-radial, ball-cage and traction couplings).  Per
-    step:
+    balls and the cage see the structure's displacement as a given function over the step and
+    take one ROS2 step with the per-ball block Jacobian (the stiff ball-radial, ball-cage and
+    traction couplings).  Per step:
 
         x* = Phi x_n + G0 u_n                      structure predictor (input held)
         ROS2 step of the balls/cage with the structure going linearly from x_n to x*
