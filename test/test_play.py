@@ -1,6 +1,7 @@
 """``bearing-sim play`` delivers every recorded message to a subscriber in another process, with
 the recorded types, stamps and bytes; ``--loop`` keeps the waveform tables contiguous across the
-seam; ``--clock`` publishes the recording's time; bad files end with exit status 2 and one line."""
+seam; ``--clock`` publishes the recording's time; bad files end with exit status 2 and one line; a
+teardown that hangs ends with the stacks and exit status 1."""
 from __future__ import annotations
 
 import json
@@ -170,3 +171,28 @@ def test_bad_arguments_exit_2_with_one_line(args, named, recording, bearing_sim_
                        text=True, timeout=60)
     lines = r.stderr.strip().splitlines()
     assert r.returncode == 2 and len(lines) == 1 and named in lines[0] and args[1] in lines[0], r.stderr
+
+
+HUNG_TEARDOWN = textwrap.dedent('''
+    import sys, time
+    from rclpy.node import Node
+    from bearing_sim_ros.recording import play
+    from bearing_sim_ros.cli import main
+
+    play.TEARDOWN_TIMEOUT = 1.0
+    Node.destroy_node = lambda self: time.sleep(600)      # a teardown that never returns
+    sys.exit(main(["play", sys.argv[1], "--rate", "20", "--wait", "0"]))
+''')
+
+
+def test_a_hung_teardown_ends_with_the_stacks_and_status_1(recording, ros_env, tmp_path):
+    """The watchdog around the middleware's teardown (play.TEARDOWN_TIMEOUT): a hang there does
+    not keep the process forever; it prints where it hung and exits 1."""
+    path, _, _ = recording
+    script = tmp_path / "hung.py"
+    script.write_text(HUNG_TEARDOWN)
+    r = subprocess.run([sys.executable, str(script), str(path)], env=ros_env, capture_output=True,
+                       text=True, timeout=60)
+    assert r.returncode == 1, r.stderr
+    assert "published" in r.stderr and "Timeout (0:00:01)!" in r.stderr, r.stderr
+    assert "<lambda>" in r.stderr, r.stderr        # the stack shows the hanging call
