@@ -1787,9 +1787,11 @@ def speed_study(seconds: float = 0.2, settle: float = 0.05, scenarios=None, samp
     from .integrators import RK4, SplitROS2
     from .sensor import AccelerometerChain
 
-    methods = [("reference", lambda: RK4(per_sample=32)), ("rk4 h=3e-6", lambda: RK4(step=3e-6)),
-               ("rk4 h=2e-6", lambda: RK4(step=2e-6)),
-               ("default", lambda: SplitROS2(per_sample=DEFAULT_OVERSAMPLE / SkiddingModel.decimation)),
+    # the reference and the default as the model builds them (method_for), the others by hand
+    default_per_sample = DEFAULT_OVERSAMPLE / SkiddingModel.decimation
+    methods = [("reference", lambda: method_for("reference", None)),
+               ("rk4 h=3e-6", lambda: RK4(step=3e-6)), ("rk4 h=2e-6", lambda: RK4(step=2e-6)),
+               ("default", lambda: method_for("default", None, default_per_sample=default_per_sample)),
                ("split, 1 sample/step", lambda: SplitROS2(per_sample=1))]
     rows = []
     for label, name, rpm, load in scenarios or STUDY_SCENARIOS:
