@@ -17,6 +17,7 @@ from collections import deque
 import numpy as np
 
 from .errors import UserError
+from .teardown import teardown_watchdog
 
 ANALYSIS_MAX_S = 30.0       # s of signal (the end of the recording) that the summary analyses
 
@@ -139,9 +140,11 @@ def run_command(args) -> int:
                        "overruns": node.stats.overruns, "worst_lag": node.stats.worst_lag,
                        "tier": node.sim.tier, "dropped": rs["dropped"], "ok": rs["ok"], "error": rs["error"],
                        "path": rs["path"]}
-            node.destroy_node()
-            log_recording(node.recorder)
-        rclpy.try_shutdown()
+        with teardown_watchdog():
+            if node is not None:
+                node.destroy_node()
+                log_recording(node.recorder)
+            rclpy.try_shutdown()
     if error is not None:
         raise error
     if figures is None:

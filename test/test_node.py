@@ -6,6 +6,8 @@ from __future__ import annotations
 import math
 import signal
 import subprocess
+import sys
+import textwrap
 import time
 
 import numpy as np
@@ -257,3 +259,32 @@ def test_fast_mode_runs_duration_and_ends(started, tmp_path):
     assert sum(m.width for _t, m in accel) == 45000
     assert np.all(np.diff(stamps) == BATCH_NS)
     assert [t for t, _m in accel] == list(stamps + BATCH_NS)
+
+
+HUNG_TEARDOWN = textwrap.dedent('''
+    import sys, time
+    from rclpy.node import Node
+    from bearing_sim_ros import teardown
+    from bearing_sim_ros.nodes.bearing_sim_node import main
+
+    teardown.TEARDOWN_TIMEOUT = 1.0
+    Node.destroy_node = lambda self: time.sleep(600)      # a teardown that never returns
+    sys.exit(main(sys.argv[1:]))
+''')
+
+
+def test_a_hung_teardown_ends_with_the_stacks_status_1_and_a_closed_recording(ros_env, tmp_path):
+    """The watchdog around the middleware's teardown (teardown.TEARDOWN_TIMEOUT): a node whose
+    destroy_node never returns prints where it hung and exits 1, and its recording, closed
+    before, is complete."""
+    out = tmp_path / "hung.mcap"
+    script = tmp_path / "hung.py"
+    script.write_text(HUNG_TEARDOWN)
+    args = ["--ros-args", "-p", "scene:=er16k_outer_race", "-p", "real_time:=false",
+            "-p", "duration:=0.5", "-p", f"record:={out}"]
+    r = subprocess.run([sys.executable, str(script), *args], env=ros_env, capture_output=True,
+                       text=True, timeout=120)
+    assert r.returncode == 1, r.stderr
+    assert "Timeout (0:00:01)!" in r.stderr and "<lambda>" in r.stderr, r.stderr
+    topics, _meta = read_recording(out)
+    assert sum(m.width for _t, m in topics["/accel"]) == 7500

@@ -176,17 +176,17 @@ def test_bad_arguments_exit_2_with_one_line(args, named, recording, bearing_sim_
 HUNG_TEARDOWN = textwrap.dedent('''
     import sys, time
     from rclpy.node import Node
-    from bearing_sim_ros.recording import play
+    from bearing_sim_ros import teardown
     from bearing_sim_ros.cli import main
 
-    play.TEARDOWN_TIMEOUT = 1.0
+    teardown.TEARDOWN_TIMEOUT = 1.0
     Node.destroy_node = lambda self: time.sleep(600)      # a teardown that never returns
     sys.exit(main(["play", sys.argv[1], "--rate", "20", "--wait", "0"]))
 ''')
 
 
 def test_a_hung_teardown_ends_with_the_stacks_and_status_1(recording, ros_env, tmp_path):
-    """The watchdog around the middleware's teardown (play.TEARDOWN_TIMEOUT): a hang there does
+    """The watchdog around the middleware's teardown (teardown.TEARDOWN_TIMEOUT): a hang there does
     not keep the process forever; it prints where it hung and exits 1."""
     path, _, _ = recording
     script = tmp_path / "hung.py"

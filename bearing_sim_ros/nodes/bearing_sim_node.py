@@ -38,6 +38,7 @@ from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
 
 from ..errors import UserError
+from ..teardown import teardown_watchdog
 
 NODE_NAME = "bearing_sim"
 DEFAULT_SCENE = "er16k_outer_race"
@@ -668,14 +669,15 @@ def main(argv=None) -> int:
         print(f"error: {exc}", file=sys.stderr)
         status = 2
     finally:
+        error = None
         if node is not None:
-            node.stop()
+            node.stop()                 # the recording is closed here, before anything can hang
             error = node.error
-            node.destroy_node()
-            log_recording(node.recorder)
-        else:
-            error = None
-        rclpy.try_shutdown()
+        with teardown_watchdog():
+            if node is not None:
+                node.destroy_node()
+                log_recording(node.recorder)
+            rclpy.try_shutdown()
     if error is not None:
         raise error
     return status

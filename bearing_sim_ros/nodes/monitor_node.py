@@ -27,6 +27,7 @@ from rclpy.node import Node
 
 from ..analysis.envelope import DETECTION_THRESHOLD, FAULT_LINES, diagnose
 from ..messages import TOPIC_ACCEL, TOPIC_STATE, waveform_qos
+from ..teardown import teardown_watchdog
 from ..waveform import NS, from_pointcloud2
 
 DEFAULT_SCENE = "er16k_outer_race"
@@ -190,7 +191,8 @@ def main(args) -> int:
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
+        with teardown_watchdog():
+            if node is not None:
+                node.destroy_node()
+            rclpy.try_shutdown()
     return 0

@@ -27,24 +27,18 @@ A test or pipeline that needs every message even after two missed periods passes
 """
 from __future__ import annotations
 
-import faulthandler
 import os
 import sys
 import threading
 import time
 
 from ..errors import UserError
+from ..teardown import teardown_watchdog
 from ..waveform import NS
 from .reader import get_message, open_recording
 from .schemas import qos_from_yaml
 
 WAIT_FOR_SUBSCRIBERS = 5.0    # s, the default of --wait: one missed 3 s announcement period and margin
-# s: the longest the middleware's teardown may take after the last message.  Once (CI, clean
-# clone, 2026-11-24) `play` logged its last line and then did not exit within 60 s; where it
-# hung is not known (it has not come back in 50 runs since).  Past this the Python stacks of all
-# threads go to stderr and the process exits with status 1 (faulthandler's watchdog is a C
-# thread: it fires even if the hang holds the GIL).
-TEARDOWN_TIMEOUT = 30.0
 DISCOVERY_GRACE = 0.5         # s without a new match: the subscriber's topics have all matched
 ACK_TIMEOUT = 2.0             # s to let reliable subscribers receive the tail at the end
 WAVEFORM_TYPE = "sensor_msgs/msg/PointCloud2"
@@ -190,13 +184,10 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
             log(f"play {path}: {'stopped after' if stop.is_set() else 'published'} {published} messages")
             return published
         finally:
-            faulthandler.dump_traceback_later(TEARDOWN_TIMEOUT, exit=True)
-            try:
+            with teardown_watchdog():
                 node.destroy_node()
                 if rclpy.ok():
                     rclpy.shutdown()
-            finally:
-                faulthandler.cancel_dump_traceback_later()
     finally:
         rec.close()
 
@@ -251,7 +242,7 @@ def play_command(args) -> int:
          wait_for_subscribers=float(args.wait), stop=stop)
     # everything is published, the node destroyed and the recording closed: skip the
     # interpreter's finalisation, where the middleware's static objects and threads are torn
-    # down, so that it cannot be where `play` hangs (see TEARDOWN_TIMEOUT)
+    # down, so that it cannot be where `play` hangs (see module ``teardown``)
     sys.stdout.flush()
     sys.stderr.flush()
     os._exit(0)

@@ -1,0 +1,27 @@
+"""A bound on the middleware's teardown (``destroy_node``, ``rclpy`` shutdown) in every command
+that runs a node: ``play``, ``node``, ``run`` and ``monitor``.
+
+Once (CI, clean clone, 2026-11-24) ``play`` logged its last line and then did not exit within
+60 s; where it hung is not known (it did not come back in 50 runs since).  A command must not
+hang forever there: its work is done by then (the recording closed, the messages sent), so past
+``TEARDOWN_TIMEOUT`` the Python stacks of all threads go to stderr, which says where it hung, and
+the process exits with status 1.  faulthandler's watchdog is a C thread: it fires even if the hang
+holds the GIL.
+"""
+from __future__ import annotations
+
+import faulthandler
+from contextlib import contextmanager
+
+TEARDOWN_TIMEOUT = 30.0      # s: the longest the teardown may take
+
+
+@contextmanager
+def teardown_watchdog():
+    """Run the block (the teardown) under the watchdog: if it lasts more than
+    ``TEARDOWN_TIMEOUT`` s, dump every thread's stack to stderr and exit with status 1."""
+    faulthandler.dump_traceback_later(TEARDOWN_TIMEOUT, exit=True)
+    try:
+        yield
+    finally:
+        faulthandler.cancel_dump_traceback_later()
