@@ -188,6 +188,20 @@ def test_rk4_at_the_papers_step_reports_divergence_in_one_line():
         Simulator(sc, fidelity="skidding", solver="rk4").advance(300)
 
 
+@pytest.mark.parametrize("index", [0, 7], ids=["er16k", "b6205_ball_outer"])
+def test_the_bench_times_rk4_up_to_its_stability_limit(index):
+    """The equal-error comparison with RK4 is fair only if the bench times RK4 at the largest step
+    it survives: its largest RK4 step runs 50 ms of a bench scene, one 1 us longer diverges."""
+    from bearing_sim_ros.bench import SCENARIOS
+
+    scene = SCENARIOS[index].build()
+    largest = max(kw["rk4_step"] for _label, family, kw in sk.BENCH_CONFIGS if family == "skidding rk4")
+    batch = Simulator(scene, fidelity="skidding", solver="rk4", rk4_step=largest).advance(750)
+    assert np.all(np.isfinite(batch.accel))
+    with pytest.raises(UserError, match="diverged"):
+        Simulator(scene, fidelity="skidding", solver="rk4", rk4_step=largest + 1e-6).advance(750)
+
+
 def test_solvers_agree_with_the_reference():
     """default and rk4 (at a step it survives) against the converged reference, 200 N, 2000 rpm."""
     sc = make_scene()
