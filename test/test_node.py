@@ -7,13 +7,13 @@ import math
 import signal
 import subprocess
 import sys
-import textwrap
 import time
 
 import numpy as np
 import pytest
 
-from test_node_support import NS, Listener, NodeProcess, read_recording, stamps_and_widths
+from test_node_support import (NS, Listener, NodeProcess, hung_teardown_script, read_recording,
+                               stamps_and_widths)
 
 from bearing_sim_ros.analysis.envelope import DETECTION_THRESHOLD, envelope_spectrum, fault_lines, line_at
 from bearing_sim_ros.catalog import get_bearing
@@ -261,25 +261,14 @@ def test_fast_mode_runs_duration_and_ends(started, tmp_path):
     assert [t for t, _m in accel] == list(stamps + BATCH_NS)
 
 
-HUNG_TEARDOWN = textwrap.dedent('''
-    import sys, time
-    from rclpy.node import Node
-    from bearing_sim_ros import teardown
-    from bearing_sim_ros.nodes.bearing_sim_node import main
-
-    teardown.TEARDOWN_TIMEOUT = 1.0
-    Node.destroy_node = lambda self: time.sleep(600)      # a teardown that never returns
-    sys.exit(main(sys.argv[1:]))
-''')
-
-
 def test_a_hung_teardown_ends_with_the_stacks_status_1_and_a_closed_recording(ros_env, tmp_path):
     """The watchdog around the middleware's teardown (teardown.TEARDOWN_TIMEOUT): a node whose
     destroy_node never returns prints where it hung and exits 1, and its recording, closed
     before, is complete."""
     out = tmp_path / "hung.mcap"
     script = tmp_path / "hung.py"
-    script.write_text(HUNG_TEARDOWN)
+    script.write_text(hung_teardown_script(
+        "from bearing_sim_ros.nodes.bearing_sim_node import main; sys.exit(main(sys.argv[1:]))"))
     args = ["--ros-args", "-p", "scene:=er16k_outer_race", "-p", "real_time:=false",
             "-p", "duration:=0.5", "-p", f"record:={out}"]
     r = subprocess.run([sys.executable, str(script), *args], env=ros_env, capture_output=True,

@@ -13,6 +13,21 @@ import numpy as np
 NS = 1_000_000_000
 
 
+def hung_teardown_script(call: str) -> str:
+    """A Python script that runs ``call`` (an expression that ends the process with its exit
+    status, sys.argv available) with ``Node.destroy_node`` hanging for 600 s and the teardown
+    watchdog's timeout (``teardown.TEARDOWN_TIMEOUT``) at 1 s."""
+    return "\n".join([
+        "import sys, time",
+        "from rclpy.node import Node",
+        "from bearing_sim_ros import teardown",
+        "teardown.TEARDOWN_TIMEOUT = 1.0",
+        "Node.destroy_node = lambda self: time.sleep(600)      # a teardown that never returns",
+        call,
+        "",
+    ])
+
+
 def param_text(value) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"

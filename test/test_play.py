@@ -13,6 +13,7 @@ import zlib
 
 import numpy as np
 import pytest
+from test_node_support import hung_teardown_script
 
 from bearing_sim_ros.recording.reader import open_recording
 from bearing_sim_ros.recording.render import render
@@ -173,24 +174,13 @@ def test_bad_arguments_exit_2_with_one_line(args, named, recording, bearing_sim_
     assert r.returncode == 2 and len(lines) == 1 and named in lines[0] and args[1] in lines[0], r.stderr
 
 
-HUNG_TEARDOWN = textwrap.dedent('''
-    import sys, time
-    from rclpy.node import Node
-    from bearing_sim_ros import teardown
-    from bearing_sim_ros.cli import main
-
-    teardown.TEARDOWN_TIMEOUT = 1.0
-    Node.destroy_node = lambda self: time.sleep(600)      # a teardown that never returns
-    sys.exit(main(["play", sys.argv[1], "--rate", "20", "--wait", "0"]))
-''')
-
-
 def test_a_hung_teardown_ends_with_the_stacks_and_status_1(recording, ros_env, tmp_path):
     """The watchdog around the middleware's teardown (teardown.TEARDOWN_TIMEOUT): a hang there does
     not keep the process forever; it prints where it hung and exits 1."""
     path, _, _ = recording
     script = tmp_path / "hung.py"
-    script.write_text(HUNG_TEARDOWN)
+    script.write_text(hung_teardown_script('from bearing_sim_ros.cli import main; '
+                                           'sys.exit(main(["play", sys.argv[1], "--rate", "20", "--wait", "0"]))'))
     r = subprocess.run([sys.executable, str(script), str(path)], env=ros_env, capture_output=True,
                        text=True, timeout=60)
     assert r.returncode == 1, r.stderr
