@@ -341,6 +341,24 @@ def test_centrifugal_load_on_unloaded_balls():
     np.testing.assert_allclose(qo[free], fc, rtol=0.05)
 
 
+def test_traction_curve_is_eq_23_on_both_sides_of_its_series_switch():
+    """mu(v) = (A + B|v|) exp(-C|v|) - A + (A + D) v / sqrt(v^2 + vc^2), odd in v, and its slope:
+    the kernel takes exp(-C|v|) from a Taylor series below C|v| = 1/16 and from libm above; both
+    branches against the closed form with numpy's exp, and the slope against a difference."""
+    ta, tb, tc, td, vc = -0.1, 0.06, 0.2, 0.1, 0.01          # seed 000's curve, as in the scenes
+    v = np.concatenate([np.linspace(-5.0, 5.0, 2001), np.linspace(-0.4, 0.4, 2001)])
+    assert np.any(tc * np.abs(v) < 1 / 16) and np.any(tc * np.abs(v) > 1 / 16)
+    got = np.array([sk._traction(x, ta, tb, tc, td, vc) for x in v])
+    a = np.abs(v)
+    mu = np.sign(v) * ((ta + tb * a) * np.exp(-tc * a) - ta) + (ta + td) * v / np.hypot(v, vc)
+    np.testing.assert_allclose(got[:, 0], mu, rtol=1e-14, atol=1e-16)
+    dv = 1e-7
+    up = np.array([sk._traction(x + dv, ta, tb, tc, td, vc)[0] for x in v])
+    down = np.array([sk._traction(x - dv, ta, tb, tc, td, vc)[0] for x in v])
+    away = np.abs(v) > 10 * dv                    # |v| has a kink at 0 (its jump is regularised)
+    np.testing.assert_allclose(got[away, 1], ((up - down) / (2 * dv))[away], rtol=1e-5, atol=1e-5)
+
+
 def test_film_switch():
     """ehl_film: the Hamrock-Dowson film (a few tenths of a micron here) and the squeeze damping;
     without it the film is zero and the balls rattle in the clearance more (more high-frequency
