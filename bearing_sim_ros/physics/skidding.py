@@ -1135,8 +1135,8 @@ SPLIT_WORK_ZEROED = (13, 18)
 
 @njit(**STEP_KERNEL)
 def _engine_split(y, fy, un, up, aux0, dg0, film, counters, n, m, hs, kk, ramp, ta_, tg_,
-                 tb_, gamma, p, dtab, wti, wto, phi, g0, g1, g2, phis, g0s, g1s, g2s, phie,
-                 g0e, g1e, nsub, nball, cacc, dacc, kb, out_acc, out_qi, out_qo, out_cage,
+                 tb_, gamma, p, dtab, wti, wto, phi_t, g0_t, g1_t, g2_t, phis, g0s, g1s, g2s,
+                 phie_t, g0e_t, g1e_t, nsub, nball, cacc, dacc, kb, out_acc, out_qi, out_qo, out_cage,
                  out_bs, out_cs, out_sli, out_slo, out_fi, out_fo, ynext, fnext, unext, ytmp,
                  rtmp, kst, auxn, auxs, dgn, dgs, filmn, wsp, wcage, scr, frc, xpred, xs, uu,
                  qa, ycur, fcur, ucur, auxc, filmc, xsmp, usmp, ybl, fbl, xbl, auxbl):
@@ -1158,7 +1158,7 @@ def _engine_split(y, fy, un, up, aux0, dg0, film, counters, n, m, hs, kk, ramp, 
     Event-aware: if a ball is inside a defect under a contact it changes, or a contact opened or
     closed, the step is redone as ``nsub`` sub-steps (propagators phie, g0e, g1e of one
     sub-step), and the structure state and input at the samples inside the step are kept (xsmp,
-    usmp).
+    usmp).  The step's and the sub-step's propagators come transposed (``phi_t`` = Phi^T ...).
 
     The step is written out here rather than in helper functions on purpose: a numba call cost
     about 18 ns per array argument (the array struct and, before the loop ran without numba's
@@ -1192,7 +1192,7 @@ def _engine_split(y, fy, un, up, aux0, dg0, film, counters, n, m, hs, kk, ramp, 
                 substepped = False
                 nsteps = 1
                 yc, fc, uc, ac, flc = y, fy, un, aux0, film
-                ph, gz, gl = phi, g0, g1
+                ph, gz, gl = phi_t, g0_t, g1_t
                 mball = nball
                 # a step that starts with a ball inside a defect is a defect event whatever its
                 # end: straight to the sub-steps (the whole step would be thrown away)
@@ -1215,7 +1215,7 @@ def _engine_split(y, fy, un, up, aux0, dg0, film, counters, n, m, hs, kk, ramp, 
                         # nsub sub-steps, each with the Jacobian from its own start
                         substepped = True
                         nsteps = nsub
-                        ph, gz, gl = phie, g0e, g1e
+                        ph, gz, gl = phie_t, g0e_t, g1e_t
                         mball = 1
                         for jb_ in range(nb):
                             for q in range(NAUX):
@@ -1224,14 +1224,19 @@ def _engine_split(y, fy, un, up, aux0, dg0, film, counters, n, m, hs, kk, ramp, 
                     hcur = hstep / nsteps
                     for sidx in range(nsteps):
                         tc = t + sidx * hcur
-                        # structure predictor with the input held
+                        # structure predictor with the input held (column by column of the
+                        # transposed propagators: the rows vectorise, 2-3 % of the step; each
+                        # entry sums in the same order as row by row, so the same bits)
                         for r in range(10):
-                            acc = 0.0
-                            for c in range(10):
-                                acc += ph[r, c] * yc[c]
-                            for c in range(4):
-                                acc += gz[r, c] * uc[c]
-                            xpred[r] = acc
+                            xpred[r] = 0.0
+                        for c in range(10):
+                            yv = yc[c]
+                            for r in range(10):
+                                xpred[r] += ph[c, r] * yv
+                        for c in range(4):
+                            uv = uc[c]
+                            for r in range(10):
+                                xpred[r] += gz[c, r] * uv
                         # ROS2 on balls and cage, the structure given (going linearly from x_n
                         # to x*), in mball sub-steps (multirate: the balls' stiff forced response
                         # converges at first order in their step where the forcing is rough)
@@ -1296,10 +1301,12 @@ def _engine_split(y, fy, un, up, aux0, dg0, film, counters, n, m, hs, kk, ramp, 
                         for c in range(4):
                             qa[c] = 0.5 * (unext[c] - 2.0 * uc[c] + up[c]) if quad else 0.0
                         for r in range(10):
-                            acc = xpred[r]
-                            for c in range(4):
-                                acc += gl[r, c] * (unext[c] - uc[c]) + g2[r, c] * qa[c]
-                            ynext[r] = acc
+                            ynext[r] = xpred[r]
+                        for c in range(4):
+                            du = unext[c] - uc[c]
+                            qc = qa[c]
+                            for r in range(10):
+                                ynext[r] += gl[c, r] * du + g2_t[c, r] * qc
                         if nsteps > 1:
                             for q in range(nvar):
                                 ycur[q] = ynext[q]
@@ -1608,6 +1615,11 @@ class SkiddingModel:
             self.phie, self.g0e, self.g1e, _g2e = propagators(A, B, self.hstep / self.nsub)
         else:
             self.phie, self.g0e, self.g1e = self.phi, self.g0, self.g1
+        # the engine takes the step's and the event sub-step's propagators transposed
+        self._step_prop_t = tuple(np.ascontiguousarray(a.T)
+                                  for a in (self.phi, self.g0, self.g1, self.g2))
+        self._event_prop_t = tuple(np.ascontiguousarray(a.T)
+                                   for a in (self.phie, self.g0e, self.g1e))
         self._lin_load = load.copy()
         self.counters[3] = 0            # the structure input depends on kb: re-evaluate
 
@@ -1755,9 +1767,8 @@ class SkiddingModel:
                 work[k][:] = 0.0
             status = _engine_split(self.y, self._fy, self._un, self._up, self._aux0, self._dg0,
                                    self.film, self.counters, n, m, hs, self.kk, ramp, ta_, tg_, tb_,
-                                   gamma, self.p, self.dtab, self.wti, self.wto, self.phi, self.g0,
-                                   self.g1, self.g2, self.phis, self.g0s, self.g1s, self.g2s,
-                                   self.phie, self.g0e, self.g1e, self.nsub, self.nball, self.cacc,
+                                   gamma, self.p, self.dtab, self.wti, self.wto, *self._step_prop_t,
+                                   self.phis, self.g0s, self.g1s, self.g2s, *self._event_prop_t, self.nsub, self.nball, self.cacc,
                                    self.dacc, self.kb, acc, qi, qo, cage, bs, cs, sli, slo, fi, fo,
                                    *work)
         else:
