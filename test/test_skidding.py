@@ -359,6 +359,43 @@ def test_traction_curve_is_eq_23_on_both_sides_of_its_series_switch():
     np.testing.assert_allclose(got[away, 1], ((up - down) / (2 * dv))[away], rtol=1e-5, atol=1e-5)
 
 
+@pytest.mark.parametrize("profile", ["geometric", "rectangular", "half_sine", "piecewise"])
+def test_defect_depth_slopes_along_the_ball_angle(profile):
+    """The skidding tier's W takes a race defect's loss slope along the ball angle from
+    ``defects.interference_loss_slope`` (analytic, one evaluation): it matches a central
+    difference of the loss wherever the profile is smooth (both races, a deep and a shallow pit,
+    across the whole pit), and a ball defect adds loss but no slope."""
+    from bearing_sim_ros.catalog import get_bearing
+    from bearing_sim_ros.physics.defects import defect_table, interference_loss_slope
+    from bearing_sim_ros.scene import Defect
+    b = get_bearing("ER-16K")
+    ri, ro, rb = 0.5 * b.inner_race_diameter, 0.5 * b.outer_race_diameter, 0.5 * b.ball_diameter
+    checked = 0
+    for kind, radius in (("inner", ri), ("outer", ro)):
+        for width, depth in ((0.6e-3, 0.25e-3), (1.2e-3, 5e-6)):      # deep: no bottom; shallow
+            tab = defect_table([Defect(kind, width, depth, width, angle=0.3, profile=profile)], b)
+            half = 0.5 * width / radius
+            shaft = 0.2 if kind == "inner" else 0.0
+            centre = 0.3 + shaft
+            for th in centre + np.linspace(-0.98 * half, 0.98 * half, 41):
+                got = interference_loss_slope(tab, 0, th, shaft, 0.0, ri, ro, rb)
+                h = 1e-9
+                up = interference_loss_slope(tab, 0, th + h, shaft, 0.0, ri, ro, rb)
+                dn = interference_loss_slope(tab, 0, th - h, shaft, 0.0, ri, ro, rb)
+                k = 0 if kind == "inner" else 1
+                fd = (up[k] - dn[k]) / (2 * h)
+                one_sided = ((up[k] - got[k]) / h, (got[k] - dn[k]) / h)
+                if abs(one_sided[0] - one_sided[1]) > 1e-3 * max(abs(fd), 1e-6):
+                    continue                              # a kink inside the difference: skip
+                assert got[2 + k] == pytest.approx(fd, rel=1e-4, abs=1e-9)
+                assert got[3 - k] == 0.0 and got[1 - k] == 0.0
+                checked += 1
+    assert checked > 100
+    tab = defect_table([Defect("ball", 2e-3, 0.1e-3, 2e-3, angle=0.0, profile=profile)], b)
+    li, lo, dli, dlo = interference_loss_slope(tab, 0, 0.1, 0.0, 0.0, ri, ro, rb)
+    assert lo > 0.0 and dli == 0.0 and dlo == 0.0
+
+
 def test_film_switch():
     """ehl_film: the Hamrock-Dowson film (a few tenths of a micron here) and the squeeze damping;
     without it the film is zero and the balls rattle in the clearance more (more high-frequency

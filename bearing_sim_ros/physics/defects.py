@@ -162,6 +162,24 @@ def _profile_drop(profile, u, half, radius, rho, hmax, ramp, depth):
     return hmax * (f if f < 1.0 else 1.0)
 
 
+@njit(cache=True, inline="always")
+def _profile_slope(profile, u, half, radius, rho, hmax, ramp, depth):
+    """d drop / d u of :func:`_profile_drop` (m/rad); at the centre of a pit (u = 0), where the
+    geometric and piecewise profiles have a kink, the slope for u > 0."""
+    s = (half - abs(u)) * radius
+    ds_du = -radius if u >= 0.0 else radius
+    if profile == 0:                                # geometric
+        if s >= rho:
+            return 0.0
+        root = math.sqrt(rho * rho - s * s)
+        return ds_du * s / root if rho - root < depth else 0.0
+    if profile == 2:                                # half-sine
+        return hmax * math.cos(0.5 * math.pi * (u + half) / half) * (0.5 * math.pi / half)
+    if profile == 3 and ramp > 0.0 and s < ramp:    # piecewise, on a ramp
+        return ds_du * hmax / ramp
+    return 0.0                                      # rectangular, or on the flat
+
+
 @njit(cache=True)
 def interference_loss(table, j, theta, shaft_angle, ball_spin, r_inner, r_outer, r_ball):
     """Total loss of interference (m) of ball ``j`` at revolution angle ``theta`` (rad) from every
@@ -171,8 +189,20 @@ def interference_loss(table, j, theta, shaft_angle, ball_spin, r_inner, r_outer,
     Returns (loss_inner_contact, loss_outer_contact): split so the skidding tier can apply each
     to its own contact; the kinematic tier adds them.
     """
+    li, lo, _dli, _dlo = interference_loss_slope(table, j, theta, shaft_angle, ball_spin, r_inner,
+                                                 r_outer, r_ball)
+    return li, lo
+
+
+@njit(cache=True)
+def interference_loss_slope(table, j, theta, shaft_angle, ball_spin, r_inner, r_outer, r_ball):
+    """:func:`interference_loss` and the race defects' slopes of the two losses along ``theta``
+    (m/rad): (loss_i, loss_o, dloss_i/dtheta, dloss_o/dtheta).  A ball defect turns with the
+    ball's spin, not with theta, and adds no slope."""
     loss_i = 0.0
     loss_o = 0.0
+    slope_i = 0.0
+    slope_o = 0.0
     for k in range(table.shape[0]):
         kind = int(table[k, D_KIND])
         half = table[k, D_HALF]
@@ -183,11 +213,15 @@ def interference_loss(table, j, theta, shaft_angle, ball_spin, r_inner, r_outer,
             if abs(u) < half:
                 loss_o += _profile_drop(prof, u, half, r_outer, table[k, D_RHO_O],
                                         table[k, D_HMAX_O], table[k, D_RAMP_O], depth)
+                slope_o += _profile_slope(prof, u, half, r_outer, table[k, D_RHO_O],
+                                          table[k, D_HMAX_O], table[k, D_RAMP_O], depth)
         elif kind == 0:                                      # inner race: turns with the shaft
             u = wrap(theta - table[k, D_ANGLE] - shaft_angle)
             if abs(u) < half:
                 loss_i += _profile_drop(prof, u, half, r_inner, table[k, D_RHO_I],
                                         table[k, D_HMAX_I], table[k, D_RAMP_I], depth)
+                slope_i += _profile_slope(prof, u, half, r_inner, table[k, D_RHO_I],
+                                          table[k, D_HMAX_I], table[k, D_RAMP_I], depth)
         elif j == int(table[k, D_BALL]):                     # ball: meets outer at 0, inner at pi
             psi = ball_spin + table[k, D_ANGLE]
             u = wrap(psi)
@@ -198,7 +232,7 @@ def interference_loss(table, j, theta, shaft_angle, ball_spin, r_inner, r_outer,
             if abs(u) < half:
                 loss_i += wander_reach(table, k, ball_spin) * _profile_drop(
                     prof, u, half, r_ball, table[k, D_RHO_I], table[k, D_HMAX_I], table[k, D_RAMP_I], depth)
-    return loss_i, loss_o
+    return loss_i, loss_o, slope_i, slope_o
 
 
 @njit(cache=True)
