@@ -396,6 +396,29 @@ def test_defect_depth_slopes_along_the_ball_angle(profile):
     assert lo > 0.0 and dli == 0.0 and dlo == 0.0
 
 
+def test_a_ball_free_in_a_deep_pit_is_not_a_defect_event():
+    """The split solver sub-steps a step in which a ball is inside a defect under a contact it
+    changes, unless that contact stays open at both ends by more than OPEN_GAP_MARGIN times its
+    gap's change (the ball crosses the pit in free flight); a closed contact inside a defect at
+    the step's start sends the step straight to the sub-steps."""
+    a0 = np.zeros((3, sk.NAUX))
+    a1 = np.zeros((3, sk.NAUX))
+    a0[1, sk.X_LOSSO] = a1[1, sk.X_LOSSO] = 50e-6          # ball 1 over an outer-race pit
+    a0[1, sk.X_DO], a1[1, sk.X_DO] = -30e-6, -28e-6         # open by 30 and 28 um
+    assert not sk._defect_changes_contact(a0, a1, 3)
+    assert sk._step_event(a0, a1, 3, True) == sk.NO_EVENT
+    a1[1, sk.X_DO] = -10e-6                                 # closing fast: 20 um in the step
+    assert sk._defect_changes_contact(a0, a1, 3)
+    assert sk._step_event(a0, a1, 3, True) == sk.DEFECT_EVENT
+    assert sk._step_event(a0, a1, 3, False) == sk.NO_EVENT  # no defects in the scene
+    a1[1, sk.X_DO] = 2e-6                                   # closed at the end
+    assert sk._defect_changes_contact(a0, a1, 3)
+    assert not sk._inside_defect(a0, 3) and sk._inside_defect(a1, 3)
+    a0[1, sk.X_LOSSO] = a1[1, sk.X_LOSSO] = 0.0             # the pit changes no contact
+    a0[2, sk.X_LOSSI], a0[2, sk.X_DI], a1[2, sk.X_DI] = 1e-6, 1e-6, 1e-6
+    assert sk._defect_changes_contact(a0, a1, 3)            # inner contact closed in a pit
+
+
 def test_film_switch():
     """ehl_film: the Hamrock-Dowson film (a few tenths of a micron here) and the squeeze damping;
     without it the film is zero and the balls rattle in the clearance more (more high-frequency

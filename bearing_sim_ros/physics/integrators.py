@@ -136,8 +136,10 @@ class SplitROS2(ROS2):
     ramped input at that time (precomputed sub-step propagators).
 
     Event-aware: a step in which a ball is inside a defect (its depth profile, with edges, under
-    a contact that the defect changes: one that would be closed without it) is redone in
-    ``event_substeps`` sub-steps per internal sample (a step of two samples in twice as many).
+    a contact that the defect changes: one that would be closed without it, unless that contact
+    stays open at both ends by more than ``skidding.OPEN_GAP_MARGIN`` times its gap's change: a
+    ball in free flight over a deep pit) is redone in ``event_substeps`` sub-steps per internal
+    sample (a step of two samples in twice as many).
     Without that the method converges only to first order there (a smooth method across a kink),
     and the impacts, which make the defect's envelope line, come out wrong.  A step in which a
     ball-race or ball-pocket contact opens or closes (the load handing over from ball to ball, a
