@@ -1083,14 +1083,14 @@ NO_EVENT, CONTACT_EVENT, DEFECT_EVENT, START_EVENT = 0, 1, 2, 3
 # later impact and was most of the bench's line and waveform error there; sub-stepped, 0.001 mrad
 START_STEPS = 1
 # a ball inside a defect whose contact stays open at both ends of a step by more than this many
-# times its gap's change over the step moves freely in the pit, smoothly: not an event.  On
-# seed 004's ball+outer scene (2 mm pits, 0.11-0.16 mm deep where the ball meets them, against
-# at most ~25 um of Hertz deflection at 2000 N) the ball leaves the race at once and crosses most
-# of each pit in free flight: with this rule its defect event steps fell from 24 to 16 % (8.5 % of its steps
-# are now tried whole before they are sub-stepped, 3.4 % before) and the scene ran 1.2x faster,
-# its line error 0.34 -> 0.42 %; the ER-16K 0.6 mm pits (9-14 um deep) kept their figures within
-# 0.04 pp (inner race 0.53 -> 0.55 %, outer 0.15 -> 0.11 %; a margin of 1: 0.62 / 0.09 %, 4:
-# 0.53 / 0.13 %, ball+outer 0.43 / 0.45 %)
+# times its gap's change over the step moves freely in the pit, smoothly: not an event.  On seed
+# 004's ball+outer scene (2 mm pits, 0.11-0.16 mm deep where the ball meets them, against at most
+# ~25 um of Hertz deflection at 2000 N) the ball leaves the race at once and crosses most of each
+# pit in free flight: with this rule its defect event steps fell from 24 to 16 % (8.5 % of its
+# steps are now tried whole before they are sub-stepped, 3.4 % before) and the scene ran 1.2x
+# faster, its line error 0.34 -> 0.42 %; the ER-16K 0.6 mm pits (9-14 um deep) kept their figures
+# within 0.04 pp (inner race 0.53 -> 0.55 %, outer 0.15 -> 0.11 %; a margin of 1: 0.62 / 0.09 %,
+# 4: 0.53 / 0.13 %, ball+outer 0.43 / 0.45 %)
 OPEN_GAP_MARGIN = 2.0
 
 
@@ -1124,7 +1124,8 @@ def _defect_changes_contact(a0, a1, nb):
 def _step_event(a0, a1, nb, has_def):
     """What a step went through, from the contact values at two of its points (its ends, or its
     start and its second stage's point): DEFECT_EVENT if a ball was inside a defect at either
-    (:func:`_defect_changes_contact`); else CONTACT_EVENT if a ball-race or ball-pocket contact opened or closed; else NO_EVENT.
+    (:func:`_defect_changes_contact`; only if the scene has defects, ``has_def``); else
+    CONTACT_EVENT if a ball-race or ball-pocket contact opened or closed; else NO_EVENT.
     Without pocket clearance the pocket spring stays engaged, but its force is clamped at zero
     where its damping outweighs it (a ball leaving the pocket face), and that kink counts too: a
     plain step of two samples across it, with the spring's stiffness in W, kicked the cage by
@@ -1179,9 +1180,10 @@ def _engine_split(y, fy, un, up, aux0, dg0, film, counters, n, m, hs, kk, ramp, 
                   + G2 (u' - 2 u_n + u_{n-1}) / 2  parabola's term in a plain step after one)
 
     Event-aware: if a ball is inside a defect under a contact it changes (and that contact did not
-    stay well open: ``OPEN_GAP_MARGIN``), or a contact opened or closed, the step is redone as ``nsub`` sub-steps (propagators phie, g0e, g1e of one
-    sub-step), and the structure state and input at the samples inside the step are kept (xsmp,
-    usmp).  The step's and the sub-step's propagators come transposed (``phi_t`` = Phi^T ...).
+    stay well open: ``OPEN_GAP_MARGIN``), or a contact opened or closed, the step is redone as
+    ``nsub`` sub-steps (propagators phie, g0e, g1e of one sub-step), and the structure state and
+    input at the samples inside the step are kept (xsmp, usmp).  The step's and the sub-step's
+    propagators come transposed (``phi_t`` = Phi^T ...).
 
     The step is written out here rather than in helper functions on purpose: a numba call cost
     about 18 ns per array argument (the array struct and, before the loop ran without numba's
