@@ -124,7 +124,7 @@ B_TH, B_R, B_PSI, B_W, B_V, B_OM = range(NBV)
 
 # per-ball auxiliary values from a right-hand-side evaluation (for the Jacobian; the contacts'
 # deflections X_DI, X_DO, negative where open, for their films and the events).  X_PAD keeps a
-# row a whole number of 16-byte pairs: with 27 columns the default's step took 10 % longer than
+# row a whole number of 16 bytes: with 27 columns the default's step took 10 % longer than
 # with 26 or 28 (back-to-back timings on the bench scenes)
 (X_KTI, X_KTO, X_CI, X_CO, X_QI, X_QO, X_MUI, X_MUO, X_DMUI, X_DMUO, X_FT, X_DMUP, X_CIN, X_DRAGD,
  X_MUP, X_SFT, X_SARC, X_C, X_S, X_DEDTH, X_DLI, X_DLO, X_LOSSI, X_LOSSO, X_DI, X_DO, X_PAD,
@@ -202,9 +202,9 @@ def _defect_losses(dtab, y, p, sh_ang, scr):
     """Interference losses (m) of every ball from every defect: scr[:, 0] inner contact,
     scr[:, 1] outer contact, and their slopes along the ball angle (m/rad) scr[:, 3], scr[:, 4].
     Only the balls that can be inside a defect are evaluated (with
-    ``defects.interference_loss``): for a race defect the ball nearest to it and the two next to
-    it (a defect is at most half a ball spacing wide and a ball stays within its pocket), for a
-    ball defect that ball; so the cost is per defect, not per ball."""
+    ``defects.interference_loss_slope``): for a race defect the ball nearest to it and the two
+    next to it (a defect is at most half a ball spacing wide and a ball stays within its pocket),
+    for a ball defect that ball; so the cost is per defect, not per ball."""
     nb = int(p[P_NB])
     spacing = 2.0 * math.pi / nb
     for j in range(nb):
@@ -442,6 +442,7 @@ def _rhs(y, f, ws, sh_ang, fx_ext, fy_ext, p, dtab, wti, wto, film, aux, dg, scr
         a[X_LOSSO] = scr[j, 1] if has_def and do + scr[j, 1] > 0.0 else 0.0
         a[X_DI] = di
         a[X_DO] = do
+        a[X_PAD] = 0.0                # written, so that the table is the same in every run
         d = dg[j]
         d[D_QI] = qi
         d[D_QO] = qo
@@ -1100,7 +1101,8 @@ def _inside_defect(a, nb):
     ``X_LOSSI`` in :func:`_rhs`), from the contact values ``a`` of one instant: a step that
     starts so is an event whatever happens in it."""
     for j in range(nb):
-        if (a[j, X_LOSSI] > 0.0 and a[j, X_DI] > 0.0) or (a[j, X_LOSSO] > 0.0 and a[j, X_DO] > 0.0):
+        if ((a[j, X_LOSSI] > 0.0 and a[j, X_DI] > 0.0)
+                or (a[j, X_LOSSO] > 0.0 and a[j, X_DO] > 0.0)):
             return True
     return False
 
@@ -1160,9 +1162,9 @@ SPLIT_WORK_ZEROED = (13, 18)
 @njit(**STEP_KERNEL)
 def _engine_split(y, fy, un, up, aux0, dg0, film, counters, n, m, hs, kk, ramp, ta_, tg_,
                  tb_, gamma, p, dtab, wti, wto, phi_t, g0_t, g1_t, g2_t, phis, g0s, g1s, g2s,
-                 phie_t, g0e_t, g1e_t, nsub, nball, cacc, dacc, kb, out_acc, out_qi, out_qo, out_cage,
-                 out_bs, out_cs, out_sli, out_slo, out_fi, out_fo, ynext, fnext, unext, ytmp,
-                 rtmp, kst, auxn, auxs, dgn, dgs, filmn, wsp, wcage, scr, frc, xpred, xs, uu,
+                 phie_t, g0e_t, g1e_t, nsub, nball, cacc, dacc, kb, out_acc, out_qi, out_qo,
+                 out_cage, out_bs, out_cs, out_sli, out_slo, out_fi, out_fo, ynext, fnext, unext,
+                 ytmp, rtmp, kst, auxn, auxs, dgn, dgs, filmn, wsp, wcage, scr, frc, xpred, xs, uu,
                  qa, ycur, fcur, ucur, auxc, filmc, xsmp, usmp, ybl, fbl, xbl, auxbl):
     """Advance ``n`` internal samples with :class:`~.integrators.SplitROS2`, one step per ``kk``
     samples.  The state (y, its derivative fy, the structure input un, aux0, dg0, film) persists
@@ -1794,9 +1796,9 @@ class SkiddingModel:
             status = _engine_split(self.y, self._fy, self._un, self._up, self._aux0, self._dg0,
                                    self.film, self.counters, n, m, hs, self.kk, ramp, ta_, tg_, tb_,
                                    gamma, self.p, self.dtab, self.wti, self.wto, *self._step_prop_t,
-                                   self.phis, self.g0s, self.g1s, self.g2s, *self._event_prop_t, self.nsub, self.nball, self.cacc,
-                                   self.dacc, self.kb, acc, qi, qo, cage, bs, cs, sli, slo, fi, fo,
-                                   *work)
+                                   self.phis, self.g0s, self.g1s, self.g2s, *self._event_prop_t,
+                                   self.nsub, self.nball, self.cacc, self.dacc, self.kb, acc, qi,
+                                   qo, cage, bs, cs, sli, slo, fi, fo, *work)
         else:
             if self._work is None:
                 self._work = engine_work(self.y.shape[0], nb, tb_.shape[0])
