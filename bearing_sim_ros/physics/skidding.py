@@ -1091,7 +1091,7 @@ START_STEPS = 1
 # steps are now tried whole before they are sub-stepped, 3.4 % before) and the scene ran 1.2x
 # faster, its line error 0.34 -> 0.42 %; the ER-16K 0.6 mm pits (9-14 um deep) kept their figures
 # within 0.04 pp (inner race 0.53 -> 0.55 %, outer 0.15 -> 0.11 %; a margin of 1: 0.62 / 0.09 %,
-# 4: 0.53 / 0.13 %, ball+outer 0.43 / 0.45 %)
+# 4: 0.53 / 0.13 %, ball+outer 0.43 / 0.45 %; the bench's error metrics, a throwaway script)
 OPEN_GAP_MARGIN = 2.0
 
 
@@ -1195,6 +1195,7 @@ def _engine_split(y, fy, un, up, aux0, dg0, film, counters, n, m, hs, kk, ramp, 
     Work arrays (ynext ... auxbl): :func:`split_work`."""
     nvar = y.shape[0]
     nb = int(p[P_NB])
+    has_def = dtab.shape[0] > 0          # the scene has defects: defect events are possible
     hstep = kk * hs
     kstep = counters[0]
     i0 = counters[1]
@@ -1225,7 +1226,7 @@ def _engine_split(y, fy, un, up, aux0, dg0, film, counters, n, m, hs, kk, ramp, 
                 # defect event whatever its end: straight to the sub-steps (the whole step would
                 # be thrown away)
                 event = NO_EVENT
-                if nsub > 1 and dtab.shape[0] > 0 and _inside_defect(aux0, nb):
+                if nsub > 1 and has_def and _inside_defect(aux0, nb):
                     event = DEFECT_EVENT
                 elif nsub > 1 and counters[4] > 0:
                     event = START_EVENT       # the first steps from a set state: see START_STEPS
@@ -1355,13 +1356,13 @@ def _engine_split(y, fy, un, up, aux0, dg0, film, counters, n, m, hs, kk, ramp, 
                                     usmp[jj, c] = ucur[c]
                     if event != NO_EVENT or nsub <= 1:
                         break
-                    event = _step_event(aux0, auxn, nb, dtab.shape[0] > 0)
+                    event = _step_event(aux0, auxn, nb, has_def)
                     if event == NO_EVENT:
                         # a contact that closes and opens again inside the step shows at neither
                         # end but at the second stage's point (the step's end as the first stage
                         # predicts it): without this, two samples per step let undamped balls
                         # rattle (no EHL film, 600 rpm / 2000 N: RMS 0.06 -> up to 7.5 m/s^2)
-                        event = _step_event(aux0, auxs, nb, dtab.shape[0] > 0)
+                        event = _step_event(aux0, auxs, nb, has_def)
                     if event == NO_EVENT:
                         break
                 have_next = True
