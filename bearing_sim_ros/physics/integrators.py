@@ -118,7 +118,7 @@ class SplitROS2(ROS2):
     through its values at the last two grid points and the step's end (linearly after a step
     with events, where the input has a kink).  A ramp alone passes a force at frequency f with
     a relative error of about (pi f h)^2 / 3, 6 % at the resonator's 4 kHz at two samples per
-    step, which was most of the default's error on the healthy scenes (README, "Solvers").  The
+    step, which was most of the default's error on the healthy scenes (docs/solvers.md).  The
     balls and the cage see the structure's displacement as a given function over the step and
     take one ROS2 step with the per-ball block Jacobian (the stiff ball-radial, ball-cage and
     traction couplings).  Per step:
@@ -147,13 +147,13 @@ class SplitROS2(ROS2):
     stage's point, so that a contact that closes and opens again inside the step counts) is
     sub-stepped too: from an open contact that closes during the step, W would leave the step
     explicit in the contact's stiffness (without any redo, two samples per step went 38 % and
-    230 % off in RMS at 200 and 2000 N).  Such steps are 0.4-5 % of all on the bench scenes
-    (README, "Solvers"); a step of one sample used to be redone once instead, with each ball's
-    Jacobian from the stiffer end of the step, which left 1.1 % error at 2000 N where
-    sub-steps leave 0.5 %.  6 sub-steps per internal sample rather than 4 bring the ER-16K
+    230 % off in RMS at 200 and 2000 N).  Such steps are 0.9-7 % of all on the bench scenes
+    (README, "Solvers", "Event sub-steps"); a step of one sample used to be redone once
+    instead, with each ball's Jacobian from the stiffer end of the step, which left 1.1 % error
+    at 2000 N where sub-steps leave 0.5 %.  6 sub-steps per internal sample rather than 4 bring the ER-16K
     inner-race line from 0.97 to 0.53 % off at two samples per step (8: 0.33 %) for 6-25 % more
     work (25 % on the ball+outer scene, whose 2 mm ball pit is under a contact in a fifth of the
-    steps; README, "Solvers", "The first step").  The first ``skidding.START_STEPS`` steps after
+    steps; docs/solvers.md, "The first step").  The first ``skidding.START_STEPS`` steps after
     the state is set are sub-stepped whatever happens in them.
     """
 
