@@ -60,8 +60,9 @@ def test_light_load_high_speed_gets_skidding():
 
 def ramp_across_the_boundary(start_rpm, end_rpm):
     """Ramp the healthy ER-16K at 10 N from ``start_rpm`` to ``end_rpm`` in 40 batches, with a
-    tolerance that puts the tier boundary inside the ramp.  Returns (tiers per batch, accel_y
-    per batch, the simulator)."""
+    tolerance that puts the tier boundary inside the ramp.  Returns (the first tier, tiers per
+    batch, accel_y per batch, the simulator, (shaft, cage) angles (rad) before the ramp and
+    after each batch)."""
     base = load_scene("er16k_healthy")
     lo, hi = (kinematic_error_estimate(base, w * RPM, (0.0, -10.0))[0] for w in (2000, 8000))
     scene = replace(base, radial_load=(0.0, -10.0), shaft_speed=start_rpm * RPM,
@@ -70,10 +71,17 @@ def ramp_across_the_boundary(start_rpm, end_rpm):
     first = sim.tier
     sim.advance(1500)
     accel, tiers = [], []
+    angles = [_angles(sim)]
     for rpm in np.linspace(start_rpm, end_rpm, 40):
         accel.append(sim.advance(150, shaft_speed=rpm * RPM).accel[:, 1])
         tiers.append(sim.tier)
-    return first, tiers, accel, sim
+        angles.append(_angles(sim))
+    return first, tiers, accel, sim, np.array(angles)
+
+
+def _angles(sim):
+    snap = sim.snapshot()
+    return snap.shaft_angle, snap.cage_angle
 
 
 def assert_no_jump_at(k, accel):
@@ -85,18 +93,33 @@ def assert_no_jump_at(k, accel):
     assert around.max() <= np.ptp(np.concatenate(accel[max(0, k - 4):k])) + 1e-12
 
 
+def assert_state_carried_over_at(k, angles):
+    """The new tier went on from the old one's state: the shaft and the cage turn as much in
+    the batches at the switch (k, the first batch after which the new tier runs, and k + 1) as
+    the batches on either side make expected (the speed ramps linearly).  Without the hand-over
+    the angles restart: a batch's turn is off by tens of radians (16x the expected shaft turn),
+    not by the 1-2 % that the cage's skid changes between the tiers."""
+    turn = np.diff(angles, axis=0)               # (batch, [shaft, cage]) rad
+    for j in (k, k + 1):                         # the switch is at batch k or right after it
+        expected = 0.5 * (turn[j - 1] + turn[j + 1])
+        assert abs(turn[j, 0] / expected[0] - 1) < 0.01, turn[k - 1:k + 3, 0]
+        assert abs(turn[j, 1] / expected[1] - 1) < 0.05, turn[k - 1:k + 3, 1]
+
+
 def test_a_speed_ramp_across_the_boundary_switches_without_a_jump():
     """2000 -> 8000 rpm: kinematic, then skidding once the estimate passes the tolerance."""
-    first, tiers, accel, sim = ramp_across_the_boundary(2000, 8000)
+    first, tiers, accel, sim, angles = ramp_across_the_boundary(2000, 8000)
     assert first == "kinematic" and tiers[-1] == "skidding" and sim.tier_switches >= 1
     assert_no_jump_at(tiers.index("skidding"), accel)
+    assert_state_carried_over_at(tiers.index("skidding"), angles)
 
 
 def test_a_speed_ramp_down_switches_back_to_kinematic():
     """8000 -> 2000 rpm: the reverse switch (with hysteresis), again without a jump."""
-    first, tiers, accel, sim = ramp_across_the_boundary(8000, 2000)
+    first, tiers, accel, sim, angles = ramp_across_the_boundary(8000, 2000)
     assert first == "skidding" and tiers[-1] == "kinematic" and sim.tier_switches >= 1
     assert_no_jump_at(tiers.index("kinematic"), accel)
+    assert_state_carried_over_at(tiers.index("kinematic"), angles)
 
 
 def study_estimate():
