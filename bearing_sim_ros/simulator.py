@@ -144,8 +144,11 @@ class Simulator:
     def _build_chain(self):
         from .physics.sensor import AccelerometerChain
 
-        self.oversample = int(round(self._model.internal_rate / self.sample_rate))
-        self.chain = AccelerometerChain(self.scene.sensor, self.sample_rate, self.oversample, self.seed)
+        # internal samples per output sample: the sensor chain's rate, which both tiers share (at
+        # least 4, whatever ``oversample``, the integration steps, is)
+        self.chain_oversample = int(round(self._model.internal_rate / self.sample_rate))
+        self.chain = AccelerometerChain(self.scene.sensor, self.sample_rate, self.chain_oversample,
+                                        self.seed)
         self.accel_channels = tuple(f"accel_{a}" for a in self.scene.sensor.axes)
         self.contact_channels = contact_channel_names(self.bearing.balls)
         cols = self.chain.axis_columns
@@ -168,6 +171,16 @@ class Simulator:
         return tuple(self._radial_load)
 
     @property
+    def oversample(self) -> int | None:
+        """Integration steps per output sample of the running tier (the constructor's
+        ``oversample``, else the tier's default); None for the skidding tier's "rk4" and
+        "reference" solvers, whose steps are set in seconds.  The sensor chain's rate is
+        ``chain_oversample``."""
+        if self.tier == "skidding":
+            return self._model.oversample if self.solver == "default" else None
+        return self._model.decimation
+
+    @property
     def time(self) -> float:
         """Time of the next output sample (s)."""
         return self.index / self.sample_rate
@@ -184,7 +197,7 @@ class Simulator:
         series of every row: the pending ones first, then the n new ones (views of one new
         array per series, so that a batch never shares memory with a later one); with
         ``index0`` (absolute output index), also the chain's n output samples (n, 2)."""
-        m = self.oversample
+        m = self.chain_oversample
         pend = self._pending
         p = pend["cage_speed"].shape[0]
         series = self._series(p + n)
@@ -269,7 +282,7 @@ class Simulator:
         new = self._build_model(sel.tier)
         if hasattr(new, "adopt_state"):
             new.adopt_state(old)
-        if int(round(new.internal_rate / self.sample_rate)) != self.oversample:
+        if int(round(new.internal_rate / self.sample_rate)) != self.chain_oversample:
             raise RuntimeError("tiers must share the internal rate to switch without a seam")
         self._model = new
         self.tier_switches += 1

@@ -169,7 +169,11 @@ def test_oversample_sets_the_default_solvers_step():
     # a switch of tiers at run time needs the same sensor-chain rate in both (4 per sample)
     with pytest.raises(UserError, match=r"^oversample = 8: with fidelity auto allowed values are 1, 2 or 4"):
         Simulator(sc, fidelity="auto", oversample=8)
-    assert Simulator(sc, fidelity="skidding", oversample=8).oversample == 4
+    eight = Simulator(sc, fidelity="skidding", oversample=8)
+    assert eight.oversample == 8 and eight.chain_oversample == 4
+    assert Simulator(sc, fidelity="skidding").oversample == 2
+    assert Simulator(sc, fidelity="kinematic", oversample=1).oversample == 1
+    assert Simulator(sc, fidelity="skidding", solver="rk4", rk4_step=3e-6).oversample is None
     assert sk.DEFAULT_OVERSAMPLE == 2
     whole = Simulator(sc, fidelity="skidding", oversample=1).advance(600).accel
     sim = Simulator(sc, fidelity="skidding", oversample=1)
