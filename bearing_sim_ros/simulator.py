@@ -235,8 +235,11 @@ class Simulator:
         else:
             l1 = np.asarray(radial_load, dtype=float).reshape(2)
             l1x, l1y = float(l1[0]), float(l1[1])
-        if not (math.isfinite(s1) and math.isfinite(l1x) and math.isfinite(l1y)):
-            raise UserError(f"shaft_speed / radial_load = {s1!r} / {(l1x, l1y)!r}: must be finite")
+        # float(): the load in use is held as numpy scalars, whose repr is np.float64(...)
+        if not math.isfinite(s1):
+            raise UserError(f"shaft_speed = {float(s1)!r} rad/s: must be a finite number")
+        if not (math.isfinite(l1x) and math.isfinite(l1y)):
+            raise UserError(f"radial_load = ({float(l1x)!r}, {float(l1y)!r}) N: must be finite numbers")
         self.maybe_switch_tier(s1, (l1x, l1y))
         n = int(n)
         series, accel = self._run(n, s0, s1, l0x, l0y, l1x, l1y, self.index)
