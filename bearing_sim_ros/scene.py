@@ -453,6 +453,19 @@ def shipped_scenes() -> list:
     return sorted(p.stem for p in scenes_dir().glob("*.yaml"))
 
 
+def scene_argument(scene: Scene) -> str:
+    """How a command line names ``scene`` so that it loads the same file from any directory: a
+    shipped scene by its name, any other scene file by its absolute path (the ``name:`` inside a
+    file is a label that ``load_scene`` cannot find the file by).  A scene built in Python from a
+    mapping has no file; its name is all there is."""
+    if not scene.source_path:
+        return scene.name
+    path = Path(scene.source_path).resolve()
+    if path.suffix == ".yaml" and path == (scenes_dir() / f"{path.stem}.yaml").resolve():
+        return path.stem
+    return str(path)
+
+
 def resolve_scene_path(name_or_path: str | Path) -> Path:
     """A shipped scene name or a path to a YAML file -> the file's path."""
     text = str(name_or_path)

@@ -3,7 +3,9 @@
 each test on its own ROS_DOMAIN_ID with discovery limited to localhost (``ros_env``)."""
 from __future__ import annotations
 
+import json
 import math
+import shlex
 import signal
 import subprocess
 import sys
@@ -98,6 +100,20 @@ def test_bad_parameters_end_the_node_with_one_line(ros_env, bearing_sim_exe, par
     assert "Traceback" not in r.stderr + r.stdout
     for w in words:
         assert w in lines[0]
+
+
+def test_recorded_command_names_a_scene_file_by_its_absolute_path(ros_env, bearing_sim_exe, tmp_path):
+    """``--scene rig.yaml`` (relative) is recorded as the file's absolute path, so that the
+    recording's command loads the same scene from any folder."""
+    text = load_scene("er16k_healthy").source_text.replace("name: er16k_healthy", "name: my_rig")
+    (tmp_path / "rig.yaml").write_text(text)
+    r = subprocess.run([bearing_sim_exe, "node", "--scene", "rig.yaml", "--ros-args", "-p", "real_time:=false",
+                        "-p", "duration:=0.1", "-p", "record:=live.mcap"],
+                       cwd=tmp_path, env=ros_env, capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    _topics, meta = read_recording(tmp_path / "live.mcap")
+    argv = shlex.split(json.loads(meta["bearing_sim"]["parameters"])["command"])
+    assert f"scene:={tmp_path / 'rig.yaml'}" in argv and "my_rig" not in " ".join(argv)
 
 
 # ---- the stream ---------------------------------------------------------------------------------

@@ -28,6 +28,7 @@ recording and diagnostics happen in the simulation thread, which owns the simula
 from __future__ import annotations
 
 import math
+import shlex
 import sys
 import threading
 import time
@@ -273,11 +274,15 @@ class BearingSimNode(Node):
     def _open_recorder(self, cfg):
         from ..messages import TYPES
         from ..recording.recorder import Recorder, recording_metadata
+        from ..scene import scene_argument
 
         params = dict(cfg)
+        # the scene as a shipped name or an absolute path: a relative path or the name inside a
+        # scene file would not load from another directory
+        command_cfg = dict(cfg, scene=shlex.quote(scene_argument(self.scene)))
         params.update({"mode": "live",
                        "command": "bearing-sim node --ros-args " + " ".join(
-                           f"-p {k}:={_param_text(v)}" for k, v in sorted(cfg.items()))})
+                           f"-p {k}:={_param_text(v)}" for k, v in sorted(command_cfg.items()))})
         meta = recording_metadata(self.scene, params, int(cfg["seed"]), self.sim.selection)
         text = self.scene.source_text
         attachments = {f"{self.scene.name}.yaml": text.encode("utf-8")} if text else {}
