@@ -43,59 +43,112 @@ def _nonnegative(kind):
     return _number(kind, allow_zero=True)
 
 
+def _in_range(lo: float, hi: float, unit: str):
+    """argparse type: a number within [lo, hi] (in ``unit``)."""
+    def parse(text):
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+        if not lo <= value <= hi:
+            raise argparse.ArgumentTypeError(f"{text} {unit}: allowed range is [{lo:g}, {hi:g}] {unit}")
+        return value
+    return parse
+
+
 def build_parser() -> argparse.ArgumentParser:
+    from .physics.integrators import RK4_DEFAULT_STEP, RK4_STEP_RANGE
+    from .simulator import SAMPLE_RATE_RANGE
+
     p = _Parser(prog="bearing-sim", description="Virtual bearing accelerometer for ROS 2.")
     sub = p.add_subparsers(dest="command", parser_class=_Parser, metavar="COMMAND")
     sub.required = True
+    scene_help = "shipped scene name (see `bearing-sim scenes`) or path of a scene YAML"
 
-    s = sub.add_parser("node", help="run the ROS 2 node (same as ros2 run bearing_sim_ros bearing_sim_node)")
-    s.add_argument("--scene", default=None, help="shipped scene name or YAML path")
+    s = sub.add_parser("node", help="run the ROS 2 node (same as ros2 run bearing_sim_ros bearing_sim_node)",
+                       usage="%(prog)s [-h] [--scene S] [--ros-args ...]",
+                       formatter_class=argparse.RawDescriptionHelpFormatter,
+                       epilog="ROS arguments follow --ros-args, for example\n"
+                              "  bearing-sim node --scene er16k_healthy --ros-args -p duration:=10 "
+                              "-p record:=run.mcap\n"
+                              "The node's parameters (sample_rate, duration, record, fidelity, seed, ...):\n"
+                              "README.md, \"The live node\", or `ros2 param describe /bearing_sim <name>`.")
+    s.add_argument("--scene", default=None, metavar="S",
+                   help=f"{scene_help} (default: the scene parameter's, er16k_outer_race)")
 
     s = sub.add_parser("run", help="what `make run` does: the node on a scene for a while, recorded, then a summary")
-    s.add_argument("--scene", default="er16k_outer_race")
-    s.add_argument("--duration", type=float, default=10.0, help="seconds; 0 = until Ctrl-C")
-    s.add_argument("--out", required=True, help="MCAP file to record")
+    s.add_argument("--scene", default="er16k_outer_race", metavar="S", help=f"{scene_help} (default: %(default)s)")
+    s.add_argument("--duration", type=float, default=10.0, metavar="SECONDS",
+                   help="seconds of signal in real time; 0 = until Ctrl-C (default: %(default)g)")
+    s.add_argument("--out", required=True, metavar="F.mcap", help="MCAP file to record to (required)")
 
     s = sub.add_parser("render", help="offline, as fast as possible, to MCAP")
-    s.add_argument("scene")
-    s.add_argument("--duration", type=_positive(float), required=True, help="seconds of signal")
-    s.add_argument("--out", required=True, help="output .mcap")
-    s.add_argument("--fidelity", default="auto", choices=["auto", "kinematic", "skidding"])
-    s.add_argument("--seed", type=_nonnegative(int), default=0)
-    s.add_argument("--sample-rate", type=_positive(float), default=15000.0)
-    s.add_argument("--solver", default="default", choices=["default", "rk4", "reference"])
-    s.add_argument("--oversample", type=int, default=None,
-                   help="integration steps per output sample: 1, 2 or a multiple of 4 (default: each tier's own)")
+    s.add_argument("scene", metavar="S", help=scene_help)
+    s.add_argument("--duration", type=_positive(float), required=True, metavar="SECONDS",
+                   help="seconds of signal, > 0 (required)")
+    s.add_argument("--out", required=True, metavar="F.mcap", help="MCAP file to write (required)")
+    s.add_argument("--fidelity", default="auto", choices=["auto", "kinematic", "skidding"],
+                   help="model tier; auto: the cheapest within the scene's error tolerance "
+                        "(default: %(default)s)")
+    s.add_argument("--seed", type=_nonnegative(int), default=0, metavar="N",
+                   help="seed of the random slip and the sensor noise, a whole number >= 0 (default: %(default)s)")
+    s.add_argument("--sample-rate", type=_in_range(*SAMPLE_RATE_RANGE, "Hz"), default=15000.0, metavar="HZ",
+                   help=f"output sample rate, Hz, {SAMPLE_RATE_RANGE[0]:g} to {SAMPLE_RATE_RANGE[1]:g} "
+                        f"(default: %(default)g)")
+    s.add_argument("--solver", default="default", choices=["default", "rk4", "reference"],
+                   help="integrator of the skidding tier (the kinematic tier has none): default, rk4 "
+                        "(classic RK4 at a fixed step, see --rk4-step) or reference (converged, slow) "
+                        "(default: %(default)s)")
+    s.add_argument("--rk4-step", type=_in_range(*RK4_STEP_RANGE, "s"), default=None, metavar="SECONDS",
+                   help=f"step of --solver rk4, s, {RK4_STEP_RANGE[0]:g} to {RK4_STEP_RANGE[1]:g} "
+                        f"(default: {RK4_DEFAULT_STEP:g}, seed 000's, which diverges on this model; "
+                        f"6e-06 survives every bench scene)")
+    s.add_argument("--oversample", type=int, default=None, metavar="M",
+                   help="integration steps per output sample: 1, 2 or a multiple of 4 up to 64 "
+                        "(default: each tier's own, 2)")
 
     s = sub.add_parser("play", help="republish a recording on its topics")
-    s.add_argument("file")
-    s.add_argument("--rate", type=_positive(float), default=1.0)
-    s.add_argument("--loop", action="store_true")
-    s.add_argument("--clock", action="store_true", help="publish /clock from the recording's stamps")
+    s.add_argument("file", metavar="F.mcap", help="the recording to republish")
+    s.add_argument("--rate", type=_positive(float), default=1.0, metavar="X",
+                   help="playback speed, a multiple of real time, > 0 (default: %(default)g)")
+    s.add_argument("--loop", action="store_true",
+                   help="start again from the beginning at the end, until Ctrl-C (default: play once)")
+    s.add_argument("--clock", action="store_true",
+                   help="publish /clock from the recording's stamps (default: off)")
     s.add_argument("--wait", type=_nonnegative(float), default=5.0, metavar="SECONDS",
-                   help="wait up to this long for a first subscriber before publishing (default 5; "
+                   help="wait up to this long for a first subscriber before publishing (default %(default)g; "
                         "DDS discovery can take one 3 s announcement period)")
 
     s = sub.add_parser("report", help="PNG plots and a summary of a recording")
-    s.add_argument("file")
-    s.add_argument("--out", required=True)
+    s.add_argument("file", metavar="F.mcap", help="the recording to analyse")
+    s.add_argument("--out", required=True, metavar="DIR",
+                   help="folder for the PNG plots, summary.md and summary.json, created if missing (required)")
 
     s = sub.add_parser("bench", help="speed-against-error study")
-    s.add_argument("--quick", action="store_true")
+    s.add_argument("--quick", action="store_true",
+                   help="fewer scenes, settings and repeats, shorter runs: about 45 s instead of about "
+                        "5 minutes (default: the full study)")
     s.add_argument("--calibrate-fidelity", action="store_true",
-                   help="measure the kinematic tier's error against the skidding reference and refit config/fidelity.yaml")
-    s.add_argument("--out", required=True)
+                   help="measure the kinematic tier's error against the skidding reference and refit "
+                        "config/fidelity.yaml (default: off)")
+    s.add_argument("--out", required=True, metavar="DIR",
+                   help="folder for bench.md, bench.json and bench.png, created if missing (required)")
 
     s = sub.add_parser("validate", help="simulated against real CWRU recordings")
-    s.add_argument("--cwru", required=True)
-    s.add_argument("--out", required=True)
+    s.add_argument("--cwru", required=True, metavar="DIR",
+                   help="folder (or one file) of CWRU bearing data center .mat recordings (required)")
+    s.add_argument("--out", required=True, metavar="DIR",
+                   help="folder for validation.md, validation.json and the PNG plots (required)")
 
     sub.add_parser("scenes", help="list the shipped scenes")
 
     s = sub.add_parser("monitor", help="example condition-monitoring subscriber (envelope analysis)")
-    s.add_argument("--window", type=_positive(float), default=4.0, help="seconds of signal per analysis")
-    s.add_argument("--count", type=_nonnegative(int), default=0, help="stop after this many verdicts (0 = never)")
-    s.add_argument("--scene", default=None, help="scene giving the bearing geometry (default: er16k_outer_race)")
+    s.add_argument("--window", type=_positive(float), default=4.0, metavar="SECONDS",
+                   help="seconds of signal per analysis (default: %(default)g)")
+    s.add_argument("--count", type=_nonnegative(int), default=0, metavar="N",
+                   help="stop after this many verdicts (default: %(default)s = never)")
+    s.add_argument("--scene", default=None, metavar="S",
+                   help="scene giving the bearing geometry (default: er16k_outer_race)")
     return p
 
 

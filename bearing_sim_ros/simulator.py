@@ -28,6 +28,9 @@ from .scene import Scene, load_scene
 
 SOLVERS = ("default", "rk4", "reference")
 FIDELITIES = ("auto", "kinematic", "skidding")
+# output sample rates (Hz) that the API, the node's ``sample_rate`` parameter and
+# ``bearing-sim render --sample-rate`` accept: one range, so that what renders offline also runs live
+SAMPLE_RATE_RANGE = (1000.0, 200000.0)
 
 
 @dataclass
@@ -72,6 +75,21 @@ def _ramp(speed, load, s0, s1, l0x, l0y, l1x, l1y):
         load[k, 1] = l0y + (l1y - l0y) * f
 
 
+def reselect_tier(scene, requested_fidelity: str, selection, operating_point, new_operating_point):
+    """The tier selection at ``new_operating_point`` ((shaft speed rad/s, (x, y) load N)) for a
+    simulator now at ``operating_point`` with ``selection``, or None when the choice cannot change
+    (a tier asked for by the caller or the scene, or the same operating point).  Shared by
+    ``Simulator.maybe_switch_tier`` and callers that must know the tiers of a run in advance."""
+    if requested_fidelity != "auto" or scene.fidelity != "auto":
+        return None
+    (s0, l0), (s1, l1) = operating_point, new_operating_point
+    if s1 == s0 and l1[0] == l0[0] and l1[1] == l0[1]:
+        return None             # same operating point: same choice
+    from .fidelity import select_tier
+
+    return select_tier(scene, "auto", s1, np.asarray(l1), selection.tolerance, current=selection.tier)
+
+
 class Simulator:
     """Advance a bearing scene in output-rate batches.
 
@@ -89,8 +107,9 @@ class Simulator:
                  tolerance: float | None = None):
         if not isinstance(scene, Scene):
             scene = load_scene(scene)
-        if not (isinstance(sample_rate, (int, float)) and 100.0 <= sample_rate <= 1.0e6):
-            raise UserError(f"sample_rate = {sample_rate!r}: allowed range is [100, 1e6] Hz")
+        lo, hi = SAMPLE_RATE_RANGE
+        if not (isinstance(sample_rate, (int, float)) and lo <= sample_rate <= hi):
+            raise UserError(f"sample_rate = {sample_rate!r}: allowed range is [{lo:g}, {hi:g}] Hz")
         if fidelity not in FIDELITIES:
             raise UserError(f"fidelity = {fidelity!r}: allowed values are {', '.join(FIDELITIES)}")
         if solver not in SOLVERS:
@@ -267,15 +286,10 @@ class Simulator:
     def maybe_switch_tier(self, shaft_speed: float, radial_load) -> bool:
         """With ``fidelity="auto"``, re-select the tier for a new operating point and switch
         without a discontinuity (the new tier starts from the old one's state)."""
-        if self.requested_fidelity != "auto" or self.scene.fidelity != "auto":
+        sel = reselect_tier(self.scene, self.requested_fidelity, self.selection,
+                            (self._shaft_speed, self._radial_load), (shaft_speed, radial_load))
+        if sel is None:
             return False
-        if (shaft_speed == self._shaft_speed and radial_load[0] == self._radial_load[0]
-                and radial_load[1] == self._radial_load[1]):
-            return False            # same operating point: same choice
-        from .fidelity import select_tier
-
-        sel = select_tier(self.scene, "auto", shaft_speed, np.asarray(radial_load),
-                          self.selection.tolerance, current=self.tier)
         if sel.tier == self.tier:
             self.selection = sel
             return False

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bearing_sim_ros import cli, load_scene
+from bearing_sim_ros import Simulator, UserError, cli, load_scene
 from bearing_sim_ros.recording.reader import get_message, open_recording
 from bearing_sim_ros.recording.render import profile_at, render
 from bearing_sim_ros.scene import RPM
@@ -165,3 +165,114 @@ def test_console_script_renders_and_reports_exit_2_for_a_bad_scene(bearing_sim_e
     bad = subprocess.run([bearing_sim_exe, "render", str(tmp_path / "missing.yaml"), "--duration", "1",
                           "--out", str(out)], env=ros_env, capture_output=True, text=True, timeout=120)
     assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1 and "Traceback" not in bad.stderr
+
+
+def _recorded_command(path) -> list:
+    """The reproducing command of a recording, as argv for ``cli.main`` (without ``bearing-sim``)."""
+    import shlex
+
+    with open_recording(path) as rec:
+        argv = shlex.split(rec.parameters()["command"])
+    assert argv[:2] == ["bearing-sim", "render"]
+    return argv[1:]
+
+
+def test_the_recorded_command_of_a_scene_file_reproduces_it_from_another_folder(tmp_path, monkeypatch, capsys):
+    """A scene given as a (relative) YAML path is recorded as its absolute path, not as the
+    ``name:`` inside it, which no command can load; run from elsewhere, the command gives the
+    same bytes."""
+    work, elsewhere = tmp_path / "work", tmp_path / "elsewhere"
+    work.mkdir()
+    elsewhere.mkdir()
+    text = load_scene("er16k_healthy").source_text.replace("name: er16k_healthy", "name: my_rig")
+    (work / "rig.yaml").write_text(text)
+    monkeypatch.chdir(work)
+    assert cli.main(["render", "rig.yaml", "--duration", "0.2", "--fidelity", "kinematic", "--seed", "3",
+                     "--out", "first.mcap"]) == 0
+    argv = _recorded_command(work / "first.mcap")
+    assert str(work / "rig.yaml") in argv and "my_rig" not in argv
+    monkeypatch.chdir(elsewhere)
+    assert cli.main(argv + ["--out", "again.mcap"]) == 0, capsys.readouterr().err
+    assert (elsewhere / "again.mcap").read_bytes() == (work / "first.mcap").read_bytes()
+
+
+def test_solver_with_the_kinematic_tier_asked_for_is_one_line(tmp_path, capsys):
+    out = tmp_path / "k.mcap"
+    code, err = _one_line_error(capsys, ["render", "er16k_outer_race", "--duration", "0.1", "--fidelity",
+                                         "kinematic", "--solver", "rk4", "--out", str(out)])
+    assert code == 2 and len(err.splitlines()) == 1, err
+    assert "--solver rk4" in err and "skidding tier only" in err and "--fidelity kinematic" in err
+    assert not out.exists()
+
+
+def test_solver_unused_by_auto_is_said_and_not_recorded(tmp_path, capsys):
+    """Auto keeps er16k_outer_race on the kinematic tier: ``--solver reference`` changes nothing,
+    the printed line says so, and the file is the default's to the byte (its command names no
+    solver)."""
+    plain, asked = tmp_path / "plain.mcap", tmp_path / "asked.mcap"
+    assert cli.main(["render", "er16k_outer_race", "--duration", "0.2", "--out", str(plain)]) == 0
+    capsys.readouterr()
+    assert cli.main(["render", "er16k_outer_race", "--duration", "0.2", "--solver", "reference",
+                     "--out", str(asked)]) == 0
+    line = capsys.readouterr().out
+    assert "kinematic tier; --solver applies to the skidding tier only" in line
+    assert "--solver" not in " ".join(_recorded_command(asked))
+    assert asked.read_bytes() == plain.read_bytes()
+
+
+def test_solver_kept_when_a_profile_takes_auto_to_the_skidding_tier(tmp_path, capsys):
+    """At 10000 rpm without load auto picks the skidding tier, so there the solver runs: it is
+    recorded with its step, and the recorded command reproduces the file."""
+    text = load_scene("er16k_outer_race").source_text + (
+        "profile:\n  - {t: 0.01, shaft_speed_rpm: 10000, radial_load: [0.0, 0.0]}\n")
+    scene_path = tmp_path / "fast.yaml"
+    scene_path.write_text(text)
+    out = tmp_path / "fast.mcap"
+    assert cli.main(["render", str(scene_path), "--duration", "0.02", "--solver", "rk4", "--rk4-step", "2e-6",
+                     "--out", str(out)]) == 0
+    assert "skidding tier)" in capsys.readouterr().out
+    argv = _recorded_command(out)
+    assert " ".join(argv).endswith("--solver rk4 --rk4-step 2e-06")
+    with open_recording(out) as rec:
+        assert rec.parameters()["rk4_step"] == 2e-6
+    assert cli.main(argv + ["--out", str(tmp_path / "again.mcap")]) == 0
+    assert (tmp_path / "again.mcap").read_bytes() == out.read_bytes()
+
+
+@pytest.mark.parametrize("extra, words", [
+    (["--rk4-step", "5e-6"], ["--rk4-step = 5e-06 s", "--solver rk4 only"]),
+    (["--solver", "rk4", "--rk4-step", "0"], ["--rk4-step", "0 s", "[1e-09, 0.001] s"]),
+    (["--solver", "rk4", "--rk4-step=-1e-6"], ["--rk4-step", "-1e-6 s", "[1e-09, 0.001] s"]),
+    (["--sample-rate", "500"], ["--sample-rate", "500 Hz", "[1000, 200000] Hz"]),
+    (["--sample-rate", "250000"], ["--sample-rate", "250000 Hz", "[1000, 200000] Hz"]),
+])
+def test_rk4_step_and_sample_rate_mistakes_are_one_line(tmp_path, capsys, extra, words):
+    out = tmp_path / "x.mcap"
+    code, err = _one_line_error(capsys, ["render", "er16k_skidding", "--duration", "0.1", "--fidelity", "skidding",
+                                         "--out", str(out), *extra])
+    assert code == 2 and len(err.splitlines()) == 1, err
+    for w in words:
+        assert w in err, err
+    assert not out.exists()
+
+
+def test_sample_rate_range_is_the_nodes():
+    """One range for the API, ``render --sample-rate`` and the node's ``sample_rate``."""
+    from bearing_sim_ros.nodes.bearing_sim_node import _descriptors
+    from bearing_sim_ros.simulator import SAMPLE_RATE_RANGE
+
+    span = _descriptors()["sample_rate"][1].floating_point_range[0]
+    assert (span.from_value, span.to_value) == SAMPLE_RATE_RANGE
+    for outside in (SAMPLE_RATE_RANGE[0] - 1, SAMPLE_RATE_RANGE[1] + 1):
+        with pytest.raises(UserError, match=r"sample_rate = .*\[1000, 200000\] Hz"):
+            Simulator("er16k_healthy", sample_rate=outside)
+
+
+def test_rk4_divergence_names_the_option_that_sets_the_step(tmp_path, capsys):
+    out = tmp_path / "d.mcap"
+    code, err = _one_line_error(capsys, ["render", "er16k_skidding", "--duration", "0.02", "--fidelity", "skidding",
+                                         "--solver", "rk4", "--rk4-step", "2e-5", "--out", str(out)])
+    assert code == 2 and len(err.splitlines()) == 1, err
+    assert err.startswith("error: --rk4-step = 2e-05 s: the fixed-step RK4 diverged")
+    assert "smaller --rk4-step or --solver default" in err and "rk4_step" not in err
+    assert not out.exists()

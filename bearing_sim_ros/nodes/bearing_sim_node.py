@@ -121,6 +121,8 @@ def _descriptors():
     from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
     from rcl_interfaces.msg import ParameterType as T
 
+    from ..simulator import SAMPLE_RATE_RANGE
+
     def d(kind, text, read_only=False, lo=None, hi=None, constraints=""):
         desc = ParameterDescriptor(type=kind, description=text, read_only=read_only,
                                    additional_constraints=constraints)
@@ -133,7 +135,7 @@ def _descriptors():
     return {
         "scene": (DEFAULT_SCENE, d(T.PARAMETER_STRING, "shipped scene name or path of a scene YAML", True,
                                    constraints="see `bearing-sim scenes`")),
-        "sample_rate": (15000.0, d(T.PARAMETER_DOUBLE, "output sample rate, Hz", True, 1000.0, 200000.0)),
+        "sample_rate": (15000.0, d(T.PARAMETER_DOUBLE, "output sample rate, Hz", True, *SAMPLE_RATE_RANGE)),
         "batch_duration": (0.01, d(T.PARAMETER_DOUBLE, "samples per waveform table, s", True, 0.001, 1.0,
                                    "batch_duration x sample_rate must be a whole number of samples")),
         "real_time": (True, d(T.PARAMETER_BOOL, "pace on the steady clock; false = as fast as possible")),

@@ -27,6 +27,9 @@ EXPLICIT = 0
 ROSENBROCK = 1
 SPLIT = 2
 
+RK4_DEFAULT_STEP = 1.0e-5          # s, seed 000's fixed step
+RK4_STEP_RANGE = (1.0e-9, 1.0e-3)  # s, what ``rk4_step`` / ``--rk4-step`` accept
+
 
 class Method:
     """Base class: a fixed-step method.  ``order``: classical order; ``stages``: right-hand-side
@@ -172,7 +175,7 @@ def method_for(solver: str, rk4_step: float | None, reference_per_sample: int = 
     """The method behind a ``solver=`` name; ``default_per_sample``: steps of the default per
     internal sample (a fraction: several samples per step)."""
     if solver == "rk4":
-        return RK4(step=1.0e-5 if rk4_step is None else float(rk4_step))
+        return RK4(step=RK4_DEFAULT_STEP if rk4_step is None else float(rk4_step))
     if solver == "reference":
         return RK4(per_sample=reference_per_sample)
     if solver == "default":

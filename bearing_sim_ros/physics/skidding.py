@@ -88,12 +88,13 @@ import numpy as np
 from numba import njit
 
 from ..catalog import G
+from ..errors import UserError
 from . import KinematicSnapshot, TierOutput
 from .defects import (D_ANGLE, D_BALL, D_KIND, KIND_BALL, KIND_INNER, defect_table, interference_loss,
                       interference_loss_slope, waviness_gain, waviness_table)
 from .film import (FILM_EXP_Q, FILM_EXP_U, FILM_LOAD_FLOOR, film_coefficient,
                    squeeze_film_coefficient, structural_damping_coefficient)
-from .integrators import EXPLICIT, SPLIT, method_for
+from .integrators import EXPLICIT, RK4_STEP_RANGE, SPLIT, method_for
 from .structure import secant_stiffness, structure_system
 
 # compile options of every kernel here: cached; FMA contraction (a * b + c may become one
@@ -1529,6 +1530,17 @@ class SolverDiverged(RuntimeError):
     pass
 
 
+class RK4Diverged(UserError):
+    """The fixed-step RK4 diverged: a user's choice of step, not an internal error.  ``step`` (s)
+    and ``t`` (s) let a caller word the advice in its own names (the CLI's ``--rk4-step``)."""
+
+    def __init__(self, step: float, t: float):
+        self.step, self.t = step, t
+        super().__init__(f"rk4_step = {step:g} s: the fixed-step RK4 diverged at t = {t:.4g} s "
+                         f"(step beyond its stability limit for this load/speed); use solver='default' "
+                         f"or a smaller rk4_step")
+
+
 class SkiddingModel:
     """The skidding tier (see module docstring).  ``internal_rate`` = 4 x the output rate (Hz)."""
 
@@ -1544,15 +1556,14 @@ class SkiddingModel:
         points come from the structure's exact response).  ``method``: an
         :class:`~.integrators.Method` instance overriding ``solver`` (for studies of step size
         and method; the Simulator does not use it)."""
-        from ..errors import UserError
-
         self.scene = scene
         self.seed = int(seed)
         self.sample_rate = float(sample_rate)
         self.internal_rate = self.sample_rate * self.decimation
         self.hs = 1.0 / self.internal_rate
-        if rk4_step is not None and not (isinstance(rk4_step, (int, float)) and 1e-9 <= rk4_step <= 1e-3):
-            raise UserError(f"rk4_step = {rk4_step!r}: allowed range is [1e-09, 0.001] s")
+        lo, hi = RK4_STEP_RANGE
+        if rk4_step is not None and not (isinstance(rk4_step, (int, float)) and lo <= rk4_step <= hi):
+            raise UserError(f"rk4_step = {rk4_step!r}: allowed range is [{lo:g}, {hi:g}] s")
         self.solver = solver
         self.oversample = int(oversample or DEFAULT_OVERSAMPLE)
         if not (self.oversample in (1, 2) or self.oversample % 4 == 0):
@@ -1756,8 +1767,6 @@ class SkiddingModel:
 
     # ---- TierModel interface -----------------------------------------------------------------
     def advance(self, n_steps: int, speed0: float, speed1: float, load0, load1) -> TierOutput:
-        from ..errors import UserError
-
         q = self.q
         n = int(n_steps) * q
         m = self.decimation * q
@@ -1812,10 +1821,7 @@ class SkiddingModel:
         if status != 0:
             t_bad = (self.counters[1] + self.counters[2]) * hs
             if self.solver == "rk4":
-                raise UserError(
-                    f"rk4_step = {self.hstep:g} s: the fixed-step RK4 diverged at t = {t_bad:.4g} s "
-                    f"(step beyond its stability limit for this load/speed); use solver='default' "
-                    f"or a smaller rk4_step")
+                raise RK4Diverged(self.hstep, t_bad)
             raise SolverDiverged(f"skidding solver {self.solver!r} diverged at t = {t_bad:.4g} s")
         self.shaft_angle = ramp[R_A0] + 0.5 * (speed0 + speed1) * n * hs
         self._speed = float(speed1)

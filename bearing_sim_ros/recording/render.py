@@ -18,6 +18,7 @@ one batch).
 from __future__ import annotations
 
 import math
+import shlex
 import sys
 import time
 from pathlib import Path
@@ -125,35 +126,75 @@ class _Progress:
             sys.stderr.flush()
 
 
+def _runs_skidding(scene, sim, duration: float, sample_rate: float, n_batch: int) -> bool:
+    """Whether the skidding tier runs at any batch of this render: the tier chosen at the start,
+    then the choice at the operating point that each batch ramps to (as the render loop below
+    and ``Simulator.maybe_switch_tier`` make it)."""
+    from ..simulator import reselect_tier
+
+    selection = sim.selection
+    point = (sim.shaft_speed, sim.radial_load)
+    total = int(round(duration * sample_rate))
+    done = 0
+    while selection.tier != "skidding" and done < total:
+        done += min(n_batch, total - done)
+        new_point = profile_at(scene, done / sample_rate)
+        selection = reselect_tier(scene, sim.requested_fidelity, selection, point, new_point) or selection
+        point = new_point
+    return selection.tier == "skidding"
+
+
 def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
            sample_rate: float = 15000.0, solver: str = "default",
            batch_duration: float = BATCH_DURATION, state_rate: float = STATE_RATE,
-           progress: bool | None = None, oversample: int | None = None) -> dict:
+           progress: bool | None = None, oversample: int | None = None,
+           rk4_step: float | None = None) -> dict:
     """Render ``duration`` seconds of ``scene`` (Scene, shipped name or YAML path) to ``out``.
 
     ``oversample``: integration steps per output sample (None: each tier's own; see
-    :class:`~bearing_sim_ros.Simulator`).  Returns a summary: messages, bytes, wall time (s),
-    real-time factor, recorder status."""
+    :class:`~bearing_sim_ros.Simulator`).  ``solver`` and ``rk4_step`` (s, ``solver="rk4"``
+    only) are the skidding tier's: when the kinematic tier was asked for, they are an error;
+    when ``fidelity="auto"`` keeps to the kinematic tier for the whole render, they are not used,
+    not recorded, and the summary's ``solver_unused`` says so.  Returns a summary: messages,
+    bytes, wall time (s), real-time factor, tier, path, solver_unused."""
     from .. import Simulator
-    from ..scene import load_scene
+    from ..scene import load_scene, scene_argument
     from .recorder import Recorder, recording_metadata
 
     if not hasattr(scene, "bearing"):
         scene = load_scene(scene)
     if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
         raise UserError(f"--duration = {duration!r}: expected seconds > 0")
+    if rk4_step is not None and solver != "rk4":
+        raise UserError(f"--rk4-step = {rk4_step:g} s: applies to --solver rk4 only (given --solver {solver})")
     sim = Simulator(scene, sample_rate=sample_rate, fidelity=fidelity, seed=seed, solver=solver,
-                    oversample=oversample)
+                    oversample=oversample, rk4_step=rk4_step)
+    n_batch = max(1, int(round(sample_rate * batch_duration)))
+    solver_unused = solver != "default" and not _runs_skidding(scene, sim, duration, sample_rate, n_batch)
+    if solver_unused and "kinematic" in (fidelity, scene.fidelity):
+        given = f"--solver {solver}" + (f" --rk4-step {float(rk4_step)!r}" if rk4_step is not None else "")
+        asked_by = ("--fidelity kinematic" if fidelity == "kinematic"
+                    else f"scene {scene.name}'s fidelity.tier: kinematic")
+        raise UserError(f"{given}: the solver applies to the skidding tier only, and {asked_by} runs the "
+                        f"kinematic tier; drop {given.split(' ', 1)[0]} or use --fidelity skidding")
+    if solver_unused:
+        # auto keeps to the kinematic tier: the file is the default solver's, and says so
+        solver, rk4_step = "default", None
+        sim = Simulator(scene, sample_rate=sample_rate, fidelity=fidelity, seed=seed, oversample=oversample)
     from ..messages import BatchMessages
 
     msgs = BatchMessages(sim, start_ns=0)
-    n_batch = max(1, int(round(sample_rate * batch_duration)))
     total = int(round(duration * sample_rate))
     params = {"mode": "render", "duration": float(duration), "fidelity": fidelity, "seed": int(seed),
               "sample_rate": float(sample_rate), "solver": solver, "batch_duration": float(batch_duration),
               "state_rate": float(state_rate), "start_time_ns": 0, "oversample": int(oversample or 0),
-              "command": (f"bearing-sim render {scene.name} --duration {duration:g} --fidelity {fidelity} "
-                          f"--seed {seed} --sample-rate {sample_rate:g} --solver {solver}"
+              "rk4_step": rk4_step,
+              # solver, step and oversample only when not the default: a kinematic render must
+              # not name a solver it did not use; repr: the step exactly as it was given
+              "command": (f"bearing-sim render {shlex.quote(scene_argument(scene))} --duration {duration:g} "
+                          f"--fidelity {fidelity} --seed {seed} --sample-rate {sample_rate:g}"
+                          + (f" --solver {solver}" if solver != "default" else "")
+                          + (f" --rk4-step {float(rk4_step)!r}" if rk4_step is not None else "")
                           + (f" --oversample {oversample}" if oversample else ""))}
     meta = recording_metadata(scene, params, seed, sim.selection)
     attachments = {f"{scene.name}.yaml": scene.source_text.encode("utf-8")} if scene.source_text else {}
@@ -228,19 +269,29 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
         raise UserError(f"--out = {str(out)!r}: {status['error']}")
     return {"messages": status["messages"], "bytes": status["bytes"], "wall_s": wall,
             "signal_s": total / sample_rate, "real_time_factor": (total / sample_rate) / max(wall, 1e-9),
-            "tier": sim.tier, "path": status["path"]}
+            "tier": sim.tier, "path": status["path"], "solver_unused": solver_unused}
 
 
 def render_command(args) -> int:
     """CLI entry: ``bearing-sim render S --duration SEC --out F.mcap [...]``."""
+    from ..physics.skidding import RK4Diverged
     from ..scene import load_scene
 
     scene = load_scene(args.scene)
     out = str(args.out)
-    summary = render(scene, float(args.duration), out, fidelity=args.fidelity, seed=int(args.seed),
-                     sample_rate=float(args.sample_rate), solver=getattr(args, "solver", "default"),
-                     oversample=getattr(args, "oversample", None))
-    print(f"{summary['path']}: {summary['signal_s']:g} s of {scene.name} ({summary['tier']} tier), "
+    try:
+        summary = render(scene, float(args.duration), out, fidelity=args.fidelity, seed=int(args.seed),
+                         sample_rate=float(args.sample_rate), solver=args.solver,
+                         oversample=args.oversample, rk4_step=args.rk4_step)
+    except RK4Diverged as exc:
+        # the model words its advice for the Python API; here the knobs are options
+        raise UserError(f"--rk4-step = {exc.step:g} s: the fixed-step RK4 diverged at t = {exc.t:.4g} s "
+                        f"(step beyond its stability limit for this load/speed); use a smaller "
+                        f"--rk4-step or --solver default") from None
+    tier = f"{summary['tier']} tier"
+    if summary["solver_unused"]:
+        tier += "; --solver applies to the skidding tier only, not used"
+    print(f"{summary['path']}: {summary['signal_s']:g} s of {scene.name} ({tier}), "
           f"{summary['messages']} messages, {summary['bytes'] / 1e6:.1f} MB of messages, "
           f"rendered in {summary['wall_s']:.2f} s = {summary['real_time_factor']:.1f}x real time")
     return 0
