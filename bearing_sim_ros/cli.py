@@ -126,8 +126,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     s = sub.add_parser("bench", help="speed-against-error study")
     s.add_argument("--quick", action="store_true",
-                   help="fewer scenes, settings and repeats, shorter runs: about 45 s instead of about "
-                        "5 minutes (default: the full study)")
+                   help="fewer scenes, settings and repeats, shorter runs: about 25 s instead of about "
+                        "6 minutes (default: the full study)")
     s.add_argument("--calibrate-fidelity", action="store_true",
                    help="measure the kinematic tier's error against the skidding reference and refit "
                         "config/fidelity.yaml (default: off)")
