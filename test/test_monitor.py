@@ -10,6 +10,7 @@ healthy would be a test of the wrong thing.  The CWRU 6205 scene carries its loa
 from __future__ import annotations
 
 import re
+import subprocess
 
 import numpy as np
 import pytest
@@ -17,6 +18,7 @@ import pytest
 from test_node_support import NS, NodeProcess
 
 from bearing_sim_ros.nodes.monitor_node import Window
+from bearing_sim_ros.recording.render import render
 
 
 def test_window_gathers_contiguous_tables_and_restarts_on_a_gap():
@@ -67,3 +69,26 @@ def test_monitor_detects_outer_race_and_calls_healthy_healthy(ros_env, bearing_s
     h = [ln for ln in out_healthy.splitlines() if "verdict=" in ln]
     assert len(h) == 1 and "verdict=healthy" in h[0], out_healthy
     assert "shaft=1797rpm" in h[0]
+
+
+def test_monitor_loses_no_table_of_a_recording_played_at_4x(ros_env, bearing_sim_exe, tmp_path):
+    """A recording played at 4x: 400 tables/s against the subscription's depth of 100 (0.25 s).
+    The first analysis imports scipy (~1 s); on the executor thread it let the depth overflow
+    (at 2x too: about 1 run in 2) and the monitor lost tables and restarted its window."""
+    recording = tmp_path / "four_seconds.mcap"
+    render("er16k_outer_race", 4.0, recording, fidelity="kinematic", seed=3, progress=False)
+    monitor = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / "monitor.log",
+                          command=("monitor", "--window", "1", "--count", "3"))
+    try:
+        # play waits for the monitor's subscriptions (discovery can take a 3 s period or more)
+        play = subprocess.run([bearing_sim_exe, "play", str(recording), "--rate", "4", "--wait", "15"],
+                              env=ros_env, capture_output=True, text=True, timeout=60)
+        assert play.returncode == 0, play.stderr
+        assert monitor.wait(30) == 0, monitor.output()
+        out = monitor.output()
+    finally:
+        monitor.close()
+    verdicts = [ln for ln in out.splitlines() if "verdict=" in ln]
+    assert len(verdicts) == 3 and all("verdict=outer" in v for v in verdicts), out
+    assert "not contiguous" not in out, out
+    assert "monitor: 3 verdicts from 300 tables, 0 gaps" in out, out      # 3 windows of 1 s, whole

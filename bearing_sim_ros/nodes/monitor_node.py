@@ -15,11 +15,18 @@ at the fault frequencies of the scene's bearing at the measured shaft speed, and
 
 ``found/theory Hz`` and ``x`` the height of the line over the median of its neighbourhood
 (threshold x4, ``envelope.DETECTION_THRESHOLD``).  The axis where a line stands highest counts.
+
+The analysis runs on a thread of its own, and the callbacks only decode and queue: the
+subscription keeps a bounded number of tables (``waveform_qos``: 1 s of signal, 0.5 s when a
+recording plays at 2x), and an analysis on the executor thread (the first one imports scipy,
+about 1 s) would let it overflow and lose tables.  On exit the monitor prints how many tables
+it took and how many gaps it saw.
 """
 from __future__ import annotations
 
 import sys
 import time
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import rclpy
@@ -127,12 +134,17 @@ class MonitorNode(Node):
         self.count = int(count)
         self.out = out or sys.stdout
         self.window = Window()
+        self.tables = 0
+        self.windows_queued = 0
         self.verdicts = []
         self._speeds = []
         self._t0 = None
         self._warned = False
-        # reliable like the node offers; depth = 1 s of 10 ms batches, so an analysis that takes
-        # a while (scipy on the executor thread) does not lose tables
+        # one worker: verdicts come out in signal order; the windows wait in its queue, so an
+        # analysis slower than the signal would grow it (8 ms per 3 s window here, no danger)
+        self._analysis = ThreadPoolExecutor(max_workers=1, thread_name_prefix="envelope")
+        # reliable like the node offers; depth = 1 s of 10 ms batches: plenty while the
+        # executor thread only decodes tables
         self.create_subscription(PointCloud2, TOPIC_ACCEL, self._on_accel, waveform_qos(0.01))
         self.create_subscription(JointState, TOPIC_STATE, self._on_state, 10)
 
@@ -145,9 +157,10 @@ class MonitorNode(Node):
             self._speeds.append(float(msg.velocity[list(msg.name).index("shaft")]))
 
     def _on_accel(self, msg):
-        if self.done:
+        if self.count and self.windows_queued >= self.count:
             return
         stamp, channels, data = from_pointcloud2(msg)
+        self.tables += 1
         if self._t0 is None:
             self._t0 = stamp
         if not self.window.add(stamp, channels, data):
@@ -156,14 +169,27 @@ class MonitorNode(Node):
             self._speeds = []
         if self.window.sample_rate and self.window.seconds() >= self.window_s:
             fs = self.window.sample_rate
-            x = self.window.take()
             speeds, self._speeds = self._speeds, []
             # the speed in use comes from `state`; without it, the scene's operating point
             shaft = float(np.mean(speeds)) if speeds else float(self.scene.shaft_speed)
-            result = verdict(x, channels, fs, self.scene.bearing, abs(shaft) / (2 * np.pi))
-            self.verdicts.append(result)
             t = (stamp + data.shape[0] * NS / fs - self._t0) / NS
-            print(format_verdict(t, result), file=self.out, flush=True)
+            self.windows_queued += 1
+            self._analysis.submit(self._analyse, t, self.window.take(), channels, fs, shaft)
+
+    def _analyse(self, t: float, x: np.ndarray, channels, fs: float, shaft: float) -> None:
+        """On the analysis thread: one verdict, printed."""
+        try:
+            result = verdict(x, channels, fs, self.scene.bearing, abs(shaft) / (2 * np.pi))
+        except Exception as exc:  # noqa: BLE001 - a failed analysis must not end the monitor silently
+            self.get_logger().error(f"envelope analysis at t={t:.2f}s failed: {exc}")
+            return
+        self.verdicts.append(result)
+        print(format_verdict(t, result), file=self.out, flush=True)
+
+    def destroy_node(self):
+        # the window being analysed finishes; queued ones are dropped (Ctrl-C means stop)
+        self._analysis.shutdown(wait=True, cancel_futures=True)
+        return super().destroy_node()
 
 
 def main(args) -> int:
@@ -194,5 +220,7 @@ def main(args) -> int:
         with teardown_watchdog():
             if node is not None:
                 node.destroy_node()
+                print(f"monitor: {len(node.verdicts)} verdicts from {node.tables} tables, "
+                      f"{node.window.gaps} gaps (lost tables or a restarted source)", flush=True)
             rclpy.try_shutdown()
     return 0
