@@ -116,6 +116,32 @@ def test_every_message_reads_back_with_rosbags_and_mcap(tmp_path, sim_msgs):
         assert r.header.profile == "ros2"
 
 
+def test_add_topic_takes_an_int_depth_like_rclpy(tmp_path):
+    """``create_publisher(Float64, "/x", 10)``: rclpy takes an int as a keep-last depth, and so
+    does the recorder; the file then offers the profile rclpy would use."""
+    from rclpy.qos import QoSProfile
+    from rosbags.highlevel import AnyReader
+    from std_msgs.msg import Float64
+
+    path = tmp_path / "depth.mcap"
+    with Recorder(path, {"a": "b"}) as rec:
+        rec.add_topic("/x", "std_msgs/msg/Float64", 10)
+        rec.write("/x", Float64(data=1.5), 1)
+        with pytest.raises(ValueError, match="/y: qos = -1: a depth must be >= 0"):
+            rec.add_topic("/y", "std_msgs/msg/Float64", -1)
+        with pytest.raises(TypeError, match="/y: qos = 'ten': expected"):
+            rec.add_topic("/y", "std_msgs/msg/Float64", "ten")
+    assert rec.status["ok"] and rec.status["messages"] == 1
+    with AnyReader([path]) as reader:
+        (conn,) = reader.connections
+        assert conn.topic == "/x"
+        offered = conn.ext.offered_qos_profiles[0]
+    rclpy_default = QoSProfile(depth=10)
+    assert offered.depth == 10 and offered.history.name == "KEEP_LAST"
+    assert offered.reliability.name == rclpy_default.reliability.name == "RELIABLE"
+    assert offered.durability.name == rclpy_default.durability.name == "VOLATILE"
+
+
 def test_unwritable_path_is_a_user_error(tmp_path):
     with pytest.raises(UserError, match="record = .*cannot write there"):
         Recorder(tmp_path / "missing_dir" / "x.mcap", {"a": "b"})

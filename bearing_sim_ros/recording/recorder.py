@@ -55,6 +55,20 @@ def _normalise_topic(topic: str) -> str:
     return topic if topic.startswith("/") else "/" + topic
 
 
+def _qos_profile(qos, topic: str):
+    """The QoSProfile for ``qos`` as rclpy reads it: a profile as it is, an int as a keep-last
+    depth (``Node._validate_qos_or_depth_parameter``), None as no profile."""
+    from rclpy.qos import QoSProfile
+
+    if qos is None or isinstance(qos, QoSProfile):
+        return qos
+    if isinstance(qos, int) and not isinstance(qos, bool):
+        if qos < 0:
+            raise ValueError(f"{topic}: qos = {qos}: a depth must be >= 0")
+        return QoSProfile(depth=qos)
+    raise TypeError(f"{topic}: qos = {qos!r}: expected an rclpy QoSProfile, an int depth or None")
+
+
 def rotated_path(path: Path, index: int) -> Path:
     """``run.mcap`` -> ``run_003.mcap``."""
     return path.with_name(f"{path.stem}_{index:03d}{path.suffix or '.mcap'}")
@@ -112,10 +126,12 @@ class Recorder:
 
     # ---- producer side (any thread) -----------------------------------------------------------
     def add_topic(self, topic: str, msg_type: str, qos) -> None:
-        """Declare a channel: ``msg_type`` like 'sensor_msgs/msg/PointCloud2'; ``qos`` the rclpy
-        QoSProfile it is published with (recorded as ``offered_qos_profiles``)."""
+        """Declare a channel: ``msg_type`` like 'sensor_msgs/msg/PointCloud2'; ``qos`` what it
+        is published with (recorded as ``offered_qos_profiles``): an rclpy QoSProfile, or an int,
+        a keep-last depth, as ``create_publisher`` takes it; None records no profile."""
         name = _normalise_topic(topic)
         definition = message_definition(msg_type)      # fail now, in the caller, if unknown
+        qos = _qos_profile(qos, name)
         self._aliases[topic] = name
         self._aliases[name] = name
         if name in self._topics:
