@@ -59,11 +59,10 @@ def _record_tail(path, max_s: float) -> dict:
                     speeds.popleft()
         meta = dict(rec.metadata)
         counts = {t: c.count for t, c in topics.items()}
-        size = rec.path.stat().st_size
     data = np.concatenate(list(parts)) if parts else np.zeros((0, 0), np.float32)
     return {"accel": data, "channels": channels, "sample_rate": rate,
             "shaft_speed": float(np.mean(speeds)) if speeds else None, "metadata": meta,
-            "counts": counts, "bytes": size}
+            "counts": counts}
 
 
 def summarise(scene, tail: dict, node_figures: dict, path) -> str:
@@ -95,7 +94,7 @@ def summarise(scene, tail: dict, node_figures: dict, path) -> str:
         lines.append(f"verdict: {FAULT_NAMES[res['verdict']]} (threshold x{DETECTION_THRESHOLD:g} the "
                      f"local floor; the scene's defects: {defects})")
     n_msgs = sum(tail["counts"].values())
-    lines.append(f"recording: {path} ({tail['bytes'] / 1e6:.1f} MB, {n_msgs} messages on "
+    lines.append(f"recording: {path} ({f['sizes']}, {n_msgs} messages on "
                  f"{len(tail['counts'])} topics, {f['dropped']} dropped)")
     lines.append(f"  next: bearing-sim report {path} --out {str(path).rsplit('.', 1)[0]}_report"
                  f"   |   bearing-sim play {path}")
@@ -109,6 +108,7 @@ def run_command(args) -> int:
     from rclpy.parameter import Parameter
 
     from .nodes.bearing_sim_node import BearingSimNode, log_recording, spin_node
+    from .recording.recorder import sizes_text
     from .scene import load_scene
 
     duration = float(args.duration)
@@ -139,7 +139,7 @@ def run_command(args) -> int:
                        "rtf": node.stats.real_time_factor,
                        "overruns": node.stats.overruns, "worst_lag": node.stats.worst_lag,
                        "tier": node.sim.tier, "dropped": rs["dropped"], "ok": rs["ok"], "error": rs["error"],
-                       "path": rs["path"]}
+                       "path": rs["path"], "sizes": sizes_text(rs)}
         with teardown_watchdog():
             if node is not None:
                 node.destroy_node()

@@ -10,6 +10,13 @@ import pytest
 from test_node_support import NS, read_recording
 
 
+def _raw_message_bytes(path) -> int:
+    from mcap.reader import make_reader
+
+    with open(path, "rb") as f:
+        return sum(len(message.data) for _schema, _channel, message in make_reader(f).iter_messages())
+
+
 def test_run_records_and_summarises(ros_env, bearing_sim_exe, tmp_path):
     out = tmp_path / "runs" / "r.mcap"
     out.parent.mkdir()
@@ -33,6 +40,10 @@ def test_run_records_and_summarises(ros_env, bearing_sim_exe, tmp_path):
     stamps = np.array([m.header.stamp.sec * NS + m.header.stamp.nanosec for m in accel])
     assert np.all(np.diff(stamps) == 10_000_000)
     assert meta["bearing_sim"]["scene"] == "er16k_outer_race"
+    # the sizes, each named: serialised message bytes and the file (the summary and the node's log)
+    sizes = f"{_raw_message_bytes(out) / 1e6:.1f} MB of messages, {out.stat().st_size / 1e6:.1f} MB on disk (zstd)"
+    assert f"recording: {out} ({sizes}, " in text, text
+    assert f"recording {out}: " in r.stderr and f"messages, {sizes}, 0 dropped" in r.stderr, r.stderr
 
 
 @pytest.mark.parametrize("case", ["unknown scene", "missing output folder"])

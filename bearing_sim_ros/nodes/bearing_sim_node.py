@@ -630,12 +630,14 @@ def _param_text(value) -> str:
 def log_recording(recorder) -> None:
     """Log where a closed recording went.  Call after ``destroy_node``: after a signal the node's
     context is gone, and its logger's /rosout publisher with it."""
+    from ..recording.recorder import sizes_text
+
     if recorder is None:
         return
     st = recorder.status
     log = rclpy.logging.get_logger(NODE_NAME)
     if st["ok"]:
-        log.info(f"recording {st['path']}: {st['messages']} messages, {st['bytes'] / 1e6:.1f} MB, "
+        log.info(f"recording {st['path']}: {st['messages']} messages, {sizes_text(st)}, "
                  f"{st['dropped']} dropped")
     else:
         log.error(f"recording: {st['error']}")

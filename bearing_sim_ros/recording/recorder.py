@@ -69,6 +69,13 @@ def _qos_profile(qos, topic: str):
     raise TypeError(f"{topic}: qos = {qos!r}: expected an rclpy QoSProfile, an int depth or None")
 
 
+def sizes_text(status: dict) -> str:
+    """'6.5 MB of messages, 2.3 MB on disk (zstd)' for a closed recording's ``status``: what
+    the messages weigh serialised, and what the files take after chunk compression."""
+    on_disk = sum(os.path.getsize(p) for p in status["files"] if os.path.exists(p))
+    return f"{status['bytes'] / 1e6:.1f} MB of messages, {on_disk / 1e6:.1f} MB on disk (zstd)"
+
+
 def rotated_path(path: Path, index: int) -> Path:
     """``run.mcap`` -> ``run_003.mcap``."""
     return path.with_name(f"{path.stem}_{index:03d}{path.suffix or '.mcap'}")
