@@ -23,28 +23,37 @@ ANALYSIS_MAX_S = 30.0       # s of signal (the end of the recording) that the su
 
 
 def _record_tail(path, max_s: float) -> dict:
-    """The last ``max_s`` seconds of ``accel`` from a recording, and the shaft speed in use."""
+    """The last ``max_s`` seconds of ``accel`` from a recording, the shaft speed in use, and the
+    skid ratios of the whole recording (percent; the skidding tier's ``/diagnostics``)."""
     from rclpy.serialization import deserialize_message
 
+    from .analysis.report import skid_ratios
     from .recording.reader import get_message, open_recording
     from .waveform import NS, from_pointcloud2
 
     parts: deque = deque()
     held = 0
     speeds: deque = deque()
+    skids: dict = {}
     channels, rate = None, None
     prev = None
     with open_recording(path) as rec:
         topics = rec.topics()
         accel_topic = next((t for t in topics if t.rsplit("/", 1)[-1] == "accel"), None)
         speed_topic = next((t for t in topics if t.rsplit("/", 1)[-1] == "shaft_speed"), None)
+        diag_topic = next((t for t in topics if t.rsplit("/", 1)[-1] == "diagnostics"), None)
         if accel_topic is None:
             raise UserError(f"{path}: no accel topic in the recording")
-        types = {t: get_message(c.msg_type) for t, c in topics.items() if t in (accel_topic, speed_topic)}
-        for topic, _type, _log_ns, data in rec.messages(topics=[t for t in (accel_topic, speed_topic) if t]):
+        wanted = [t for t in (accel_topic, speed_topic, diag_topic) if t]
+        types = {t: get_message(topics[t].msg_type) for t in wanted}
+        for topic, _type, _log_ns, data in rec.messages(topics=wanted):
             msg = deserialize_message(data, types[topic])
             if topic == speed_topic:
                 speeds.append(float(msg.data))
+                continue
+            if topic == diag_topic:
+                for key, percent in skid_ratios(msg).items():
+                    skids.setdefault(key, []).append(percent)
                 continue
             stamp, channels, arr = from_pointcloud2(msg)
             if prev is not None and rate is None:
@@ -62,13 +71,36 @@ def _record_tail(path, max_s: float) -> dict:
     data = np.concatenate(list(parts)) if parts else np.zeros((0, 0), np.float32)
     return {"accel": data, "channels": channels, "sample_rate": rate,
             "shaft_speed": float(np.mean(speeds)) if speeds else None, "metadata": meta,
-            "counts": counts}
+            "counts": counts, "skid_percent": {k: float(np.mean(v)) for k, v in sorted(skids.items())}}
+
+
+def _verdict_lines(scene, res: dict) -> list:
+    """The verdict, honest about what a line means on a scene without a defect: a healthy
+    bearing with clearance shows a line at BPFO, the ball-pass (varying compliance) line, which
+    the detector cannot tell from an outer-race fault (README "Limitations")."""
+    from .analysis.envelope import DETECTION_THRESHOLD
+    from .nodes.monitor_node import FAULT_NAMES
+
+    threshold = f"threshold x{DETECTION_THRESHOLD:g} the local floor"
+    if scene.defects:
+        defects = ", ".join(d.kind for d in scene.defects)
+        return [f"verdict: {FAULT_NAMES[res['verdict']]} ({threshold}; the scene's defects: {defects})"]
+    if res["verdict"] == "healthy":
+        return [f"verdict: healthy ({threshold}; this scene has no defect)"]
+    if res["verdict"] == "outer":
+        bpfo = res["lines"]["bpfo"].prominence
+        return [f"verdict: this scene has no defect; the line at BPFO (x{bpfo:.0f}) is the ball-pass "
+                "(varying compliance) line,",
+                "  which the detector alone calls an outer-race fault: compare line heights with a "
+                "healthy baseline"]
+    return [f"verdict: the detector says {FAULT_NAMES[res['verdict']]} ({threshold}), but this scene "
+            "has no defect, so the line is not a defect's"]
 
 
 def summarise(scene, tail: dict, node_figures: dict, path) -> str:
     """The one-screen summary (text)."""
     from .analysis.envelope import DETECTION_THRESHOLD
-    from .nodes.monitor_node import FAULT_NAMES, verdict
+    from .nodes.monitor_node import verdict
 
     lines = []
     f = node_figures
@@ -90,9 +122,10 @@ def summarise(scene, tail: dict, node_figures: dict, path) -> str:
             ln = res["lines"][key]
             mark = "  <- detected" if key != "ftf" and ln.prominence >= DETECTION_THRESHOLD else ""
             lines.append(f"  {label:<6} {ln.expected_hz:>10.2f} {ln.found_hz:>9.2f} {ln.prominence:>8.1f}{mark}")
-        defects = ", ".join(d.kind for d in scene.defects) or "none"
-        lines.append(f"verdict: {FAULT_NAMES[res['verdict']]} (threshold x{DETECTION_THRESHOLD:g} the "
-                     f"local floor; the scene's defects: {defects})")
+        lines += _verdict_lines(scene, res)
+    if tail["skid_percent"]:
+        lines.append(f"skid ratios, mean of the recording's /diagnostics ({f['tier']} tier): "
+                     + ", ".join(f"{k.replace('_ratio', '')} {v:.3g} %" for k, v in tail["skid_percent"].items()))
     n_msgs = sum(tail["counts"].values())
     lines.append(f"recording: {path} ({f['sizes']}, {n_msgs} messages on "
                  f"{len(tail['counts'])} topics, {f['dropped']} dropped)")

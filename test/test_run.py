@@ -40,10 +40,41 @@ def test_run_records_and_summarises(ros_env, bearing_sim_exe, tmp_path):
     stamps = np.array([m.header.stamp.sec * NS + m.header.stamp.nanosec for m in accel])
     assert np.all(np.diff(stamps) == 10_000_000)
     assert meta["bearing_sim"]["scene"] == "er16k_outer_race"
+    assert "skid ratios" not in text                                # the kinematic tier has none
     # the sizes, each named: serialised message bytes and the file (the summary and the node's log)
     sizes = f"{_raw_message_bytes(out) / 1e6:.1f} MB of messages, {out.stat().st_size / 1e6:.1f} MB on disk (zstd)"
     assert f"recording: {out} ({sizes}, " in text, text
     assert f"recording {out}: " in r.stderr and f"messages, {sizes}, 0 dropped" in r.stderr, r.stderr
+
+
+def test_run_on_a_healthy_skidding_scene_explains_the_ball_pass_line_and_shows_skid(ros_env, bearing_sim_exe,
+                                                                                   tmp_path):
+    """er16k_skidding has no defect and asks for skid ratios: the summary says the BPFO line is the
+    ball-pass line, not a fault, and shows the recording's mean skid ratios."""
+    out = tmp_path / "skid.mcap"
+    r = subprocess.run([bearing_sim_exe, "run", "--scene", "er16k_skidding", "--duration", "3",
+                        "--out", str(out)], env=ros_env, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stdout + r.stderr
+    text = r.stdout
+    assert "skidding tier" in text, text
+    assert re.search(r"BPFO\s+[\d.]+\s+[\d.]+\s+[\d.]+\s+<- detected", text), text   # the line is there
+    assert "verdict: outer-race fault" not in text, text
+    assert re.search(r"verdict: this scene has no defect; the line at BPFO \(x\d+\) is the ball-pass "
+                     r"\(varying compliance\) line", text), text
+    assert "compare line heights with a healthy baseline" in text, text
+    # the skid ratios: the mean of what the recording's /diagnostics hold
+    topics, _meta = read_recording(out)
+    recorded = {}
+    for _t, msg in topics["/diagnostics"]:
+        for kv in msg.status[0].values:
+            if kv.key in ("ball_skid_ratio", "cage_skid_ratio"):
+                recorded.setdefault(kv.key[: -len("_ratio")], []).append(float(kv.value))
+    assert set(recorded) == {"ball_skid", "cage_skid"}
+    line = re.search(r"skid ratios, mean of the recording's /diagnostics \(skidding tier\): "
+                     r"ball_skid ([\d.e+-]+) %, cage_skid ([\d.e+-]+) %", text)
+    assert line, text
+    for key, shown in zip(("ball_skid", "cage_skid"), map(float, line.groups())):
+        assert shown == pytest.approx(np.mean(recorded[key]), rel=5e-3), key
 
 
 @pytest.mark.parametrize("case", ["unknown scene", "missing output folder"])

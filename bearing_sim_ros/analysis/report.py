@@ -89,13 +89,8 @@ class _Data:
                 load_t.append(_stamp(msg.header.stamp))
                 load_xy.append((msg.wrench.force.x, msg.wrench.force.y))
             else:
-                for st in msg.status:
-                    for kv in st.values:
-                        if "skid" in kv.key:
-                            try:
-                                diag.setdefault(kv.key, []).append((_stamp(msg.header.stamp), float(kv.value)))
-                            except ValueError:
-                                pass
+                for key, percent in skid_ratios(msg).items():
+                    diag.setdefault(key, []).append((_stamp(msg.header.stamp), percent))
         if not chunks:
             raise UserError(f"{rec.path}: no accelerometer waveform tables (sensor_msgs/msg/PointCloud2 "
                             f"on .../accel) in this recording; topics: {', '.join(sorted(topics)) or 'none'}")
@@ -133,6 +128,20 @@ class _Data:
             return 0
         expected = self.stamps[:-1] + np.round(self.widths[:-1] * NS / self.sample_rate).astype(np.int64)
         return int(np.sum(np.abs(self.stamps[1:] - expected) > 1000))
+
+
+def skid_ratios(diagnostics) -> dict:
+    """{key: percent} of the skid ratios in one ``/diagnostics`` message: the skidding tier's
+    ``ball_skid_ratio`` and ``cage_skid_ratio`` (percent already, physics/skidding.py)."""
+    found = {}
+    for status in diagnostics.status:
+        for kv in status.values:
+            if "skid" in kv.key:
+                try:
+                    found[kv.key] = float(kv.value)
+                except ValueError:
+                    pass            # not a number: not a ratio to average
+    return found
 
 
 def _stamp(stamp) -> int:
