@@ -20,11 +20,23 @@ export PYTHONDONTWRITEBYTECODE := 1
 
 .PHONY: run test bench venv clean
 
+# ROS 2 Jazzy's wheels and the pins of requirements.lock cover Python 3.10-3.12
+define PYTHON_CHECK
+import sys
+v = sys.version_info[:2]
+if not (3, 10) <= v <= (3, 12):
+    sys.exit(f"make: bearing_sim_ros needs Python 3.10-3.12; PYTHON={sys.executable} is {v[0]}.{v[1]}")
+endef
+export PYTHON_CHECK
+
+# A failed install removes the venv, so that the next attempt (another PYTHON, the network back)
+# starts afresh instead of reusing a half-installed one.
 $(VENV)/.installed: requirements.lock setup.py package.xml
-	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -r requirements.lock
-	$(PY) -m pip install --quiet --no-deps --no-build-isolation -e .
+	@test -x $(PY) || { $(PYTHON) -c "$$PYTHON_CHECK" && $(PYTHON) -m venv $(VENV); }
+	@{ $(PY) -m pip install --quiet --upgrade pip \
+	  && $(PY) -m pip install --quiet -r requirements.lock \
+	  && $(PY) -m pip install --quiet --no-deps --no-build-isolation -e . ; } \
+	  || { rm -rf $(VENV); echo "make: installing the dependencies failed (above); .venv removed" >&2; exit 1; }
 	@touch $@
 
 venv: $(VENV)/.installed
