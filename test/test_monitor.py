@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import re
 import subprocess
+import time
 
 import numpy as np
 import pytest
@@ -92,3 +93,47 @@ def test_monitor_loses_no_table_of_a_recording_played_at_4x(ros_env, bearing_sim
     assert len(verdicts) == 3 and all("verdict=outer" in v for v in verdicts), out
     assert "not contiguous" not in out, out
     assert "monitor: 3 verdicts from 300 tables, 0 gaps" in out, out      # 3 windows of 1 s, whole
+
+
+def test_monitor_rejects_a_bad_table_and_keeps_going(ros_env, bearing_sim_exe, tmp_path):
+    """Tables that are no waveform table (wrong point step) or hold a NaN, from another
+    publisher, are skipped, logged and counted; the recording played after them still gives its
+    verdict."""
+    import rclpy
+    from sensor_msgs.msg import PointCloud2
+
+    from bearing_sim_ros.messages import TOPIC_ACCEL, waveform_qos
+    from bearing_sim_ros.waveform import to_pointcloud2
+
+    recording = tmp_path / "two_seconds.mcap"
+    render("er16k_outer_race", 2.0, recording, fidelity="kinematic", seed=3, progress=False)
+    monitor = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / "monitor.log",
+                          command=("monitor", "--window", "1", "--count", "1"))
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    try:
+        node = rclpy.create_node("bad_tables", context=context)
+        pub = node.create_publisher(PointCloud2, TOPIC_ACCEL, waveform_qos(0.01))
+        deadline = time.monotonic() + 30
+        while pub.get_subscription_count() == 0 and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert pub.get_subscription_count() > 0, monitor.output()
+        channels = ["accel_x", "accel_y"]
+        wrong_step = to_pointcloud2(np.zeros((150, 2)), channels, 0, "bearing_accel")
+        wrong_step.point_step = 12
+        nan = to_pointcloud2(np.full((150, 2), np.nan), channels, 0, "bearing_accel")
+        for msg in (wrong_step, nan, wrong_step):
+            pub.publish(msg)
+        time.sleep(1.0)                     # reliable: delivered before the recording's tables
+        play = subprocess.run([bearing_sim_exe, "play", str(recording), "--wait", "15"],
+                              env=ros_env, capture_output=True, text=True, timeout=60)
+        assert play.returncode == 0, play.stderr
+        assert monitor.wait(30) == 0, monitor.output()
+        out = monitor.output()
+    finally:
+        monitor.close()
+        rclpy.try_shutdown(context=context)
+    assert "accel table rejected (not a waveform table" in out, out
+    verdicts = [ln for ln in out.splitlines() if "verdict=" in ln]
+    assert len(verdicts) == 1 and "verdict=outer" in verdicts[0], out
+    assert ", 3 rejected" in out, out

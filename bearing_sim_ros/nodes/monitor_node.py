@@ -135,6 +135,7 @@ class MonitorNode(Node):
         self.out = out or sys.stdout
         self.window = Window()
         self.tables = 0
+        self.rejected = 0           # tables that were no waveform table or held non-finite samples
         self.windows_queued = 0
         self.verdicts = []
         self._speeds = []
@@ -159,7 +160,16 @@ class MonitorNode(Node):
     def _on_accel(self, msg):
         if self.count and self.windows_queued >= self.count:
             return
-        stamp, channels, data = from_pointcloud2(msg)
+        try:
+            stamp, channels, data = from_pointcloud2(msg)
+            if not np.all(np.isfinite(data)):
+                raise ValueError("non-finite samples")
+        except ValueError as exc:
+            # a bad table from some other publisher: skip it, say so now and then, keep going
+            self.rejected += 1
+            self.get_logger().warning(f"accel table rejected ({exc}); {self.rejected} so far",
+                                      throttle_duration_sec=5.0)
+            return
         self.tables += 1
         if self._t0 is None:
             self._t0 = stamp
@@ -221,6 +231,7 @@ def main(args) -> int:
             if node is not None:
                 node.destroy_node()
                 print(f"monitor: {len(node.verdicts)} verdicts from {node.tables} tables, "
-                      f"{node.window.gaps} gaps (lost tables or a restarted source)", flush=True)
+                      f"{node.window.gaps} gaps (lost tables or a restarted source), "
+                      f"{node.rejected} rejected", flush=True)
             rclpy.try_shutdown()
     return 0
