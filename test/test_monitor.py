@@ -72,6 +72,16 @@ def test_monitor_detects_outer_race_and_calls_healthy_healthy(ros_env, bearing_s
     assert "shaft=1797rpm" in h[0]
 
 
+def _play_into(monitor, bearing_sim_exe, recording, env, *options) -> str:
+    """``bearing-sim play`` the recording (it waits for the monitor's subscriptions: discovery
+    can take a 3 s period or more), wait for the monitor to finish; its output."""
+    play = subprocess.run([bearing_sim_exe, "play", str(recording), *options, "--wait", "15"],
+                          env=env, capture_output=True, text=True, timeout=60)
+    assert play.returncode == 0, play.stderr
+    assert monitor.wait(30) == 0, monitor.output()
+    return monitor.output()
+
+
 def test_monitor_loses_no_table_of_a_recording_played_at_4x(ros_env, bearing_sim_exe, tmp_path):
     """A recording played at 4x: 400 tables/s against the subscription's depth of 100 (0.25 s).
     The first analysis imports scipy (~1 s); on the executor thread it let the depth overflow
@@ -81,12 +91,7 @@ def test_monitor_loses_no_table_of_a_recording_played_at_4x(ros_env, bearing_sim
     monitor = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / "monitor.log",
                           command=("monitor", "--window", "1", "--count", "3"))
     try:
-        # play waits for the monitor's subscriptions (discovery can take a 3 s period or more)
-        play = subprocess.run([bearing_sim_exe, "play", str(recording), "--rate", "4", "--wait", "15"],
-                              env=ros_env, capture_output=True, text=True, timeout=60)
-        assert play.returncode == 0, play.stderr
-        assert monitor.wait(30) == 0, monitor.output()
-        out = monitor.output()
+        out = _play_into(monitor, bearing_sim_exe, recording, ros_env, "--rate", "4")
     finally:
         monitor.close()
     verdicts = [ln for ln in out.splitlines() if "verdict=" in ln]
@@ -125,11 +130,7 @@ def test_monitor_rejects_a_bad_table_and_keeps_going(ros_env, bearing_sim_exe, t
         for msg in (wrong_step, nan, wrong_step):
             pub.publish(msg)
         time.sleep(1.0)                     # reliable: delivered before the recording's tables
-        play = subprocess.run([bearing_sim_exe, "play", str(recording), "--wait", "15"],
-                              env=ros_env, capture_output=True, text=True, timeout=60)
-        assert play.returncode == 0, play.stderr
-        assert monitor.wait(30) == 0, monitor.output()
-        out = monitor.output()
+        out = _play_into(monitor, bearing_sim_exe, recording, ros_env)
     finally:
         monitor.close()
         rclpy.try_shutdown(context=context)
