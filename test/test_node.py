@@ -14,8 +14,8 @@ import time
 import numpy as np
 import pytest
 
-from test_node_support import (NS, Listener, NodeProcess, hung_teardown_script, read_recording,
-                               stamps_and_widths)
+from test_node_support import (NS, Listener, NodeProcess, hung_teardown_script, offered_qos,
+                               read_recording, stamps_and_widths)
 
 from bearing_sim_ros.analysis.envelope import DETECTION_THRESHOLD, envelope_spectrum, fault_lines, line_at
 from bearing_sim_ros.catalog import get_bearing
@@ -62,6 +62,7 @@ def test_input_limits_from_the_bearing_geometry():
     assert check_speed(float("nan"), lim)[0] == "not_finite"
     assert check_speed(float("-inf"), lim)[0] == "not_finite"
     assert check_speed(1.01 * lim.max_speed, lim)[0] == "out_of_range"
+    assert check_speed(-1.01 * lim.max_speed, lim)[0] == "out_of_range"       # either direction
     assert check_load(0.0, -50.0, 10.0, lim) is None
     assert check_load(0.0, float("nan"), 0.0, lim)[0] == "not_finite"
     assert check_load(0.0, 0.0, 1.01 * lim.max_load, lim)[0] == "out_of_range"
@@ -157,10 +158,15 @@ def test_stream_is_15khz_contiguous_and_paced(started, listener):
     cage = np.array([s[3][1] for s in states])
     assert np.allclose(shaft, 1600 * 2 * math.pi / 60, rtol=1e-6)
     assert np.mean(cage) == pytest.approx(bearing.cage_speed(shaft[0]), rel=0.03)
+    # positions: angles in rad, not wrapped, advancing by speed x 20 ms (3.351 rad for the shaft)
+    pos = np.array([s[2] for s in states])
+    assert np.allclose(np.diff(pos[:, 0]), 0.02 * shaft[1:], rtol=1e-6)
+    assert np.allclose(np.diff(pos[:, 1]), 0.01 * (cage[1:] + cage[:-1]), rtol=1e-6)
 
     # diagnostics: about once a second, with the figures the issue asks for
     diags = [d for d in listener.diagnostics if d[0] >= recv[0]]
     assert 8 <= len(diags) <= 13
+    assert abs(np.median(np.diff([d[0] for d in diags])) - 1.0) < 0.05
     values = diags[-1][3]
     for key in ("real_time_factor", "overruns", "lag_s", "worst_lag_s", "batch_compute_s", "computed_ahead_s",
                 "tier", "shaft_speed_rad_s",
@@ -220,12 +226,16 @@ def test_bad_inputs_are_rejected_and_a_speed_change_moves_bpfo(started, listener
     listener.wait_for(lambda: len(listener.accel) > n + 20, 5, "tables after the bad inputs")
     assert "rejected" in node.output()                     # logged (throttled)
 
-    # a speed change: 1600 -> 2400 rpm takes effect at the next batch boundary
+    # a speed change: 1600 -> 2400 rpm takes effect at the next batch boundary: the first state
+    # at the new speed is stamped within compute_ahead (0.05 s) + a batch + a state period (and
+    # a margin) of the command (measured 0.07 s)
     new = 2400 * 2 * math.pi / 60
+    t_command = listener.node.get_clock().now().nanoseconds
     listener.publish_speed(new)
     st = listener.wait_for(lambda: next((s for s in listener.state if abs(s[3][0] - new) < 1e-6), None),
                            5, "state at the new speed")
     start = st[0]
+    assert (start - t_command) / NS < 0.25
     listener.wait_for(lambda: sum(d.shape[0] for _s, d in listener.accel_since(start)) >= 3 * FS,
                       10, "3 s of tables at the new speed")
     tables = listener.accel_since(start)
@@ -275,6 +285,68 @@ def test_fast_mode_runs_duration_and_ends(started, tmp_path):
     assert sum(m.width for _t, m in accel) == 45000
     assert np.all(np.diff(stamps) == BATCH_NS)
     assert [t for t, _m in accel] == list(stamps + BATCH_NS)
+    # state at the end of its batch, every 20 ms of signal, logged at its stamp
+    state = topics["/state"]
+    sst = np.array([m.header.stamp.sec * NS + m.header.stamp.nanosec for _t, m in state], dtype=np.int64)
+    assert np.all((sst - stamps[0]) % 20_000_000 == 0) and np.all(np.diff(sst) == 20_000_000)
+    assert [t for t, _m in state] == list(sst)
+    # the operating point in use, as the scene gives it (N; rad/s)
+    forces = np.array([(m.wrench.force.x, m.wrench.force.y, m.wrench.force.z) for _t, m in topics["/load"]])
+    assert len(forces) > 0 and np.all(forces == (0.0, -50.0, 0.0))
+    speeds = np.array([m.data for _t, m in topics["/shaft_speed"]])
+    assert len(speeds) > 0 and np.allclose(speeds, 1600 * 2 * math.pi / 60, rtol=1e-9)
+    # the waveforms offered as the README says: reliable, keep-last 1 s of 10 ms tables
+    for topic in ("/accel", "/contact_forces"):
+        qos = offered_qos(out)[topic]
+        assert qos.depth == 100 and qos.reliability.name == "RELIABLE" and qos.history.name == "KEEP_LAST"
+
+
+def test_publish_clock_gives_the_end_of_each_table(started, listener):
+    """publish_clock:=true: /clock carries the simulation time, the end of each published table
+    (its stamp + 10 ms), one per table, never backwards."""
+    started({"scene": "er16k_outer_race", "publish_clock": True})
+    listener.wait_for(lambda: len(listener.accel) > 100 and len(listener.clock) > 100, 30,
+                      "tables and /clock")
+    ends = {a[1] + BATCH_NS for a in listener.accel}
+    clock = np.array(listener.clock, dtype=np.int64)
+    assert np.all(np.diff(clock) == BATCH_NS)
+    shared = clock[(clock >= min(ends)) & (clock <= max(ends))]
+    assert len(shared) > 50 and set(shared.tolist()) <= ends
+
+
+def test_a_node_slower_than_real_time_counts_its_overruns_and_stays_contiguous(ros_env, tmp_path):
+    """Every batch takes 15 ms to compute (a patched ``Simulator.advance``) against 10 ms of
+    signal: /diagnostics counts the overruns and warns, the real-time factor falls below 1, and
+    the tables stay contiguous (late, none lost)."""
+    out = tmp_path / "slow.mcap"
+    script = tmp_path / "slow.py"
+    script.write_text("\n".join([
+        "import sys, time",
+        "from bearing_sim_ros import simulator",
+        "advance = simulator.Simulator.advance",
+        "def slow(self, n, *args, **kwargs):",
+        "    time.sleep(0.015 * n / 150)           # 1.5x the signal time of the samples",
+        "    return advance(self, n, *args, **kwargs)",
+        "simulator.Simulator.advance = slow",
+        "from bearing_sim_ros.nodes.bearing_sim_node import main",
+        "sys.exit(main(sys.argv[1:]))",
+        ""]))
+    args = ["--ros-args", "-p", "scene:=er16k_outer_race", "-p", "duration:=3.0", "-p", f"record:={out}"]
+    r = subprocess.run([sys.executable, str(script), *args], env=ros_env, capture_output=True,
+                       text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    topics, _meta = read_recording(out)
+    stamps = np.array([m.header.stamp.sec * NS + m.header.stamp.nanosec for _t, m in topics["/accel"]],
+                      dtype=np.int64)
+    assert len(stamps) == 300 and np.all(np.diff(stamps) == BATCH_NS)
+    status = [m.status[0] for _t, m in topics["/diagnostics"]]
+    values = [{kv.key: kv.value for kv in st.values} for st in status]
+    assert int(values[-1]["overruns"]) > 100
+    warned = [st for st, v in zip(status, values) if int(v["overruns_last_period"]) > 0]
+    level = [st.level[0] if isinstance(st.level, (bytes, bytearray)) else int(st.level) for st in warned]
+    assert warned and level == [1] * len(warned)
+    assert all("overruns in the last second" in st.message for st in warned)
+    assert float(values[-1]["real_time_factor"]) < 0.9
 
 
 def test_a_hung_teardown_ends_with_the_stacks_status_1_and_a_closed_recording(ros_env, tmp_path):

@@ -96,14 +96,15 @@ class NodeProcess:
 
 
 class Listener:
-    """An rclpy node in the test process: subscribes to accel, state and /diagnostics (what a
-    consumer does), publishes shaft_speed and load, and can set the node's parameters."""
+    """An rclpy node in the test process: subscribes to accel, state, /diagnostics and /clock
+    (what a consumer does), publishes shaft_speed and load, and can set the node's parameters."""
 
     def __init__(self, name: str = "test_listener"):
         import rclpy
         from diagnostic_msgs.msg import DiagnosticArray
         from geometry_msgs.msg import WrenchStamped
         from rclpy.executors import SingleThreadedExecutor
+        from rosgraph_msgs.msg import Clock
         from sensor_msgs.msg import JointState, PointCloud2
         from std_msgs.msg import Float64
 
@@ -115,9 +116,11 @@ class Listener:
         self.accel = []          # (receive time monotonic s, stamp ns, channels, (n, c) float32)
         self.state = []          # (stamp ns, names, positions, velocities)
         self.diagnostics = []    # (receive time, level, message, {key: value})
+        self.clock = []          # /clock, ns
         self.node.create_subscription(PointCloud2, "accel", self._on_accel, waveform_qos(0.01))
         self.node.create_subscription(JointState, "state", self._on_state, 50)
         self.node.create_subscription(DiagnosticArray, "/diagnostics", self._on_diag, 10)
+        self.node.create_subscription(Clock, "/clock", self._on_clock, 100)
         self.pub_speed = self.node.create_publisher(Float64, "shaft_speed", 10)
         self.pub_load = self.node.create_publisher(WrenchStamped, "load", 10)
         self.executor = SingleThreadedExecutor(context=self.ctx)
@@ -144,6 +147,9 @@ class Listener:
         s = msg.header.stamp
         self.state.append((s.sec * NS + s.nanosec, list(msg.name), list(msg.position), list(msg.velocity)))
 
+    def _on_clock(self, msg):
+        self.clock.append(msg.clock.sec * NS + msg.clock.nanosec)
+
     def _on_diag(self, msg):
         for st in msg.status:
             level = st.level[0] if isinstance(st.level, (bytes, bytearray)) else int(st.level)
@@ -158,7 +164,9 @@ class Listener:
             time.sleep(0.05)
         raise AssertionError(f"timed out after {timeout} s waiting for {what}")
 
-    def wait_matched(self, timeout: float = 15.0) -> None:
+    def wait_matched(self, timeout: float = 30.0) -> None:
+        # the node subscribes once its simulator is built, after a cold compilation (as long as
+        # the first table can take)
         self.wait_for(lambda: self.pub_speed.get_subscription_count() > 0
                       and self.pub_load.get_subscription_count() > 0, timeout, "the node's subscriptions")
 
@@ -206,6 +214,16 @@ def stamps_and_widths(tables):
     stamps = np.array([s for s, _d in tables], dtype=np.int64)
     widths = np.array([d.shape[0] for _s, d in tables], dtype=np.int64)
     return stamps, widths
+
+
+def offered_qos(path) -> dict:
+    """{topic: the QoS profile its publisher offered} of an MCAP file, read with ``rosbags``."""
+    from pathlib import Path
+
+    from rosbags.highlevel import AnyReader
+
+    with AnyReader([Path(path)]) as reader:
+        return {c.topic: c.ext.offered_qos_profiles[0] for c in reader.connections}
 
 
 def read_recording(path):
