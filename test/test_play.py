@@ -44,7 +44,8 @@ SUBSCRIBER = textwrap.dedent('''
             elif hasattr(msg, "clock"):
                 stamp = msg.clock.sec * 10**9 + msg.clock.nanosec
             crc = zlib.crc32(bytes(msg.data)) if topic.endswith("accel") else 0
-            got.setdefault(topic, []).append([stamp, int(getattr(msg, "width", 0)), crc])
+            # the receive time: play is paced by the log times / --rate
+            got.setdefault(topic, []).append([stamp, int(getattr(msg, "width", 0)), crc, time.monotonic()])
         return cb
 
     for topic, cls in [("/accel", PointCloud2), ("/contact_forces", PointCloud2), ("/state", JointState),
@@ -110,13 +111,23 @@ def test_play_delivers_every_message_to_another_process(recording, bearing_sim_e
         assert len(got.get(topic, [])) == n, f"{topic}: {len(got.get(topic, []))} of {n}; play: {play.stderr}"
     # the same tables, stamps and bytes as recorded
     rec_stamps = []
-    for (_, data), (stamp, width, crc) in zip(accel, got["/accel"]):
+    for (_, data), (stamp, width, crc, _) in zip(accel, got["/accel"]):
         msg = deserialize_message(data, PointCloud2)
         rec_stamps.append(msg.header.stamp.sec * NS + msg.header.stamp.nanosec)
         assert (stamp, width, crc) == (rec_stamps[-1], msg.width, zlib.crc32(bytes(msg.data)))
     # /clock: the recording's time, increasing, covering it
     clock = np.array([c[0] for c in got["/clock"]])
     assert clock[0] == 0 and np.all(np.diff(clock) > 0) and clock[-1] == 1 * NS
+    # paced by the log times / --rate: the tables' log times span 0.99 s, received over 0.495 s
+    # at --rate 2 (0.99 s if the rate were ignored, ~0 if nothing paced them)
+    _assert_paced(got["/accel"], accel[-1][0] - accel[0][0], rate=2)
+
+
+def _assert_paced(received, log_span_ns, rate):
+    """The first to the last of ``received`` ([stamp, width, crc, monotonic time]) arrived over
+    the log-time span / rate, within 10 %."""
+    span = received[-1][3] - received[0][3]
+    assert span == pytest.approx(log_span_ns / NS / rate, rel=0.10), (span, log_span_ns / NS / rate)
 
 
 def test_loop_keeps_tables_contiguous_and_sigint_ends_cleanly(recording, bearing_sim_exe, ros_env, tmp_path):
@@ -146,6 +157,8 @@ def test_loop_keeps_tables_contiguous_and_sigint_ends_cleanly(recording, bearing
     assert stamps[len(accel)] == 1 * NS       # the second pass starts where the first ended
     # the second pass is the recording again, sample for sample
     assert [t[2] for t in tables[len(accel):2 * len(accel)]] == [t[2] for t in tables[:len(accel)]]
+    # one pass (first table of pass 1 to first of pass 2: 1 s of log time) takes 0.25 s at --rate 4
+    _assert_paced(tables[:len(accel) + 1], 1 * NS, rate=4)
 
 
 @pytest.mark.parametrize("kind", ["not_mcap", "truncated", "missing"])
