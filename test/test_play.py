@@ -159,6 +159,17 @@ def test_loop_keeps_tables_contiguous_and_sigint_ends_cleanly(recording, bearing
     assert [t[2] for t in tables[len(accel):2 * len(accel)]] == [t[2] for t in tables[:len(accel)]]
     # one pass (first table of pass 1 to first of pass 2: 1 s of log time) takes 0.25 s at --rate 4
     _assert_paced(tables[:len(accel) + 1], 1 * NS, rate=4)
+    # every header stamp moves on by the recording's length (1 s), not only the waveform tables':
+    # /state (every 20 ms), /diagnostics (once, at the end), /contact_forces, /load
+    for topic, n in counts.items():
+        if got[topic][0][0] is None:          # /shaft_speed: Float64, no header
+            continue
+        topic_stamps = np.array([m[0] for m in got[topic]], dtype=np.int64)
+        second_pass = topic_stamps[n:2 * n]
+        assert len(second_pass) >= 1, (topic, len(topic_stamps))
+        # time never goes back, at the seam either
+        assert np.all(np.diff(topic_stamps) > 0), (topic, np.diff(topic_stamps).min())
+        assert np.all(second_pass - topic_stamps[:len(second_pass)] == 1 * NS), topic
 
 
 @pytest.mark.parametrize("kind", ["not_mcap", "truncated", "missing"])
