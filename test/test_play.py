@@ -1,7 +1,8 @@
 """``bearing-sim play`` delivers every recorded message to a subscriber in another process, with
-the recorded types, stamps and bytes; ``--loop`` keeps the waveform tables contiguous across the
-seam; ``--clock`` publishes the recording's time; bad files end with exit status 2 and one line; a
-teardown that hangs ends with the stacks and exit status 1."""
+the recorded types, stamps, bytes and QoS, paced by the log times / ``--rate``; ``--loop`` keeps
+the waveform tables contiguous across the seam and moves every header stamp on by the recording's
+length; ``--clock`` publishes the recording's time; bad files end with exit status 2 and one line;
+a teardown that hangs ends with the stacks and exit status 1."""
 from __future__ import annotations
 
 import json
@@ -170,6 +171,77 @@ def test_loop_keeps_tables_contiguous_and_sigint_ends_cleanly(recording, bearing
         # time never goes back, at the seam either
         assert np.all(np.diff(topic_stamps) > 0), (topic, np.diff(topic_stamps).min())
         assert np.all(second_pass - topic_stamps[:len(second_pass)] == 1 * NS), topic
+
+
+QOS_OBSERVER = textwrap.dedent('''
+    import json, sys, time
+    import rclpy
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    from std_msgs.msg import Float64
+
+    topics, timeout, out = sys.argv[1].split(","), float(sys.argv[2]), sys.argv[3]
+    rclpy.init()
+    node = rclpy.create_node("qos_observer")
+    received = set()
+    # best effort + volatile matches a publisher of any reliability and durability
+    for topic in topics:
+        node.create_subscription(Float64, topic, lambda msg, topic=topic: received.add(topic),
+                                 QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT))
+    print("ready", flush=True)
+    seen = {}
+    t0 = time.monotonic()
+    # until a message came on each topic too: play is then past its wait for us, which an early
+    # exit would make last the whole --wait
+    while time.monotonic() - t0 < timeout and (len(seen) < len(topics) or len(received) < len(topics)):
+        rclpy.spin_once(node, timeout_sec=0.05)
+        for topic in topics:
+            for info in node.get_publishers_info_by_topic(topic):
+                if info.node_name == "bearing_sim":
+                    seen[topic] = [info.qos_profile.reliability.name, info.qos_profile.durability.name]
+    json.dump(seen, open(out, "w"))
+    node.destroy_node()
+    rclpy.shutdown()
+''')
+
+
+def test_play_offers_each_topic_its_recorded_qos(bearing_sim_exe, ros_env, tmp_path):
+    """The player's publishers use the QoS recorded in ``offered_qos_profiles``, seen from
+    another process (the depth does not travel in discovery: reliability and durability do)."""
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+    from std_msgs.msg import Float64
+
+    from bearing_sim_ros.recording.recorder import Recorder
+
+    # two topics with opposite settings, neither of them rclpy's default on both counts
+    recorded = {"/latched_best_effort": (ReliabilityPolicy.BEST_EFFORT, DurabilityPolicy.TRANSIENT_LOCAL),
+                "/reliable_volatile": (ReliabilityPolicy.RELIABLE, DurabilityPolicy.VOLATILE)}
+    path = tmp_path / "qos.mcap"
+    with Recorder(path, {"scene": "qos test"}, start_time_ns=0) as rec:
+        for topic, (reliability, durability) in recorded.items():
+            rec.add_topic(topic, "std_msgs/msg/Float64",
+                          QoSProfile(depth=5, reliability=reliability, durability=durability))
+        for k in range(20):                   # 2 s of log time: play stays up while observed
+            for topic in recorded:
+                rec.write(topic, Float64(data=float(k)), k * 100_000_000)
+    script = tmp_path / "qos_observer.py"
+    script.write_text(QOS_OBSERVER)
+    result = tmp_path / "qos.json"
+    obs = subprocess.Popen([sys.executable, str(script), ",".join(recorded), "40", str(result)],
+                           env=ros_env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    play = None
+    try:
+        line = obs.stdout.readline()
+        assert line.strip() == "ready", line + obs.stdout.read()
+        play = subprocess.run([bearing_sim_exe, "play", str(path), *WAIT], env=ros_env, capture_output=True,
+                              text=True, timeout=60)
+        assert play.returncode == 0, play.stderr
+        obs.wait(timeout=60)
+    finally:
+        if obs.poll() is None:
+            obs.kill()
+            obs.wait()
+    seen = json.loads(result.read_text())
+    assert seen == {t: [r.name, d.name] for t, (r, d) in recorded.items()}, (seen, play and play.stderr)
 
 
 @pytest.mark.parametrize("kind", ["not_mcap", "truncated", "missing"])
