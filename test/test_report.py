@@ -1,14 +1,20 @@
-"""``bearing-sim report`` draws its plots from nothing but the file and finds the recorded fault;
-bad inputs end with exit status 2 and one line."""
+"""``bearing-sim report`` draws its plots from nothing but the file (the recording's samples, their
+spectra and envelope spectrum) and finds the recorded fault; bad inputs end with exit status 2 and
+one line."""
 from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 
 from bearing_sim_ros import cli, load_scene
+from bearing_sim_ros.analysis import report
+from bearing_sim_ros.analysis.envelope import envelope_spectrum
 from bearing_sim_ros.analysis.report import build_report
+from bearing_sim_ros.recording.reader import open_recording
 from bearing_sim_ros.recording.render import render
+from bearing_sim_ros.waveform import NS, from_pointcloud2
 
 
 @pytest.fixture(scope="module")
@@ -19,10 +25,41 @@ def outer(tmp_path_factory):
     return rec, d / "out"
 
 
-def test_report_draws_plots_and_finds_the_outer_race_fault(outer):
+def _recorded_waveform(path):
+    """(channel names, (n, c) float array, first stamp in s) of the recording's /accel tables,
+    read here independently of the report."""
+    from rclpy.serialization import deserialize_message
+    from sensor_msgs.msg import PointCloud2
+
+    tables = []
+    with open_recording(path) as rec:
+        for _, _, _, data in rec.messages(["/accel"]):
+            tables.append(from_pointcloud2(deserialize_message(data, PointCloud2)))
+    return tables[0][1], np.concatenate([t[2] for t in tables]).astype(float), tables[0][0] / NS
+
+
+def _line_with(ax, ydata):
+    """The Line2D of ``ax`` whose y data is ``ydata`` (same length, equal to 1e-12), or None."""
+    for line in ax.get_lines():
+        y = np.asarray(line.get_ydata(), dtype=float)
+        if y.shape == ydata.shape and np.allclose(y, ydata, rtol=1e-12, atol=0):
+            return line
+    return None
+
+
+def test_report_draws_plots_and_finds_the_outer_race_fault(outer, monkeypatch):
     import matplotlib.image as mpimg
 
     rec, out = outer
+    # keep each figure as it is saved: what is drawn on it is checked below, against the recording
+    figures = {}
+    save = report._save
+
+    def keep_and_save(plt, fig, path):
+        figures[path.name] = fig
+        return save(plt, fig, path)
+
+    monkeypatch.setattr(report, "_save", keep_and_save)
     code = cli.main(["report", str(rec), "--out", str(out)])
     assert code == 0
     summary = json.loads((out / "summary.json").read_text())
@@ -42,6 +79,37 @@ def test_report_draws_plots_and_finds_the_outer_race_fault(outer):
     assert summary["duration_s"] == pytest.approx(2.0, abs=0.02)
     md = (out / "summary.md").read_text()
     assert "OUTER" in md and "![envelope.png](envelope.png)" in md and "| BPFO | 95.25 |" in md
+
+    # the data drawn is the recording's (pixel statistics alone pass with the data lines removed:
+    # grid, legend, marker lines and titles are enough for them)
+    names, accel, t0 = _recorded_waveform(rec)
+    fs = summary["sample_rate_hz"]
+    assert accel.shape == (30000, 2) and summary["channels"] == list(names)
+    whole, zoom = figures["waveform.png"].axes
+    for k, name in enumerate(names):
+        line = _line_with(whole, accel[:, k])             # every sample, at its time
+        assert line is not None and line.get_label() == name, name
+        assert np.allclose(line.get_xdata(), t0 + np.arange(accel.shape[0]) / fs)
+        zoomed = [ln for ln in zoom.get_lines() if ln.get_label() == name]
+        assert len(zoomed) == 1, name
+        i0 = int(round((zoomed[0].get_xdata()[0] / 1e3 - t0) * fs))   # ms -> sample index
+        part = accel[i0:i0 + len(zoomed[0].get_ydata()), k]
+        assert part.size >= 0.02 * fs and np.array_equal(zoomed[0].get_ydata(), part), name
+    # each channel's PSD integrates to its variance (Parseval): the channel's own spectrum
+    (spec_ax,) = figures["spectrum.png"].axes
+    for k, name in enumerate(names):
+        lines = [ln for ln in spec_ax.get_lines() if ln.get_label() == name]
+        assert len(lines) == 1, name
+        f, psd = (np.asarray(v, dtype=float) for v in lines[0].get_data())
+        assert np.sum(psd) * (f[1] - f[0]) * 1e3 == pytest.approx(accel[:, k].var(), rel=0.05), name
+    # the envelope spectrum of accel_y, up to past 3 x BPFO (the marked harmonics)
+    (env_ax,) = figures["envelope.png"].axes
+    f, s = envelope_spectrum(accel[:, names.index(summary["envelope_channel"])], fs, max_freq=fs / 2)
+    line = next((ln for ln in env_ax.get_lines() if len(ln.get_ydata()) > 100), None)
+    assert line is not None, [len(ln.get_ydata()) for ln in env_ax.get_lines()]
+    n = len(line.get_ydata())
+    assert f[n - 1] > 3 * bpfo and _line_with(env_ax, s[:n]) is line
+    assert np.allclose(line.get_xdata(), f[:n], rtol=1e-12, atol=0)
 
 
 def test_report_of_a_healthy_bearing_says_healthy(tmp_path):
