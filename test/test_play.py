@@ -81,15 +81,31 @@ def recording(tmp_path_factory):
     return out, counts, accel
 
 
-def _subscriber(tmp_path, env, want_accel, timeout):
+def _subscriber(tmp_path, env, want, timeout, source=SUBSCRIBER):
+    """Start the node script ``source`` in another process with the arguments ``want`` (what it
+    waits for: SUBSCRIBER's number of /accel tables, QOS_OBSERVER's topics), ``timeout`` (s) and
+    the result file; returns (process, result file) once its node is ready."""
     script = tmp_path / "monitor.py"
-    script.write_text(SUBSCRIBER)
+    script.write_text(source)
     result = tmp_path / "got.json"
-    proc = subprocess.Popen([sys.executable, str(script), str(want_accel), str(timeout), str(result)],
+    proc = subprocess.Popen([sys.executable, str(script), str(want), str(timeout), str(result)],
                             env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     line = proc.stdout.readline()
     assert line.strip() == "ready", line + proc.stdout.read()
     return proc, result
+
+
+def _play_to(sub, args, env):
+    """Run ``bearing-sim play`` (``args``) to the end, then let ``sub`` finish; the play result."""
+    try:
+        play = subprocess.run(args, env=env, capture_output=True, text=True, timeout=60)
+        assert play.returncode == 0, play.stderr
+        sub.wait(timeout=60)
+    finally:
+        if sub.poll() is None:
+            sub.kill()
+            sub.wait()
+    return play
 
 
 def test_play_delivers_every_message_to_another_process(recording, bearing_sim_exe, ros_env, tmp_path):
@@ -98,15 +114,7 @@ def test_play_delivers_every_message_to_another_process(recording, bearing_sim_e
 
     path, counts, accel = recording
     sub, result = _subscriber(tmp_path, ros_env, len(accel), 40)
-    try:
-        play = subprocess.run([bearing_sim_exe, "play", str(path), "--rate", "2", "--clock", *WAIT],
-                              env=ros_env, capture_output=True, text=True, timeout=60)
-        assert play.returncode == 0, play.stderr
-        sub.wait(timeout=60)
-    finally:
-        if sub.poll() is None:
-            sub.kill()
-            sub.wait()
+    play = _play_to(sub, [bearing_sim_exe, "play", str(path), "--rate", "2", "--clock", *WAIT], ros_env)
     got = json.loads(result.read_text())
     for topic, n in counts.items():
         assert len(got.get(topic, [])) == n, f"{topic}: {len(got.get(topic, []))} of {n}; play: {play.stderr}"
@@ -223,25 +231,10 @@ def test_play_offers_each_topic_its_recorded_qos(bearing_sim_exe, ros_env, tmp_p
         for k in range(20):                   # 2 s of log time: play stays up while observed
             for topic in recorded:
                 rec.write(topic, Float64(data=float(k)), k * 100_000_000)
-    script = tmp_path / "qos_observer.py"
-    script.write_text(QOS_OBSERVER)
-    result = tmp_path / "qos.json"
-    obs = subprocess.Popen([sys.executable, str(script), ",".join(recorded), "40", str(result)],
-                           env=ros_env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    play = None
-    try:
-        line = obs.stdout.readline()
-        assert line.strip() == "ready", line + obs.stdout.read()
-        play = subprocess.run([bearing_sim_exe, "play", str(path), *WAIT], env=ros_env, capture_output=True,
-                              text=True, timeout=60)
-        assert play.returncode == 0, play.stderr
-        obs.wait(timeout=60)
-    finally:
-        if obs.poll() is None:
-            obs.kill()
-            obs.wait()
+    observer, result = _subscriber(tmp_path, ros_env, ",".join(recorded), 40, source=QOS_OBSERVER)
+    play = _play_to(observer, [bearing_sim_exe, "play", str(path), *WAIT], ros_env)
     seen = json.loads(result.read_text())
-    assert seen == {t: [r.name, d.name] for t, (r, d) in recorded.items()}, (seen, play and play.stderr)
+    assert seen == {t: [r.name, d.name] for t, (r, d) in recorded.items()}, (seen, play.stderr)
 
 
 @pytest.mark.parametrize("kind", ["not_mcap", "truncated", "missing"])
