@@ -1204,7 +1204,7 @@ def _engine_split(y, fy, un, up, aux0, dg0, film, counters, n, m, hs, kk, ramp, 
 
     The per-ball tables (aux, dg, film) are double-buffered within a call: ``auxp[cur]`` holds the
     step's start and ``auxp[1 - cur]`` its end, and accepting a step flips ``cur`` instead of
-    copying the end over the start (about 400 numbers per step: 3-8 % of a plain step, measured
+    copying the end over the start (about 400 numbers per step: 1-7 % of a step, measured
     back to back on the bench scenes); the call copies aux0, dg0, film in at its start and the
     current slots out at its end.
 
