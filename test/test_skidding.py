@@ -552,9 +552,14 @@ def _envelope_line(name, key, lub=None):
     return fault_lines(y, FS, ff)[key], ff[key]
 
 
-def _skid(name, rpm, load, settle=0.15, seconds=0.1, lub=None):
-    """Mean (ball, cage) skid ratios (%) over ``seconds`` after ``settle``."""
-    r = run(make_scene(name, rpm=rpm, load=load, lub=lub), [(settle, rpm, load), (seconds, rpm, load)])
+def _skid(name, rpm, load, settle=0.15, seconds=0.1, lub=None, width_mm=None, solver="default"):
+    """Mean (ball, cage) skid ratios (%) over ``seconds`` after ``settle``; the scene's defects
+    widened to ``width_mm`` (and as long) if given."""
+    sc = make_scene(name, rpm=rpm, load=load, lub=lub)
+    if width_mm is not None:
+        sc = replace(sc, defects=tuple(replace(d, width=width_mm * 1e-3, length=width_mm * 1e-3)
+                                       for d in sc.defects))
+    r = run(sc, [(settle, rpm, load), (seconds, rpm, load)], solver=solver, chunk=0.1)
     k = int(settle * FS)
     return r.cat("bskid")[k:].mean(), r.cat("cskid")[k:].mean()
 
@@ -580,12 +585,7 @@ def _defect_skid(name, width_mm=None, solver="default"):
     """Mean cage skid ratio (%) at 2000 rpm / 200 N over 1 s after 0.3 s (whole cage turns and
     a hundred defect passes: a 0.1 s mean moves by the phase of the last passes), the scene's
     defect widened to ``width_mm`` (and as long)."""
-    sc = make_scene(name, rpm=2000, load=200)
-    if width_mm is not None:
-        sc = replace(sc, defects=tuple(replace(d, width=width_mm * 1e-3, length=width_mm * 1e-3)
-                                       for d in sc.defects))
-    r = run(sc, [(0.3, 2000, 200), (1.0, 2000, 200)], solver=solver, chunk=0.1)
-    return r.cat("cskid")[int(0.3 * FS):].mean()
+    return _skid(name, 2000, 200, settle=0.3, seconds=1.0, width_mm=width_mm, solver=solver)[1]
 
 
 def test_a_defect_raises_the_cage_skid():
