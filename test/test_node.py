@@ -79,6 +79,21 @@ def test_stamp_checks():
     assert check_stamp(5 * NS, 6 * NS, now, 0.0)[0] == "out_of_order"
 
 
+def test_oversample_description_names_each_tiers_default():
+    """`ros2 param describe /bearing_sim oversample` states what 0 means: the steps per output
+    sample that each tier really takes when none is given."""
+    import re
+
+    from bearing_sim_ros import Simulator
+    from bearing_sim_ros.nodes.bearing_sim_node import _descriptors
+
+    text = _descriptors()["oversample"][1].description
+    scene = load_scene("er16k_healthy")
+    for tier in ("kinematic", "skidding"):
+        stated = int(re.search(rf"{tier} (\d+)", text).group(1))
+        assert stated == Simulator(scene, fidelity=tier).oversample, (tier, text)
+
+
 # ---- user mistakes ------------------------------------------------------------------------------
 @pytest.mark.parametrize("params, words", [
     ({"scene": "no_such_scene"}, ["scene", "no_such_scene", "er16k_outer_race"]),

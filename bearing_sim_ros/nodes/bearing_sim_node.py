@@ -121,6 +121,8 @@ def _descriptors():
     from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
     from rcl_interfaces.msg import ParameterType as T
 
+    from ..physics.kinematic import DEFAULT_OVERSAMPLE as KINEMATIC_OVERSAMPLE
+    from ..physics.skidding import DEFAULT_OVERSAMPLE as SKIDDING_OVERSAMPLE
     from ..simulator import SAMPLE_RATE_RANGE
 
     def d(kind, text, read_only=False, lo=None, hi=None, constraints=""):
@@ -144,7 +146,8 @@ def _descriptors():
         "fidelity": ("auto", d(T.PARAMETER_STRING, "model tier", True, constraints="auto | kinematic | skidding")),
         "seed": (0, d(T.PARAMETER_INTEGER, "seed of random slip and sensor noise", True, 0, 2 ** 31 - 1)),
         "oversample": (0, d(T.PARAMETER_INTEGER, "integration steps per output sample (speed against "
-                            "accuracy); 0 = each tier's own: kinematic 2, skidding 4", True, 0, 64,
+                            f"accuracy); 0 = each tier's own: kinematic {KINEMATIC_OVERSAMPLE}, "
+                            f"skidding {SKIDDING_OVERSAMPLE}", True, 0, 64,
                             "0, 1, 2 or a multiple of 4; at most 4 where the tier is chosen automatically")),
         "publish_clock": (False, d(T.PARAMETER_BOOL, "publish /clock with the simulation time")),
         "frame_id": ("", d(T.PARAMETER_STRING, "frame of the waveform tables; empty = the scene's sensor frame", True)),
