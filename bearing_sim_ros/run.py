@@ -101,12 +101,13 @@ def summarise(scene, tail: dict, node_figures: dict, path) -> str:
     """The one-screen summary (text)."""
     from .analysis.envelope import DETECTION_THRESHOLD
     from .nodes.monitor_node import verdict
+    from .recording.render import tier_summary
 
     lines = []
     f = node_figures
     lines.append(f"bearing-sim run: {scene.name} ({scene.bearing.name}), {f['signal_s']:.2f} s of signal in "
                  f"{f['wall_s']:.2f} s: real-time factor {f['rtf']:.3f}, {f['overruns']} overruns, "
-                 f"worst lag {1e3 * f['worst_lag']:.1f} ms, {f['tier']} tier")
+                 f"worst lag {1e3 * f['worst_lag']:.1f} ms, {tier_summary(f['tier_values'])}")
     fs = tail["sample_rate"]
     x = tail["accel"]
     if not fs or x.shape[0] < fs:
@@ -142,6 +143,7 @@ def run_command(args) -> int:
 
     from .nodes.bearing_sim_node import BearingSimNode, log_recording, spin_node
     from .recording.recorder import sizes_text
+    from .recording.render import tier_values
     from .scene import load_scene
 
     duration = float(args.duration)
@@ -171,7 +173,7 @@ def run_command(args) -> int:
             figures = {"signal_s": node.sim.time, "wall_s": node.stats.last - node.stats.started,
                        "rtf": node.stats.real_time_factor,
                        "overruns": node.stats.overruns, "worst_lag": node.stats.worst_lag,
-                       "tier": node.sim.tier, "dropped": rs["dropped"], "ok": rs["ok"], "error": rs["error"],
+                       "tier": node.sim.tier, "tier_values": tier_values(node.sim), "dropped": rs["dropped"], "ok": rs["ok"], "error": rs["error"],
                        "path": rs["path"], "sizes": sizes_text(rs)}
         with teardown_watchdog():
             if node is not None:

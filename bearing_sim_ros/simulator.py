@@ -130,6 +130,7 @@ class Simulator:
         self._radial_load = np.array(scene.radial_load, dtype=float)
         self.index = 0                       # absolute index of the next output sample
         self.tier_switches = 0
+        self.last_tier_switch = None         # (time s, old tier, new tier) of the latest switch
 
         from .fidelity import select_tier
 
@@ -293,7 +294,7 @@ class Simulator:
         if sel.tier == self.tier:
             self.selection = sel
             return False
-        old = self._model
+        old, old_tier = self._model, self.tier
         self.tier = sel.tier
         self.selection = sel
         new = self._build_model(sel.tier)
@@ -303,6 +304,7 @@ class Simulator:
             raise RuntimeError("tiers must share the internal rate to switch without a seam")
         self._model = new
         self.tier_switches += 1
+        self.last_tier_switch = (self.time, old_tier, sel.tier)
         return True
 
     # ---- state for the JointState topic ----------------------------------------------------

@@ -228,7 +228,7 @@ def test_bad_inputs_are_rejected_and_a_speed_change_moves_bpfo(started, listener
             "rejected_out_of_order": 1, "rejected_inputs": 8}
 
     def counted():
-        for _t, _lvl, _m, v in reversed(listener.diagnostics):
+        for _t, _lvl, _m, v, _stamp in reversed(listener.diagnostics):
             if int(v.get("rejected_inputs", 0)) >= 8 and v["radial_load_n"] == "0 -80":
                 return v
         return None
@@ -265,6 +265,41 @@ def test_bad_inputs_are_rejected_and_a_speed_change_moves_bpfo(started, listener
     assert lines["bpfo"].found_hz == pytest.approx(f_new, rel=0.005)
     freqs, spec = envelope_spectrum(x, FS, max_freq=300.0, segment=1.0)
     assert line_at(freqs, spec, f_old).prominence < DETECTION_THRESHOLD     # the old line is gone
+
+
+def test_a_command_across_the_tier_boundary_switches_tiers_and_says_so(started, listener):
+    """1600 rpm / 50 N runs the kinematic tier; 10000 rpm with the load taken off needs the
+    skidding tier.  The node switches at the first batch after the commands, logs it, and its
+    /diagnostics name the tier, count the switch and give its time in the signal; the stream
+    stays contiguous and finite through it."""
+    node = started({"scene": "er16k_outer_race"})
+    listener.wait_matched()
+    first = listener.wait_for(lambda: next((d for d in listener.diagnostics if "tier" in d[3]), None),
+                              30, "the first diagnostics")
+    assert first[3]["tier"] == "kinematic" and first[3]["last_tier_switch"] == "none"
+    # ROS time of sample 0, from a diagnostics message: its stamp is the end of the published signal
+    start_ns = first[4] - round(float(first[3]["simulated_s"]) * NS)
+    t_command = listener.node.get_clock().now().nanoseconds
+    listener.publish_speed(10000 * 2 * math.pi / 60)
+    listener.publish_load(0.0, 0.0)
+    v = listener.wait_for(lambda: next((d[3] for d in reversed(listener.diagnostics)
+                                        if d[3].get("tier") == "skidding"), None), 10, "the skidding tier")
+    assert v["tier_switches"] == "1"
+    old_new, at = v["last_tier_switch"].split(" at ")
+    assert old_new == "kinematic -> skidding"
+    # the switch is in the signal within compute_ahead (0.05 s) + a batch + a margin of the command
+    # (the 1 ms is simulated_s's rounding)
+    after_command = float(at.removesuffix(" s")) - (t_command - start_ns) / NS
+    assert -0.001 < after_command < 0.25, after_command
+    assert f"tier switch at {at} of signal: kinematic -> skidding" in node.output()
+    switch_ns = start_ns + round(float(at.removesuffix(" s")) * NS)
+    listener.wait_for(lambda: listener.accel[-1][1] > switch_ns + NS // 2, 10, "0.5 s of tables after the switch")
+    tables = listener.accel_since(switch_ns - NS // 2)
+    stamps, widths = stamps_and_widths(tables)
+    assert stamps[0] < switch_ns < stamps[-1]
+    assert np.all(np.diff(stamps) == widths[:-1] * NS // 15000)
+    assert np.all(np.isfinite(np.concatenate([d for _s, d in tables])))
+    assert node.proc.poll() is None
 
 
 # ---- shutdown and recording ---------------------------------------------------------------------

@@ -115,7 +115,7 @@ class Listener:
         self.node = rclpy.create_node(name, context=self.ctx)
         self.accel = []          # (receive time monotonic s, stamp ns, channels, (n, c) float32)
         self.state = []          # (stamp ns, names, positions, velocities)
-        self.diagnostics = []    # (receive time, level, message, {key: value})
+        self.diagnostics = []    # (receive time, level, message, {key: value}, stamp ns)
         self.clock = []          # /clock, ns
         self.node.create_subscription(PointCloud2, "accel", self._on_accel, waveform_qos(0.01))
         self.node.create_subscription(JointState, "state", self._on_state, 50)
@@ -153,7 +153,8 @@ class Listener:
     def _on_diag(self, msg):
         for st in msg.status:
             level = st.level[0] if isinstance(st.level, (bytes, bytearray)) else int(st.level)
-            self.diagnostics.append((time.monotonic(), level, st.message, {kv.key: kv.value for kv in st.values}))
+            self.diagnostics.append((time.monotonic(), level, st.message, {kv.key: kv.value for kv in st.values},
+                                     msg.header.stamp.sec * NS + msg.header.stamp.nanosec))
 
     def wait_for(self, predicate, timeout: float, what: str):
         end = time.monotonic() + timeout

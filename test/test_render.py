@@ -230,7 +230,7 @@ def test_solver_kept_when_a_profile_takes_auto_to_the_skidding_tier(tmp_path, ca
     out = tmp_path / "fast.mcap"
     assert cli.main(["render", str(scene_path), "--duration", "0.02", "--solver", "rk4", "--rk4-step", "2e-6",
                      "--out", str(out)]) == 0
-    assert "skidding tier)" in capsys.readouterr().out
+    assert "skidding tier at the end: 1 switch, the last kinematic -> skidding at 0.000 s)" in capsys.readouterr().out
     argv = _recorded_command(out)
     assert " ".join(argv).endswith("--solver rk4 --rk4-step 2e-06")
     with open_recording(out) as rec:

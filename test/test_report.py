@@ -77,6 +77,7 @@ def test_report_draws_plots_and_finds_the_outer_race_fault(outer, monkeypatch):
     assert summary["verdict"] == "outer" and summary["expected_defects"] == ["outer"]
     assert summary["waveform_gaps"] == 0 and summary["sample_rate_hz"] == 15000.0
     assert summary["duration_s"] == pytest.approx(2.0, abs=0.02)
+    assert summary["tiers"] == ["kinematic"] and summary["tier_switches"] == 0
     md = (out / "summary.md").read_text()
     assert "OUTER" in md and "![envelope.png](envelope.png)" in md and "| BPFO | 95.25 |" in md
 
@@ -147,3 +148,24 @@ def test_report_of_a_skidding_run_shows_cage_and_skid_ratios(tmp_path):
     assert set(ratios) >= {"ball_skid_ratio", "cage_skid_ratio"}
     # percent, and the cage runs slower than pure rolling (seed 000: 1.25 % at this point)
     assert 0.05 < ratios["cage_skid_ratio"] < 20
+
+
+def test_report_says_when_auto_switched_tiers(tmp_path):
+    """A profile from 1600 to 10000 rpm with the load taken off moves ``fidelity: auto`` from the
+    kinematic to the skidding tier part way: the metadata keeps the tier at the start, and the
+    report tells from ``/diagnostics`` that the skidding tier ran after it, and when it took over
+    (a batch boundary while the profile ramps)."""
+    scene = tmp_path / "up.yaml"
+    scene.write_text(load_scene("er16k_outer_race").source_text
+                     + "profile:\n  - {t: 0.5, shaft_speed_rpm: 10000, radial_load: [0.0, 0.0]}\n")
+    rec = tmp_path / "up.mcap"
+    render(str(scene), 1.0, rec, progress=False)
+    s = build_report(rec, tmp_path / "out")
+    assert s["tier"] == "kinematic" and s["tiers"] == ["kinematic", "skidding"]
+    assert s["tier_switches"] == 1
+    old_new, t = s["last_tier_switch"].split(" at ")
+    assert old_new == "kinematic -> skidding"
+    t_s = float(t.removesuffix(" s"))
+    assert 0.0 < t_s < 0.5 and t_s * 100 == pytest.approx(round(t_s * 100), abs=1e-9)
+    md = (tmp_path / "out" / "summary.md").read_text()
+    assert "kinematic tier (" in md and "at the start, then skidding: 1 tier switch, the last kinematic -> skidding at" in md

@@ -59,6 +59,7 @@ class _Data:
         state_t, shaft_w, cage_w = [], [], []
         cmd_t, cmd_speed, load_t, load_xy = [], [], [], []
         diag = {}
+        tiers = []
         samples = 0
         fs_meta = None
         try:
@@ -91,6 +92,9 @@ class _Data:
             else:
                 for key, percent in skid_ratios(msg).items():
                     diag.setdefault(key, []).append((_stamp(msg.header.stamp), percent))
+                tier = tier_keys(msg)
+                if tier.get("tier"):
+                    tiers.append(tier)
         if not chunks:
             raise UserError(f"{rec.path}: no accelerometer waveform tables (sensor_msgs/msg/PointCloud2 "
                             f"on .../accel) in this recording; topics: {', '.join(sorted(topics)) or 'none'}")
@@ -108,6 +112,7 @@ class _Data:
         self.load_t = np.array(load_t, dtype=float) / NS
         self.load_xy = np.array(load_xy, dtype=float).reshape(-1, 2)
         self.skid = {k: np.array(v, dtype=float) for k, v in diag.items()}
+        self.tiers = tiers
 
     @staticmethod
     def _find(topics, name, msg_type):
@@ -142,6 +147,29 @@ def skid_ratios(diagnostics) -> dict:
                 except ValueError:
                     pass            # not a number: not a ratio to average
     return found
+
+
+def tier_keys(diagnostics) -> dict:
+    """The model-tier keys of one ``/diagnostics`` message (``recording.render.tier_values``):
+    ``tier``, ``tier_switches``, ``last_tier_switch``, as text; {} when it has none."""
+    return {kv.key: kv.value for status in diagnostics.status for kv in status.values
+            if kv.key in ("tier", "tier_switches", "last_tier_switch")}
+
+
+def tier_history(metadata: dict, tiers: list) -> dict:
+    """What ran: the tier the recording started with (its metadata), the tiers that
+    ``/diagnostics`` reported in order of appearance, and the switches (count, latest)."""
+    seen = [metadata["tier"]] if metadata.get("tier") else []
+    for t in tiers:
+        if not seen or seen[-1] != t["tier"]:
+            seen.append(t["tier"])
+    last = tiers[-1] if tiers else {}
+    try:
+        switches = int(last.get("tier_switches", ""))
+    except ValueError:
+        switches = None                 # a recording from before the key, or none reported
+    return {"tiers": seen, "tier_switches": switches,
+            "last_tier_switch": last.get("last_tier_switch", "none") if switches else "none"}
 
 
 def _stamp(stamp) -> int:
@@ -351,6 +379,7 @@ def build_report(path, out) -> dict:
         "seed": meta.get("seed", ""),
         "tier": meta.get("tier", ""),
         "tier_reason": meta.get("tier_reason", ""),
+        **tier_history(meta, d.tiers),
         "parameters": _json_or_text(meta.get("parameters", "")),
         "duration_s": duration,
         "messages": message_count,
@@ -394,6 +423,16 @@ def _num(v) -> str:
     return "n/a" if v is None or (isinstance(v, float) and not math.isfinite(v)) else f"{v:.4g}"
 
 
+def _tiers_text(s: dict) -> str:
+    """``kinematic tier (reason)``, or with ``fidelity: auto`` switching: which tiers ran."""
+    text = f"{s['tier']} tier ({s['tier_reason']})"
+    if s["tier_switches"]:
+        text += (f" at the start, then {' -> '.join(s['tiers'][1:]) or s['tier']}: "
+                 f"{s['tier_switches']} tier switch{'es' if s['tier_switches'] > 1 else ''}, "
+                 f"the last {s['last_tier_switch']}")
+    return text
+
+
 def _markdown(s: dict) -> str:
     lines = [f"# Recording report: {s['scene'] or Path(s['file']).name}", ""]
     if s["description"]:
@@ -407,7 +446,7 @@ def _markdown(s: dict) -> str:
               f"{exp} (the verdict {agree}).", ""]
     lines += ["| | |", "| --- | --- |",
               f"| file | `{s['file']}` |",
-              f"| made by | bearing_sim_ros {s['package_version']}, {s['tier']} tier ({s['tier_reason']}), seed {s['seed']} |",
+              f"| made by | bearing_sim_ros {s['package_version']}, {_tiers_text(s)}, seed {s['seed']} |",
               f"| length | {s['duration_s']:.2f} s, {s['messages']} messages; analysed {s['analysed_s']:.2f} s |",
               f"| waveform | {s['sample_rate_hz']:g} Hz, {', '.join(s['channels'])}; "
               f"{'contiguous' if s['waveform_gaps'] == 0 else str(s['waveform_gaps']) + ' gaps'} |",

@@ -357,7 +357,12 @@ class BearingSimNode(Node):
         """Advance one batch and build its messages (no waiting, no publishing)."""
         sim, msgs = self.sim, self.msgs
         speed, load = self._cmd_speed, self._cmd_load       # commands take effect here
+        switches = sim.tier_switches
         batch = sim.advance(n, shaft_speed=speed, radial_load=load)
+        if sim.tier_switches != switches:
+            t, old, new = sim.last_tier_switch
+            self.get_logger().info(f"tier switch at {t:.3f} s of signal: {old} -> {new} "
+                                   f"({sim.selection.reason})")
         if batch.index0 == 0:
             # ROS time of sample 0: one batch before now, when the first batch is ready (its
             # computation may include loading compiled kernels: that must not be an overrun)
@@ -476,7 +481,7 @@ class BearingSimNode(Node):
             self._stop.wait(max(0.0, wake - now))
 
     def _diagnostics(self, stamp_ns, now, published_index):
-        from ..recording.render import diagnostics_message
+        from ..recording.render import diagnostics_message, tier_values
 
         st = self.stats
         period = st.period_end(now, published_index)
@@ -491,10 +496,7 @@ class BearingSimNode(Node):
             "batch_compute_s": f"{period['busy_mean']:.6f}",
             "batch_compute_worst_s": f"{period['busy_worst']:.6f}",
             "sim_thread_load": f"{period['busy_fraction']:.4f}",
-            "tier": self.sim.tier,
-            "tier_reason": self.sim.selection.reason,
-            "tier_estimated_error": f"{self.sim.selection.estimated_error:.3g}",
-            "tier_switches": self.sim.tier_switches,
+            **tier_values(self.sim),
             "shaft_speed_rad_s": f"{self.sim.shaft_speed:.6g}",
             "radial_load_n": " ".join(f"{v:.6g}" for v in self.sim.radial_load),
             "simulated_s": f"{published_index / self.sim.sample_rate:.3f}",

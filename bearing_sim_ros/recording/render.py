@@ -87,6 +87,29 @@ def diagnostics_message(stamp_ns: int, values: dict, level: int = 0, message: st
     return arr
 
 
+def tier_values(sim) -> dict:
+    """The ``/diagnostics`` keys on the model tier, the live node's and a render's alike: the
+    tier in use, why, its estimated error, how many times ``fidelity: auto`` switched, and the
+    latest switch (``kinematic -> skidding at 1.230 s``: the simulated time of the first batch
+    the new tier computed; ``none``)."""
+    last = sim.last_tier_switch
+    return {"tier": sim.tier, "tier_reason": sim.selection.reason,
+            "tier_estimated_error": f"{sim.selection.estimated_error:.3g}",
+            "tier_switches": sim.tier_switches,
+            "last_tier_switch": "none" if last is None else f"{last[1]} -> {last[2]} at {last[0]:.3f} s"}
+
+
+def tier_summary(values: dict) -> str:
+    """``kinematic tier``, or after switches of ``fidelity: auto`` (``tier_values``) ``skidding
+    tier at the end: 1 switch, the last kinematic -> skidding at 0.430 s``."""
+    text = f"{values['tier']} tier"
+    switches = values["tier_switches"]
+    if switches:
+        text += (f" at the end: {switches} switch{'es' if switches > 1 else ''}, the last "
+                 f"{values['last_tier_switch']}")
+    return text
+
+
 def _qos_for(topic: str, batch_duration: float):
     from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
@@ -156,7 +179,8 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
     only) are the skidding tier's: when the kinematic tier was asked for, they are an error;
     when ``fidelity="auto"`` keeps to the kinematic tier for the whole render, they are not used,
     not recorded, and the summary's ``solver_unused`` says so.  Returns a summary: messages,
-    bytes, wall time (s), real-time factor, tier, path, solver_unused."""
+    bytes, wall time (s), real-time factor, tier (at the end), tier_values (``tier_values``: the
+    tier switches of ``fidelity="auto"``), path, solver_unused."""
     from .. import Simulator
     from ..scene import load_scene, scene_argument
     from .recorder import Recorder, recording_metadata
@@ -233,10 +257,7 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
                 # or the output path is left out so that the file stays byte-identical
                 values = {"real_time_factor": "nan", "real_time": "false", "mode": "render",
                           "overruns": 0, "overruns_last_period": 0, "lag_s": "0.000000",
-                          "worst_lag_s": "0.000000", "tier": sim.tier,
-                          "tier_reason": sim.selection.reason,
-                          "tier_estimated_error": f"{sim.selection.estimated_error:.3g}",
-                          "tier_switches": sim.tier_switches,
+                          "worst_lag_s": "0.000000", **tier_values(sim),
                           "shaft_speed_rad_s": f"{sim.shaft_speed:.6g}",
                           "radial_load_n": " ".join(f"{v:.6g}" for v in sim.radial_load),
                           "simulated_s": f"{sim.time:.3f}", "rejected_inputs": 0,
@@ -269,7 +290,8 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
         raise UserError(f"--out = {str(out)!r}: {status['error']}")
     return {"messages": status["messages"], "bytes": status["bytes"], "wall_s": wall,
             "signal_s": total / sample_rate, "real_time_factor": (total / sample_rate) / max(wall, 1e-9),
-            "tier": sim.tier, "path": status["path"], "solver_unused": solver_unused}
+            "tier": sim.tier, "tier_values": tier_values(sim), "path": status["path"],
+            "solver_unused": solver_unused}
 
 
 def render_command(args) -> int:
@@ -288,7 +310,7 @@ def render_command(args) -> int:
         raise UserError(f"--rk4-step = {exc.step:g} s: the fixed-step RK4 diverged at t = {exc.t:.4g} s "
                         f"(step beyond its stability limit for this load/speed); use a smaller "
                         f"--rk4-step or --solver default") from None
-    tier = f"{summary['tier']} tier"
+    tier = tier_summary(summary["tier_values"])
     if summary["solver_unused"]:
         tier += "; --solver applies to the skidding tier only, not used"
     print(f"{summary['path']}: {summary['signal_s']:g} s of {scene.name} ({tier}), "
