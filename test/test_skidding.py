@@ -599,7 +599,6 @@ def test_a_defect_raises_the_cage_skid():
         assert _defect_skid(name, 1.2) - healthy > 4e-4, name
 
 
-
 def _pit(width_mm=None, angle_deg=None, lub=None):
     """Mean cage skid ratio (%) and mean total inner-contact load (N, summed over the balls) at
     2000 rpm / 200 N over 1 s after 0.3 s, with ``er16k_outer_race``'s pit widened to
@@ -640,6 +639,7 @@ def test_a_wide_pit_at_the_bottom_lowers_the_cage_skid_by_spreading_the_load():
     assert drag[3.0] > 3e-4 and drag[600.0] < -3e-3, drag
     skid_off, load_off = _pit(2.4, angle_deg=-60.0)
     assert abs(load_off - load0) < 2.0 and skid_off - skid0 > 1e-3, (skid_off - skid0, load_off - load0)
+
 
 def study_seed000():
     """The README's "Seed 000's numbers, side by side": envelope lines at 1600 rpm / 50 N, the
