@@ -174,6 +174,7 @@ def test_rotation_by_duration_gives_complete_files(tmp_path, sim_msgs):
     rec, sent = _record(base, scene, sim, msgs, batches=100, rotate_seconds=0.25)
     files = rec.status["files"]
     assert files == [str(rotated_path(base, k)) for k in range(4)]
+    assert [Path(f).name for f in files] == ["rot_000.mcap", "rot_001.mcap", "rot_002.mcap", "rot_003.mcap"]
     total = 0
     for k, f in enumerate(files):
         with open_recording(f) as r:
@@ -229,3 +230,159 @@ def test_rotation_by_size(tmp_path, sim_msgs):
             assert n < 20_000 + 2_000                  # at most one message over the limit
             total += sum(1 for _ in r.messages(["/accel"]))
     assert total == len(sent)
+
+
+# PointField datatypes (sensor_msgs/msg/PointField.msg constants) as numpy types
+_POINTFIELD_NUMPY = {7: "<f4", 8: "<f8"}
+
+
+def _decode_by_fields(m):
+    """A waveform table decoded as a generic PointCloud2 reader would: by each field's name,
+    offset and datatype, point_step and row_step (not by this package's ``from_pointcloud2``)."""
+    assert m.height == 1 and not m.is_bigendian and m.is_dense
+    assert m.row_step == m.point_step * m.width and len(m.data) == m.row_step
+    assert all(f.count == 1 for f in m.fields)
+    dtype = np.dtype({"names": [f.name for f in m.fields],
+                      "formats": [_POINTFIELD_NUMPY[f.datatype] for f in m.fields],
+                      "offsets": [f.offset for f in m.fields], "itemsize": m.point_step})
+    rows = np.frombuffer(bytes(m.data), dtype=dtype)
+    return [f.name for f in m.fields], np.stack([rows[name] for name in dtype.names], axis=1)
+
+
+def test_tables_and_state_read_back_by_their_own_layout(tmp_path, sim_msgs):
+    """Through rosbags and a reader that knows only the PointCloud2 layout: ``accel`` holds
+    accel_x, accel_y and ``contact_forces`` inner_00..inner_08, outer_00..outer_08 (README), each
+    a float32 at 4 x its column, stamped at the ROS time of the batch's first sample (start +
+    index / 15 kHz); ``state`` lists shaft, cage, balls, the cage turning at (1 - d/D_m) / 2 of
+    the shaft (pure rolling, kinematic tier) in angle and speed."""
+    from rosbags.highlevel import AnyReader
+
+    scene, sim, msgs = sim_msgs
+    nb = sim.bearing.balls
+    path = tmp_path / "tables.mcap"
+    rec = Recorder(path, {"a": "b"})
+    for topic in ("accel", "contact_forces", "state"):
+        rec.add_topic(topic, TYPES[topic], None)
+    sent = []
+    for _ in range(3):
+        b = sim.advance(150)
+        t = msgs.stamp_ns(b.index0 + b.n)
+        rec.write("accel", msgs.accel(b), t)
+        rec.write("contact_forces", msgs.contact_forces(b), t)
+        rec.write("state", msgs.state(t), t)
+        sent.append(b)
+    rec.close()
+    got = {}
+    with AnyReader([path]) as reader:
+        for conn, _t, raw in reader.messages():
+            got.setdefault(conn.topic, []).append(reader.deserialize(raw, conn.msgtype))
+    assert {k: len(v) for k, v in got.items()} == {"/accel": 3, "/contact_forces": 3, "/state": 3}
+    contact_names = [f"inner_{j:02d}" for j in range(nb)] + [f"outer_{j:02d}" for j in range(nb)]
+    ratio = (1.0 - scene.bearing.ball_diameter / scene.bearing.pitch_diameter) / 2.0
+    for b, a, c, s in zip(sent, got["/accel"], got["/contact_forces"], got["/state"]):
+        first_sample_ns = 1_700_000_000 * 10**9 + b.index0 * 10**9 // 15000
+        for m, names, data in ((a, ["accel_x", "accel_y"], b.accel), (c, contact_names, b.contact_forces)):
+            assert m.header.stamp.sec * 10**9 + m.header.stamp.nanosec == first_sample_ns
+            got_names, table = _decode_by_fields(m)
+            assert got_names == names
+            np.testing.assert_array_equal(table, np.asarray(data, dtype=np.float32))
+        assert list(s.name) == ["shaft", "cage"] + [f"ball_{j:02d}" for j in range(nb)]
+        assert s.position[1] / s.position[0] == pytest.approx(ratio, rel=1e-6)
+        assert s.velocity[1] / s.velocity[0] == pytest.approx(ratio, rel=1e-9)
+
+
+def test_messages_are_numbered_per_channel_and_published_at_their_log_time(tmp_path):
+    """MCAP sequence numbers count each channel's messages from 0 (readers find gaps by them);
+    publish time = log time; the scene attachment is YAML; a write after close is dropped and
+    counted."""
+    from mcap.reader import make_reader
+    from std_msgs.msg import Float64
+
+    path = tmp_path / "seq.mcap"
+    rec = Recorder(path, {"a": "b"}, {"scene.yaml": b"name: x\n"}, start_time_ns=0)
+    rec.add_topic("/a", "std_msgs/msg/Float64", 10)
+    rec.add_topic("/b", "std_msgs/msg/Float64", 10)
+    for k in range(4):
+        rec.write("/a", Float64(data=float(k)), 1000 + k)
+        if k % 2:
+            rec.write("/b", Float64(data=-float(k)), 2000 + k)
+    rec.close()
+    rec.write("/a", Float64(data=9.0), 5000)
+    assert rec.status["messages"] == 6 and rec.status["dropped"] == 1
+    seqs = {}
+    with open(path, "rb") as fh:
+        reader = make_reader(fh)
+        for _schema, channel, message in reader.iter_messages():
+            seqs.setdefault(channel.topic, []).append(message.sequence)
+            assert message.publish_time == message.log_time
+        (att,) = list(reader.iter_attachments())
+    assert seqs == {"/a": [0, 1, 2, 3], "/b": [0, 1]}
+    assert att.name == "scene.yaml" and att.media_type == "application/yaml"
+
+
+def test_a_non_default_qos_profile_is_recorded_as_offered(tmp_path):
+    """Best effort, transient local, 1.5 s deadline, 2 ms lifespan, manual liveliness with a 3 s
+    lease: rosbags reads each from the file, and the recorder's own reader (``play``) gives the
+    same profile back."""
+    from rclpy.duration import Duration
+    from rclpy.qos import DurabilityPolicy, LivelinessPolicy, QoSProfile, ReliabilityPolicy
+    from rosbags.highlevel import AnyReader
+    from std_msgs.msg import Float64
+
+    q = QoSProfile(depth=7, reliability=ReliabilityPolicy.BEST_EFFORT,
+                   durability=DurabilityPolicy.TRANSIENT_LOCAL,
+                   deadline=Duration(seconds=1, nanoseconds=500_000_000),
+                   lifespan=Duration(nanoseconds=2_000_000),
+                   liveliness=LivelinessPolicy.MANUAL_BY_TOPIC,
+                   liveliness_lease_duration=Duration(seconds=3))
+    path = tmp_path / "qos.mcap"
+    with Recorder(path, {"a": "b"}) as rec:
+        rec.add_topic("/x", "std_msgs/msg/Float64", q)
+        rec.write("/x", Float64(data=1.0), 1)
+    with AnyReader([path]) as reader:
+        (conn,) = reader.connections
+        offered = conn.ext.offered_qos_profiles[0]
+    assert offered.depth == 7 and offered.reliability.name == "BEST_EFFORT"
+    assert offered.durability.name == "TRANSIENT_LOCAL" and offered.liveliness.name == "MANUAL_BY_TOPIC"
+    assert (offered.deadline.sec, offered.deadline.nsec) == (1, 500_000_000)
+    assert (offered.lifespan.sec, offered.lifespan.nsec) == (0, 2_000_000)
+    assert (offered.liveliness_lease_duration.sec, offered.liveliness_lease_duration.nsec) == (3, 0)
+    with open_recording(path) as r:
+        (info,) = r.channels.values()
+    back = qos_from_yaml(info.qos_yaml)
+    assert (back.depth, back.reliability, back.durability, back.liveliness) == \
+        (7, q.reliability, q.durability, q.liveliness)
+    assert back.deadline == q.deadline and back.lifespan == q.lifespan
+    assert back.liveliness_lease_duration == q.liveliness_lease_duration
+
+
+def test_the_queue_limit_bounds_the_backlog_not_the_recording(tmp_path, monkeypatch):
+    """``MAX_QUEUE_BYTES`` caps what waits for the disk; a recorder whose writer keeps up records
+    far more than that in total without dropping anything."""
+    import time
+
+    from std_msgs.msg import Float64
+
+    from bearing_sim_ros.recording import recorder as recorder_module
+
+    monkeypatch.setattr(recorder_module, "MAX_QUEUE_BYTES", 100)
+    with Recorder(tmp_path / "q.mcap", {"a": "b"}) as rec:
+        rec.add_topic("/x", "std_msgs/msg/Float64", 10)
+        for k in range(30):                   # 30 x 12 bytes of CDR: 3.6 x the limit in total
+            rec.write("/x", Float64(data=float(k)), k)
+            deadline = time.monotonic() + 5.0
+            while rec.status["messages"] < k + 1 and time.monotonic() < deadline:
+                time.sleep(0.002)
+    assert rec.status["messages"] == 30 and rec.status["dropped"] == 0
+
+
+def test_a_file_of_another_profile_is_not_a_ros2_recording(tmp_path):
+    from mcap.writer import Writer
+
+    path = tmp_path / "json.mcap"
+    with open(path, "wb") as fh:
+        w = Writer(fh)
+        w.start(profile="", library="test")
+        w.finish()
+    with pytest.raises(UserError, match="is not 'ros2': not a ROS 2 recording"):
+        open_recording(path)
