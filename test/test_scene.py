@@ -65,6 +65,7 @@ def test_numbers_in_exponent_form_are_floats(tmp_path):
     ("shaft_speed_rpm: 1600", "shaft_speed_rpm: 1e9", ["shaft_speed_rpm", "1000000000", "60000"]),
     ("radial_load: [0.0, -50.0]", "radial_load: [0.0]", ["radial_load", "2 numbers"]),
     ("clock: 6", "clock: 6, colour: red", ["defects[0].colour", "unknown key"]),
+    ("width_mm: 0.6", "width_mm: 0", ["defects[0].width_mm", "0", "(0, "]),
     ("operating_point:", "operating_pont:", ["operating_pont", "unknown key"]),
 ])
 def test_bad_scene_is_one_line_naming_key_value_and_allowed(tmp_path, old, new, expect):
@@ -77,6 +78,30 @@ def test_bad_scene_is_one_line_naming_key_value_and_allowed(tmp_path, old, new, 
     assert "\n" not in msg
     for piece in expect:
         assert piece in msg, msg
+
+
+def test_defect_position_by_clock_or_degrees_and_waviness_phase(tmp_path):
+    """Clock positions (12 top, 3 at +x) and degrees become angles counterclockwise from +x (rad,
+    up to whole turns); a defect given neither sits at the bottom (-90 deg); a waviness phase in
+    degrees is radians."""
+    path = tmp_path / "s.yaml"
+    for spec, angle in (("clock: 3", 0.0), ("clock: 12", math.pi / 2), ("clock: 4.5", -math.pi / 4),
+                        ("angle_deg: 30", math.pi / 6), ("angle_deg: -120", -2 * math.pi / 3)):
+        path.write_text(GOOD.replace("clock: 6", spec))
+        got = load_scene(path).defects[0].angle
+        assert math.remainder(got - angle, 2 * math.pi) == pytest.approx(0.0, abs=1e-12), (spec, got)
+    path.write_text(GOOD.replace(", clock: 6", "") + "waviness:\n  - {race: inner, order: 3, amplitude_um: 2, phase_deg: 90}\n")
+    scene = load_scene(path)
+    assert scene.defects[0].angle == pytest.approx(-math.pi / 2)
+    (w,) = scene.waviness
+    assert (w.race, w.order, w.amplitude, w.phase) == ("inner", 3, pytest.approx(2e-6), pytest.approx(math.pi / 2))
+
+
+def test_profile_times_must_increase_strictly(tmp_path):
+    path = tmp_path / "s.yaml"
+    path.write_text(GOOD + "profile:\n  - {t: 1.0, shaft_speed_rpm: 1000}\n  - {t: 1.0, shaft_speed_rpm: 2000}\n")
+    with pytest.raises(SceneError, match=r"profile\[1\]\.t = 1: times must increase"):
+        load_scene(path)
 
 
 def test_missing_section_and_broken_yaml(tmp_path):
