@@ -2,6 +2,7 @@
 from dataclasses import replace
 
 import numpy as np
+import pytest
 
 from bearing_sim_ros import Simulator, load_scene
 from bearing_sim_ros.bench import Config, Scenario, errors, reference_config, run_config
@@ -56,6 +57,59 @@ def test_light_load_high_speed_gets_skidding():
     scene = load_scene("er16k_healthy")
     sel = select_tier(scene, "auto", 10000 * RPM, (0.0, -10.0), 0.05)
     assert sel.tier == "skidding" and sel.estimated_error > 0.05
+
+
+def test_skid_index_by_hand_from_seed000_eq30():
+    """chi = (Nb F_v + T_cage / R_m) / (mu_max W) computed by hand: F_v = c_v pi xi d^2 (D_m w_c)^1.95
+    / 32 at the pure-rolling cage speed w_c = w (1 - d / D_m) / 2, mu_max at the traction curve's
+    peak v = 1 / C - A / B, W the shaft's weight alone (no radial load)."""
+    scene = load_scene("er16k_healthy")
+    b, lub = scene.bearing, scene.lubrication
+    w = 3000 * RPM
+    w_cage = 0.5 * w * (1.0 - b.ball_diameter / b.pitch_diameter)
+    f_v = lub.drag_coefficient * np.pi * lub.fluid_density * b.ball_diameter ** 2 * (b.pitch_diameter * w_cage) ** 1.95 / 32
+    v = 1.0 / lub.traction_c - lub.traction_a / lub.traction_b
+    mu_max = (lub.traction_a + lub.traction_b * v) * np.exp(-lub.traction_c * v) + lub.traction_d
+    weight = scene.structure.shaft_mass * 9.80665
+    expect = (b.balls * f_v + lub.cage_drag * w_cage / (0.5 * b.pitch_diameter)) / (mu_max * weight)
+    assert skid_index(scene, w, (0.0, 0.0)) == pytest.approx(expect, rel=1e-4)
+
+
+def test_the_shafts_weight_adds_to_a_downward_load():
+    """The weight m g pulls the shaft down: it adds to a downward radial load and takes away from
+    an upward one; without gravity the load is the radial load alone."""
+    scene = load_scene("er16k_healthy")
+    mg = scene.structure.shaft_mass * 9.80665
+    w = 2000 * RPM
+    chi_weight = skid_index(scene, w, (0.0, 0.0))
+    for load in (50.0, 500.0):
+        expect = chi_weight * mg / (load + mg)
+        assert skid_index(scene, w, (0.0, -load)) == pytest.approx(expect, rel=1e-9)
+        assert skid_index(scene, w, (0.0, load + 2 * mg)) == pytest.approx(expect, rel=1e-9)
+        assert skid_index(replace(scene, gravity=False), w, (0.0, -load)) == pytest.approx(
+            chi_weight * mg / load, rel=1e-9)
+
+
+def test_a_preload_counts_as_no_clearance_in_the_estimate():
+    scene = load_scene("er16k_healthy")
+
+    def estimate(clearance):
+        sc = replace(scene, bearing=scene.bearing.with_clearance(clearance))
+        return kinematic_error_estimate(sc, 2000 * RPM, (0.0, -50.0))[0]
+    assert estimate(-10e-6) == estimate(0.0) < estimate(45e-6)
+
+
+def test_hysteresis_keeps_the_skidding_tier_down_to_0_7_of_the_tolerance():
+    """An estimate at 0.85 x the tolerance: kinematic when starting or already kinematic, but a
+    run on the skidding tier stays there until the estimate is below 0.7 x the tolerance."""
+    scene = load_scene("er16k_healthy")
+    w, load = 2000 * RPM, (0.0, -50.0)
+    est = kinematic_error_estimate(scene, w, load)[0]
+    tol = est / 0.85
+    assert select_tier(scene, "auto", w, load, tol).tier == "kinematic"
+    assert select_tier(scene, "auto", w, load, tol, current="kinematic").tier == "kinematic"
+    assert select_tier(scene, "auto", w, load, tol, current="skidding").tier == "skidding"
+    assert select_tier(scene, "auto", w, load, est / 0.65, current="skidding").tier == "kinematic"
 
 
 def ramp_across_the_boundary(start_rpm, end_rpm):
