@@ -291,3 +291,45 @@ def test_read_recording_rejects_a_short_channel(tmp_path):
     savemat(str(path), {"X105_DE_time": np.zeros((10, 1)), "X105RPM": np.array([[1797]])})
     with pytest.raises(UserError, match="at least 1000 samples"):
         read_recording(path)
+
+
+def test_reader_picks_the_files_own_test_number_and_ignores_a_zero_rpm(tmp_path):
+    """Some CWRU files carry a second test's channels: the variables of the test number in the
+    file name are read.  An RPM of 0 is no speed: the load's nominal one is used."""
+    from scipy.io import savemat
+
+    path = tmp_path / "12k_Drive_End_IR007_2_98.mat"
+    t = np.arange(24000) / 12000.0
+    savemat(str(path), {"X097_DE_time": np.sin(2 * np.pi * 90 * t)[:, None], "X097RPM": np.array([[1797]]),
+                        "X098_DE_time": 0.5 * np.sin(2 * np.pi * 90 * t)[:, None], "X098RPM": np.array([[0]])})
+    rec = read_recording(path)
+    assert rec.channel == "X098_DE_time" and np.max(rec.accel) == pytest.approx(0.5 * G, rel=1e-6)
+    assert rec.rpm == 1750.0 and "nominal" in rec.rpm_source
+
+
+def test_statistics_of_a_sine_and_of_a_negative_impulse_train():
+    """A sine of amplitude a: RMS a / sqrt 2, crest factor sqrt 2, kurtosis 1.5, peak-to-peak 2a.
+    Turning a signal upside down changes none of them."""
+    t = np.arange(12000) / 12000.0
+    st = env.statistics(3.0 * np.sin(2 * np.pi * 50 * t))
+    assert st["rms"] == pytest.approx(3 / math.sqrt(2), rel=1e-6)
+    assert st["crest_factor"] == pytest.approx(math.sqrt(2), rel=1e-6)
+    assert st["kurtosis"] == pytest.approx(1.5, rel=1e-6) and st["peak_to_peak"] == pytest.approx(6.0, rel=1e-6)
+    x = _impacts(12000.0, 1.0, 100.0, noise=0.0)
+    up, down = env.statistics(x), env.statistics(-x)
+    for key in ("rms", "kurtosis", "crest_factor", "peak_to_peak"):
+        assert down[key] == pytest.approx(up[key], rel=1e-9), key
+
+
+def test_detector_band_is_clipped_below_a_low_nyquist():
+    """At 8 kHz the default 2-5 kHz band reaches past Nyquist: it is cut to 0.9 x 4 kHz, and an
+    outer-race impact train ringing at 3 kHz is still found."""
+    ff = BEARING.fault_frequencies(29.95)
+    d = env.diagnose(_impacts(8000.0, 4.0, ff["bpfo"], f_res=3000.0), 8000.0, ff)
+    assert d["verdict"] == "outer"
+
+
+def test_within_a_factor_is_symmetric():
+    assert V._within(1.0, 1.9, 2.0) and V._within(1.9, 1.0, 2.0)
+    assert not V._within(1.0, 2.1, 2.0) and not V._within(2.1, 1.0, 2.0)
+    assert not V._within(0.0, 1.0, 2.0) and not V._within(float("nan"), 1.0, 2.0)
