@@ -358,3 +358,36 @@ def test_wander_on_a_race_defect_is_a_one_line_scene_error(tmp_path):
         load_scene(str(path))
     msg = str(exc.value)
     assert "wander_turns" in msg and "ball" in msg and "\n" not in msg
+
+
+def test_waviness_and_half_sine_defect_geometry():
+    """Inner-race waviness turns with the shaft (turning ball and shaft together changes nothing),
+    outer-race waviness stays put; a half-sine defect's drop is never negative and peaks at the
+    largest drop at its centre."""
+    from bearing_sim_ros.physics.defects import _profile_drop, waviness_gain, waviness_table
+    from bearing_sim_ros.scene import Waviness
+
+    inner = waviness_table([Waviness("inner", 5, 1e-6, 0.3)])
+    outer = waviness_table([Waviness("outer", 5, 1e-6, 0.3)])
+    for theta, shaft, turn in ((0.2, 0.0, 0.5), (1.0, 2.0, -0.7)):
+        assert waviness_gain(inner, theta + turn, shaft + turn) == pytest.approx(waviness_gain(inner, theta, shaft), abs=1e-18)
+        assert waviness_gain(outer, theta, shaft + turn) == pytest.approx(waviness_gain(outer, theta, shaft), abs=1e-18)
+    assert abs(waviness_gain(inner, 0.2, 0.6) - waviness_gain(inner, 0.2, 0.0)) > 3e-7
+    half, hmax = 0.01, 5e-6
+    drops = [_profile_drop(2, u, half, 0.02, 4e-3, hmax, 1e-4, 1e-3) for u in np.linspace(-0.999 * half, 0.999 * half, 201)]
+    assert min(drops) >= 0.0 and max(drops) == pytest.approx(hmax, rel=1e-9)
+
+
+def test_structural_contact_damping_from_the_tangent_stiffness():
+    """c_h = 2 zeta sqrt(m_b k_t) with k_t = dQ/d delta of Hertz's Q = K delta^1.5, here taken by a
+    central difference: ``structural_damping_coefficient`` is c_h / delta^0.25."""
+    from bearing_sim_ros.physics.film import structural_damping_coefficient
+
+    scene = load_scene("er16k_healthy")
+    b, lub = scene.bearing, scene.lubrication
+    contact = b.inner_contact
+    for delta in (1e-6, 1e-5):
+        h = 1e-3 * delta
+        k_t = contact.stiffness * ((delta + h) ** 1.5 - (delta - h) ** 1.5) / (2 * h)
+        c_h = 2 * lub.contact_damping_ratio * math.sqrt(b.ball_mass * k_t)
+        assert structural_damping_coefficient(contact, lub, b.ball_mass) * delta ** 0.25 == pytest.approx(c_h, rel=1e-6)
