@@ -391,3 +391,46 @@ def test_structural_contact_damping_from_the_tangent_stiffness():
         k_t = contact.stiffness * ((delta + h) ** 1.5 - (delta - h) ** 1.5) / (2 * h)
         c_h = 2 * lub.contact_damping_ratio * math.sqrt(b.ball_mass * k_t)
         assert structural_damping_coefficient(contact, lub, b.ball_mass) * delta ** 0.25 == pytest.approx(c_h, rel=1e-6)
+
+
+@pytest.mark.parametrize("name", ["er16k_inner_race", "b6205_inner_outer", "b6205_ball_outer", "cwru_6205_b007"])
+def test_kernel_defect_search_matches_every_ball_evaluated(name):
+    """The kernel tests a race defect only against the ball nearest to it and that ball's two
+    neighbours (``ball_geometry``).  At random cage, shaft and spin angles, with random slip, each
+    ball's interference loss equals ``defects.interference_loss`` evaluated for that ball at its
+    own angle, for every kind of defect (the CWRU ball defect with its wandering spin axis); and
+    the angles do reach the defects."""
+    from bearing_sim_ros.physics.defects import D_ANGLE, D_HALF, D_KIND, KIND_BALL, KIND_INNER, interference_loss
+    from bearing_sim_ros.physics.kinematic import P_CR, P_NB, P_RB, P_RI, P_RO, KinematicModel, ball_geometry
+
+    scene = load_scene(name)
+    model = KinematicModel(scene, 15000.0, 2, 3, scene.shaft_speed, np.array(scene.radial_load))
+    geo, nb = model.geo, int(model.geo[P_NB])
+    spacing = 2 * math.pi / nb
+    rng = np.random.default_rng(7)
+    gc, gs, goff, eps = np.empty(nb), np.empty(nb), np.empty(nb), np.zeros(nb)
+    met = 0
+    dtab = model.dtab
+    for i in range(4000):
+        cage, shaft, spin = rng.uniform(-50.0, 50.0, 3)
+        if i % 2:
+            # half of the draws put a defect within twice its half-width of a ball (or the ball
+            # defect within that of a race), so that the defect's profile and edges are sampled
+            k = rng.integers(dtab.shape[0])
+            near = rng.uniform(-2.0, 2.0) * dtab[k, D_HALF]
+            if int(dtab[k, D_KIND]) == KIND_BALL:
+                # whole turns pick another stretch of a wandering spin axis
+                spin = -dtab[k, D_ANGLE] + near + rng.integers(2) * math.pi + rng.integers(10_000) * 2 * math.pi
+            else:
+                centre = dtab[k, D_ANGLE] + (shaft if int(dtab[k, D_KIND]) == KIND_INNER else 0.0)
+                cage = centre + near - rng.integers(nb) * spacing
+        cache = np.full((nb, 3), np.nan)
+        ball_geometry(geo, model.cj, model.sj, dtab, model.wtab, model.seed, cache, shaft, cage, spin,
+                      math.cos(cage), math.sin(cage), 0.0, 0.0, 0.0, eps, gc, gs, goff)
+        for j in range(nb):
+            theta = cage + j * spacing + eps[j]
+            li, lo = interference_loss(dtab, j, theta, shaft, spin, geo[P_RI], geo[P_RO], geo[P_RB])
+            assert goff[j] - geo[P_CR] == pytest.approx(li + lo, abs=1e-15), (j, cage, shaft, spin)
+            assert math.cos(theta) == pytest.approx(gc[j], abs=1e-6) and math.sin(theta) == pytest.approx(gs[j], abs=1e-6)
+            met += li + lo > 0.0
+    assert met > 100, met

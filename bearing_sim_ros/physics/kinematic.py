@@ -118,9 +118,12 @@ def ball_geometry(geo, cj, sj, dtab, wtab, seed, slip_cache, shaft_angle, cage_a
     (chunk-invariant); ``slip_cache`` (nb, 3: knot index, value there, value at the next)
     avoids re-hashing until the cage passes a knot.
 
-    Defects: :func:`~.defects.add_defect_losses` spelled out, because the kernel calls this
-    inline at every step and an array-taking call costs more than its arithmetic, and because
-    it also says whether a ball is near a defect."""
+    Defects: every defect's interference loss (:func:`~.defects.interference_loss`), with a race
+    defect tested only against the ball nearest to it and that ball's two neighbours (a defect
+    is narrower than half the ball spacing, scene validation, and slip moves a ball by a few
+    percent of it), so that the cost is per defect, not per ball; written out here because the
+    kernel calls this inline at every step, an array-taking call costs more than its arithmetic,
+    and it also says whether a ball is near a defect."""
     nb = int(geo[P_NB])
     cr = geo[P_CR]
     spacing = 2.0 * math.pi / nb
