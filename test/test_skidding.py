@@ -398,6 +398,51 @@ def test_defect_depth_slopes_along_the_ball_angle(profile):
     assert lo > 0.0 and dli == 0.0 and dlo == 0.0
 
 
+@pytest.mark.parametrize("name", ["er16k_inner_race", "b6205_inner_outer", "b6205_ball_outer"])
+def test_defect_search_matches_every_ball_evaluated(name):
+    """``_defect_losses`` evaluates a race defect only for the ball nearest to it and that ball's
+    two neighbours.  From a settled state (balls where skidding and the pocket clearance put
+    them), turned as a whole by random angles against random shaft angles, every ball's losses
+    and slopes equal ``interference_loss_slope`` evaluated for that ball at its own angle; and
+    the angles do reach the defects."""
+    from bearing_sim_ros.physics.defects import D_ANGLE, D_BALL, D_KIND, KIND_BALL, KIND_INNER, interference_loss_slope
+
+    scene = load_scene(name)
+    model = sk.SkiddingModel(scene, FS, 0, scene.shaft_speed, np.array(scene.radial_load))
+    w, load = scene.shaft_speed, np.array(scene.radial_load)
+    model.advance(3000, w, w, load, load)          # 50 ms: the balls settle in their pockets
+    p, dtab, nb = model.p, model.dtab, int(model.p[sk.P_NB])
+    spacing = 2 * np.pi / nb
+    rng = np.random.default_rng(5)
+    scr = np.zeros((nb, 5))
+    met = 0
+    for i in range(3000):
+        y = model.y.copy()
+        turn, shaft = rng.uniform(-40.0, 40.0, 2)
+        if i % 2:
+            # put a race defect next to a ball (a ball defect against a race) half of the time
+            k = rng.integers(dtab.shape[0])
+            j = rng.integers(nb)
+            th_j = y[sk.NS0 + sk.NBV * j + sk.B_TH]
+            if int(dtab[k, D_KIND]) == KIND_BALL:
+                y[sk.NS0 + sk.NBV * int(dtab[k, D_BALL]) + sk.B_PSI] = (-dtab[k, D_ANGLE] + rng.uniform(-0.1, 0.1)
+                                                                 + rng.integers(2) * np.pi)
+            else:
+                centre = dtab[k, D_ANGLE] + (shaft if int(dtab[k, D_KIND]) == KIND_INNER else 0.0)
+                turn = centre - th_j + rng.uniform(-0.03, 0.03)
+        y[10] += turn
+        for j in range(nb):
+            y[sk.NS0 + sk.NBV * j + sk.B_TH] += turn
+        sk._defect_losses(dtab, y, p, shaft, scr)
+        for j in range(nb):
+            b = sk.NS0 + sk.NBV * j
+            want = interference_loss_slope(dtab, j, y[b + sk.B_TH], shaft, y[b + sk.B_PSI], p[sk.P_RI], p[sk.P_RO],
+                                           p[sk.P_RB])
+            assert tuple(scr[j, [0, 1, 3, 4]]) == pytest.approx(want, abs=1e-15), (j, turn, shaft)
+            met += want[0] + want[1] > 0.0
+    assert met > 300, met
+
+
 def test_a_ball_free_in_a_deep_pit_is_not_a_defect_event():
     """The split solver sub-steps a step in which a ball is inside a defect under a contact it
     changes, unless that contact stays open at both ends by more than OPEN_GAP_MARGIN times its
