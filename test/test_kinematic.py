@@ -434,3 +434,34 @@ def test_kernel_defect_search_matches_every_ball_evaluated(name):
             assert math.cos(theta) == pytest.approx(gc[j], abs=1e-6) and math.sin(theta) == pytest.approx(gs[j], abs=1e-6)
             met += li + lo > 0.0
     assert met > 100, met
+
+
+def test_film_coefficient_is_hamrock_dowson_worked_by_hand():
+    """h = 3.63 U^0.68 G^0.49 W^-0.073 (1 - e^(-0.68 k)) R_x (Hamrock-Dowson 1977, seed 000 eq. 12)
+    worked by hand in its dimensionless groups for the ER-16K inner-race contact (R_x of a ball on
+    a convex race from the catalog's diameters, E' = E / (1 - nu^2) of steel), against
+    ``film_coefficient``'s C in h = C u^0.68 Q^-0.073; and at 1600 rpm / 50 N the film is a few
+    tenths of a micron (the load on the most loaded ball, about half the 50 N), as for a mineral
+    oil of this viscosity in a bearing of this size."""
+    from bearing_sim_ros.physics.film import film_coefficient
+
+    scene = load_scene("er16k_healthy")
+    b, lub = scene.bearing, scene.lubrication
+    contact = b.inner_contact
+    e_eff = b.elastic_modulus / (1 - b.poisson_ratio ** 2)
+    assert 2.0e11 < e_eff < 2.5e11                        # bearing steel
+    r_ball = 0.5 * b.ball_diameter
+    r_race = 0.5 * b.inner_race_diameter
+    rx = r_ball * r_race / (r_ball + r_race)
+    assert contact.rx == pytest.approx(rx, rel=1e-12)
+    c = film_coefficient(contact, lub, e_eff)
+    for u, q in ((0.5, 5.0), (5.0, 50.0), (20.0, 500.0)):
+        U = lub.viscosity * u / (e_eff * rx)
+        G = lub.pressure_viscosity * e_eff
+        W = q / (e_eff * rx ** 2)
+        h = 3.63 * U ** 0.68 * G ** 0.49 * W ** -0.073 * (1 - math.exp(-0.68 * contact.ellipticity)) * rx
+        assert c * u ** 0.68 * q ** -0.073 == pytest.approx(h, rel=1e-10)
+    # 1600 rpm: entrainment speed of pure rolling at the inner race, u = (w_shaft - w_cage) r_race
+    w = 1600 * 2 * math.pi / 60
+    u = (w - b.cage_speed(w)) * r_race
+    assert 0.1e-6 < c * u ** 0.68 * 25.0 ** -0.073 < 1.0e-6
