@@ -60,6 +60,18 @@ def test_reader_converts_g_and_takes_speed_from_the_file(tmp_path):
     assert rec.shaft_speed == pytest.approx(1772 * 2 * math.pi / 60)
 
 
+def test_reader_sample_rate_override_and_the_shaft_order_check(tmp_path):
+    """``sample_rate`` overrides the rate the file name says; a rate that puts the recording's
+    shaft-order line off the shaft speed is kept but noted (the check prefers the file's 12 kHz,
+    at which the synthetic line sits at 3 x the 1772 rpm shaft)."""
+    path = tmp_path / "12k_Drive_End_IR007_1_123.mat"
+    _write_mat(path)
+    rec = read_recording(path, sample_rate=48000.0)
+    assert rec.sample_rate == 48000.0
+    assert any("prefers 12000 Hz over 48000 Hz" in note for note in rec.notes), rec.notes
+    assert not read_recording(path).notes
+
+
 def test_reader_without_rpm_uses_the_nominal_speed_of_the_load(tmp_path):
     path = tmp_path / "12k_Drive_End_OR007@6_3_999.mat"
     _write_mat(path, number=999, with_rpm=False)
