@@ -430,7 +430,7 @@ def test_kernel_defect_search_matches_every_ball_evaluated(name):
         for j in range(nb):
             theta = cage + j * spacing + eps[j]
             li, lo = interference_loss(dtab, j, theta, shaft, spin, geo[P_RI], geo[P_RO], geo[P_RB])
-            assert goff[j] - geo[P_CR] == pytest.approx(li + lo, abs=1e-15), (j, cage, shaft, spin)
+            assert goff[j] - geo[P_CR] == pytest.approx(li + lo, rel=1e-9, abs=1e-15), (j, cage, shaft, spin)
             assert math.cos(theta) == pytest.approx(gc[j], abs=1e-6) and math.sin(theta) == pytest.approx(gs[j], abs=1e-6)
             met += li + lo > 0.0
     assert met > 100, met
