@@ -282,8 +282,9 @@ def test_a_command_across_the_tier_boundary_switches_tiers_and_says_so(started, 
     t_command = listener.node.get_clock().now().nanoseconds
     listener.publish_speed(10000 * 2 * math.pi / 60)
     listener.publish_load(0.0, 0.0)
+    # the switch builds the skidding tier, whose kernels compile (about 12 s) on a cold cache
     v = listener.wait_for(lambda: next((d[3] for d in reversed(listener.diagnostics)
-                                        if d[3].get("tier") == "skidding"), None), 10, "the skidding tier")
+                                        if d[3].get("tier") == "skidding"), None), 60, "the skidding tier")
     assert v["tier_switches"] == "1"
     old_new, at = v["last_tier_switch"].split(" at ")
     assert old_new == "kinematic -> skidding"
@@ -293,7 +294,7 @@ def test_a_command_across_the_tier_boundary_switches_tiers_and_says_so(started, 
     assert -0.001 < after_command < 0.25, after_command
     assert f"tier switch at {at} of signal: kinematic -> skidding" in node.output()
     switch_ns = start_ns + round(float(at.removesuffix(" s")) * NS)
-    listener.wait_for(lambda: listener.accel[-1][1] > switch_ns + NS // 2, 10, "0.5 s of tables after the switch")
+    listener.wait_for(lambda: listener.accel[-1][1] > switch_ns + NS // 2, 30, "0.5 s of tables after the switch")
     tables = listener.accel_since(switch_ns - NS // 2)
     stamps, widths = stamps_and_widths(tables)
     assert stamps[0] < switch_ns < stamps[-1]
