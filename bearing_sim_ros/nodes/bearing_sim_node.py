@@ -401,7 +401,8 @@ class BearingSimNode(Node):
         context = self.context
         queue = deque()
         anchor_t = anchor_i = None            # sample anchor_i is due at steady time anchor_t
-        next_diag = None
+        next_diag = None                      # steady-clock time of the next /diagnostics
+        next_diag_index = sr                  # real_time:=false: once per second of signal, like render
         est = 0.0
         published_index = 0
         stats.period_start(time.monotonic(), 0)
@@ -416,8 +417,9 @@ class BearingSimNode(Node):
                 stats.batch(lag, item.batch, now)
                 published_index = item.end_index
                 out = item.out
-                if now >= next_diag:
+                if (now >= next_diag) if real_time else (item.end_index >= next_diag_index):
                     next_diag = max(next_diag + 1.0, now - 0.5)
+                    next_diag_index = (math.floor(item.end_index / sr) + 1) * sr
                     out = out + [(self.pub_diag, self._diagnostics(item.end_stamp, now, published_index))]
                 if context.ok():
                     try:
