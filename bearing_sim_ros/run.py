@@ -157,7 +157,7 @@ def run_command(args) -> int:
     error = None
     try:
         rclpy.init(args=[])
-        node = BearingSimNode(parameter_overrides=overrides)
+        node = BearingSimNode(record_argument="--out", parameter_overrides=overrides)
         print(f"bearing-sim run: {scene.name} in real time "
               f"{'until Ctrl-C' if duration == 0 else f'for {duration:g} s'}, recording to {out}", flush=True)
         spin_node(node)

@@ -178,10 +178,12 @@ def check_config(cfg: dict):
 # ---- the node ----------------------------------------------------------------------------------
 class BearingSimNode(Node):
     """The ``bearing_sim`` node; see the module docstring.  Raises UserError for a bad
-    parameter or scene (rclpy must be initialised)."""
+    parameter or scene (rclpy must be initialised).  ``record_argument``: how an error names the
+    ``record`` path (``bearing-sim run`` passes ``--out``, the option its user gave)."""
 
-    def __init__(self, **kwargs):
+    def __init__(self, record_argument: str = "record", **kwargs):
         super().__init__(NODE_NAME, **kwargs)
+        self._record_argument = record_argument
         self._declare_all()
         cfg = self._cfg
         reason = check_config(cfg)
@@ -291,7 +293,7 @@ class BearingSimNode(Node):
         meta = recording_metadata(self.scene, params, int(cfg["seed"]), self.sim.selection)
         text = self.scene.source_text
         attachments = {f"{self.scene.name}.yaml": text.encode("utf-8")} if text else {}
-        self.recorder = Recorder(cfg["record"], meta, attachments)
+        self.recorder = Recorder(cfg["record"], meta, attachments, argument=self._record_argument)
         for ent, qos in ((self.sub_speed, self.small_qos), (self.sub_load, self.small_qos),
                          (self.pub_accel, self.wave_qos), (self.pub_contact, self.wave_qos),
                          (self.pub_state, self.small_qos), (self.pub_diag, self.small_qos)):
