@@ -326,7 +326,8 @@ def test_signal_exits_0_with_a_readable_recording(started, tmp_path, sig):
 
 def test_fast_mode_runs_duration_and_ends(started, tmp_path):
     """real_time:=false with duration 3 s: the node ends by itself with exactly 3 s recorded,
-    log time = the end of each table (the file replays at the signal's pace)."""
+    log time = the end of each table (the file replays at the signal's pace), and a
+    /diagnostics per second of signal (a fast run takes less than a steady-clock second)."""
     out = tmp_path / "fast.mcap"
     node = started({"scene": "er16k_outer_race", "real_time": False, "duration": 3.0, "record": str(out)})
     assert node.wait(60) == 0, node.output()
@@ -346,6 +347,12 @@ def test_fast_mode_runs_duration_and_ends(started, tmp_path):
     assert len(forces) > 0 and np.all(forces == (0.0, -50.0, 0.0))
     speeds = np.array([m.data for _t, m in topics["/shaft_speed"]])
     assert len(speeds) > 0 and np.allclose(speeds, 1600 * 2 * math.pi / 60, rtol=1e-9)
+    # /diagnostics once per second of signal (as render writes them), stamped at 1, 2, 3 s
+    diag = topics["/diagnostics"]
+    dst = np.array([m.header.stamp.sec * NS + m.header.stamp.nanosec for _t, m in diag], dtype=np.int64)
+    assert list(dst - stamps[0]) == [NS, 2 * NS, 3 * NS], dst - stamps[0]
+    simulated = [next(kv.value for kv in m.status[0].values if kv.key == "simulated_s") for _t, m in diag]
+    assert simulated == ["1.000", "2.000", "3.000"]
     # the waveforms offered as the README says: reliable, keep-last 1 s of 10 ms tables
     for topic in ("/accel", "/contact_forces"):
         qos = offered_qos(out)[topic]

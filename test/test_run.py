@@ -82,7 +82,8 @@ def test_run_user_mistakes_are_one_line(ros_env, bearing_sim_exe, tmp_path, case
     if case == "unknown scene":
         args, word = ["--scene", "nope", "--duration", "1", "--out", str(tmp_path / "x.mcap")], "nope"
     else:
-        args, word = ["--duration", "1", "--out", "/no/such/folder/r.mcap"], "/no/such/folder/r.mcap"
+        # named by the option the user gave, not the node parameter behind it
+        args, word = ["--duration", "1", "--out", "/no/such/folder/r.mcap"], "--out = '/no/such/folder/r.mcap'"
     r = subprocess.run([bearing_sim_exe, "run", *args], env=ros_env, capture_output=True, text=True, timeout=60)
     assert r.returncode == 2, r.stdout + r.stderr
     lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
