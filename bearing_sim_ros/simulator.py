@@ -307,6 +307,27 @@ class Simulator:
         self.last_tier_switch = (self.time, old_tier, sel.tier)
         return True
 
+    @property
+    def can_switch_tiers(self) -> bool:
+        """Whether ``fidelity="auto"`` may change the tier at run time: asked for by the caller
+        and by the scene, and the scene does not need the skidding tier for its outputs."""
+        return (self.requested_fidelity == "auto" and self.scene.fidelity == "auto"
+                and "skid_ratios" not in self.scene.outputs)
+
+    def prepare_switches(self) -> None:
+        """Load (on a cold cache: compile) the other tier's kernels now, by running a throwaway
+        model of it for a few samples, so that a switch at run time costs only that tier's set-up
+        (about 30 ms, inside the live node's compute_ahead) instead of also loading its kernels
+        (25 ms more when cached, 10-15 s on a cold cache).  Nothing of this simulator changes.
+        A no-op where the tier cannot switch."""
+        if not self.can_switch_tiers:
+            return
+        other = "skidding" if self.tier == "kinematic" else "kinematic"
+        model = self._build_model(other)
+        m = int(round(model.internal_rate / self.sample_rate))
+        w, load = self._shaft_speed, np.array(self._radial_load, dtype=float)
+        model.advance(8 * m, w, w, load, load)
+
     # ---- state for the JointState topic ----------------------------------------------------
     def snapshot(self):
         """Angles and speeds of shaft, cage and balls (see ``physics.KinematicSnapshot``)."""

@@ -14,8 +14,8 @@ import time
 import numpy as np
 import pytest
 
-from test_node_support import (NS, Listener, NodeProcess, hung_teardown_script, offered_qos,
-                               read_recording, stamps_and_widths)
+from test_node_support import (FIRST_TABLE_S, NS, Listener, NodeProcess, hung_teardown_script,
+                               offered_qos, read_recording, stamps_and_widths)
 
 from bearing_sim_ros.analysis.envelope import DETECTION_THRESHOLD, envelope_spectrum, fault_lines, line_at
 from bearing_sim_ros.catalog import get_bearing
@@ -138,7 +138,7 @@ def test_stream_is_15khz_contiguous_and_paced(started, listener):
     nanosecond, stamp time advances with the steady clock within 2 %; state at 50 Hz with the
     shaft at the scene's speed; diagnostics once a second; run-time parameter changes checked."""
     node = started({"scene": "er16k_outer_race"})
-    listener.wait_for(lambda: len(listener.accel) > 0, 30, "the first accel table")
+    listener.wait_for(lambda: len(listener.accel) > 0, FIRST_TABLE_S, "the first accel table")
     t_first = listener.accel[0][0]
     listener.wait_for(lambda: listener.accel[-1][0] - t_first > 11.0, 20, "11 s of tables")
     tables = list(listener.accel)
@@ -215,7 +215,7 @@ def test_bad_inputs_are_rejected_and_a_speed_change_moves_bpfo(started, listener
     good value and are counted in /diagnostics; a good speed moves the envelope BPFO line."""
     node = started({"scene": "er16k_outer_race"})
     listener.wait_matched()
-    listener.wait_for(lambda: len(listener.accel) > 0, 30, "the first accel table")
+    listener.wait_for(lambda: len(listener.accel) > 0, FIRST_TABLE_S, "the first accel table")
     now = listener.node.get_clock().now().nanoseconds
     for bad in (float("nan"), float("inf"), float("-inf"), 1.0e5):
         listener.publish_speed(bad)
@@ -275,7 +275,7 @@ def test_a_command_across_the_tier_boundary_switches_tiers_and_says_so(started, 
     node = started({"scene": "er16k_outer_race"})
     listener.wait_matched()
     first = listener.wait_for(lambda: next((d for d in listener.diagnostics if "tier" in d[3]), None),
-                              30, "the first diagnostics")
+                              FIRST_TABLE_S, "the first diagnostics")
     assert first[3]["tier"] == "kinematic" and first[3]["last_tier_switch"] == "none"
     # ROS time of sample 0, from a diagnostics message: its stamp is the end of the published signal
     start_ns = first[4] - round(float(first[3]["simulated_s"]) * NS)
@@ -363,7 +363,7 @@ def test_publish_clock_gives_the_end_of_each_table(started, listener):
     """publish_clock:=true: /clock carries the simulation time, the end of each published table
     (its stamp + 10 ms), one per table, never backwards."""
     started({"scene": "er16k_outer_race", "publish_clock": True})
-    listener.wait_for(lambda: len(listener.accel) > 100 and len(listener.clock) > 100, 30,
+    listener.wait_for(lambda: len(listener.accel) > 100 and len(listener.clock) > 100, FIRST_TABLE_S,
                       "tables and /clock")
     ends = {a[1] + BATCH_NS for a in listener.accel}
     clock = np.array(listener.clock, dtype=np.int64)

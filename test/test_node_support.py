@@ -13,6 +13,11 @@ import numpy as np
 NS = 1_000_000_000
 
 
+# how long a node may take to its first table: on a cold cache it compiles the kinematic tier's
+# kernels (about 16 s) and, with fidelity auto, the skidding tier's (about 12 s) first
+FIRST_TABLE_S = 60.0
+
+
 def hung_teardown_script(call: str) -> str:
     """A Python script that runs ``call`` (an expression that ends the process with its exit
     status, sys.argv available) with ``Node.destroy_node`` hanging for 600 s and the teardown

@@ -349,6 +349,9 @@ class BearingSimNode(Node):
 
     def _run(self):
         try:
+            # before the first batch, which starts the clock: a tier switch at run time must not
+            # stall the stream while the other tier's kernels load (or compile, on a cold cache)
+            self.sim.prepare_switches()
             self._loop()
         except BaseException as exc:  # noqa: BLE001 - reported by main() as an internal error
             self.error = exc
