@@ -315,15 +315,21 @@ class Simulator:
                 and "skid_ratios" not in self.scene.outputs)
 
     def prepare_switches(self) -> None:
-        """Load (on a cold cache: compile) the other tier's kernels now, by running a throwaway
-        model of it for a few samples, so that a switch at run time costs only that tier's set-up
-        (about 30 ms, inside the live node's compute_ahead) instead of also loading its kernels
-        (25 ms more when cached, 10-15 s on a cold cache).  Nothing of this simulator changes.
-        A no-op where the tier cannot switch."""
+        """Load (on a cold cache: compile) the other tier's kernels now, by handing a copy of the
+        running tier's state to a throwaway model of the other one and running it for a few
+        samples, so that a switch at run time costs only that tier's set-up (about 30 ms, inside
+        the live node's compute_ahead) instead of also loading its kernels (25 ms more when
+        cached, 10-15 s on a cold cache).  Nothing of this simulator changes.  A no-op where the
+        tier cannot switch."""
         if not self.can_switch_tiers:
             return
+        import copy
+
         other = "skidding" if self.tier == "kinematic" else "kinematic"
         model = self._build_model(other)
+        if hasattr(model, "adopt_state"):
+            # the hand-over too (it reads the old tier's films); from a copy, which it may update
+            model.adopt_state(copy.deepcopy(self._model))
         m = int(round(model.internal_rate / self.sample_rate))
         w, load = self._shaft_speed, np.array(self._radial_load, dtype=float)
         model.advance(8 * m, w, w, load, load)

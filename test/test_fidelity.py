@@ -195,8 +195,8 @@ if __name__ == "__main__":
 
 def test_prepare_switches_loads_the_other_tiers_kernels_and_changes_nothing():
     """``Simulator.prepare_switches`` (the live node calls it before its first batch) loads the
-    tier that auto may switch to, in a fresh process: its stepping kernel has a compiled
-    signature afterwards and none before; a scene that needs the skidding tier for its skid
+    tier that auto may switch to, in a fresh process: its stepping kernel and the hand-over's
+    have compiled signatures afterwards and none before; a scene that needs the skidding tier for its skid
     ratios never switches, so nothing is loaded.  The simulator's own samples are the same bits
     with and without it."""
     import subprocess
@@ -208,16 +208,18 @@ def test_prepare_switches_loads_the_other_tiers_kernels_and_changes_nothing():
         "from bearing_sim_ros.physics import kinematic, skidding\n"
         "sim = Simulator(sys.argv[1])\n"
         "sim.advance(150)\n"
-        "other = skidding._engine_split if sim.tier == 'kinematic' else kinematic.advance_kernel\n"
-        "before = len(other.signatures)\n"
+        # the other tier's stepping kernel, and the hand-over's (the kinematic balls' films)
+        "other = ((skidding._engine_split, kinematic._ball_films) if sim.tier == 'kinematic'\n"
+        "         else (kinematic.advance_kernel,))\n"
+        "before = sum(len(k.signatures) for k in other)\n"
         "sim.prepare_switches()\n"
-        "print(sim.tier, sim.can_switch_tiers, before, len(other.signatures))\n")
+        "print(sim.tier, sim.can_switch_tiers, before, sum(len(k.signatures) for k in other))\n")
     got = {}
     for name in ("er16k_outer_race", "er16k_skidding"):
         run = subprocess.run([sys.executable, "-c", script, name], capture_output=True, text=True, timeout=300)
         assert run.returncode == 0, run.stderr[-2000:]
         got[name] = run.stdout.split()
-    assert got["er16k_outer_race"] == ["kinematic", "True", "0", "1"]
+    assert got["er16k_outer_race"] == ["kinematic", "True", "0", "2"]
     assert got["er16k_skidding"] == ["skidding", "False", "0", "0"]      # asks for skid ratios
 
     plain, prepared = Simulator("er16k_outer_race", seed=3), Simulator("er16k_outer_race", seed=3)
