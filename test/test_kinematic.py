@@ -465,3 +465,36 @@ def test_film_coefficient_is_hamrock_dowson_worked_by_hand():
     w = 1600 * 2 * math.pi / 60
     u = (w - b.cage_speed(w)) * r_race
     assert 0.1e-6 < c * u ** 0.68 * 25.0 ** -0.073 < 1.0e-6
+
+
+def test_piecewise_profile_ramps_to_the_depth_where_the_ball_would_touch_the_bottom():
+    """A shallow pit (5 um deep, 1.2 mm wide on the ER-16K outer race): the geometric profile
+    (the ball's sag into the pit, a circle of the contact's radius rho) reaches the bottom at an
+    arc sqrt(2 rho d - d^2) from the edge; the piecewise profile ramps linearly over that same
+    arc, so the two agree at the edge, where the ball bottoms out, and over the flat bottom, and
+    the ramp is half way down half way along it."""
+    from bearing_sim_ros.catalog import get_bearing
+    from bearing_sim_ros.physics.defects import (D_HALF, D_HMAX_O, D_RAMP_O, D_RHO_O, PROFILE_CODES,
+                                                 _profile_drop, defect_table)
+    from bearing_sim_ros.scene import Defect
+
+    b = get_bearing("ER-16K")
+    ro = 0.5 * b.outer_race_diameter
+    width, depth = 1.2e-3, 5e-6
+    rows = {p: defect_table([Defect("outer", width, depth, width, angle=0.0, profile=p)], b)[0]
+            for p in ("geometric", "piecewise")}
+    row = rows["piecewise"]
+    rho, half = row[D_RHO_O], row[D_HALF]
+    ramp = math.sqrt(2 * rho * depth - depth ** 2)          # m of arc from the edge
+    assert row[D_HMAX_O] == depth and ramp < 0.5 * width
+    assert row[D_RAMP_O] == pytest.approx(ramp, rel=1e-12)
+
+    def drop(profile, s):
+        r = rows[profile]
+        u = half - s / ro                                    # angle from the pit's centre
+        return _profile_drop(PROFILE_CODES[profile], u, half, ro, r[D_RHO_O], r[D_HMAX_O], r[D_RAMP_O], depth)
+
+    for s in (0.0, ramp, 1.5 * ramp, 0.5 * width):
+        assert drop("piecewise", s) == pytest.approx(drop("geometric", s), rel=1e-9, abs=1e-15), s
+    assert drop("piecewise", 0.5 * ramp) == pytest.approx(0.5 * depth, rel=1e-9)
+    assert drop("geometric", 0.5 * ramp) < 0.5 * depth                # the circle is flatter there
