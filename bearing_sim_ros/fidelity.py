@@ -107,6 +107,12 @@ def kinematic_error_estimate(scene, shaft_speed: float, radial_load) -> tuple:
     return float(est), chi
 
 
+def needs_skidding(scene) -> bool:
+    """Whether the scene's outputs need the skidding tier whatever the operating point (skid
+    ratios: the kinematic tier has no slip)."""
+    return "skid_ratios" in scene.outputs
+
+
 def select_tier(scene, request: str, shaft_speed: float, radial_load, tolerance: float,
                 current: str | None = None) -> Selection:
     """Choose the tier for ``scene`` at an operating point; ``current`` (the tier in use at run
@@ -114,7 +120,7 @@ def select_tier(scene, request: str, shaft_speed: float, radial_load, tolerance:
     est, chi = kinematic_error_estimate(scene, shaft_speed, radial_load)
     if request in ("kinematic", "skidding"):
         return Selection(request, f"{request} requested", est, tolerance, chi)
-    if "skid_ratios" in scene.outputs:
+    if needs_skidding(scene):
         return Selection("skidding", "the scene asks for skid ratios", est, tolerance, chi)
     limit = tolerance * (HYSTERESIS if current == "skidding" else 1.0)
     if est <= limit:

@@ -173,7 +173,8 @@ def run_command(args) -> int:
             figures = {"signal_s": node.sim.time, "wall_s": node.stats.last - node.stats.started,
                        "rtf": node.stats.real_time_factor,
                        "overruns": node.stats.overruns, "worst_lag": node.stats.worst_lag,
-                       "tier": node.sim.tier, "tier_values": tier_values(node.sim), "dropped": rs["dropped"], "ok": rs["ok"], "error": rs["error"],
+                       "tier": node.sim.tier, "tier_values": tier_values(node.sim),
+                       "dropped": rs["dropped"], "ok": rs["ok"], "error": rs["error"],
                        "path": rs["path"], "sizes": sizes_text(rs)}
         with teardown_watchdog():
             if node is not None:

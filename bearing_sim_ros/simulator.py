@@ -75,12 +75,18 @@ def _ramp(speed, load, s0, s1, l0x, l0y, l1x, l1y):
         load[k, 1] = l0y + (l1y - l0y) * f
 
 
+def _auto_reselects(scene, requested_fidelity: str) -> bool:
+    """Whether the tier is chosen anew at each operating point: auto asked for by the caller and
+    by the scene."""
+    return requested_fidelity == "auto" and scene.fidelity == "auto"
+
+
 def reselect_tier(scene, requested_fidelity: str, selection, operating_point, new_operating_point):
     """The tier selection at ``new_operating_point`` ((shaft speed rad/s, (x, y) load N)) for a
     simulator now at ``operating_point`` with ``selection``, or None when the choice cannot change
     (a tier asked for by the caller or the scene, or the same operating point).  Shared by
     ``Simulator.maybe_switch_tier`` and callers that must know the tiers of a run in advance."""
-    if requested_fidelity != "auto" or scene.fidelity != "auto":
+    if not _auto_reselects(scene, requested_fidelity):
         return None
     (s0, l0), (s1, l1) = operating_point, new_operating_point
     if s1 == s0 and l1[0] == l0[0] and l1[1] == l0[1]:
@@ -311,8 +317,9 @@ class Simulator:
     def can_switch_tiers(self) -> bool:
         """Whether ``fidelity="auto"`` may change the tier at run time: asked for by the caller
         and by the scene, and the scene does not need the skidding tier for its outputs."""
-        return (self.requested_fidelity == "auto" and self.scene.fidelity == "auto"
-                and "skid_ratios" not in self.scene.outputs)
+        from .fidelity import needs_skidding
+
+        return _auto_reselects(self.scene, self.requested_fidelity) and not needs_skidding(self.scene)
 
     def prepare_switches(self) -> None:
         """Load (on a cold cache: compile) the other tier's kernels now, by handing a copy of the
@@ -330,9 +337,8 @@ class Simulator:
         if hasattr(model, "adopt_state"):
             # the hand-over too (it reads the old tier's films); from a copy, which it may update
             model.adopt_state(copy.deepcopy(self._model))
-        m = int(round(model.internal_rate / self.sample_rate))
-        w, load = self._shaft_speed, np.array(self._radial_load, dtype=float)
-        model.advance(8 * m, w, w, load, load)
+        w, load = self._shaft_speed, self._radial_load.copy()
+        model.advance(8 * self.chain_oversample, w, w, load, load)     # 8 output samples
 
     # ---- state for the JointState topic ----------------------------------------------------
     def snapshot(self):

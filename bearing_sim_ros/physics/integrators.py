@@ -153,8 +153,8 @@ class SplitROS2(ROS2):
     230 % off in RMS at 200 and 2000 N).  Such steps are 0.9-7 % of all on the bench scenes
     (README, "Solvers", "Event sub-steps"); a step of one sample used to be redone once
     instead, with each ball's Jacobian from the stiffer end of the step, which left 1.1 % error
-    at 2000 N where sub-steps leave 0.5 %.  6 sub-steps per internal sample rather than 4 bring the ER-16K
-    inner-race line from 0.97 to 0.53 % off at two samples per step (8: 0.33 %) for 6-25 % more
+    at 2000 N where sub-steps leave 0.5 %.  6 sub-steps per internal sample rather than 4 bring
+    the ER-16K inner-race line from 0.97 to 0.53 % off at two samples per step (8: 0.33 %) for 6-25 % more
     work (25 % on the ball+outer scene, whose 2 mm ball pit is under a contact in a fifth of the
     steps; docs/solvers.md, "The first step").  The first ``skidding.START_STEPS`` steps after
     the state is set are sub-stepped whatever happens in them.

@@ -1555,9 +1555,13 @@ class RK4Diverged(UserError):
 
     def __init__(self, step: float, t: float):
         self.step, self.t = step, t
-        super().__init__(f"rk4_step = {step:g} s: the fixed-step RK4 diverged at t = {t:.4g} s "
-                         f"(step beyond its stability limit for this load/speed); use solver='default' "
-                         f"or a smaller rk4_step")
+        super().__init__(self.worded("rk4_step", "solver='default'"))
+
+    def worded(self, step_name: str, default_solver: str) -> str:
+        """The message with the caller's names for the step and for the default solver."""
+        return (f"{step_name} = {self.step:g} s: the fixed-step RK4 diverged at t = {self.t:.4g} s "
+                f"(step beyond its stability limit for this load/speed); use a smaller {step_name} "
+                f"or {default_solver}")
 
 
 class SkiddingModel:

@@ -307,9 +307,7 @@ def render_command(args) -> int:
                          oversample=args.oversample, rk4_step=args.rk4_step)
     except RK4Diverged as exc:
         # the model words its advice for the Python API; here the knobs are options
-        raise UserError(f"--rk4-step = {exc.step:g} s: the fixed-step RK4 diverged at t = {exc.t:.4g} s "
-                        f"(step beyond its stability limit for this load/speed); use a smaller "
-                        f"--rk4-step or --solver default") from None
+        raise UserError(exc.worded("--rk4-step", "--solver default")) from None
     tier = tier_summary(summary["tier_values"])
     if summary["solver_unused"]:
         tier += "; --solver applies to the skidding tier only, not used"
