@@ -75,7 +75,12 @@ SCENARIOS = [
 ]
 QUICK_SCENARIOS = [SCENARIOS[2], SCENARIOS[3]]
 
-KINEMATIC = [Config(f"kinematic x{m}", "kinematic", "kinematic", (("oversample", m),)) for m in (1, 2, 4, 8)]
+# the kinematic tier as a user gets it (one or two steps per output sample from the bearing mode),
+# then at fixed steps per output sample
+KINEMATIC_DEFAULT = Config("kinematic default", "kinematic default", "kinematic")
+KINEMATIC_STEPS = [Config(f"kinematic x{m}", "kinematic", "kinematic", (("oversample", m),)) for m in (1, 2, 4, 8)]
+KINEMATIC = [KINEMATIC_DEFAULT] + KINEMATIC_STEPS
+QUICK_KINEMATIC = [KINEMATIC_DEFAULT, KINEMATIC_STEPS[1]]
 
 
 QUICK_CONFIGS = ("rk4 h=4e-06", "default")     # the skidding settings of ``--quick``
@@ -207,7 +212,7 @@ def errors(run: Run, ref: Run, scene, sample_rate: float) -> dict:
 def study(quick: bool = False, sample_rate: float = 15000.0, progress=None) -> dict:
     scenarios = QUICK_SCENARIOS if quick else SCENARIOS
     settle, seconds, repeats = (0.1, 0.4, 1) if quick else (0.2, 0.5, 3)
-    configs = KINEMATIC[1:3] if quick else KINEMATIC
+    configs = QUICK_KINEMATIC if quick else KINEMATIC
     configs = configs + skidding_configs(quick)
     ref_cfg = reference_config()
     rows = []
@@ -374,7 +379,6 @@ CALIBRATION_POINTS = [
     Scenario("CWRU 6205 healthy 1797 rpm", "cwru_6205_normal"),
     Scenario("6205 healthy 1750 rpm 2000 N", "b6205_ball_outer"),
 ]
-KINEMATIC_DEFAULT = Config("kinematic", "kinematic", "kinematic")
 
 
 def calibrate_fidelity(sample_rate: float = 15000.0, settle: float = 0.3, seconds: float = 0.6,

@@ -105,7 +105,8 @@ def build_parser() -> argparse.ArgumentParser:
                         f"6e-06 survives every bench scene)")
     s.add_argument("--oversample", type=int, default=None, metavar="M",
                    help="integration steps per output sample: 1, 2 or a multiple of 4 up to 64 "
-                        "(default: each tier's own, 2)")
+                        "(default: each tier's own: kinematic 1 while its bearing mode is below a "
+                        "tenth of the sample rate, else 2; skidding 2)")
 
     s = sub.add_parser("play", help="republish a recording on its topics")
     s.add_argument("file", metavar="F.mcap", help="the recording to republish")

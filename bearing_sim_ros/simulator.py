@@ -103,9 +103,11 @@ class Simulator:
     sample_rate: output rate (Hz).  fidelity: "auto" | "kinematic" | "skidding".
     seed: random slip and sensor noise.  solver: "default" | "rk4" | "reference" (skidding tier).
     rk4_step: step of the "rk4" solver (s).  oversample: integration steps per output sample
-    (the accuracy knob: 1, 2 or a multiple of 4 up to 64; by default each tier's own,
-    ``physics.kinematic.DEFAULT_OVERSAMPLE`` = 2 and, for the skidding tier's "default" solver,
-    ``physics.skidding.DEFAULT_OVERSAMPLE`` = 2; "rk4" and "reference" keep their steps).
+    (the accuracy knob: 1, 2 or a multiple of 4 up to 64; by default each tier's own: the
+    kinematic tier takes 1 while its bearing mode stays below a tenth of ``sample_rate``, else
+    ``physics.kinematic.DEFAULT_OVERSAMPLE`` = 2, chosen again when the load moves it; the skidding
+    tier's "default" solver ``physics.skidding.DEFAULT_OVERSAMPLE`` = 2; "rk4" and "reference"
+    keep their steps).
     """
 
     def __init__(self, scene, sample_rate: float = 15000.0, fidelity: str = "auto", seed: int = 0,
@@ -156,10 +158,9 @@ class Simulator:
     # ---- construction ---------------------------------------------------------------------
     def _build_model(self, tier: str):
         if tier == "kinematic":
-            from .physics.kinematic import DEFAULT_OVERSAMPLE, KinematicModel
+            from .physics.kinematic import KinematicModel
 
-            m = self._oversample or DEFAULT_OVERSAMPLE
-            return KinematicModel(self.scene, self.sample_rate, m, self.seed,
+            return KinematicModel(self.scene, self.sample_rate, self._oversample, self.seed,
                                   self._shaft_speed, self._radial_load)
         from .physics.skidding import SkiddingModel
 
@@ -199,7 +200,8 @@ class Simulator:
     @property
     def oversample(self) -> int | None:
         """Integration steps per output sample of the running tier (the constructor's
-        ``oversample``, else the tier's default); None for the skidding tier's "rk4" and
+        ``oversample``, else the tier's default, which for the kinematic tier follows the bearing
+        mode at the load); None for the skidding tier's "rk4" and
         "reference" solvers, whose steps are set in seconds.  The sensor chain's rate is
         ``chain_oversample``."""
         if self.tier == "skidding":

@@ -12,7 +12,7 @@ def test_quick_bench_writes_table_json_and_plot(tmp_path, bearing_sim_exe):
     result = json.loads((out / "bench.json").read_text())
     rows = [r for r in result["rows"] if "diverged" not in r]
     families = {r["family"] for r in rows}
-    assert {"kinematic", "skidding default"} <= families
+    assert {"kinematic default", "kinematic", "skidding default"} <= families
     assert result["reference"] == "reference" and result["machine"]["threads_used"] == 1
     for r in rows:
         assert r["real_time_factor"] > 0 and math.isfinite(r["error"])

@@ -10,6 +10,7 @@ import signal
 import subprocess
 import sys
 import time
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -88,10 +89,16 @@ def test_oversample_description_names_each_tiers_default():
     from bearing_sim_ros.nodes.bearing_sim_node import _descriptors
 
     text = _descriptors()["oversample"][1].description
-    scene = load_scene("er16k_healthy")
-    for tier in ("kinematic", "skidding"):
-        stated = int(re.search(rf"{tier} (\d+)", text).group(1))
-        assert stated == Simulator(scene, fidelity=tier).oversample, (tier, text)
+    soft = load_scene("er16k_healthy")                                     # bearing mode 1.0 kHz
+    stiff = replace(load_scene("er16k_skidding"), radial_load=(0.0, -2000.0))     # 2.1 kHz
+    rule = re.search(r"kinematic (\d+) while its bearing mode is below ([\d.]+) x sample_rate, "
+                     r"else (\d+); skidding (\d+)", text)
+    assert rule, text
+    below, fraction, above, skidding = rule.groups()
+    assert float(fraction) * 15000.0 == 1500.0
+    assert int(below) == Simulator(soft, fidelity="kinematic").oversample
+    assert int(above) == Simulator(stiff, fidelity="kinematic").oversample
+    assert int(skidding) == Simulator(soft, fidelity="skidding").oversample
 
 
 # ---- user mistakes ------------------------------------------------------------------------------

@@ -122,6 +122,7 @@ def _descriptors():
     from rcl_interfaces.msg import ParameterType as T
 
     from ..physics.kinematic import DEFAULT_OVERSAMPLE as KINEMATIC_OVERSAMPLE
+    from ..physics.kinematic import SOFT_MODE_FRACTION
     from ..physics.skidding import DEFAULT_OVERSAMPLE as SKIDDING_OVERSAMPLE
     from ..simulator import SAMPLE_RATE_RANGE
 
@@ -146,7 +147,8 @@ def _descriptors():
         "fidelity": ("auto", d(T.PARAMETER_STRING, "model tier", True, constraints="auto | kinematic | skidding")),
         "seed": (0, d(T.PARAMETER_INTEGER, "seed of random slip and sensor noise", True, 0, 2 ** 31 - 1)),
         "oversample": (0, d(T.PARAMETER_INTEGER, "integration steps per output sample (speed against "
-                            f"accuracy); 0 = each tier's own: kinematic {KINEMATIC_OVERSAMPLE}, "
+                            f"accuracy); 0 = each tier's own: kinematic 1 while its bearing mode "
+                            f"is below {SOFT_MODE_FRACTION:g} x sample_rate, else {KINEMATIC_OVERSAMPLE}; "
                             f"skidding {SKIDDING_OVERSAMPLE}", True, 0, 64,
                             "0, 1, 2 or a multiple of 4; at most 4 where the tier is chosen automatically")),
         "publish_clock": (False, d(T.PARAMETER_BOOL, "publish /clock with the simulation time")),

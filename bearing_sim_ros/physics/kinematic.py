@@ -78,10 +78,14 @@ AFTER_STEPS = 3      # event sub-steps go on this many steps after a ball was la
                      # 0.3 % at x1)
 CORRECTOR_NODES = (1.0, 0.0, -1.0)   # residual at the step end (predicted), start, previous start
 PREDICTOR_NODES = (0.0, -1.0)
-DEFAULT_OVERSAMPLE = 2  # steps per output sample the Simulator should use by default: ETD3 with
-                        # event sub-steps.  x1 is 1.35-1.7x faster and as accurate on light loads,
-                        # but 0.4-2.9 % off in RMS where the bearing mode is stiff (ER-16K at
-                        # 500 N and up, the healthy CWRU scene; README, "Kinematic tier: speed ...")
+DEFAULT_OVERSAMPLE = 2  # steps per output sample where the bearing mode is stiff: ETD3 with event
+                        # sub-steps.  x1 is 1.35-1.7x faster and as accurate on light loads, but
+                        # 0.4-2.9 % off in RMS where the bearing mode is stiff (ER-16K at 500 N
+                        # and up, the healthy CWRU scene; README, "Kinematic tier: speed ...")
+SOFT_MODE_FRACTION = 0.1  # oversample=None takes one step per output sample while the bearing mode
+                          # stays below this fraction of the output rate (1.5 kHz at 15 kHz: the
+                          # ER-16K at 200 N and less, 0.07 % RMS; the 6307, 0.35 %, x2's worst); above
+                          # it, DEFAULT_OVERSAMPLE (test/test_kinematic_speed.py bearing-mode)
 CHAIN_OVERSAMPLE = 4   # accelerometer chain rate / output rate at least (the skidding tier's rate,
                        # so that a switch of tiers keeps the chain and the signal has no seam)
 
@@ -723,24 +727,39 @@ def _ball_films(geo, geom, dx, dy, shaft_speed):
     return out
 
 
+def bearing_mode_hz(A: np.ndarray, structure) -> float:
+    """The highest mode (Hz) of a linearised structure's system matrix ``A`` below its unit
+    resonator: the bearing's.  The stiffer the bearing (the load), the higher it is and the less
+    one step per output sample follows it."""
+    freqs = np.abs(np.linalg.eigvals(A).imag) / (2 * math.pi)
+    if structure.has_resonator:
+        resonator = math.sqrt(structure.resonator_stiffness / structure.resonator_mass) / (2 * math.pi)
+        freqs = freqs[freqs < 0.9 * resonator]
+    return float(freqs.max()) if freqs.size else 0.0
+
+
 class KinematicModel:
     """The kinematic tier (see module docstring).  ``internal_rate`` in Hz."""
 
     name = "kinematic"
 
-    def __init__(self, scene, output_rate: float, oversample: int, seed: int, shaft_speed: float,
+    def __init__(self, scene, output_rate: float, oversample: int | None, seed: int, shaft_speed: float,
                  radial_load, chain_oversample: int | None = None, event_substeps: bool = True):
-        """``oversample``: integration steps per output sample; ``chain_oversample``: samples per
-        output sample handed to the accelerometer chain (a multiple of ``oversample``; default
-        ``max(oversample, CHAIN_OVERSAMPLE)``), the extra ones by dense output."""
+        """``oversample``: integration steps per output sample; None picks 1 or
+        ``DEFAULT_OVERSAMPLE`` from the bearing mode at each linearisation (``step_for_mode``);
+        ``chain_oversample``: samples per output sample handed to the accelerometer chain (a
+        multiple of every ``oversample`` used; default ``max(oversample, CHAIN_OVERSAMPLE)``),
+        the extra ones by dense output."""
         self.scene = scene
-        self.decimation = int(oversample)
-        chain = chain_oversample or max(self.decimation, CHAIN_OVERSAMPLE)
-        if chain % self.decimation:
-            raise ValueError(f"chain_oversample {chain} is not a multiple of oversample {self.decimation}")
-        self.dense = chain // self.decimation          # chain samples per integration step
-        self.internal_rate = float(output_rate) * chain
-        self.h = 1.0 / (float(output_rate) * self.decimation)
+        self.output_rate = float(output_rate)
+        self.auto_oversample = oversample is None
+        largest = DEFAULT_OVERSAMPLE if self.auto_oversample else int(oversample)
+        chain = chain_oversample or max(largest, CHAIN_OVERSAMPLE)
+        if chain % largest:
+            raise ValueError(f"chain_oversample {chain} is not a multiple of oversample {largest}")
+        self.chain_per_sample = chain
+        self.internal_rate = self.output_rate * chain
+        self._set_step(largest)
         self.seed = int(seed)
         self.event_substeps = bool(event_substeps)
         b = scene.bearing
@@ -779,6 +798,18 @@ class KinematicModel:
         self.dtab = defect_table(scene.defects, b, seed=self.seed, ball_load=self.static_ball_load)
 
     # ---- linearisation and propagators ---------------------------------------------------------
+    def _set_step(self, oversample: int):
+        """Integration steps per output sample: the step h (s) and the chain samples per step."""
+        self.decimation = int(oversample)
+        self.dense = self.chain_per_sample // self.decimation     # chain samples per integration step
+        self.h = 1.0 / (self.output_rate * self.decimation)
+
+    def step_for_mode(self, mode_hz: float) -> int:
+        """Steps per output sample for a bearing mode (Hz): one while the mode stays below
+        ``SOFT_MODE_FRACTION`` of the output rate, where one step per sample errs no more than
+        two elsewhere (README, "Kinematic tier: speed and accuracy"), else ``DEFAULT_OVERSAMPLE``."""
+        return 1 if mode_hz < SOFT_MODE_FRACTION * self.output_rate else DEFAULT_OVERSAMPLE
+
     def _mean_force(self, d: np.ndarray) -> np.ndarray:
         """Bearing force on the pedestal averaged over one ball spacing of cage angle (no
         defects, no slip): the quasi-static load-deflection law."""
@@ -861,6 +892,9 @@ class KinematicModel:
                               [1.0, 0.0, 0.0, 0.0],
                               [0.0, 1.0, 0.0, 0.0]])
         B = b_forces @ to_forces
+        self.bearing_mode = bearing_mode_hz(A, self.scene.structure)
+        if self.auto_oversample:
+            self._set_step(self.step_for_mode(self.bearing_mode))
         rows = [7, 9 if self.scene.structure.has_resonator else 8]
         self._propagators(A, B, A[rows], B[rows])
         self.hist[2] = 0.0       # the residual's definition changed: restart its history
