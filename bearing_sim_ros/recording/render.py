@@ -91,12 +91,16 @@ def tier_values(sim) -> dict:
     """The ``/diagnostics`` keys on the model tier, the live node's and a render's alike: the
     tier in use, why, its estimated error, how many times ``fidelity: auto`` switched, and the
     latest switch (``kinematic -> skidding at 1.230 s``: the simulated time of the first batch
-    the new tier computed; ``none``)."""
+    the new tier computed; ``none``), and its integration steps per output sample
+    (``Simulator.oversample``, which the kinematic tier's default changes with the load; ``none``
+    for the fixed steps of "rk4" and "reference")."""
     last = sim.last_tier_switch
+    steps = sim.oversample
     return {"tier": sim.tier, "tier_reason": sim.selection.reason,
             "tier_estimated_error": f"{sim.selection.estimated_error:.3g}",
             "tier_switches": sim.tier_switches,
-            "last_tier_switch": "none" if last is None else f"{last[1]} -> {last[2]} at {last[0]:.3f} s"}
+            "last_tier_switch": "none" if last is None else f"{last[1]} -> {last[2]} at {last[0]:.3f} s",
+            "oversample": "none" if steps is None else steps}
 
 
 def tier_summary(values: dict) -> str:
