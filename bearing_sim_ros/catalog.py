@@ -162,7 +162,7 @@ def bearing_from_mapping(name: str, data: dict, where: str = "bearing") -> Beari
     """Build a :class:`Bearing` from a catalog-style mapping (mm, um, deg, GPa), validating it."""
     if not isinstance(data, dict):
         raise SceneError(f"{where}: expected a catalog name or a mapping of geometry, got {data!r}")
-    unknown = sorted(set(data) - _CATALOG_KEYS)
+    unknown = sorted(set(map(str, data)) - _CATALOG_KEYS)     # str: a YAML key may be a number
     if unknown:
         raise SceneError(
             f"{where}.{unknown[0]}: unknown key; allowed: {', '.join(sorted(_CATALOG_KEYS))}")

@@ -189,18 +189,19 @@ class _Section:
     dotted key path, the value and what is allowed."""
 
     def __init__(self, data: Any, path: str, allowed: tuple, required: tuple = ()):
+        self.path = path
         if data is None:
             data = {}
         if not isinstance(data, dict):
-            raise SceneError(f"{path} = {data!r}: expected a mapping with keys {', '.join(allowed)}")
+            # the top level has no key to name: the file itself is the wrong shape
+            raise SceneError(f"{path or 'top level'} = {data!r}: expected a mapping with keys {', '.join(allowed)}")
         unknown = sorted(set(map(str, data)) - set(allowed))
         if unknown:
-            raise SceneError(f"{path}.{unknown[0]}: unknown key; allowed: {', '.join(allowed)}")
+            raise SceneError(f"{self.key(unknown[0])}: unknown key; allowed: {', '.join(allowed)}")
         for key in required:
             if key not in data:
-                raise SceneError(f"{path}.{key}: missing (required)")
+                raise SceneError(f"{self.key(key)}: missing (required)")
         self.data = data
-        self.path = path
 
     def key(self, name: str) -> str:
         return f"{self.path}.{name}" if self.path else name

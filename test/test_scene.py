@@ -131,3 +131,21 @@ def test_cli_scenes_lists_one_line_each(bearing_sim_exe):
     assert out.returncode == 0
     names = [ln.split()[0] for ln in out.stdout.splitlines()]
     assert set(names) == set(shipped_scenes())
+
+
+@pytest.mark.parametrize("text, expect", [
+    ("", "scene bad.yaml: bearing: missing (required)"),                        # an empty file
+    ("- a\n- b\n", "scene bad.yaml: top level = ['a', 'b']: expected a mapping with keys name, "),
+    ("just words\n", "scene bad.yaml: top level = 'just words': expected a mapping"),
+    (GOOD + "colour: red\n", "scene bad.yaml: colour: unknown key; allowed: name, "),
+    (GOOD.replace("bearing: ER-16K", "bearing: {balls: 9, 8: x}"), "scene bad.yaml: bearing.8: unknown key"),
+])
+def test_top_level_mistakes_name_the_key_without_a_stray_dot(tmp_path, text, expect):
+    """The top level has no path: its keys are named bare ("colour", not ".colour"), a file that
+    is not a mapping says so, and a number among a bearing's keys is a key like any other (it
+    used to end in a TypeError from sorting str and int keys)."""
+    path = tmp_path / "bad.yaml"
+    path.write_text(text)
+    with pytest.raises(SceneError) as exc:
+        load_scene(path)
+    assert str(exc.value).startswith(expect), str(exc.value)
