@@ -7,6 +7,7 @@ parses arguments and maps errors to exit codes.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 
 from .errors import UserError
@@ -21,16 +22,18 @@ class _Parser(argparse.ArgumentParser):
         raise UserError(f"{self.prog}: {message}")
 
 
-def _number(kind, allow_zero: bool):
-    """argparse type: a ``kind`` (int or float) > 0, or >= 0 with ``allow_zero``."""
+def _number(kind, allow_zero: bool, hi: float = math.inf):
+    """argparse type: a finite ``kind`` (int or float) > 0, or >= 0 with ``allow_zero``; at most ``hi``."""
     def parse(text):
         try:
             value = kind(text)
         except ValueError:
             raise argparse.ArgumentTypeError(
                 f"{text!r} is not a {'whole number' if kind is int else 'number'}") from None
-        if not (value >= 0 if allow_zero else value > 0):
-            raise argparse.ArgumentTypeError(f"{text!r} must be {'>=' if allow_zero else '>'} 0")
+        if not (math.isfinite(value) and (value >= 0 if allow_zero else value > 0) and value <= hi):
+            upper = f" and <= {hi}" if hi < math.inf else ""
+            raise argparse.ArgumentTypeError(
+                f"{text!r} must be a finite number {'>=' if allow_zero else '>'} 0{upper}")
         return value
     return parse
 
@@ -39,8 +42,8 @@ def _positive(kind):
     return _number(kind, allow_zero=False)
 
 
-def _nonnegative(kind):
-    return _number(kind, allow_zero=True)
+def _nonnegative(kind, hi: float = math.inf):
+    return _number(kind, allow_zero=True, hi=hi)
 
 
 def _in_range(lo: float, hi: float, unit: str):
@@ -58,7 +61,7 @@ def _in_range(lo: float, hi: float, unit: str):
 
 def build_parser() -> argparse.ArgumentParser:
     from .physics.integrators import RK4_DEFAULT_STEP, RK4_STEP_RANGE
-    from .simulator import SAMPLE_RATE_RANGE
+    from .simulator import SAMPLE_RATE_RANGE, SEED_RANGE
 
     p = _Parser(prog="bearing-sim", description="Virtual bearing accelerometer for ROS 2.")
     sub = p.add_subparsers(dest="command", parser_class=_Parser, metavar="COMMAND")
@@ -78,7 +81,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     s = sub.add_parser("run", help="what `make run` does: the node on a scene for a while, recorded, then a summary")
     s.add_argument("--scene", default="er16k_outer_race", metavar="S", help=f"{scene_help} (default: %(default)s)")
-    s.add_argument("--duration", type=float, default=10.0, metavar="SECONDS",
+    s.add_argument("--duration", type=_nonnegative(float), default=10.0, metavar="SECONDS",
                    help="seconds of signal in real time; 0 = until Ctrl-C (default: %(default)g)")
     s.add_argument("--out", required=True, metavar="F.mcap", help="MCAP file to record to (required)")
 
@@ -90,8 +93,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--fidelity", default="auto", choices=["auto", "kinematic", "skidding"],
                    help="model tier; auto: the cheapest within the scene's error tolerance "
                         "(default: %(default)s)")
-    s.add_argument("--seed", type=_nonnegative(int), default=0, metavar="N",
-                   help="seed of the random slip and the sensor noise, a whole number >= 0 (default: %(default)s)")
+    s.add_argument("--seed", type=_nonnegative(int, hi=SEED_RANGE[1]), default=0, metavar="N",
+                   help=f"seed of the random slip and the sensor noise, a whole number {SEED_RANGE[0]} to "
+                        f"{SEED_RANGE[1]} (default: %(default)s)")
     s.add_argument("--sample-rate", type=_in_range(*SAMPLE_RATE_RANGE, "Hz"), default=15000.0, metavar="HZ",
                    help=f"output sample rate, Hz, {SAMPLE_RATE_RANGE[0]:g} to {SAMPLE_RATE_RANGE[1]:g} "
                         f"(default: %(default)g)")

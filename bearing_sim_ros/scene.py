@@ -270,6 +270,7 @@ def clock_to_angle(clock: float) -> float:
     return math.pi / 2.0 - clock * math.pi / 6.0
 
 
+TOLERANCE_RANGE = (1e-4, 1.0)   # relative error allowed to the fidelity choice (fidelity.tolerance)
 MAX_LOAD = 1.0e6        # N: a bound against absurd values; the bearing's own limit is checked later
 MAX_SPEED_RPM = 60000.0
 
@@ -441,7 +442,7 @@ def scene_from_dict(data: Any, name: str = "scene", source_text: str = "", sourc
         lubrication=_lubrication(top),
         sensor=_sensor(top),
         fidelity=fid.choice("tier", TIERS, "auto"),
-        fidelity_tolerance=fid.number("tolerance", 0.05, lo=1e-4, hi=1.0),
+        fidelity_tolerance=fid.number("tolerance", 0.05, *TOLERANCE_RANGE),
         outputs=tuple(outputs),
         profile=_profile(top, speed, load),
         source_text=source_text,

@@ -24,13 +24,16 @@ import numpy as np
 from numba import njit
 
 from .errors import UserError
-from .scene import Scene, load_scene
+from .scene import MAX_LOAD, MAX_SPEED_RPM, RPM, Scene, load_scene
 
 SOLVERS = ("default", "rk4", "reference")
 FIDELITIES = ("auto", "kinematic", "skidding")
 # output sample rates (Hz) that the API, the node's ``sample_rate`` parameter and
 # ``bearing-sim render --sample-rate`` accept: one range, so that what renders offline also runs live
 SAMPLE_RATE_RANGE = (1000.0, 200000.0)
+# seeds that the API, ``bearing-sim render --seed`` and the node's ``seed`` parameter (an int64,
+# kept to 31 bits) accept: one range, so that a render's seed also runs live
+SEED_RANGE = (0, 2 ** 31 - 1)
 
 
 @dataclass
@@ -125,8 +128,17 @@ class Simulator:
         if oversample is not None and not (isinstance(oversample, int) and not isinstance(oversample, bool)
                                            and (oversample in (1, 2) or (oversample % 4 == 0 and 4 <= oversample <= 64))):
             raise UserError(f"oversample = {oversample!r}: allowed values are 1, 2 or a multiple of 4 up to 64")
-        if not isinstance(seed, int) or seed < 0:
-            raise UserError(f"seed = {seed!r}: expected a whole number >= 0")
+        if (not isinstance(seed, (int, np.integer)) or isinstance(seed, bool)
+                or not SEED_RANGE[0] <= seed <= SEED_RANGE[1]):
+            raise UserError(f"seed = {seed!r}: expected a whole number in [{SEED_RANGE[0]}, {SEED_RANGE[1]}]")
+        if tolerance is not None:
+            from .scene import TOLERANCE_RANGE
+
+            lo, hi = TOLERANCE_RANGE
+            if not (isinstance(tolerance, (int, float)) and not isinstance(tolerance, bool)
+                    and lo <= tolerance <= hi):
+                raise UserError(f"tolerance = {tolerance!r}: allowed range is [{lo:g}, {hi:g}] "
+                                f"(a relative error, as the scene's fidelity.tolerance)")
         self.scene = scene
         self.bearing = scene.bearing
         self.sample_rate = float(sample_rate)
@@ -257,17 +269,32 @@ class Simulator:
             raise UserError(f"n = {n!r}: expected a whole number of samples > 0")
         s0 = self._shaft_speed
         l0x, l0y = self._radial_load
-        s1 = s0 if shaft_speed is None else float(shaft_speed)
+        try:
+            s1 = s0 if shaft_speed is None else float(shaft_speed)
+        except (TypeError, ValueError):
+            raise UserError(f"shaft_speed = {shaft_speed!r}: expected a number, rad/s") from None
         if radial_load is None:
             l1x, l1y = l0x, l0y
         else:
-            l1 = np.asarray(radial_load, dtype=float).reshape(2)
+            try:
+                l1 = np.asarray(radial_load, dtype=float).reshape(2)
+            except (TypeError, ValueError):
+                raise UserError(f"radial_load = {radial_load!r}: expected two numbers (x, y), N") from None
             l1x, l1y = float(l1[0]), float(l1[1])
         # float(): the load in use is held as numpy scalars, whose repr is np.float64(...)
         if not math.isfinite(s1):
             raise UserError(f"shaft_speed = {float(s1)!r} rad/s: must be a finite number")
         if not (math.isfinite(l1x) and math.isfinite(l1y)):
             raise UserError(f"radial_load = ({float(l1x)!r}, {float(l1y)!r}) N: must be finite numbers")
+        # the bounds of a scene's operating point and profile (beyond them the model's output is
+        # not a number); the live node's inputs have tighter ones, from the bearing (InputLimits)
+        max_speed = MAX_SPEED_RPM * RPM
+        if abs(s1) > max_speed:
+            raise UserError(f"shaft_speed = {s1:g} rad/s: allowed range is [{-max_speed:g}, {max_speed:g}] "
+                            f"rad/s (+-{MAX_SPEED_RPM:g} rpm, as in a scene)")
+        if max(abs(l1x), abs(l1y)) > MAX_LOAD:
+            raise UserError(f"radial_load = ({l1x:g}, {l1y:g}) N: each entry must be in "
+                            f"[{-MAX_LOAD:g}, {MAX_LOAD:g}] N, as in a scene")
         self.maybe_switch_tier(s1, (l1x, l1y))
         n = int(n)
         series, accel = self._run(n, s0, s1, l0x, l0y, l1x, l1y, self.index)

@@ -64,3 +64,78 @@ def test_non_finite_inputs_are_named_with_plain_numbers():
     assert str(speed.value) == "shaft_speed = nan rad/s: must be a finite number"
     assert str(load.value) == "radial_load = (nan, 0.0) N: must be finite numbers"
     assert "np." not in str(speed.value) + str(load.value)
+
+
+def _user_mistake(capsys, argv):
+    """``bearing-sim argv`` in this process: (exit status, its one stderr line)."""
+    code = cli.main(argv)
+    err = capsys.readouterr().err
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert len(lines) == 1 and "Traceback" not in err, err
+    return code, lines[0]
+
+
+@pytest.mark.parametrize("argv, words", [
+    # inf passed the > 0 checks: render said "--duration = inf: expected seconds > 0", play waited
+    # or played forever
+    (["render", "er16k_healthy", "--duration", "inf"], ["--duration", "'inf'", "finite number > 0"]),
+    (["render", "er16k_healthy", "--duration", "1e400"], ["--duration", "'1e400'", "finite number > 0"]),
+    (["play", "x.mcap", "--rate", "inf"], ["--rate", "'inf'", "finite number > 0"]),
+    (["play", "x.mcap", "--wait", "inf"], ["--wait", "'inf'", "finite number >= 0"]),
+    (["monitor", "--window", "inf"], ["--window", "'inf'", "finite number > 0"]),
+    # a seed beyond 64 bits ended in an OverflowError traceback (exit 1)
+    (["render", "er16k_healthy", "--duration", "0.1", "--seed", "99999999999999999999999"],
+     ["--seed", "'99999999999999999999999'", "<= 2147483647"]),
+])
+def test_non_finite_and_huge_numbers_are_one_line_naming_the_option(tmp_path, capsys, argv, words):
+    code, line = _user_mistake(capsys, [*argv, *(["--out", str(tmp_path / "x.mcap")] if argv[0] == "render" else [])])
+    assert code == 2
+    for w in words:
+        assert w in line, line
+    assert not (tmp_path / "x.mcap").exists()
+
+
+def test_seed_range_is_the_nodes():
+    """One range of seeds for the API, ``render --seed`` and the node's ``seed``: a seed that
+    renders also runs live."""
+    import numpy as np
+
+    from bearing_sim_ros.nodes.bearing_sim_node import _descriptors
+    from bearing_sim_ros.simulator import SEED_RANGE
+
+    span = _descriptors()["seed"][1].integer_range[0]
+    assert (span.from_value, span.to_value) == SEED_RANGE
+    assert Simulator("er16k_healthy", seed=np.int64(SEED_RANGE[1])).seed == SEED_RANGE[1]
+    for bad in (SEED_RANGE[1] + 1, 2 ** 63, -1, True, 1.5):
+        with pytest.raises(UserError) as exc:
+            Simulator("er16k_healthy", seed=bad)
+        assert str(exc.value) == f"seed = {bad!r}: expected a whole number in [0, 2147483647]"
+
+
+@pytest.mark.parametrize("call, message", [
+    # a string or a list ended in ValueError/TypeError from float(), a wrong length in
+    # "cannot reshape array"
+    (lambda s: s.advance(10, shaft_speed="fast"), "shaft_speed = 'fast': expected a number, rad/s"),
+    (lambda s: s.advance(10, radial_load=(1.0, 2.0, 3.0)), "radial_load = (1.0, 2.0, 3.0): expected two numbers (x, y), N"),
+    (lambda s: s.advance(10, radial_load=5.0), "radial_load = 5.0: expected two numbers (x, y), N"),
+    # beyond a scene's bounds the kinematic tier returned NaN without a word
+    (lambda s: s.advance(10, shaft_speed=1e9),
+     "shaft_speed = 1e+09 rad/s: allowed range is [-6283.19, 6283.19] rad/s (+-60000 rpm, as in a scene)"),
+    (lambda s: s.advance(10, radial_load=(0.0, -1e12)),
+     "radial_load = (0, -1e+12) N: each entry must be in [-1e+06, 1e+06] N, as in a scene"),
+])
+def test_advance_names_a_bad_speed_or_load_and_what_is_allowed(call, message):
+    sim = Simulator("er16k_healthy", fidelity="kinematic")
+    with pytest.raises(UserError) as exc:
+        call(sim)
+    assert str(exc.value) == message
+    assert sim.index == 0                     # nothing advanced
+
+
+@pytest.mark.parametrize("tolerance", [-1.0, 0.0, math.nan, "x"])
+def test_tolerance_outside_the_scenes_range_is_named(tolerance):
+    """``tolerance`` (the fidelity choice's allowed error) was taken as given: a string ended in
+    a TypeError, a negative or NaN one silently picked a tier."""
+    with pytest.raises(UserError) as exc:
+        Simulator("er16k_healthy", tolerance=tolerance)
+    assert str(exc.value).startswith(f"tolerance = {tolerance!r}: allowed range is [0.0001, 1]")

@@ -69,6 +69,22 @@ def test_input_limits_from_the_bearing_geometry():
     assert check_load(0.0, 0.0, 1.01 * lim.max_load, lim)[0] == "out_of_range"
 
 
+def test_input_limits_never_exceed_what_the_simulator_takes():
+    """A very small custom bearing's n*dm limit (or a very large one's 2 x C0) lies beyond the
+    bounds of ``Simulator.advance``: the node would accept a command that then ends it with a
+    UserError from the simulation thread.  Its limits are clamped to those bounds."""
+    from bearing_sim_ros import Simulator
+    from bearing_sim_ros.catalog import bearing_from_mapping
+    from bearing_sim_ros.scene import MAX_LOAD, MAX_SPEED_RPM, RPM
+
+    tiny = bearing_from_mapping("tiny", {"balls": 6, "ball_diameter_mm": 1.0, "pitch_diameter_mm": 4.0})
+    huge = bearing_from_mapping("huge", {"balls": 20, "ball_diameter_mm": 150.0, "pitch_diameter_mm": 1200.0})
+    assert InputLimits(tiny).max_speed == pytest.approx(MAX_SPEED_RPM * RPM)
+    assert InputLimits(huge).max_load == MAX_LOAD and InputLimits(huge).static_capacity > MAX_LOAD
+    sim = Simulator("er16k_healthy", fidelity="kinematic")
+    sim.advance(10, shaft_speed=InputLimits(tiny).max_speed, radial_load=(0.0, -MAX_LOAD))
+
+
 def test_stamp_checks():
     now = 1_000 * NS
     assert check_stamp(0, None, now, 1.0) is None                       # unstamped

@@ -64,11 +64,15 @@ class InputLimits:
     ``max_load`` (N).  Derived from the catalog geometry (see the constants above)."""
 
     def __init__(self, bearing):
+        from ..scene import MAX_LOAD, MAX_SPEED_RPM, RPM
+
         dm_mm = bearing.pitch_diameter * 1e3
         dw_mm = bearing.ball_diameter * 1e3
-        self.max_speed = NDM_LIMIT / dm_mm * 2.0 * math.pi / 60.0
         self.static_capacity = STATIC_F0 * bearing.balls * dw_mm ** 2 * math.cos(bearing.contact_angle)
-        self.max_load = LOAD_MULTIPLE_C0 * self.static_capacity
+        # never beyond what ``Simulator.advance`` takes (a scene's bounds), which only a very
+        # small (speed) or very large (load) custom bearing reaches
+        self.max_speed = min(NDM_LIMIT / dm_mm, MAX_SPEED_RPM) * RPM
+        self.max_load = min(LOAD_MULTIPLE_C0 * self.static_capacity, MAX_LOAD)
 
     def __repr__(self):
         return (f"InputLimits(max_speed={self.max_speed:.1f} rad/s, "
@@ -124,7 +128,7 @@ def _descriptors():
     from ..physics.kinematic import DEFAULT_OVERSAMPLE as KINEMATIC_OVERSAMPLE
     from ..physics.kinematic import SOFT_MODE_FRACTION
     from ..physics.skidding import DEFAULT_OVERSAMPLE as SKIDDING_OVERSAMPLE
-    from ..simulator import SAMPLE_RATE_RANGE
+    from ..simulator import SAMPLE_RATE_RANGE, SEED_RANGE
 
     def d(kind, text, read_only=False, lo=None, hi=None, constraints=""):
         desc = ParameterDescriptor(type=kind, description=text, read_only=read_only,
@@ -145,7 +149,7 @@ def _descriptors():
         "duration": (0.0, d(T.PARAMETER_DOUBLE, "seconds of signal, then exit; 0 = forever", False, 0.0, 1.0e9)),
         "record": ("", d(T.PARAMETER_STRING, "MCAP file to record to; empty = no recording", True)),
         "fidelity": ("auto", d(T.PARAMETER_STRING, "model tier", True, constraints="auto | kinematic | skidding")),
-        "seed": (0, d(T.PARAMETER_INTEGER, "seed of random slip and sensor noise", True, 0, 2 ** 31 - 1)),
+        "seed": (0, d(T.PARAMETER_INTEGER, "seed of random slip and sensor noise", True, *SEED_RANGE)),
         "oversample": (0, d(T.PARAMETER_INTEGER, "integration steps per output sample (speed against "
                             f"accuracy); 0 = each tier's own: kinematic 1 while its bearing mode "
                             f"is below {SOFT_MODE_FRACTION:g} x sample_rate, else {KINEMATIC_OVERSAMPLE}; "

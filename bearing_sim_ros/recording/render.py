@@ -192,7 +192,7 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
     if not hasattr(scene, "bearing"):
         scene = load_scene(scene)
     if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
-        raise UserError(f"--duration = {duration!r}: expected seconds > 0")
+        raise UserError(f"--duration = {duration!r}: expected a finite number of seconds > 0")
     if rk4_step is not None and solver != "rk4":
         raise UserError(f"--rk4-step = {rk4_step:g} s: applies to --solver rk4 only (given --solver {solver})")
     sim = Simulator(scene, sample_rate=sample_rate, fidelity=fidelity, seed=seed, solver=solver,
