@@ -30,6 +30,7 @@ import numpy as np
 
 from .analysis.envelope import fault_lines
 from .errors import UserError
+from .paths import output_folder
 from .scene import RPM, load_scene
 
 
@@ -421,11 +422,7 @@ def write_calibration(result: dict, path: Path) -> None:
 
 
 def bench_command(args) -> int:
-    out = Path(args.out)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise UserError(f"--out {args.out!r}: cannot create the folder ({exc.strerror})") from None
+    out = output_folder(args.out)
     import sys
 
     say = lambda msg: print(msg, file=sys.stderr, flush=True)  # noqa: E731

@@ -26,3 +26,21 @@ def config_dir() -> Path:
 
 def scenes_dir() -> Path:
     return config_dir() / "scenes"
+
+
+def output_folder(text, option: str = "--out") -> Path:
+    """The folder ``text`` (the value of ``option``) for a command's files, created if missing;
+    a one-line UserError naming the option when it is empty, a file or cannot be created."""
+    from .errors import UserError
+
+    where = f"{option} = {str(text)!r}"
+    if not str(text).strip():
+        raise UserError(f"{where}: expected the path of a folder")
+    out = Path(text)
+    if out.exists() and not out.is_dir():
+        raise UserError(f"{where}: exists and is not a folder; give a folder")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise UserError(f"{where}: cannot create the folder ({exc.strerror})") from None
+    return out

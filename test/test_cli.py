@@ -139,3 +139,30 @@ def test_tolerance_outside_the_scenes_range_is_named(tolerance):
     with pytest.raises(UserError) as exc:
         Simulator("er16k_healthy", tolerance=tolerance)
     assert str(exc.value).startswith(f"tolerance = {tolerance!r}: allowed range is [0.0001, 1]")
+
+
+@pytest.mark.parametrize("out, words", [
+    ("", ["--out = ''", "expected the path of a folder"]),              # wrote into the current folder
+    ("a_file", ["--out = ", "a_file", "exists and is not a folder"]),
+    ("/proc/no_folder_here", ["--out = '/proc/no_folder_here'", "cannot create the folder"]),
+])
+@pytest.mark.parametrize("command", ["report", "bench", "validate"])
+def test_output_folders_are_checked_before_the_work(tmp_path, capsys, monkeypatch, command, out, words):
+    """report, bench and validate write into a folder: an empty --out, a file or a folder that
+    cannot be created is one line naming --out before anything is computed (validate used to
+    compute for seconds, then end in a FileNotFoundError traceback; an empty --out wrote into
+    the current folder)."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "a_file").write_text("x")
+    argv = {"report": ["report", "rec.mcap", "--out", out],
+            "bench": ["bench", "--quick", "--out", out],
+            "validate": ["validate", "--cwru", "no_such_folder", "--out", out]}[command]
+    if command == "report":
+        from bearing_sim_ros.recording.render import render
+
+        render("er16k_healthy", 0.05, tmp_path / "rec.mcap", fidelity="kinematic")
+    code, line = _user_mistake(capsys, argv)
+    assert code == 2
+    for w in words:
+        assert w in line, line
+    assert {p.name for p in tmp_path.iterdir()} <= {"a_file", "rec.mcap"}      # nothing written

@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import UserError
+from ..paths import output_folder
 from ..recording.reader import open_recording
 from ..waveform import NS, from_pointcloud2
 from .envelope import DEFAULT_BAND, FAULT_LINES, diagnose, envelope_spectrum, statistics
@@ -339,7 +340,6 @@ def plot_cage(d: _Data, scene, out: Path, meta: dict) -> str | None:
 # ---- summary -----------------------------------------------------------------------------------
 def build_report(path, out) -> dict:
     """Read ``path``, write the plots and summaries to ``out``; return the summary dict."""
-    out = Path(out)
     rec = open_recording(path)
     try:
         d = _Data(rec)
@@ -348,10 +348,7 @@ def build_report(path, out) -> dict:
         message_count = rec.message_count
     finally:
         rec.close()
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise UserError(f"--out = {str(out)!r}: cannot create it ({exc.strerror})") from None
+    out = output_folder(out)
     scene = _scene_from_metadata(meta)
     fs = d.sample_rate
     ch = "accel_y" if "accel_y" in d.channels else d.channels[0]

@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import UserError
+from ..paths import output_folder
 from . import envelope as env
 from .cwru import Recording, find_recordings, read_recording, shaft_order_check
 
@@ -562,9 +563,7 @@ def validate_command(args) -> int:
     """``bearing-sim validate --cwru DIR --out DIR``: exit 0 once the report is written (failed
     checks are listed in it and on stdout: a mismatch is a finding, not an error), 2 on a user
     mistake (missing folder, unreadable file)."""
-    out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise UserError(f"--out {str(out)!r}: exists and is not a folder; give a folder for the report")
+    out = output_folder(args.out)         # before the work: an unwritable --out ended it in a traceback
     t0 = time.perf_counter()
     rows = run_validation(args.cwru, out)
     print(summary_table(rows))
