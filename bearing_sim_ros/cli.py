@@ -173,6 +173,10 @@ def _dispatch(args, rest) -> int:
     if cmd == "node":
         from .nodes.bearing_sim_node import main as node_main
 
+        stray = rest[:rest.index("--ros-args")] if "--ros-args" in rest else rest
+        if stray:     # rclpy would ignore them without a word
+            raise UserError(f"bearing-sim node: unrecognized arguments: {' '.join(stray)} "
+                            f"(ROS arguments follow --ros-args)")
         argv = []
         if args.scene:
             argv += ["--ros-args", "-p", f"scene:={args.scene}"]

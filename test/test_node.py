@@ -141,6 +141,36 @@ def test_bad_parameters_end_the_node_with_one_line(ros_env, bearing_sim_exe, par
         assert w in lines[0]
 
 
+@pytest.mark.parametrize("args, words", [
+    # rclpy ignored arguments before --ros-args without a word: the node ran on
+    (["--bogus"], ["unrecognized arguments: --bogus", "follow --ros-args"]),
+    (["extra"], ["unrecognized arguments: extra"]),
+    # rcl's parse errors and unknown ROS arguments ended in RCLError / UnknownROSArgsError tracebacks
+    (["--ros-args", "--bogus"], ["ROS arguments: unknown --bogus", "-p name:=value"]),
+    (["--ros-args", "-p", "frame_id:="], ["ROS arguments:", "'-p frame_id:='", "name:=\"''\""]),
+    (["--ros-args", "--params-file", "no_such.yaml"], ["ROS arguments:", "no_such.yaml"]),
+])
+def test_bad_ros_arguments_end_the_node_with_one_error_line(ros_env, bearing_sim_exe, args, words):
+    r = subprocess.run([bearing_sim_exe, "node", *args], env=ros_env, capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2, r.stderr
+    assert "Traceback" not in r.stderr + r.stdout
+    # rcl itself logs "[ERROR] [rcl]: Failed to parse global arguments" before it raises
+    lines = [ln for ln in r.stderr.splitlines() if ln.strip() and "[rcl]" not in ln]
+    assert len(lines) == 1 and lines[0].startswith("error: "), r.stderr
+    for w in words:
+        assert w in lines[0], lines[0]
+
+
+def test_a_misspelt_parameter_is_named_in_a_warning(ros_env, bearing_sim_exe):
+    """``-p sampel_rate:=1000.0`` was ignored without a word; it is still ignored (a parameters
+    file may hold other nodes' parameters), with a warning that names it and the node's own."""
+    r = subprocess.run([bearing_sim_exe, "node", "--ros-args", "-p", "real_time:=false", "-p", "duration:=0.05",
+                        "-p", "sampel_rate:=1000.0"], env=ros_env, capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    assert ("parameter sampel_rate: not a bearing_sim parameter, ignored; its parameters are scene, sample_rate"
+            in r.stderr + r.stdout), r.stderr
+
+
 def test_recorded_command_names_a_scene_file_by_its_absolute_path(ros_env, bearing_sim_exe, tmp_path):
     """``--scene rig.yaml`` (relative) is recorded as the file's absolute path, so that the
     recording's command loads the same scene from any folder."""

@@ -191,6 +191,12 @@ class BearingSimNode(Node):
         super().__init__(NODE_NAME, **kwargs)
         self._record_argument = record_argument
         self._declare_all()
+        # a misspelt `-p name:=value` is otherwise ignored without a word (not an error: a
+        # parameters file for several nodes may hold other nodes' parameters)
+        for name in sorted(set(getattr(self, "_parameter_overrides", {})) - set(self._cfg)):
+            if not self.has_parameter(name):
+                self.get_logger().warning(f"parameter {name}: not a {NODE_NAME} parameter, ignored; "
+                                          f"its parameters are {', '.join(self._cfg)}")
         cfg = self._cfg
         reason = check_config(cfg)
         if reason:
@@ -678,17 +684,39 @@ def spin_node(node) -> None:
         executor.shutdown(timeout_sec=0)
 
 
+def ros_arguments_error(exc) -> UserError:
+    """The one-line UserError for ROS arguments that rcl cannot parse (RCLError from
+    ``rclpy.init``) or does not know (UnknownROSArgsError from the node): rcl's reason without
+    its source locations, and what is allowed."""
+    import re
+
+    from rclpy._rclpy_pybind11 import UnknownROSArgsError
+
+    text = (str(exc).splitlines() or [exc.__class__.__name__])[0]
+    text = re.sub(r",? at /\S+:\d+", "", text).removeprefix("failed to initialize rcl: ")
+    if isinstance(exc, UnknownROSArgsError):
+        text = "unknown " + text.strip("[]").replace("'", "")      # "['--bogus']" -> "unknown --bogus"
+    return UserError(f"ROS arguments: {text}; after --ros-args come -p name:=value (an empty string: "
+                     f"name:=\"''\"), -r from:=to, --params-file FILE, --log-level LEVEL")
+
+
 def main(argv=None) -> int:
     """``bearing_sim_node`` / ``bearing-sim node``: run the node until ``duration``, Ctrl-C or
-    SIGTERM; exit status 0, or 2 with one line for a bad parameter or scene."""
+    SIGTERM; exit status 0, or 2 with one line for a bad parameter, scene or ROS argument."""
+    from rclpy._rclpy_pybind11 import RCLError, UnknownROSArgsError
     from rclpy.executors import ExternalShutdownException
 
     args = list(sys.argv) if argv is None else ["bearing_sim_node", *argv]
     node = None
     status = 0
     try:
-        rclpy.init(args=args)
-        node = BearingSimNode()
+        try:
+            rclpy.init(args=args)
+            node = BearingSimNode()
+        except (RCLError, UnknownROSArgsError) as exc:
+            if isinstance(exc, RCLError) and rclpy.ok():
+                raise                   # not the arguments: rclpy.init went through
+            raise ros_arguments_error(exc) from None
         spin_node(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
