@@ -345,3 +345,20 @@ def test_within_a_factor_is_symmetric():
     assert V._within(1.0, 1.9, 2.0) and V._within(1.9, 1.0, 2.0)
     assert not V._within(1.0, 2.1, 2.0) and not V._within(2.1, 1.0, 2.0)
     assert not V._within(0.0, 1.0, 2.0) and not V._within(float("nan"), 1.0, 2.0)
+
+
+def test_the_calibration_fit_round_trips_the_shipped_values():
+    """``validate_fit`` rebuilds each scene from the seven fitted values: the shipped values give
+    back the shipped scenes (the resonator keeps its frequency), and its parameter vector maps back."""
+    import dataclasses
+
+    from bearing_sim_ros.analysis import validate_fit as F
+
+    values = F.shipped_values()
+    assert F.from_x(F.to_x(values)) == pytest.approx(values)
+    for name in SCENES:
+        scene = load_scene(name)
+        again = F.with_values(scene, values)
+        assert dataclasses.astuple(again.structure) == pytest.approx(dataclasses.astuple(scene.structure))
+        assert again.bearing.radial_clearance == pytest.approx(scene.bearing.radial_clearance)
+        assert again.sensor == scene.sensor and again.defects == scene.defects

@@ -94,9 +94,10 @@ def _bearing(scene_name: str):
     return load_scene(scene_name).bearing
 
 
-def compare_recording(rec: Recording, seconds: float | None = None, seed: int = SEED) -> dict:
-    """Simulate ``rec``'s scene at its speed and rate, same length (or the first ``seconds``),
-    and analyse both.  The signals are kept under "signals" (not written to JSON)."""
+def compare_recording(rec: Recording, seconds: float | None = None, seed: int = SEED, scene=None) -> dict:
+    """Simulate ``rec``'s scene (or ``scene``, a Scene standing for it: the calibration fit) at its
+    speed and rate, same length (or the first ``seconds``), and analyse both.  The signals are
+    kept under "signals" (not written to JSON)."""
     from ..scene import shipped_scenes
 
     n = rec.accel.size if seconds is None else min(rec.accel.size, int(round(seconds * rec.sample_rate)))
@@ -107,14 +108,14 @@ def compare_recording(rec: Recording, seconds: float | None = None, seed: int = 
         "channel": rec.channel, "seconds": n / rec.sample_rate, "notes": list(rec.notes),
         "shaft_order_check": shaft_order_check(rec.accel, rec.sample_rate, rec.rpm),
     }
-    if rec.scene not in shipped_scenes():
+    if scene is None and rec.scene not in shipped_scenes():
         row["notes"].append(f"no shipped scene {rec.scene!r}: recording analysed alone")
         row["real"] = analyse(real, rec.sample_rate, rec.shaft_hz, _bearing("cwru_6205_normal"))
         row["sim"] = None
         row["signals"] = {"real": real, "sim": None}
         return row
-    bearing = _bearing(rec.scene)
-    sim = simulate(rec.scene, rec.sample_rate, rec.rpm, n, seed)
+    bearing = _bearing(rec.scene) if scene is None else scene.bearing
+    sim = simulate(rec.scene if scene is None else scene, rec.sample_rate, rec.rpm, n, seed)
     row["real"] = analyse(real, rec.sample_rate, rec.shaft_hz, bearing)
     row["sim"] = analyse(sim, rec.sample_rate, rec.shaft_hz, bearing)
     row["fault_frequencies_hz"] = bearing.fault_frequencies(rec.shaft_hz)
