@@ -36,6 +36,12 @@ SAMPLE_RATE_RANGE = (1000.0, 200000.0)
 SEED_RANGE = (0, 2 ** 31 - 1)
 
 
+def _whole_number(value) -> bool:
+    """Whether ``value`` is a Python or numpy integer and not a bool (``True`` is an int, but
+    ``advance(True)`` or ``seed=True`` is a mistake, not 1)."""
+    return isinstance(value, (int, np.integer)) and not isinstance(value, bool)
+
+
 @dataclass
 class Batch:
     """``n`` output samples.  Times in s, accelerations m/s^2, forces N, speeds rad/s."""
@@ -125,11 +131,10 @@ class Simulator:
             raise UserError(f"fidelity = {fidelity!r}: allowed values are {', '.join(FIDELITIES)}")
         if solver not in SOLVERS:
             raise UserError(f"solver = {solver!r}: allowed values are {', '.join(SOLVERS)}")
-        if oversample is not None and not (isinstance(oversample, int) and not isinstance(oversample, bool)
+        if oversample is not None and not (_whole_number(oversample)
                                            and (oversample in (1, 2) or (oversample % 4 == 0 and 4 <= oversample <= 64))):
             raise UserError(f"oversample = {oversample!r}: allowed values are 1, 2 or a multiple of 4 up to 64")
-        if (not isinstance(seed, (int, np.integer)) or isinstance(seed, bool)
-                or not SEED_RANGE[0] <= seed <= SEED_RANGE[1]):
+        if not (_whole_number(seed) and SEED_RANGE[0] <= seed <= SEED_RANGE[1]):
             raise UserError(f"seed = {seed!r}: expected a whole number in [{SEED_RANGE[0]}, {SEED_RANGE[1]}]")
         if tolerance is not None:
             from .scene import TOLERANCE_RANGE
@@ -163,7 +168,7 @@ class Simulator:
         self.selection = select_tier(scene, request, self._shaft_speed, self._radial_load,
                                      tolerance if tolerance is not None else scene.fidelity_tolerance)
         self.tier = self.selection.tier
-        self._oversample = oversample
+        self._oversample = None if oversample is None else int(oversample)
         self._model = self._build_model(self.tier)
         self._build_chain()
 
@@ -265,7 +270,7 @@ class Simulator:
     def advance(self, n: int, shaft_speed: float | None = None, radial_load=None) -> Batch:
         """Advance by ``n`` output samples.  ``shaft_speed`` (rad/s) and ``radial_load`` (N, (x, y))
         replace the operating point; the change is ramped over this call."""
-        if not isinstance(n, (int, np.integer)) or n <= 0:
+        if not (_whole_number(n) and n > 0):
             raise UserError(f"n = {n!r}: expected a whole number of samples > 0")
         s0 = self._shaft_speed
         l0x, l0y = self._radial_load

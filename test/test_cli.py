@@ -132,6 +132,30 @@ def test_advance_names_a_bad_speed_or_load_and_what_is_allowed(call, message):
     assert sim.index == 0                     # nothing advanced
 
 
+@pytest.mark.parametrize("call, message", [
+    # True is an int to Python: advance(True) advanced one sample, oversample=np.int64(4) was refused
+    (lambda: Simulator("er16k_healthy", fidelity="kinematic").advance(True),
+     "n = True: expected a whole number of samples > 0"),
+    (lambda: Simulator("er16k_healthy", fidelity="kinematic").advance(False),
+     "n = False: expected a whole number of samples > 0"),
+    (lambda: Simulator("er16k_healthy", seed=False), "seed = False: expected a whole number in [0, 2147483647]"),
+    (lambda: Simulator("er16k_healthy", fidelity="kinematic", oversample=True),
+     "oversample = True: allowed values are 1, 2 or a multiple of 4 up to 64"),
+])
+def test_bools_are_not_whole_numbers(call, message):
+    with pytest.raises(UserError) as exc:
+        call()
+    assert str(exc.value) == message
+
+
+def test_numpy_integers_are_whole_numbers():
+    import numpy as np
+
+    sim = Simulator("er16k_healthy", fidelity="kinematic", seed=np.int32(3), oversample=np.int64(4))
+    assert sim.oversample == 4 and type(sim.oversample) is int
+    assert sim.advance(np.int64(2)).n == 2
+
+
 @pytest.mark.parametrize("tolerance", [-1.0, 0.0, math.nan, "x"])
 def test_tolerance_outside_the_scenes_range_is_named(tolerance):
     """``tolerance`` (the fidelity choice's allowed error) was taken as given: a string ended in
