@@ -31,6 +31,33 @@ TYPES = {
 }
 
 
+# the node's ``batch_duration`` (s) and ``state_rate`` (Hz; 0 = no state) parameters and render()'s
+# arguments of the same names: defaults, ranges and how they go together (``batching_error``), in
+# one place, so that a render's batching also runs live
+BATCH_DURATION, BATCH_DURATION_RANGE = 0.01, (0.001, 1.0)
+STATE_RATE, STATE_RATE_RANGE = 50.0, (0.0, 1000.0)
+
+
+def batching_error(sample_rate: float, batch_duration, state_rate) -> str | None:
+    """None if ``batch_duration`` (s) and ``state_rate`` (Hz) are usable at ``sample_rate`` (Hz, a
+    valid one), else a one-line reason naming the argument, its value and what is allowed: each
+    within its range, a batch a whole number (>= 1) of samples, at most one state per batch."""
+    import numbers
+
+    for name, value, (lo, hi), unit in (("batch_duration", batch_duration, BATCH_DURATION_RANGE, "s"),
+                                        ("state_rate", state_rate, STATE_RATE_RANGE, "Hz")):
+        if isinstance(value, bool) or not isinstance(value, numbers.Real) or not lo <= value <= hi:
+            return f"{name} = {value!r}: allowed range is [{lo:g}, {hi:g}] {unit}"
+    samples = sample_rate * batch_duration
+    if abs(samples - round(samples)) > 1e-6 * max(samples, 1.0) or round(samples) < 1:
+        return (f"batch_duration = {batch_duration!r} s with sample_rate = {sample_rate!r} Hz "
+                f"gives {samples:.6g} samples: must be a whole number >= 1")
+    if state_rate > 1.0 / batch_duration * (1 + 1e-9):
+        return (f"state_rate = {state_rate!r} Hz: at most one state per batch, "
+                f"<= 1 / batch_duration = {1.0 / batch_duration:g} Hz")
+    return None
+
+
 def batch_qos_depth(batch_duration: float) -> int:
     """Keep-last depth holding about one second of batches."""
     return max(10, int(math.ceil(1.0 / batch_duration)))

@@ -268,6 +268,37 @@ def test_sample_rate_range_is_the_nodes():
             Simulator("er16k_healthy", sample_rate=outside)
 
 
+@pytest.mark.parametrize("kwargs, message", [
+    # batch_duration 0 ended in a ZeroDivisionError, a negative state_rate was taken
+    ({"batch_duration": 0}, "batch_duration = 0: allowed range is [0.001, 1] s"),
+    ({"batch_duration": "10ms"}, "batch_duration = '10ms': allowed range is [0.001, 1] s"),
+    ({"state_rate": -1}, "state_rate = -1: allowed range is [0, 1000] Hz"),
+    ({"state_rate": math.nan}, "state_rate = nan: allowed range is [0, 1000] Hz"),
+    ({"batch_duration": 0.0105},
+     "batch_duration = 0.0105 s with sample_rate = 15000.0 Hz gives 157.5 samples: must be a whole number >= 1"),
+    ({"state_rate": 500.0},
+     "state_rate = 500.0 Hz: at most one state per batch, <= 1 / batch_duration = 100 Hz"),
+])
+def test_batch_duration_and_state_rate_follow_the_nodes_rule(tmp_path, kwargs, message):
+    """render() takes the node's batch_duration and state_rate with the node's ranges and rule."""
+    out = tmp_path / "x.mcap"
+    with pytest.raises(UserError) as exc:
+        render("er16k_healthy", 0.05, out, fidelity="kinematic", progress=False, **kwargs)
+    assert str(exc.value) == message
+    assert not out.exists()
+
+
+def test_batch_duration_and_state_rate_ranges_are_the_nodes():
+    from bearing_sim_ros.messages import BATCH_DURATION, BATCH_DURATION_RANGE, STATE_RATE, STATE_RATE_RANGE
+    from bearing_sim_ros.nodes.bearing_sim_node import _descriptors
+
+    for name, default, span in (("batch_duration", BATCH_DURATION, BATCH_DURATION_RANGE),
+                                ("state_rate", STATE_RATE, STATE_RATE_RANGE)):
+        value, desc = _descriptors()[name]
+        fp = desc.floating_point_range[0]
+        assert (value, (fp.from_value, fp.to_value)) == (default, span)
+
+
 def test_rk4_divergence_names_the_option_that_sets_the_step(tmp_path, capsys):
     out = tmp_path / "d.mcap"
     code, err = _one_line_error(capsys, ["render", "er16k_skidding", "--duration", "0.02", "--fidelity", "skidding",

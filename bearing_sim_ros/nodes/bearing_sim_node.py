@@ -128,6 +128,7 @@ def _descriptors():
     from ..physics.kinematic import DEFAULT_OVERSAMPLE as KINEMATIC_OVERSAMPLE
     from ..physics.kinematic import SOFT_MODE_FRACTION
     from ..physics.skidding import DEFAULT_OVERSAMPLE as SKIDDING_OVERSAMPLE
+    from ..messages import BATCH_DURATION, BATCH_DURATION_RANGE, STATE_RATE, STATE_RATE_RANGE
     from ..simulator import SAMPLE_RATE_RANGE, SEED_RANGE
 
     def d(kind, text, read_only=False, lo=None, hi=None, constraints=""):
@@ -143,7 +144,8 @@ def _descriptors():
         "scene": (DEFAULT_SCENE, d(T.PARAMETER_STRING, "shipped scene name or path of a scene YAML", True,
                                    constraints="see `bearing-sim scenes`")),
         "sample_rate": (15000.0, d(T.PARAMETER_DOUBLE, "output sample rate, Hz", True, *SAMPLE_RATE_RANGE)),
-        "batch_duration": (0.01, d(T.PARAMETER_DOUBLE, "samples per waveform table, s", True, 0.001, 1.0,
+        "batch_duration": (BATCH_DURATION, d(T.PARAMETER_DOUBLE, "samples per waveform table, s", True,
+                                             *BATCH_DURATION_RANGE,
                                    "batch_duration x sample_rate must be a whole number of samples")),
         "real_time": (True, d(T.PARAMETER_BOOL, "pace on the steady clock; false = as fast as possible")),
         "duration": (0.0, d(T.PARAMETER_DOUBLE, "seconds of signal, then exit; 0 = forever", False, 0.0, 1.0e9)),
@@ -157,8 +159,8 @@ def _descriptors():
                             "0, 1, 2 or a multiple of 4; at most 4 where the tier is chosen automatically")),
         "publish_clock": (False, d(T.PARAMETER_BOOL, "publish /clock with the simulation time")),
         "frame_id": ("", d(T.PARAMETER_STRING, "frame of the waveform tables; empty = the scene's sensor frame", True)),
-        "state_rate": (50.0, d(T.PARAMETER_DOUBLE, "JointState rate, Hz; 0 = off", False, 0.0, 1000.0,
-                               "at most one per batch: state_rate <= 1 / batch_duration")),
+        "state_rate": (STATE_RATE, d(T.PARAMETER_DOUBLE, "JointState rate, Hz; 0 = off", False, *STATE_RATE_RANGE,
+                                     "at most one per batch: state_rate <= 1 / batch_duration")),
         "compute_ahead": (0.05, d(T.PARAMETER_DOUBLE, "compute batches up to this long before they are "
                                   "due, s: absorbs scheduling hiccups; a command takes effect this much "
                                   "later in the published signal", False, 0.0, 2.0)),
@@ -171,14 +173,9 @@ def check_config(cfg: dict):
     """None if the parameter set ``cfg`` (name -> value) is usable together, else a one-line reason."""
     if cfg["fidelity"] not in FIDELITIES:
         return f"fidelity = {cfg['fidelity']!r}: allowed values are {', '.join(FIDELITIES)}"
-    samples = cfg["sample_rate"] * cfg["batch_duration"]
-    if abs(samples - round(samples)) > 1e-6 * max(samples, 1.0) or round(samples) < 1:
-        return (f"batch_duration = {cfg['batch_duration']!r} s with sample_rate = {cfg['sample_rate']!r} Hz "
-                f"gives {samples:.6g} samples: must be a whole number >= 1")
-    if cfg["state_rate"] > 1.0 / cfg["batch_duration"] * (1 + 1e-9):
-        return (f"state_rate = {cfg['state_rate']!r} Hz: at most one state per batch, "
-                f"<= 1 / batch_duration = {1.0 / cfg['batch_duration']:g} Hz")
-    return None
+    from ..messages import batching_error
+
+    return batching_error(cfg["sample_rate"], cfg["batch_duration"], cfg["state_rate"])
 
 
 # ---- the node ----------------------------------------------------------------------------------

@@ -26,12 +26,10 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import UserError
-from ..messages import TOPIC_ACCEL, TOPIC_CONTACT, TOPIC_DIAGNOSTICS, TOPIC_LOAD, TOPIC_SHAFT_SPEED, \
-    TOPIC_STATE, TYPES, waveform_qos
+from ..messages import BATCH_DURATION, STATE_RATE, TOPIC_ACCEL, TOPIC_CONTACT, TOPIC_DIAGNOSTICS, TOPIC_LOAD, \
+    TOPIC_SHAFT_SPEED, TOPIC_STATE, TYPES, batching_error, waveform_qos
 from ..waveform import NS
 
-BATCH_DURATION = 0.01     # s, the node's default
-STATE_RATE = 50.0         # Hz, the node's default
 NODE_NAME = "bearing_sim"
 
 
@@ -182,7 +180,9 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
     :class:`~bearing_sim_ros.Simulator`).  ``solver`` and ``rk4_step`` (s, ``solver="rk4"``
     only) are the skidding tier's: when the kinematic tier was asked for, they are an error;
     when ``fidelity="auto"`` keeps to the kinematic tier for the whole render, they are not used,
-    not recorded, and the summary's ``solver_unused`` says so.  Returns a summary: messages,
+    not recorded, and the summary's ``solver_unused`` says so.  ``batch_duration`` (s) and
+    ``state_rate`` (Hz) are the node's parameters of the same names, with the same ranges and
+    rule (``messages.batching_error``).  Returns a summary: messages,
     bytes, wall time (s), real-time factor, tier (at the end), tier_values (``tier_values``: the
     tier switches of ``fidelity="auto"``), path, solver_unused."""
     from .. import Simulator
@@ -197,7 +197,12 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
         raise UserError(f"--rk4-step = {rk4_step:g} s: applies to --solver rk4 only (given --solver {solver})")
     sim = Simulator(scene, sample_rate=sample_rate, fidelity=fidelity, seed=seed, solver=solver,
                     oversample=oversample, rk4_step=rk4_step)
-    n_batch = max(1, int(round(sample_rate * batch_duration)))
+    # the node's rule for its parameters of the same names (a render's batching also runs live);
+    # after the Simulator, which checks sample_rate
+    reason = batching_error(sim.sample_rate, batch_duration, state_rate)
+    if reason:
+        raise UserError(reason)
+    n_batch = int(round(sample_rate * batch_duration))
     solver_unused = solver != "default" and not _runs_skidding(scene, sim, duration, sample_rate, n_batch)
     if solver_unused and "kinematic" in (fidelity, scene.fidelity):
         given = f"--solver {solver}" + (f" --rk4-step {float(rk4_step)!r}" if rk4_step is not None else "")
