@@ -59,9 +59,22 @@ def _in_range(lo: float, hi: float, unit: str):
     return parse
 
 
+def _oversample(text):
+    """argparse type: integration steps per output sample, the API's allowed values."""
+    from .simulator import OVERSAMPLE_ALLOWED, oversample_allowed
+
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if not oversample_allowed(value):
+        raise argparse.ArgumentTypeError(f"{text}: allowed values are {OVERSAMPLE_ALLOWED}")
+    return value
+
+
 def build_parser() -> argparse.ArgumentParser:
     from .physics.integrators import RK4_DEFAULT_STEP, RK4_STEP_RANGE
-    from .simulator import SAMPLE_RATE_RANGE, SEED_RANGE
+    from .simulator import AUTO_OVERSAMPLE_MAX, OVERSAMPLE_ALLOWED, SAMPLE_RATE_RANGE, SEED_RANGE
 
     p = _Parser(prog="bearing-sim", description="Virtual bearing accelerometer for ROS 2.")
     sub = p.add_subparsers(dest="command", parser_class=_Parser, metavar="COMMAND")
@@ -107,9 +120,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help=f"step of --solver rk4, s, {RK4_STEP_RANGE[0]:g} to {RK4_STEP_RANGE[1]:g} "
                         f"(default: {RK4_DEFAULT_STEP:g}, seed 000's, which diverges on this model; "
                         f"6e-06 survives every bench scene)")
-    s.add_argument("--oversample", type=int, default=None, metavar="M",
-                   help="integration steps per output sample: 1, 2 or a multiple of 4 up to 64 "
-                        "(default: each tier's own: kinematic 1 while its bearing mode is below a "
+    s.add_argument("--oversample", type=_oversample, default=None, metavar="M",
+                   help=f"integration steps per output sample: {OVERSAMPLE_ALLOWED} (at most "
+                        f"{AUTO_OVERSAMPLE_MAX} where --fidelity auto chooses the tier) (default: each tier's own: kinematic 1 while its bearing mode is below a "
                         "tenth of the sample rate, else 2; skidding 2)")
 
     s = sub.add_parser("play", help="republish a recording on its topics")

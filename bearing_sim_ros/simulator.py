@@ -42,6 +42,32 @@ def _whole_number(value) -> bool:
     return isinstance(value, (int, np.integer)) and not isinstance(value, bool)
 
 
+# integration steps per output sample that the API, ``bearing-sim render --oversample`` and the
+# node's ``oversample`` parameter (where 0 means each tier's own) accept
+OVERSAMPLE_ALLOWED = "1, 2 or a multiple of 4 up to 64"
+# at most this many where fidelity auto may switch tiers at run time: above it the kinematic
+# tier's sensor chain runs faster than the skidding tier's, and a switch needs the same chain
+AUTO_OVERSAMPLE_MAX = 4
+
+
+def oversample_allowed(value) -> bool:
+    """Whether ``value`` is one of ``OVERSAMPLE_ALLOWED``."""
+    return _whole_number(value) and (value in (1, 2) or (value % 4 == 0 and 4 <= value <= 64))
+
+
+class OversampleForAuto(UserError):
+    """``oversample`` above ``AUTO_OVERSAMPLE_MAX`` where fidelity auto chooses the tier.
+    ``worded`` lets a caller name the two in its own words (the CLI's ``--oversample``)."""
+
+    def __init__(self, value):
+        self.value = value
+        super().__init__(self.worded("oversample", "fidelity"))
+
+    def worded(self, oversample_name: str, fidelity_name: str) -> str:
+        return (f"{oversample_name} = {self.value!r}: with {fidelity_name} auto allowed values are 1, 2 "
+                f"or {AUTO_OVERSAMPLE_MAX} (or choose {fidelity_name} kinematic or skidding)")
+
+
 @dataclass
 class Batch:
     """``n`` output samples.  Times in s, accelerations m/s^2, forces N, speeds rad/s."""
@@ -131,9 +157,8 @@ class Simulator:
             raise UserError(f"fidelity = {fidelity!r}: allowed values are {', '.join(FIDELITIES)}")
         if solver not in SOLVERS:
             raise UserError(f"solver = {solver!r}: allowed values are {', '.join(SOLVERS)}")
-        if oversample is not None and not (_whole_number(oversample)
-                                           and (oversample in (1, 2) or (oversample % 4 == 0 and 4 <= oversample <= 64))):
-            raise UserError(f"oversample = {oversample!r}: allowed values are 1, 2 or a multiple of 4 up to 64")
+        if oversample is not None and not oversample_allowed(oversample):
+            raise UserError(f"oversample = {oversample!r}: allowed values are {OVERSAMPLE_ALLOWED}")
         if not (_whole_number(seed) and SEED_RANGE[0] <= seed <= SEED_RANGE[1]):
             raise UserError(f"seed = {seed!r}: expected a whole number in [{SEED_RANGE[0]}, {SEED_RANGE[1]}]")
         if tolerance is not None:
@@ -160,11 +185,8 @@ class Simulator:
         from .fidelity import select_tier
 
         request = scene.fidelity if fidelity == "auto" else fidelity
-        if request == "auto" and oversample is not None and oversample > 4:
-            # above 4 the kinematic tier's sensor chain runs faster than the skidding tier's, and a
-            # switch at run time needs the same chain on both sides
-            raise UserError(f"oversample = {oversample!r}: with fidelity auto allowed values are 1, 2 or 4 "
-                            f"(or choose fidelity kinematic or skidding)")
+        if request == "auto" and oversample is not None and oversample > AUTO_OVERSAMPLE_MAX:
+            raise OversampleForAuto(oversample)
         self.selection = select_tier(scene, request, self._shaft_speed, self._radial_load,
                                      tolerance if tolerance is not None else scene.fidelity_tolerance)
         self.tier = self.selection.tier

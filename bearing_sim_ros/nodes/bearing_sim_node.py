@@ -129,7 +129,7 @@ def _descriptors():
     from ..physics.kinematic import SOFT_MODE_FRACTION
     from ..physics.skidding import DEFAULT_OVERSAMPLE as SKIDDING_OVERSAMPLE
     from ..messages import BATCH_DURATION, BATCH_DURATION_RANGE, STATE_RATE, STATE_RATE_RANGE
-    from ..simulator import SAMPLE_RATE_RANGE, SEED_RANGE
+    from ..simulator import AUTO_OVERSAMPLE_MAX, OVERSAMPLE_ALLOWED, SAMPLE_RATE_RANGE, SEED_RANGE
 
     def d(kind, text, read_only=False, lo=None, hi=None, constraints=""):
         desc = ParameterDescriptor(type=kind, description=text, read_only=read_only,
@@ -156,7 +156,8 @@ def _descriptors():
                             f"accuracy); 0 = each tier's own: kinematic 1 while its bearing mode "
                             f"is below {SOFT_MODE_FRACTION:g} x sample_rate, else {KINEMATIC_OVERSAMPLE}; "
                             f"skidding {SKIDDING_OVERSAMPLE}", True, 0, 64,
-                            "0, 1, 2 or a multiple of 4; at most 4 where the tier is chosen automatically")),
+                            f"0, {OVERSAMPLE_ALLOWED}; at most {AUTO_OVERSAMPLE_MAX} where the tier is "
+                            f"chosen automatically")),
         "publish_clock": (False, d(T.PARAMETER_BOOL, "publish /clock with the simulation time")),
         "frame_id": ("", d(T.PARAMETER_STRING, "frame of the waveform tables; empty = the scene's sensor frame", True)),
         "state_rate": (STATE_RATE, d(T.PARAMETER_DOUBLE, "JointState rate, Hz; 0 = off", False, *STATE_RATE_RANGE,

@@ -307,6 +307,7 @@ def render_command(args) -> int:
     """CLI entry: ``bearing-sim render S --duration SEC --out F.mcap [...]``."""
     from ..physics.skidding import RK4Diverged
     from ..scene import load_scene
+    from ..simulator import OversampleForAuto
 
     scene = load_scene(args.scene)
     out = str(args.out)
@@ -317,6 +318,8 @@ def render_command(args) -> int:
     except RK4Diverged as exc:
         # the model words its advice for the Python API; here the knobs are options
         raise UserError(exc.worded("--rk4-step", "--solver default")) from None
+    except OversampleForAuto as exc:
+        raise UserError(exc.worded("--oversample", "--fidelity")) from None
     tier = tier_summary(summary["tier_values"])
     if summary["solver_unused"]:
         tier += "; --solver applies to the skidding tier only, not used"
