@@ -44,3 +44,18 @@ def output_folder(text, option: str = "--out") -> Path:
     except OSError as exc:
         raise UserError(f"{where}: cannot create the folder ({exc.strerror})") from None
     return out
+
+
+def output_file(text, option: str = "--out") -> Path:
+    """The path ``text`` (the value of ``option``) of an .mcap file to write; a one-line
+    UserError naming the option when it is empty or a folder (``open`` said
+    "IsADirectoryError: '.'" for an empty one).  Whether it can be written is the writer's to say."""
+    from .errors import UserError
+
+    where = f"{option} = {str(text)!r}"
+    if not str(text).strip():
+        raise UserError(f"{where}: expected the path of an .mcap file")
+    out = Path(text)
+    if out.is_dir():
+        raise UserError(f"{where}: is a folder; expected the path of an .mcap file")
+    return out

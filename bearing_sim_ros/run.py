@@ -17,6 +17,7 @@ from collections import deque
 import numpy as np
 
 from .errors import UserError
+from .paths import output_file
 from .teardown import teardown_watchdog
 
 ANALYSIS_MAX_S = 30.0       # s of signal (the end of the recording) that the summary analyses
@@ -149,6 +150,7 @@ def run_command(args) -> int:
     duration = float(args.duration)           # finite and >= 0: the parser's type checks it
     scene = load_scene(args.scene)
     out = str(args.out)
+    output_file(out)          # the node takes an empty record for "no recording"
     overrides = [Parameter("scene", value=str(args.scene)), Parameter("duration", value=duration),
                  Parameter("record", value=out), Parameter("real_time", value=True)]
     node = None

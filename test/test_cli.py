@@ -190,3 +190,31 @@ def test_output_folders_are_checked_before_the_work(tmp_path, capsys, monkeypatc
     for w in words:
         assert w in line, line
     assert {p.name for p in tmp_path.iterdir()} <= {"a_file", "rec.mcap"}      # nothing written
+
+
+@pytest.mark.parametrize("out, words", [
+    # render said "--out = '': cannot write there (IsADirectoryError: ... '.')"; run took the
+    # empty path for the node's "no recording" and ended in an AttributeError traceback
+    ("", ["--out = ''", "expected the path of an .mcap file"]),
+    ("  ", ["--out = '  '", "expected the path of an .mcap file"]),
+    ("a_folder", ["--out = 'a_folder'", "is a folder; expected the path of an .mcap file"]),
+])
+@pytest.mark.parametrize("command", ["render", "run"])
+def test_output_files_are_named_when_empty_or_a_folder(tmp_path, capsys, monkeypatch, command, out, words):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "a_folder").mkdir()
+    argv = {"render": ["render", "er16k_healthy", "--duration", "0.1", "--out", out],
+            "run": ["run", "--duration", "0.2", "--out", out]}[command]
+    code, line = _user_mistake(capsys, argv)
+    assert code == 2
+    for w in words:
+        assert w in line, line
+    assert {p.name for p in tmp_path.iterdir()} == {"a_folder"} and not any((tmp_path / "a_folder").iterdir())
+
+
+def test_the_recorder_names_a_folder_by_the_callers_argument(tmp_path):
+    from bearing_sim_ros.recording.recorder import Recorder
+
+    with pytest.raises(UserError) as exc:
+        Recorder(tmp_path, {}, argument="record")
+    assert str(exc.value) == f"record = {str(tmp_path)!r}: is a folder; expected the path of an .mcap file"

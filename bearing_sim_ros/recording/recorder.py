@@ -35,6 +35,7 @@ from collections import deque
 from pathlib import Path
 
 from ..errors import UserError
+from ..paths import output_file
 from .cdr import zero_padding
 from .schemas import message_definition, qos_to_yaml
 
@@ -98,7 +99,7 @@ class Recorder:
         if rotate_bytes < 0 or not math.isfinite(rotate_seconds) or rotate_seconds < 0:
             raise UserError(f"rotation = {rotate_bytes!r} bytes / {rotate_seconds!r} s: "
                             "expected numbers >= 0 (0 = no rotation)")
-        self._base = Path(path)
+        self._base = output_file(path, argument)
         self._rotate = bool(rotate_bytes or rotate_seconds)
         self._rotate_bytes = int(rotate_bytes)
         self._rotate_ns = int(round(rotate_seconds * 1e9))
