@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from bearing_sim_ros import Simulator, UserError, cli
@@ -98,8 +99,6 @@ def test_non_finite_and_huge_numbers_are_one_line_naming_the_option(tmp_path, ca
 def test_seed_range_is_the_nodes():
     """One range of seeds for the API, ``render --seed`` and the node's ``seed``: a seed that
     renders also runs live."""
-    import numpy as np
-
     from bearing_sim_ros.nodes.bearing_sim_node import _descriptors
     from bearing_sim_ros.simulator import SEED_RANGE
 
@@ -149,8 +148,6 @@ def test_bools_are_not_whole_numbers(call, message):
 
 
 def test_numpy_integers_are_whole_numbers():
-    import numpy as np
-
     sim = Simulator("er16k_healthy", fidelity="kinematic", seed=np.int32(3), oversample=np.int64(4))
     assert sim.oversample == 4 and type(sim.oversample) is int
     assert sim.advance(np.int64(2)).n == 2
@@ -180,16 +177,20 @@ def test_output_folders_are_checked_before_the_work(tmp_path, capsys, monkeypatc
     (tmp_path / "a_file").write_text("x")
     argv = {"report": ["report", "rec.mcap", "--out", out],
             "bench": ["bench", "--quick", "--out", out],
-            "validate": ["validate", "--cwru", "no_such_folder", "--out", out]}[command]
+            "validate": ["validate", "--cwru", "normal_0_97.mat", "--out", out]}[command]
     if command == "report":
         from bearing_sim_ros.recording.render import render
 
         render("er16k_healthy", 0.05, tmp_path / "rec.mcap", fidelity="kinematic")
+    if command == "validate":            # a usable input: --cwru is checked first
+        from scipy.io import savemat
+
+        savemat(str(tmp_path / "normal_0_97.mat"), {"X097_DE_time": np.zeros((48000, 1))})
     code, line = _user_mistake(capsys, argv)
     assert code == 2
     for w in words:
         assert w in line, line
-    assert {p.name for p in tmp_path.iterdir()} <= {"a_file", "rec.mcap"}      # nothing written
+    assert {p.name for p in tmp_path.iterdir()} <= {"a_file", "rec.mcap", "normal_0_97.mat"}    # nothing written
 
 
 @pytest.mark.parametrize("out, words", [

@@ -106,6 +106,7 @@ def test_bad_inputs_exit_2_with_one_line(tmp_path, capsys):
     empty = tmp_path / "empty"
     empty.mkdir()
     assert "no .mat files" in _one_line_exit_2(capsys, ["validate", "--cwru", str(empty), "--out", out])
+    assert not Path(out).exists()         # --cwru is checked before --out is created (it was created first)
 
 
 def test_installed_command_exits_2_on_a_non_mat_file(tmp_path, bearing_sim_exe):

@@ -544,8 +544,12 @@ def run_validation(cwru, out=None, seconds: float | None = None, extras: bool = 
                    extra_seconds: float = 3.0) -> list:
     """Compare every recording in ``cwru`` (folder or file) with its simulation; write the report
     to ``out`` when given.  ``seconds`` limits each comparison to the first seconds (tests);
-    ``extras`` adds the load-zone and robustness runs.  Returns the rows (with signals)."""
+    ``extras`` adds the load-zone and robustness runs.  The recordings are read first, so that a
+    missing or unusable one is named before ``out`` is created (``paths.output_folder``), and
+    that before the work.  Returns the rows (with signals)."""
     recordings = [read_recording(p) for p in find_recordings(cwru)]
+    if out is not None:
+        out = output_folder(out)
     rows = [compare_recording(rec, seconds) for rec in recordings]
     add_rms_ratios(rows)
     for r in rows:
@@ -556,7 +560,7 @@ def run_validation(cwru, out=None, seconds: float | None = None, extras: bool = 
         zone = load_zone_check(outer, extra_seconds)
         robust = robustness(seconds=extra_seconds)
     if out is not None:
-        write_report(Path(out), rows, robust, zone)
+        write_report(out, rows, robust, zone)
     return rows
 
 
@@ -564,9 +568,9 @@ def validate_command(args) -> int:
     """``bearing-sim validate --cwru DIR --out DIR``: exit 0 once the report is written (failed
     checks are listed in it and on stdout: a mismatch is a finding, not an error), 2 on a user
     mistake (missing folder, unreadable file)."""
-    out = output_folder(args.out)         # before the work: an unwritable --out ended it in a traceback
     t0 = time.perf_counter()
-    rows = run_validation(args.cwru, out)
+    rows = run_validation(args.cwru, args.out)     # checks --cwru, then --out, then works
+    out = Path(args.out)
     print(summary_table(rows))
     print(f"{len(rows)} recordings compared in {time.perf_counter() - t0:.1f} s")
     print(f"report: {out / 'validation.md'}  data: {out / 'validation.json'}")
