@@ -9,6 +9,7 @@ line names the key, the value and what is allowed.
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -470,6 +471,10 @@ def scene_argument(scene: Scene) -> str:
 
 def resolve_scene_path(name_or_path: str | Path) -> Path:
     """A shipped scene name or a path to a YAML file -> the file's path."""
+    if not isinstance(name_or_path, (str, os.PathLike)):
+        # str() would make any value a name: load_scene(None) said "unknown scene 'None'"
+        raise SceneError(f"scene = {name_or_path!r}: expected a shipped scene name or the path of a scene "
+                         f"YAML (str or pathlib.Path), not {type(name_or_path).__name__}")
     text = str(name_or_path)
     path = Path(text)
     if path.suffix in (".yaml", ".yml") or path.exists() or "/" in text:

@@ -6,6 +6,7 @@ import textwrap
 
 import pytest
 
+from bearing_sim_ros import Simulator
 from bearing_sim_ros.errors import SceneError
 from bearing_sim_ros.scene import load_scene, shipped_scenes
 
@@ -114,6 +115,19 @@ def test_missing_section_and_broken_yaml(tmp_path):
         load_scene(path)
     with pytest.raises(SceneError, match="unknown scene"):
         load_scene("no_such_scene")
+
+
+@pytest.mark.parametrize("value, kind", [(None, "NoneType"), (3, "int"), (["er16k_healthy"], "list")])
+def test_a_scene_that_is_not_a_name_or_path_says_what_was_expected(value, kind):
+    """load_scene(None) said "unknown scene 'None'" (str() made any value a name)."""
+    message = (f"scene = {value!r}: expected a shipped scene name or the path of a scene YAML "
+               f"(str or pathlib.Path), not {kind}")
+    with pytest.raises(SceneError) as exc:
+        load_scene(value)
+    assert str(exc.value) == message
+    with pytest.raises(SceneError) as exc:
+        Simulator(value)
+    assert str(exc.value) == message
 
 
 def test_cli_bad_scene_exit_2_one_line(tmp_path, bearing_sim_exe):
