@@ -122,8 +122,9 @@ def build_parser() -> argparse.ArgumentParser:
                         f"6e-06 survives every bench scene)")
     s.add_argument("--oversample", type=_oversample, default=None, metavar="M",
                    help=f"integration steps per output sample: {OVERSAMPLE_ALLOWED} (at most "
-                        f"{AUTO_OVERSAMPLE_MAX} where --fidelity auto chooses the tier) (default: each tier's own: kinematic 1 while its bearing mode is below a "
-                        "tenth of the sample rate, else 2; skidding 2)")
+                        f"{AUTO_OVERSAMPLE_MAX} where --fidelity auto chooses the tier) (default: each "
+                        "tier's own: kinematic 1 while its bearing mode is below a tenth of the sample "
+                        "rate, else 2; skidding 2)")
 
     s = sub.add_parser("play", help="republish a recording on its topics")
     s.add_argument("file", metavar="F.mcap", help="the recording to republish")
