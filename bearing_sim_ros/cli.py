@@ -185,12 +185,12 @@ def _dispatch(args, rest) -> int:
     if cmd == "scenes":
         return _scenes(args)
     if cmd == "node":
-        from .nodes.bearing_sim_node import main as node_main
+        from .nodes.bearing_sim_node import main as node_main, stray_arguments_error
 
+        # checked here too: the scene's parameter goes first, after a --ros-args of its own
         stray = rest[:rest.index("--ros-args")] if "--ros-args" in rest else rest
-        if stray:     # rclpy would ignore them without a word
-            raise UserError(f"bearing-sim node: unrecognized arguments: {' '.join(stray)} "
-                            f"(ROS arguments follow --ros-args)")
+        if stray:
+            raise stray_arguments_error("bearing-sim node", stray)
         argv = []
         if args.scene:
             argv += ["--ros-args", "-p", f"scene:={args.scene}"]

@@ -161,6 +161,19 @@ def test_bad_ros_arguments_end_the_node_with_one_error_line(ros_env, bearing_sim
         assert w in lines[0], lines[0]
 
 
+def test_stray_arguments_to_the_node_itself_end_it_with_one_error_line(ros_env):
+    """``ros2 run bearing_sim_ros bearing_sim_node --bogus`` (the node's own entry point, not
+    ``bearing-sim node``) ran the node and ignored the argument without a word."""
+    r = subprocess.run([sys.executable, "-m", "bearing_sim_ros.nodes.bearing_sim_node", "--bogus",
+                        "--ros-args", "-p", "real_time:=false", "-p", "duration:=0.05"],
+                       env=ros_env, capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2, r.stderr
+    assert "Traceback" not in r.stderr + r.stdout
+    lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1 and "unrecognized arguments: --bogus (ROS arguments follow --ros-args)" in lines[0], \
+        r.stderr
+
+
 def test_a_misspelt_parameter_is_named_in_a_warning(ros_env, bearing_sim_exe):
     """``-p sampel_rate:=1000.0`` was ignored without a word; it is still ignored (a parameters
     file may hold other nodes' parameters), with a warning that names it and the node's own."""

@@ -32,6 +32,7 @@ import shlex
 import sys
 import threading
 import time
+from pathlib import Path
 
 import numpy as np
 import rclpy
@@ -698,11 +699,18 @@ def ros_arguments_error(exc) -> UserError:
                      f"name:=\"''\"), -r from:=to, --params-file FILE, --log-level LEVEL")
 
 
+def stray_arguments_error(program: str, stray: list) -> UserError:
+    """The one-line UserError for arguments that are not ROS arguments (rclpy ignores them
+    without a word): the node takes its settings as parameters after --ros-args."""
+    return UserError(f"{program}: unrecognized arguments: {' '.join(stray)} (ROS arguments follow --ros-args)")
+
+
 def main(argv=None) -> int:
     """``bearing_sim_node`` / ``bearing-sim node``: run the node until ``duration``, Ctrl-C or
     SIGTERM; exit status 0, or 2 with one line for a bad parameter, scene or ROS argument."""
     from rclpy._rclpy_pybind11 import RCLError, UnknownROSArgsError
     from rclpy.executors import ExternalShutdownException
+    from rclpy.utilities import remove_ros_args
 
     args = list(sys.argv) if argv is None else ["bearing_sim_node", *argv]
     node = None
@@ -710,6 +718,9 @@ def main(argv=None) -> int:
     try:
         try:
             rclpy.init(args=args)
+            stray = remove_ros_args(args)[1:]
+            if stray:           # `ros2 run ... bearing_sim_node --bogus` ran the node regardless
+                raise stray_arguments_error(Path(args[0]).name, stray)
             node = BearingSimNode()
         except (RCLError, UnknownROSArgsError) as exc:
             if isinstance(exc, RCLError) and rclpy.ok():
