@@ -26,7 +26,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import UserError
 from ..paths import output_folder
 from . import envelope as env
 from .cwru import Recording, find_recordings, read_recording, shaft_order_check
