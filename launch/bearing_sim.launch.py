@@ -4,7 +4,8 @@
     ros2 launch bearing_sim_ros bearing_sim.launch.py scene:=cwru_6205_or007_6 record:=/tmp/run.mcap
     ros2 launch bearing_sim_ros bearing_sim.launch.py namespace:=rig1 fidelity:=skidding
 
-Every node parameter of INTERFACE.md is a launch argument with the node's default.  (Not run by
+Every node parameter is a launch argument with the node's default (test/test_readme.py checks
+the table against the node's).  (Not run by
 the test suite: ``launch`` has no PyPI wheel; the pip setup uses ``bearing-sim node`` instead.)
 """
 from launch import LaunchDescription
@@ -23,9 +24,11 @@ ARGUMENTS = [
     ("record", "", str, "MCAP file to record to; empty = no recording"),
     ("fidelity", "auto", str, "auto | kinematic | skidding"),
     ("seed", "0", int, "seed of random slip and sensor noise"),
+    ("oversample", "0", int, "integration steps per output sample; 0 = each tier's own"),
     ("publish_clock", "false", bool, "publish /clock with the simulation time"),
     ("frame_id", "", str, "frame of the waveform tables; empty = the scene's sensor frame"),
     ("state_rate", "50.0", float, "JointState rate, Hz (<= 1 / batch_duration); 0 = off"),
+    ("compute_ahead", "0.05", float, "compute batches up to this long before they are due, s"),
     ("input_max_age", "1.0", float, "reject load messages older than this, s; 0 = any age"),
 ]
 

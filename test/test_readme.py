@@ -1,0 +1,229 @@
+"""The README is the user's first hour: what it tells them to type must work as written.
+
+Runs the README's Python blocks as they stand, parses every ``bearing-sim`` command it shows with the
+CLI's own parser (and the node's parameters, ``make`` variables, ``python -m`` options, scene names
+and launch arguments it names) against the code, so that renaming an option, a parameter or a
+scene without the README fails here.  What the commands then do is tested where they are
+implemented (test_cli, test_node, test_render, ...).
+"""
+from __future__ import annotations
+
+import ast
+import re
+import shlex
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+REPO = Path(__file__).resolve().parent.parent
+README = (REPO / "README.md").read_text()
+
+
+def _blocks(lang: str) -> list[tuple[int, str]]:
+    """(line number, text) of every fenced block of ``lang`` in the README."""
+    found = []
+    for m in re.finditer(rf"^```{lang}\n(.*?)^```", README, flags=re.S | re.M):
+        found.append((README.count("\n", 0, m.start()) + 1, m.group(1)))
+    return found
+
+
+def _block_containing(lang: str, text: str) -> str:
+    hits = [body for _line, body in _blocks(lang) if text in body]
+    assert len(hits) == 1, f"expected one {lang} block of the README with {text!r}, found {len(hits)}"
+    return hits[0]
+
+
+def _shell_lines() -> list[str]:
+    """Every command line of the README's bash blocks (continuations joined, comments removed)."""
+    lines = []
+    for _line, body in _blocks("bash"):
+        for line in body.replace("\\\n", " ").splitlines():
+            line = line.split(" #", 1)[0].strip()
+            if line and not line.startswith("#"):
+                lines.append(line)
+    return lines
+
+
+# ---- the Python blocks, run as written --------------------------------------------------------
+def test_the_waveform_table_recipe_reads_a_published_table():
+    """"Consuming a waveform table": the callback's lines, run on a table the node's own
+    builder makes from a batch, give that batch's accel_y (float32) and the stamp of sample 0."""
+    from bearing_sim_ros import Simulator, load_scene
+    from bearing_sim_ros.waveform import to_pointcloud2
+
+    block = _block_containing("python", "def on_accel(msg):")
+    head, body = block.split("def on_accel(msg):", 1)
+    batch = Simulator(load_scene("er16k_outer_race"), fidelity="kinematic").advance(150)
+    stamp_ns = 1_700_000_000_123_456_789
+    msg = to_pointcloud2(batch.accel, batch.accel_channels, stamp_ns, "bearing_accel")
+    scope = {"msg": msg}
+    exec(head, scope)
+    exec(textwrap.dedent(body.split("\n", 1)[1]), scope)
+    assert scope["names"] == ["accel_x", "accel_y"]
+    np.testing.assert_array_equal(scope["accel_y"], batch.accel[:, 1].astype("<f4"))
+    assert scope["t0"] == pytest.approx(stamp_ns * 1e-9, abs=1e-6)
+
+
+def test_the_python_api_block_runs_as_written():
+    """"The Python API (no ROS needed)": every line runs, and the values are what its comments say."""
+    scope = {}
+    exec(_block_containing("python", "sim.prepare_switches()"), scope)
+    b, sim = scope["b"], scope["sim"]
+    assert b.accel.shape == (150, 2) and b.accel_channels == ("accel_x", "accel_y")
+    assert b.contact_forces.shape[1] == 2 * sim.bearing.balls
+    assert sim.tier in ("kinematic", "skidding")
+    assert set(sim.bearing.fault_frequencies(scope["scene"].shaft_hz)) == {"ftf", "bpfo", "bpfi", "bsf"}
+
+
+def test_the_skidding_outputs_block_runs_as_written():
+    """"The skidding tier": the extras it names exist with the shapes it gives."""
+    scope = {}
+    exec(_block_containing("python", 'b.extras["cage_skid"]'), scope)
+    b, nb = scope["b"], scope["sim"].bearing.balls
+    assert b.cage_speed.shape == (1500,)
+    for key in ("cage_skid", "ball_skid"):
+        assert b.extras[key].shape[0] == 1500
+    for key in ("slip_inner", "slip_outer", "friction_inner", "friction_outer"):
+        assert b.extras[key].shape == (1500, nb)
+
+
+def test_the_rosbags_block_reads_a_rendered_recording(tmp_path, monkeypatch, bearing_sim_exe):
+    """"Open a recording ...": the rosbags loop, run as written on ``outer.mcap`` from the
+    README's own render command (shortened), reads waveform tables."""
+    subprocess.run([bearing_sim_exe, "render", "er16k_outer_race", "--duration", "0.05", "--out", "outer.mcap"],
+                   cwd=tmp_path, check=True, capture_output=True)
+    monkeypatch.chdir(tmp_path)
+    scope = {}
+    exec(_block_containing("python", "AnyReader"), scope)
+    assert scope["channels"] == ["accel_x", "accel_y"]
+    assert scope["samples"].shape == (150, 2) and scope["stamp_ns"] > 0
+
+
+# ---- the commands, against the code ------------------------------------------------------------
+def _subparsers():
+    from bearing_sim_ros.cli import build_parser
+
+    parser = build_parser()
+    (action,) = [a for a in parser._actions if a.__class__.__name__ == "_SubParsersAction"]
+    return parser, action.choices
+
+
+def test_every_bearing_sim_command_line_parses():
+    """Each ``bearing-sim`` line of a bash block parses with the CLI's parser; a synopsis with
+    ``[--option a|b]`` names existing options with exactly the choices the parser has; the
+    node's ``-p name:=value`` names are node parameters."""
+    from bearing_sim_ros.nodes.bearing_sim_node import _descriptors
+
+    parser, subs = _subparsers()
+    params = set(_descriptors())
+    checked = 0
+    for line in _shell_lines():
+        for command in re.findall(r"bearing-sim\s(?:[^;&|]|\|(?! ))*", line):
+            argv = shlex.split(command)[1:]
+            if "[" in command:                     # a synopsis: options and their choices
+                sub = subs[argv[0]]
+                for option, choices in re.findall(r"\[(--[\w-]+)(?: ([\w|.-]+))?\]", command):
+                    assert option in sub._option_string_actions, f"README: {command}: no option {option}"
+                    known = sub._option_string_actions[option].choices
+                    if known is not None:
+                        assert choices.split("|") == list(known), f"README: {option} {choices} vs {known}"
+            elif argv[0] == "node":
+                args, rest = parser.parse_known_args(argv)
+                if rest:
+                    assert rest[0] == "--ros-args", f"README: {command}"
+                for name in re.findall(r"-p (\w+):=", " ".join(rest)):
+                    assert name in params, f"README: {command}: {name} is not a node parameter"
+            else:
+                parser.parse_args(argv)
+            checked += 1
+    assert checked >= 12
+
+
+def test_every_inline_bearing_sim_option_exists():
+    """`bearing-sim SUB --option ...` in the text: the subcommand and every option it shows
+    exist (``--bogus`` is the README's example of a wrong argument)."""
+    _parser, subs = _subparsers()
+    mentions = re.findall(r"`bearing-sim ([a-z]+)((?: [^`]*)?)`", README)
+    assert len(mentions) > 20
+    for sub, rest in mentions:
+        assert sub in subs, f"README: bearing-sim {sub}: no such command"
+        for option in re.findall(r"(?<!\S)(--[\w-]+)", rest):
+            if option != "--bogus":
+                assert option in subs[sub]._option_string_actions, f"README: bearing-sim {sub}: no option {option}"
+
+
+def test_node_parameters_named_in_the_readme_exist():
+    """`-p name:=` and the parameter table name the node's parameters, and the table lists
+    every one of them."""
+    from bearing_sim_ros.nodes.bearing_sim_node import _descriptors
+
+    params = set(_descriptors())
+    for name in set(re.findall(r"-p (\w+):=", README)) - {"sampel_rate"}:   # the README's misspelt example
+        assert name in params, f"README: -p {name}: not a node parameter"
+    section = README.split("### Parameters", 1)[1].split("\n### ", 1)[0]
+    tabled = set(re.findall(r"^\| `(\w+)` \|", section, flags=re.M))
+    assert tabled == params, f"README parameter table: missing {params - tabled}, unknown {tabled - params}"
+
+
+def test_python_m_commands_name_existing_options():
+    """``python -m bearing_sim_ros.X --opt``: the module exists and its help names each option."""
+    modules = {}
+    for module, rest in re.findall(r"python -m (bearing_sim_ros[\w.]+)([^\n`#]*)", README):
+        modules.setdefault(module, set()).update(re.findall(r"(?<!\S)(--[\w-]+)", rest))
+    assert "bearing_sim_ros.nodes.node_bench" in modules
+    for module, options in modules.items():
+        path = REPO / (module.replace(".", "/") + ".py")
+        assert path.is_file(), f"README: python -m {module}: no such module"
+        if "argparse" in path.read_text():
+            text = subprocess.run([sys.executable, "-m", module, "--help"], cwd=REPO, capture_output=True,
+                                  text=True, check=True).stdout
+        else:
+            text = path.read_text()
+        for option in options:
+            assert re.search(rf"(?<![\w-]){option}(?![\w-])", text), f"README: python -m {module}: no option {option}"
+
+
+def test_make_variables_and_targets_exist():
+    """``make run SCENE=... DURATION=...``: the targets and variables are the Makefile's."""
+    makefile = (REPO / "Makefile").read_text()
+    uses = re.findall(r"`?make ((?:[a-z]+)(?: [A-Z]+=\S+)*)", README)
+    assert uses
+    for use in uses:
+        target, *assignments = use.split()
+        assert re.search(rf"^{target}:", makefile, flags=re.M), f"README: make {target}: no such target"
+        for assignment in assignments:
+            name = assignment.split("=")[0]
+            assert re.search(rf"^{name}\s*\?=", makefile, flags=re.M), f"README: make {name}=: not a variable"
+
+
+def test_scene_names_in_the_readme_are_shipped():
+    from bearing_sim_ros.scene import shipped_scenes
+
+    shipped = set(shipped_scenes())
+    named = set(re.findall(r"\b((?:er16k|cwru_6205|b6205|b6307)_[a-z0-9_]+)\b", README))
+    assert named and named <= shipped, f"README names scenes that are not shipped: {sorted(named - shipped)}"
+    table = README.split("## Scenes", 1)[1].split("\n## ", 1)[0]
+    assert shipped <= set(re.findall(r"`(\w+)`", table)), "the README's scene table misses a shipped scene"
+
+
+def test_the_launch_file_offers_every_node_parameter_with_its_default():
+    """``ros2 launch bearing_sim_ros bearing_sim.launch.py NAME:=...`` (README, "The live node"):
+    ``launch`` has no wheel here, so its ARGUMENTS table is read from the source and checked
+    against the node's parameters: every one, with the node's default."""
+    from bearing_sim_ros.nodes.bearing_sim_node import _descriptors
+
+    tree = ast.parse((REPO / "launch" / "bearing_sim.launch.py").read_text())
+    (table,) = [n.value for n in tree.body if isinstance(n, ast.Assign) and n.targets[0].id == "ARGUMENTS"]
+    arguments = {row.elts[0].value: (row.elts[1].value, row.elts[2].id) for row in table.elts}
+    descriptors = _descriptors()
+    assert set(arguments) == set(descriptors)
+    casts = {"str": str, "float": float, "int": int, "bool": lambda text: text == "true"}
+    for name, (default_text, kind) in arguments.items():
+        assert casts[kind](default_text) == descriptors[name][0], f"launch {name}:={default_text}"
+    for name in re.findall(r"bearing_sim\.launch\.py((?: \w+:=\S+)+)", README):
+        for arg in re.findall(r"(\w+):=", name):
+            assert arg in arguments or arg == "namespace", f"README: launch argument {arg}"
