@@ -280,6 +280,16 @@ def test_sample_rate_range_is_the_nodes():
             Simulator("er16k_healthy", sample_rate=outside)
 
 
+@pytest.mark.parametrize("duration", [True, 0, -1.0, math.inf, "1"])
+def test_a_duration_that_is_not_seconds_is_refused_in_one_line(tmp_path, duration):
+    """render(scene, True, out) was one second of signal (bool is an int); the rest were refused."""
+    out = tmp_path / "x.mcap"
+    with pytest.raises(UserError) as exc:
+        render("er16k_healthy", duration, out, fidelity="kinematic", progress=False)
+    assert str(exc.value) == f"--duration = {duration!r}: expected a finite number of seconds > 0"
+    assert not out.exists()
+
+
 @pytest.mark.parametrize("kwargs, message", [
     # batch_duration 0 ended in a ZeroDivisionError, a negative state_rate was taken
     ({"batch_duration": 0}, "batch_duration = 0: allowed range is [0.001, 1] s"),

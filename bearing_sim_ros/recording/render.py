@@ -18,6 +18,7 @@ one batch).
 from __future__ import annotations
 
 import math
+import numbers
 import shlex
 import sys
 import time
@@ -191,7 +192,9 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
 
     if not hasattr(scene, "bearing"):
         scene = load_scene(scene)
-    if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
+    # bool is an int to Python, but render(..., True) is a slip, not one second
+    if isinstance(duration, bool) or not (isinstance(duration, numbers.Real) and math.isfinite(duration)
+                                          and duration > 0):
         raise UserError(f"--duration = {duration!r}: expected a finite number of seconds > 0")
     if rk4_step is not None and solver != "rk4":
         raise UserError(f"--rk4-step = {rk4_step:g} s: applies to --solver rk4 only (given --solver {solver})")
