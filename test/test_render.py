@@ -329,3 +329,10 @@ def test_rk4_divergence_names_the_option_that_sets_the_step(tmp_path, capsys):
     assert err.startswith("error: --rk4-step = 2e-05 s: the fixed-step RK4 diverged")
     assert "smaller --rk4-step or --solver default" in err and "rk4_step" not in err
     assert not out.exists()
+
+
+def test_tier_keys_name_what_tier_values_writes():
+    """report reads recorded diagnostics by render.TIER_KEYS: the keys tier_values writes."""
+    from bearing_sim_ros.recording.render import TIER_KEYS, tier_values
+
+    assert tuple(tier_values(Simulator("er16k_healthy", fidelity="kinematic"))) == TIER_KEYS

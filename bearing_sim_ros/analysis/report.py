@@ -151,10 +151,12 @@ def skid_ratios(diagnostics) -> dict:
 
 
 def tier_keys(diagnostics) -> dict:
-    """The model-tier keys of one ``/diagnostics`` message (``recording.render.tier_values``):
-    ``tier``, ``tier_switches``, ``last_tier_switch``, as text; {} when it has none."""
+    """The model-tier keys of one ``/diagnostics`` message (``recording.render.TIER_KEYS``:
+    ``tier``, ``tier_switches``, ``last_tier_switch``, ...), as text; {} when it has none."""
+    from ..recording.render import TIER_KEYS
+
     return {kv.key: kv.value for status in diagnostics.status for kv in status.values
-            if kv.key in ("tier", "tier_switches", "last_tier_switch")}
+            if kv.key in TIER_KEYS}
 
 
 def tier_history(metadata: dict, tiers: list) -> dict:

@@ -86,6 +86,10 @@ def diagnostics_message(stamp_ns: int, values: dict, level: int = 0, message: st
     return arr
 
 
+# the keys ``tier_values`` writes, for readers of recorded diagnostics (``analysis.report``)
+TIER_KEYS = ("tier", "tier_reason", "tier_estimated_error", "tier_switches", "last_tier_switch", "oversample")
+
+
 def tier_values(sim) -> dict:
     """The ``/diagnostics`` keys on the model tier, the live node's and a render's alike: the
     tier in use, why, its estimated error, how many times ``fidelity: auto`` switched, and the
