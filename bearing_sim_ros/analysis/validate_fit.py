@@ -159,9 +159,11 @@ def fit(cwru, seconds: float = 2.0, maxfev: int = 300, start: dict | None = None
         out[free] = x
         return out
 
+    seen = {}                           # x -> evaluation: the best is printed without a rerun
+
     def objective(x):
         values = from_x(full(x))
-        res = evaluate(recordings, values, seconds, line_weight)
+        res = seen[tuple(x)] = evaluate(recordings, values, seconds, line_weight)
         count[0] += 1
         print(f"{count[0]:4d} {time.perf_counter() - t0:5.0f}s {_line(values, res)}", flush=True)
         return res["objective"]
@@ -173,7 +175,8 @@ def fit(cwru, seconds: float = 2.0, maxfev: int = 300, start: dict | None = None
     best = from_x(full(opt.x))
     final = rounded(best)
     res = evaluate(recordings, final, seconds, line_weight)
-    print(f"best    {_line(best, evaluate(recordings, best, seconds, line_weight))}", flush=True)
+    best_result = seen.get(tuple(opt.x)) or evaluate(recordings, best, seconds, line_weight)
+    print(f"best    {_line(best, best_result)}", flush=True)
     print(f"rounded {_line(final, res)}", flush=True)
     print(f"{count[0]} evaluations in {time.perf_counter() - t0:.0f} s", flush=True)
     return {"start": start, "start_result": first, "best": best, "values": final, "result": res}
