@@ -260,6 +260,10 @@ def test_stream_is_15khz_contiguous_and_paced(started, listener):
     assert float(values["shaft_speed_rad_s"]) == pytest.approx(167.552, rel=1e-5)
     assert values["radial_load_n"] == "0 -50"
     assert int(values["rejected_inputs"]) == 0
+    # the fault frequencies as the signal has them, from the cage's speed over the last second
+    # (test_render checks them against the envelope line where the cage skids)
+    assert float(values["cage_hz"]) == pytest.approx(np.mean(cage) / (2 * math.pi), rel=0.01)
+    assert float(values["bpfo_hz"]) == pytest.approx(bearing.balls * float(values["cage_hz"]), rel=1e-5)
     rtf = np.mean([float(d[3]["real_time_factor"]) for d in diags])
     assert rtf == pytest.approx(1.0, abs=0.03)
 

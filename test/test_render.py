@@ -336,3 +336,45 @@ def test_tier_keys_name_what_tier_values_writes():
     from bearing_sim_ros.recording.render import TIER_KEYS, tier_values
 
     assert tuple(tier_values(Simulator("er16k_healthy", fidelity="kinematic"))) == TIER_KEYS
+
+
+def test_diagnostics_give_the_fault_frequencies_where_the_signal_has_them(tmp_path):
+    """At 10000 rpm / 10 N the cage skids 7 %: the outer-race line of the recorded signal is
+    7 % below the catalog's pure-rolling BPFO, and ``bpfo_hz`` in the recorded ``/diagnostics``
+    is where the line is (envelope spectrum of accel_y, within 0.2 Hz of 552 Hz); cage_hz and the
+    cage skid ratio tell the same story.  The slips and frictions are mean absolute values in
+    their units (they were means of signed values named ``*_ratio``)."""
+    from bearing_sim_ros.analysis.envelope import envelope_spectrum, line_at
+
+    text = (Path(__file__).parent.parent / "config" / "scenes" / "er16k_outer_race.yaml").read_text()
+    fast = text.replace("{shaft_speed_rpm: 1600, radial_load: [0.0, -50.0]}",
+                        "{shaft_speed_rpm: 10000, radial_load: [0.0, -10.0]}")
+    assert fast != text
+    (tmp_path / "fast.yaml").write_text(fast)
+    scene = load_scene(tmp_path / "fast.yaml")
+    out = tmp_path / "fast.mcap"
+    render(scene, 2.0, out, fidelity="skidding", progress=False)
+    accel, diag = [], []
+    with open_recording(out) as rec:
+        from rclpy.serialization import deserialize_message
+
+        for topic, msg_type, _t, data in rec.messages():
+            msg = deserialize_message(data, get_message(msg_type))
+            if topic == "/accel":
+                accel.append(from_pointcloud2(msg)[2][:, 1])
+            elif topic == "/diagnostics":
+                diag.append({kv.key: kv.value for kv in msg.status[0].values})
+    last = diag[-1]
+    bpfo, cage = float(last["bpfo_hz"]), float(last["cage_hz"])
+    theory = scene.bearing.fault_frequencies(scene.shaft_hz)
+    assert bpfo == pytest.approx(scene.bearing.balls * cage, rel=1e-5)
+    assert bpfo < 0.95 * theory["bpfo"]                       # the cage skids
+    assert bpfo == pytest.approx(theory["bpfo"] * (1 - float(last["cage_skid_ratio"]) / 100), rel=2e-3)
+    x = np.concatenate(accel)[int(FS) // 5:].astype(float)   # after the start-up transient
+    freqs, spec = envelope_spectrum(x, FS, max_freq=2000.0)
+    assert abs(line_at(freqs, spec, theory["bpfo"], search_rel=0.1).found_hz - bpfo) < 0.2
+    inner = float(last["bpfi_hz"])
+    assert inner == pytest.approx(scene.bearing.balls * (scene.shaft_hz - cage), rel=1e-5)
+    for key in ("slip_inner_m_s", "slip_outer_m_s", "friction_inner_n", "friction_outer_n"):
+        assert float(last[key]) > 0
+    assert not [k for k in last if k.endswith("_ratio") and "skid" not in k]

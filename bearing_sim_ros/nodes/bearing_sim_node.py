@@ -34,7 +34,6 @@ import threading
 import time
 from pathlib import Path
 
-import numpy as np
 import rclpy
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
@@ -286,7 +285,7 @@ class BearingSimNode(Node):
         self._repace = False
         self.finished = threading.Event()
         self.error = None
-        self.stats = _Stats(self.sim.sample_rate)
+        self.stats = _Stats(self.sim.sample_rate, self.sim.bearing.balls)
         self._thread = threading.Thread(target=self._run, name="bearing-sim", daemon=True)
 
     def _open_recorder(self, cfg):
@@ -523,8 +522,7 @@ class BearingSimNode(Node):
         }
         for key, count in self.rejected.items():
             values[f"rejected_{key}"] = count
-        for key, val in period["extras"].items():
-            values[f"{key}_ratio"] = f"{val:.4g}"
+        values.update(period["means"])
         level, message = 0, "ok"
         if period["overruns"]:
             level, message = 1, f"{period['overruns']} overruns in the last second"
@@ -560,8 +558,11 @@ class _Pending:
 class _Stats:
     """Pacing and batch statistics.  Written by the sim thread only."""
 
-    def __init__(self, sample_rate: float):
+    def __init__(self, sample_rate: float, balls: int):
+        from ..recording.render import PeriodMeans
+
         self.sample_rate = sample_rate
+        self._means = PeriodMeans(balls)
         self.overruns = 0
         self.worst_lag = 0.0
         self.batches = 0
@@ -590,7 +591,7 @@ class _Stats:
     def period_start(self, now, index):
         self._p_t, self._p_i, self._p_over, self._p_lag = now, index, self.overruns, 0.0
         self._p_busy, self._p_compute, self._p_busy_worst, self._p_batches = 0.0, 0.0, 0.0, 0
-        self._extras, self._extras_n = {}, 0
+        self._means.reset()
 
     def batch(self, lag, batch, now):
         self.batches += 1
@@ -598,10 +599,7 @@ class _Stats:
         self.last = now
         self.worst_lag = max(self.worst_lag, lag)
         self._p_lag = max(self._p_lag, lag)
-        for key, val in batch.extras.items():
-            self._extras[key] = self._extras.get(key, 0.0) + float(np.mean(val))
-        if batch.extras:
-            self._extras_n += 1
+        self._means.add(batch)
 
     def period_end(self, now, index) -> dict:
         """Figures of the period since the last call, and start a new one."""
@@ -610,7 +608,7 @@ class _Stats:
                "overruns": self.overruns - self._p_over, "worst_lag": self._p_lag,
                "busy_mean": self._p_compute / max(self._p_batches, 1), "busy_worst": self._p_busy_worst,
                "busy_fraction": self._p_busy / (now - self._p_t) if now > self._p_t else 0.0,
-               "extras": {k: v / max(self._extras_n, 1) for k, v in self._extras.items()}}
+               "means": self._means.values()}
         self.period_start(now, index)
         return out
 

@@ -86,6 +86,59 @@ def diagnostics_message(stamp_ns: int, values: dict, level: int = 0, message: st
     return arr
 
 
+# extras of a batch (``Simulator.advance``) -> its ``/diagnostics`` key, and whether the key is
+# the mean of the absolute value (signed slips and frictions of loaded and unloaded balls cancel)
+PERIOD_EXTRAS = {"ball_skid": ("ball_skid_ratio", False), "cage_skid": ("cage_skid_ratio", False),
+                 "slip_inner": ("slip_inner_m_s", True), "slip_outer": ("slip_outer_m_s", True),
+                 "friction_inner": ("friction_inner_n", True), "friction_outer": ("friction_outer_n", True)}
+
+
+class PeriodMeans:
+    """Sample-weighted means over one ``/diagnostics`` period of what the batches carry, as the
+    live node and ``render`` both publish them (``values``):
+
+    - the skidding tier's skid ratios, % (``ball_skid_ratio``, ``cage_skid_ratio``), and its
+      balls' slip speeds (m/s) and traction forces (N) at each race as the mean absolute value
+      over balls and samples (``slip_inner_m_s``, ``slip_outer_m_s``, ``friction_inner_n``,
+      ``friction_outer_n``); only while that tier runs;
+    - the fault frequencies as they are in the signal, Hz: ``cage_hz`` from the cage's mean speed,
+      ``bpfo_hz`` = Z x cage_hz, ``bpfi_hz`` = Z x the shaft's mean speed relative to the cage.
+      Where the cage skids they differ from the catalog's pure-rolling ones
+      (``Bearing.fault_frequencies``), and they are where the signal's envelope lines are."""
+
+    def __init__(self, balls: int):
+        self.balls = int(balls)
+        self.reset()
+
+    def reset(self) -> None:
+        self._sums, self._counts = {}, {}
+
+    def _add(self, key: str, total: float, n: int) -> None:
+        self._sums[key] = self._sums.get(key, 0.0) + total
+        self._counts[key] = self._counts.get(key, 0) + n
+
+    def add(self, batch) -> None:
+        n = batch.n
+        for name, val in batch.extras.items():
+            if name in PERIOD_EXTRAS:
+                key, absolute = PERIOD_EXTRAS[name]
+                self._add(key, float(np.mean(np.abs(val) if absolute else val)) * n, n)
+        self._add("cage", float(np.sum(batch.cage_speed)), n)
+        self._add("shaft", float(np.sum(batch.shaft_speed)), n)
+
+    def values(self) -> dict:
+        """{key: text} of the period so far ({} before a batch)."""
+        mean = {k: v / self._counts[k] for k, v in self._sums.items() if self._counts[k]}
+        if "cage" not in mean:
+            return {}
+        cage, shaft = mean.pop("cage"), mean.pop("shaft")
+        out = {k: f"{v:.4g}" for k, v in mean.items()}
+        out["cage_hz"] = f"{abs(cage) / (2 * math.pi):.6g}"
+        out["bpfo_hz"] = f"{self.balls * abs(cage) / (2 * math.pi):.6g}"
+        out["bpfi_hz"] = f"{self.balls * abs(shaft - cage) / (2 * math.pi):.6g}"
+        return out
+
+
 # the keys ``tier_values`` writes, for readers of recorded diagnostics (``analysis.report``)
 TIER_KEYS = ("tier", "tier_reason", "tier_estimated_error", "tier_switches", "last_tier_switch", "oversample")
 
@@ -246,8 +299,7 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
     bar = _Progress(total / sample_rate, sys.stderr.isatty() if progress is None else progress)
     t_wall0 = time.perf_counter()
     frame = msgs.frame_id
-    skid_sum = {}
-    skid_n = 0
+    means = PeriodMeans(scene.bearing.balls)
     next_diag_s = 1
     done = 0
     try:
@@ -265,9 +317,7 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
             rec.write(TOPIC_CONTACT, msgs.contact_forces(batch), pub_ns)
             if math.floor(done * state_rate / sample_rate) > math.floor((done - n) * state_rate / sample_rate):
                 rec.write(TOPIC_STATE, msgs.state(pub_ns), pub_ns)
-            for key, val in batch.extras.items():
-                skid_sum[key] = skid_sum.get(key, 0.0) + float(np.mean(val))
-            skid_n += 1
+            means.add(batch)
             while done >= next_diag_s * sample_rate:
                 # the live node's keys (nodes/bearing_sim_node.py); what depends on the wall clock
                 # or the output path is left out so that the file stays byte-identical
@@ -278,9 +328,8 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
                           "radial_load_n": " ".join(f"{v:.6g}" for v in sim.radial_load),
                           "simulated_s": f"{sim.time:.3f}", "rejected_inputs": 0,
                           "recording": "ok"}
-                for key, val in skid_sum.items():
-                    values[f"{key}_ratio"] = f"{val / max(skid_n, 1):.4g}"
-                skid_sum, skid_n = {}, 0
+                values.update(means.values())
+                means.reset()
                 rec.write(TOPIC_DIAGNOSTICS, diagnostics_message(pub_ns, values, 0, "ok"), pub_ns)
                 next_diag_s += 1
             bar.update(done / sample_rate)
