@@ -59,3 +59,16 @@ def cwru_dir():
     if not folder.is_dir():
         pytest.skip(f"CWRU recordings not found at {folder} (a user checkout has no ../shared)")
     return folder
+
+
+@pytest.fixture
+def skidding_outer_race(tmp_path):
+    """Path of er16k_outer_race moved to 10000 rpm / 10 N, where its cage skids about 7 %: the
+    outer-race line sits 7 % below the catalog's pure-rolling BPFO (552 against 595 Hz)."""
+    text = (REPO / "config" / "scenes" / "er16k_outer_race.yaml").read_text()
+    fast = text.replace("{shaft_speed_rpm: 1600, radial_load: [0.0, -50.0]}",
+                        "{shaft_speed_rpm: 10000, radial_load: [0.0, -10.0]}")
+    assert fast != text, "er16k_outer_race.yaml's operating point moved: update this fixture"
+    path = tmp_path / "skidding_outer_race.yaml"
+    path.write_text(fast)
+    return path

@@ -150,6 +150,22 @@ def test_report_of_a_skidding_run_shows_cage_and_skid_ratios(tmp_path):
     assert 0.05 < ratios["cage_skid_ratio"] < 20
 
 
+def test_report_looks_for_the_lines_where_the_recorded_cage_puts_them(tmp_path, skidding_outer_race):
+    """Where the cage skids 7 % (10000 rpm / 10 N) the outer-race line is 7 % below pure
+    rolling's BPFO; looking there, the report called this outer-race recording a ball fault.  It
+    takes the fault frequencies from the recording's /diagnostics: verdict outer, the BPFO line
+    found within 0.5 Hz of the recorded bpfo_hz."""
+    rec = tmp_path / "fast.mcap"
+    render(str(skidding_outer_race), 2.0, rec, fidelity="skidding", progress=False)
+    s = build_report(rec, tmp_path / "out")
+    rolling, used = s["fault_frequencies_pure_rolling_hz"], s["fault_frequencies_hz"]
+    assert used["bpfo"] < 0.95 * rolling["bpfo"] and "/diagnostics" in s["fault_frequencies_from"]
+    assert s["verdict"] == "outer"
+    assert abs(s["fault_lines"]["bpfo"]["found_hz"] - used["bpfo"]) < 0.5
+    assert "Expected at the fault frequencies of the recording's /diagnostics" in (
+        tmp_path / "out" / "summary.md").read_text()
+
+
 def test_report_says_when_auto_switched_tiers(tmp_path):
     """A profile from 1600 to 10000 rpm with the load taken off moves ``fidelity: auto`` from the
     kinematic to the skidding tier part way: the metadata keeps the tier at the start, and the

@@ -61,6 +61,7 @@ class _Data:
         cmd_t, cmd_speed, load_t, load_xy = [], [], [], []
         diag = {}
         tiers = []
+        in_signal = []
         samples = 0
         fs_meta = None
         try:
@@ -96,6 +97,9 @@ class _Data:
                 tier = tier_keys(msg)
                 if tier.get("tier"):
                     tiers.append(tier)
+                found = signal_frequencies(msg)
+                if found:
+                    in_signal.append(found)
         if not chunks:
             raise UserError(f"{rec.path}: no accelerometer waveform tables (sensor_msgs/msg/PointCloud2 "
                             f"on .../accel) in this recording; topics: {', '.join(sorted(topics)) or 'none'}")
@@ -113,6 +117,9 @@ class _Data:
         self.load_t = np.array(load_t, dtype=float) / NS
         self.load_xy = np.array(load_xy, dtype=float).reshape(-1, 2)
         self.skid = {k: np.array(v, dtype=float) for k, v in diag.items()}
+        # the fault frequencies the recording's /diagnostics gave, mean over the recording
+        self.signal_frequencies = ({k: float(np.mean([f[k] for f in in_signal])) for k in in_signal[0]}
+                                   if in_signal else {})
         self.tiers = tiers
 
     @staticmethod
@@ -148,6 +155,18 @@ def skid_ratios(diagnostics) -> dict:
                 except ValueError:
                     pass            # not a number: not a ratio to average
     return found
+
+
+def signal_frequencies(diagnostics) -> dict:
+    """{"ftf", "bpfo", "bpfi": Hz} as the signal has them in one ``/diagnostics`` message
+    (``cage_hz``, ``bpfo_hz``, ``bpfi_hz``: ``recording.render.PeriodMeans``); {} in a recording
+    made before these keys."""
+    keys = {"cage_hz": "ftf", "bpfo_hz": "bpfo", "bpfi_hz": "bpfi"}
+    found = {keys[kv.key]: kv.value for status in diagnostics.status for kv in status.values if kv.key in keys}
+    try:
+        return {k: float(v) for k, v in found.items()} if len(found) == len(keys) else {}
+    except ValueError:
+        return {}
 
 
 def tier_keys(diagnostics) -> dict:
@@ -357,7 +376,9 @@ def build_report(path, out) -> dict:
     x = d.accel[:, d.channels.index(ch)]
     speed = float(np.mean(d.cmd_speed)) if d.cmd_speed.size else (
         float(np.mean(d.shaft_w)) if d.shaft_w.size else (scene.shaft_speed if scene else float("nan")))
-    freqs = scene.bearing.fault_frequencies(speed / (2 * math.pi)) if scene is not None else {}
+    rolling = scene.bearing.fault_frequencies(speed / (2 * math.pi)) if scene is not None else {}
+    # where the cage skids, the lines are where the recorded cage puts them, not at pure rolling
+    freqs = {**rolling, **d.signal_frequencies} if rolling else {}
     verdict = diagnose(x, fs, freqs) if freqs and x.size > fs * 0.2 else None
 
     plots = [plot_waveform(d, freqs, out, meta), plot_spectrum(d, out, meta)]
@@ -391,6 +412,9 @@ def build_report(path, out) -> dict:
         "shaft_speed_rpm": speed * RPM,
         "shaft_speed_variation": speed_var,
         "fault_frequencies_hz": freqs,
+        "fault_frequencies_pure_rolling_hz": rolling,
+        "fault_frequencies_from": ("the recording's /diagnostics (cage_hz, bpfo_hz, bpfi_hz; bsf: pure rolling)"
+                                   if d.signal_frequencies and rolling else "pure rolling at the mean shaft speed"),
         "envelope_channel": ch,
         "fault_lines": ({k: {"expected_hz": v.expected_hz, "found_hz": v.found_hz, "height": v.height,
                              "prominence": v.prominence} for k, v in verdict["lines"].items()}
@@ -455,7 +479,8 @@ def _markdown(s: dict) -> str:
               + ") |", ""]
     if s["fault_lines"]:
         lines += ["## Fault lines in the envelope spectrum", "",
-                  "| line | theory (Hz) | found (Hz) | prominence (x local median) |", "| --- | --- | --- | --- |"]
+                  f"Expected at the fault frequencies of {s['fault_frequencies_from']}.", "",
+                  "| line | expected (Hz) | found (Hz) | prominence (x local median) |", "| --- | --- | --- | --- |"]
         for key, line in s["fault_lines"].items():
             lines.append(f"| {LINE_LABELS[key]} | {line['expected_hz']:.2f} | {_num(line['found_hz'])} | "
                          f"{_num(line['prominence'])} |")
