@@ -68,6 +68,13 @@ def test_numbers_in_exponent_form_are_floats(tmp_path):
     ("clock: 6", "clock: 6, colour: red", ["defects[0].colour", "unknown key"]),
     ("width_mm: 0.6", "width_mm: 0", ["defects[0].width_mm", "0", "(0, "]),
     ("operating_point:", "operating_pont:", ["operating_pont", "unknown key"]),
+    # a position given twice is refused, not silently taken from one of the two
+    ("clock: 6", "clock: 6, angle_deg: 30", ["defects[0]", "clock", "angle_deg", "not both"]),
+    # balls are numbered 0 .. 8 on the 9-ball ER-16K: ball 9 would be a defect no ball carries
+    ("kind: outer", "kind: ball, ball: 9", ["defects[0].ball", "9", "[0, 8]"]),
+    ("clock: 6}\n", "clock: 6}\nsensor: {axes: [x, z]}\n", ["sensor.axes", "'z'", "x, y"]),
+    # a range of 0 m/s^2 would clip every sample to 0
+    ("clock: 6}\n", "clock: 6}\nsensor: {range: 0}\n", ["sensor.range", "0", "(0, "]),
 ])
 def test_bad_scene_is_one_line_naming_key_value_and_allowed(tmp_path, old, new, expect):
     path = tmp_path / "bad.yaml"
@@ -79,6 +86,44 @@ def test_bad_scene_is_one_line_naming_key_value_and_allowed(tmp_path, old, new, 
     assert "\n" not in msg
     for piece in expect:
         assert piece in msg, msg
+
+
+def test_keys_with_a_unit_in_their_name_become_si_and_omitted_ones_take_their_documented_value(tmp_path):
+    """A key's suffix is its unit: radial_clearance_um 20 is 20e-6 m (it replaces the catalog's
+    45 um), cage_pocket_clearance_um 30 is 30e-6 m, surface_roughness_um 0.1 is 1e-7 m.  A defect
+    without length_mm is as long as it is wide (0.6 mm).  A profile knot without a speed or a load
+    holds the previous knot's (the operating point's before the first): 1600 rpm is
+    1600 * 2 pi / 60 = 167.55 rad/s, not 1600 rad/s and not 167.55 rpm.  Without a fidelity
+    section the tier is chosen automatically with a tolerance of 5 % (README)."""
+    path = tmp_path / "s.yaml"
+    path.write_text("radial_clearance_um: 20\n" + GOOD
+                    + "lubrication: {cage_pocket_clearance_um: 30, surface_roughness_um: 0.1}\n"
+                    + "profile:\n  - {t: 0.5}\n"
+                    + "  - {t: 1.0, shaft_speed_rpm: 2400, radial_load: [10.0, -150.0]}\n  - {t: 1.5}\n")
+    scene = load_scene(path)
+    assert (scene.fidelity, scene.fidelity_tolerance) == ("auto", 0.05)
+    assert scene.bearing.radial_clearance == pytest.approx(20e-6, rel=1e-12)
+    assert scene.lubrication.cage_pocket_clearance == pytest.approx(30e-6, rel=1e-12)
+    assert scene.lubrication.surface_roughness == pytest.approx(0.1e-6, rel=1e-12)
+    assert scene.defects[0].length == pytest.approx(0.6e-3, rel=1e-12)
+    knots = [(p.t, p.shaft_speed, p.radial_load) for p in scene.profile]
+    assert knots == [(0.5, pytest.approx(1600 * 2 * math.pi / 60), (0.0, -50.0)),
+                     (1.0, pytest.approx(2400 * 2 * math.pi / 60), (10.0, -150.0)),
+                     (1.5, pytest.approx(2400 * 2 * math.pi / 60), (10.0, -150.0))]
+
+
+def test_resonator_from_its_frequency_and_damping_ratio(tmp_path):
+    """The unit resonator is given as mass, natural frequency and damping ratio; its stiffness
+    and damping are the single-degree-of-freedom ones: sqrt(k / m) = 2 pi f (rad/s) and
+    c / (2 sqrt(k m)) = zeta (a factor 2 lost in c would halve the damping the scene asks for)."""
+    path = tmp_path / "s.yaml"
+    path.write_text(GOOD.replace("damping: 2210}", "damping: 2210}\n  resonator: {mass: 0.05, frequency_hz: 4200, "
+                                 "damping_ratio: 0.04}"))
+    st = load_scene(path).structure
+    assert st.has_resonator and st.resonator_mass == 0.05
+    assert math.sqrt(st.resonator_stiffness / st.resonator_mass) == pytest.approx(2 * math.pi * 4200, rel=1e-12)
+    assert st.resonator_damping / (2 * math.sqrt(st.resonator_stiffness * st.resonator_mass)) == pytest.approx(
+        0.04, rel=1e-12)
 
 
 def test_defect_position_by_clock_or_degrees_and_waviness_phase(tmp_path):
