@@ -126,6 +126,9 @@ def test_custom_bearing_contact_angle_mass_and_inertia():
     ({"balls": 2}, ["balls = 2", "[3, 40]"]),
     ({"ball_diameter_mm": -1.0}, ["ball_diameter_mm = -1.0", "allowed range"]),
     ({"poisson_ratio": 0.6}, ["poisson_ratio = 0.6", "[0.0, 0.49]"]),
+    # races 20 mm apart radially hold no 7.94 mm ball: D_o - D_i must be close to 2 d
+    ({"inner_race_diameter_mm": 30.56, "outer_race_diameter_mm": 70.56},
+     ["outer_race_diameter_mm = 70.56", "twice the ball diameter", "15.88"]),
 ])
 def test_impossible_custom_bearing_is_a_one_line_error(change, words):
     with pytest.raises(SceneError) as exc:
@@ -150,3 +153,17 @@ def test_contact_ellipse_and_hertz_stiffness_against_the_classical_sphere():
     assert c.a_coeff == pytest.approx(1.028 * radius_coeff, rel=2e-3)
     assert c.b_coeff == pytest.approx(c.a_coeff / 1.0339, rel=1e-9)
     assert c.stiffness == pytest.approx(1.087 * 2 / 3 * e_eff * math.sqrt(rho), rel=1e-3)
+
+
+def test_contact_radii_are_harris_textbook_values():
+    """Effective radii of the two ball-race contacts (Harris, Rolling Bearing Analysis, eqs for a
+    deep-groove ball bearing, zero contact angle): rolling direction R_x = d (D_m -+ d) / (2 D_m),
+    inner race convex ("-"), outer race concave ("+"); across the groove R_y = f d / (2 f - 1)
+    with each race's own conformity f.  A custom bearing with different inner (0.51) and outer
+    (0.54) conformities tells the two apart (the catalog bearings have 0.52 on both)."""
+    b = bearing_from_mapping("custom", dict(CUSTOM, inner_groove_conformity=0.51, outer_groove_conformity=0.54))
+    d, dm = 7.94e-3, 38.5e-3
+    assert b.inner_contact.rx == pytest.approx(d * (dm - d) / (2 * dm), rel=1e-12)
+    assert b.outer_contact.rx == pytest.approx(d * (dm + d) / (2 * dm), rel=1e-12)
+    assert b.inner_contact.ry == pytest.approx(0.51 * d / (2 * 0.51 - 1), rel=1e-12)
+    assert b.outer_contact.ry == pytest.approx(0.54 * d / (2 * 0.54 - 1), rel=1e-12)
