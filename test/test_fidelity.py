@@ -75,6 +75,56 @@ def test_skid_index_by_hand_from_seed000_eq30():
     assert skid_index(scene, w, (0.0, 0.0)) == pytest.approx(expect, rel=1e-4)
 
 
+def test_the_cage_drag_enters_as_its_torque_over_the_pitch_radius():
+    """A viscous cage torque T = c w_c (N m) resists the balls with a force T / R_m at the pitch
+    radius (R_m = D_m / 2), so it adds c w_c / (R_m mu_max W) to chi.  The shipped scenes have
+    c = 0, where the hand computation above cannot see this term: here c = 1e-3 N m s."""
+    scene = load_scene("er16k_healthy")
+    b = scene.bearing
+    w = 3000 * RPM
+    dragged = replace(scene, lubrication=replace(scene.lubrication, cage_drag=1e-3))
+    w_cage = 0.5 * w * (1.0 - b.ball_diameter / b.pitch_diameter)
+    lub = scene.lubrication
+    v = 1.0 / lub.traction_c - lub.traction_a / lub.traction_b          # the traction curve's peak
+    mu_max = (lub.traction_a + lub.traction_b * v) * np.exp(-lub.traction_c * v) + lub.traction_d
+    weight = scene.structure.shaft_mass * 9.80665
+    expect = 1e-3 * w_cage / (0.5 * b.pitch_diameter) / (mu_max * weight)
+    assert skid_index(dragged, w, (0.0, 0.0)) - skid_index(scene, w, (0.0, 0.0)) == pytest.approx(expect, rel=1e-6)
+
+
+def test_the_skid_index_depends_on_the_loads_size_and_the_speeds_size_only():
+    """Without gravity a bearing loaded 300 N downwards, sideways or at 45 degrees skids alike
+    (the load's magnitude, not its vertical component, presses the balls onto the races); turning
+    the shaft the other way (a negative speed, which a scene allows) skids as much as forwards
+    and gives a real estimate, so ``auto`` chooses the same tier."""
+    scene = replace(load_scene("er16k_healthy"), gravity=False)
+    w = 3000 * RPM
+    down = skid_index(scene, w, (0.0, -300.0))
+    for load in ((300.0, 0.0), (-300.0, 0.0), (300.0 / np.sqrt(2), 300.0 / np.sqrt(2))):
+        assert skid_index(scene, w, load) == pytest.approx(down, rel=1e-12), load
+    assert skid_index(scene, -w, (0.0, -300.0)) == pytest.approx(down, rel=1e-12)
+    est, _ = kinematic_error_estimate(scene, -w, (0.0, -300.0))
+    assert isinstance(est, float) and est == kinematic_error_estimate(scene, w, (0.0, -300.0))[0]
+    assert select_tier(scene, "auto", -w, (0.0, -300.0), 0.05).tier == select_tier(
+        scene, "auto", w, (0.0, -300.0), 0.05).tier
+
+
+def test_fit_recovers_a_known_error_law():
+    """``fit`` (what ``bench --calibrate-fidelity`` writes into config/fidelity.yaml) given points
+    that follow error = 0.002 + 0.5 r + 0.3 chi^0.8 exactly recovers that law: power 0.8 (on its
+    grid), the three coefficients, and a worst-case factor of 1."""
+    from bearing_sim_ros.fidelity import fit
+
+    rng = np.random.default_rng(3)
+    chi = 10.0 ** rng.uniform(-5, -0.5, 12)
+    ratio = rng.choice([0.0, 0.0013, 0.0057], 12)
+    err = 0.002 + 0.5 * ratio + 0.3 * chi ** 0.8
+    got = fit(list(zip(chi, ratio, err)))
+    assert got["power"] == pytest.approx(0.8, abs=1e-9)
+    assert (got["floor"], got["clearance_gain"], got["scale"]) == pytest.approx((0.002, 0.5, 0.3), rel=1e-6)
+    assert got["worst_factor"] == pytest.approx(1.0, abs=1e-9)
+
+
 def test_the_shafts_weight_adds_to_a_downward_load():
     """The weight m g pulls the shaft down: it adds to a downward radial load and takes away from
     an upward one; without gravity the load is the radial load alone."""
