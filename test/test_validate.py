@@ -342,6 +342,43 @@ def test_detector_band_is_clipped_below_a_low_nyquist():
     assert d["verdict"] == "outer"
 
 
+def test_detector_band_edges_follow_a_sample_rate_below_the_default_band():
+    """At 4 kHz the whole default 2-5 kHz band lies above Nyquist: its top is cut to 0.9 x 2 kHz
+    = 1.8 kHz and its bottom to half that, 0.9 kHz (left at 2 kHz it would sit above the top and
+    no band-pass exists); an outer-race impact train ringing at 1.2 kHz is still found."""
+    ff = BEARING.fault_frequencies(29.95)
+    d = env.diagnose(_impacts(4000.0, 4.0, ff["bpfo"], f_res=1200.0), 4000.0, ff)
+    assert d["verdict"] == "outer" and d["scores"]["outer"] > 10 * env.DETECTION_THRESHOLD, d["scores"]
+
+
+def test_white_noise_is_called_healthy_and_the_verdict_follows_the_threshold():
+    """White noise has no fault: twenty 1 s records all get the verdict "healthy" (their best
+    scores reach 2-3, under the threshold of 4: a lower threshold would call some of them
+    faulty), and an impact train at BPFI is "inner"; a verdict other than "healthy" names the
+    fault whose score is the highest and at least DETECTION_THRESHOLD."""
+    ff = BEARING.fault_frequencies(29.95)
+    rng = np.random.default_rng(7)
+    best = []
+    for _ in range(20):
+        d = env.diagnose(rng.standard_normal(12000), 12000.0, ff)
+        assert d["verdict"] == "healthy", d["scores"]
+        best.append(max(d["scores"].values()))
+    assert max(best) > 0.5 * env.DETECTION_THRESHOLD          # the records do test the threshold
+    d = env.diagnose(_impacts(12000.0, 2.0, ff["bpfi"]), 12000.0, ff)
+    assert d["verdict"] == max(d["scores"], key=d["scores"].get) == "inner"
+
+
+def test_band_rms_counts_a_tone_on_a_band_edge_once():
+    """Bands are [lo, hi): a 2 m/s^2 tone exactly on the 1000 Hz or 2000 Hz edge (a Welch bin at
+    8192 Hz, 4096-sample segments: 2 Hz bins) is shared between the two bands it touches, never
+    counted in both: the squares of the bands still add up to its mean square 2^2 / 2."""
+    fs = 8192.0
+    t = np.arange(int(4 * fs)) / fs
+    for f_hz in (1000.0, 2000.0):
+        bands = env.band_rms(2.0 * np.sin(2 * np.pi * f_hz * t), fs)
+        assert sum(b * b for b in bands) == pytest.approx(2.0, rel=1e-6), (f_hz, bands)
+
+
 def test_within_a_factor_is_symmetric():
     assert V._within(1.0, 1.9, 2.0) and V._within(1.9, 1.0, 2.0)
     assert not V._within(1.0, 2.1, 2.0) and not V._within(2.1, 1.0, 2.0)
