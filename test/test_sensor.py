@@ -58,6 +58,26 @@ def test_clipping_at_the_sensor_range():
     assert out.max() == pytest.approx(10.0) and out.min() == pytest.approx(-10.0)
 
 
+def test_noisy_samples_never_exceed_the_range_and_are_independent():
+    """The sensor saturates after its noise is added: with 0.05 m/s^2/sqrt(Hz) (sigma 4.3 m/s^2
+    at 15 kHz) on a 50 m/s^2 tone and a 10 m/s^2 range, no sample lies outside +-10 m/s^2, and
+    the range is reached on both sides.  Without signal the noise is white in the strong sense:
+    a sample tells nothing about the next one, so no function of one (x, y, x^2, y^2, |a|^2, its
+    direction atan2(y, x)) correlates with any of the next (|r| < 0.03, 5 standard errors for
+    30000 samples), not only the samples themselves."""
+    chain = AccelerometerChain(Sensor(range=10.0, noise_density=0.05), FS, M, 3)
+    out = feed(chain, lambda t: 50.0 * np.sin(2 * math.pi * 100.0 * t))
+    assert np.abs(out).max() <= 10.0 and out.max() == 10.0 and out.min() == -10.0
+    chain = AccelerometerChain(Sensor(noise_density=1e-3), FS, M, 5)
+    out = feed(chain, lambda t: 0.0 * t, seconds=2.0)
+    x, y = out[:, 0], out[:, 1]
+    features = [x, y, x * x, y * y, x * x + y * y, np.arctan2(y, x)]
+    for f in features:
+        for g in features:
+            r = np.corrcoef(f[:-1], g[1:])[0, 1]
+            assert abs(r) < 0.03, r
+
+
 def test_sensor_resonance_lifts_its_band():
     """A mounted resonance at 6.5 kHz raises a 6 kHz tone by the analog |H| = w^2 / |w^2 - W^2 +
     2 j zeta w W| (5.74 at zeta 0.05; the damping sets it: 4.2 at twice the damping) and leaves
