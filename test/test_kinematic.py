@@ -498,3 +498,26 @@ def test_piecewise_profile_ramps_to_the_depth_where_the_ball_would_touch_the_bot
         assert drop("piecewise", s) == pytest.approx(drop("geometric", s), rel=1e-9, abs=1e-15), s
     assert drop("piecewise", 0.5 * ramp) == pytest.approx(0.5 * depth, rel=1e-9)
     assert drop("geometric", 0.5 * ramp) < 0.5 * depth                # the circle is flatter there
+
+
+def test_rectangular_profile_drops_by_the_largest_sag_over_the_whole_width():
+    """Seed 001's H1 ("crack"): across the whole width the ball drops by the largest drop the
+    geometric profile reaches, the sag at the pit's centre rho - sqrt(rho^2 - (w / 2)^2), not by
+    the pit's depth: a 0.6 mm wide, 0.25 mm deep pit on the ER-16K outer race lets the ball down
+    by 9.4 um (its edges hold it), 27 times less than the depth."""
+    from bearing_sim_ros.catalog import get_bearing
+    from bearing_sim_ros.physics.defects import D_HALF, D_HMAX_O, D_RAMP_O, D_RHO_O, PROFILE_CODES, _profile_drop, defect_table
+    from bearing_sim_ros.scene import Defect
+
+    b = get_bearing("ER-16K")
+    r, ro = 0.5 * b.ball_diameter, 0.5 * b.outer_race_diameter
+    rho = r * ro / (ro - r)
+    width, depth = 0.6e-3, 0.25e-3
+    sag = rho - math.sqrt(rho ** 2 - (0.5 * width) ** 2)
+    assert 5e-6 < sag < depth / 20
+    row = defect_table([Defect("outer", width, depth, width, angle=0.0, profile="rectangular")], b)[0]
+    half = row[D_HALF]
+    for u in (-0.99 * half, -0.5 * half, 0.0, 0.3 * half, 0.99 * half):
+        drop = _profile_drop(PROFILE_CODES["rectangular"], u, half, ro, row[D_RHO_O], row[D_HMAX_O],
+                             row[D_RAMP_O], depth)
+        assert drop == pytest.approx(sag, rel=1e-9), u
