@@ -319,7 +319,7 @@ def _defects(top: _Section, bearing: Bearing) -> tuple:
                       "wander_turns"),
                      required=("kind", "width_mm", "depth_mm"))
         kind = d.choice("kind", DEFECT_KINDS)
-        # a local defect: at most a quarter of the ball spacing wide, so one ball meets it at a time
+        # a local defect: at most half the ball spacing (and a ball diameter) wide, so one ball meets it at a time
         spacing = math.pi * bearing.pitch_diameter / bearing.balls
         max_width = min(0.5 * spacing, bearing.ball_diameter) / 1e-3
         width = d.number("width_mm", lo=0.0, hi=max_width, lo_open=True) * 1e-3

@@ -2,8 +2,10 @@
 invariance, defect geometry, the wandering ball defect.  Every simulator here asks for
 fidelity="kinematic": "auto" may choose the other tier for a scene."""
 import math
+import os
 from dataclasses import replace
 from functools import lru_cache
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -521,3 +523,30 @@ def test_rectangular_profile_drops_by_the_largest_sag_over_the_whole_width():
         drop = _profile_drop(PROFILE_CODES["rectangular"], u, half, ro, row[D_RHO_O], row[D_HMAX_O],
                              row[D_RAMP_O], depth)
         assert drop == pytest.approx(sag, rel=1e-9), u
+
+
+def test_an_edit_to_any_physics_source_gives_the_kernels_a_new_cache_folder(tmp_path):
+    """numba's cache=True checks only the cached function's own file, and the kinematic and
+    skidding kernels inline defects.py: physics/__init__.py keys the cache folder by a hash of
+    every physics source, so that an edit of defects.py alone cannot load a stale kernel."""
+    import shutil
+    import subprocess
+    import sys
+
+    package = tmp_path / "src" / "bearing_sim_ros"
+    shutil.copytree(Path(__file__).resolve().parent.parent / "bearing_sim_ros", package,
+                    ignore=shutil.ignore_patterns("__pycache__", "*.nbi", "*.nbc"))
+    env = {**os.environ, "PYTHONPATH": str(package.parent), "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+
+    def folder():
+        code = "import bearing_sim_ros.physics, numba.core.config as c; print(c.CACHE_DIR)"
+        # cwd: `python -c` puts it first on sys.path, and the repository's own package is there
+        return subprocess.run([sys.executable, "-c", code], env=env, cwd=tmp_path, capture_output=True,
+                              text=True, check=True).stdout.strip()
+
+    before = folder()
+    with open(package / "physics" / "defects.py", "a") as f:
+        f.write("\n# an edit\n")
+    after = folder()
+    assert Path(before).parent == Path(after).parent == tmp_path / "cache"
+    assert before != after
