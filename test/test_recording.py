@@ -205,6 +205,86 @@ def test_zero_padding_changes_no_value_and_matches_an_independent_serialiser():
         assert bytes(ref) == z[:len(ref)] and not any(z[len(ref):]) and len(z) - len(ref) < 4
 
 
+def _cdr_fields_only(raw: bytes, msg_type: str, ts):
+    """The message rosbags decodes from rclpy's ``raw`` (whose buffer rmw sizes from an estimate:
+    up to 12 unused bytes after the last field, which rosbags refuses): the longest prefix it
+    accepts.  Independent of ``cdr.py``."""
+    for k in range(len(raw), len(raw) - 16, -1):
+        try:
+            return ts.deserialize_cdr(raw[:k], msg_type)
+        except Exception:  # noqa: BLE001 - a longer prefix than the fields: try a shorter one
+            continue
+    raise AssertionError(f"rosbags reads no prefix of this {msg_type}")
+
+
+def _with_garbage_where_no_value_is(clean: bytes, msg_type: str, little: bool, ts) -> bytes:
+    """``clean`` (rosbags' zero-padded CDR) plus 3 + 8 bytes of slack, with 0xAA written into
+    every zero byte that carries no value: a byte is taken for padding when garbage there
+    leaves what rosbags decodes unchanged (it re-serialises to ``clean``).  This finds the
+    alignment padding from the decoder, not from the walker under test."""
+    def same(data):
+        try:
+            return bytes(ts.serialize_cdr(ts.deserialize_cdr(data[:len(clean)], msg_type), msg_type,
+                                          little_endian=little)) == clean
+        except Exception:  # noqa: BLE001 - garbage in a length or a value: not padding
+            return False
+
+    dirty = bytearray(clean)
+    for i in range(4, len(clean)):          # after the 4-byte encapsulation header
+        if clean[i] == 0:
+            dirty[i] = 0xAA
+            if not same(bytes(dirty)):
+                dirty[i] = 0
+    return bytes(dirty) + b"\xaa" * 11      # slack after the last field (rmw's estimate)
+
+
+def test_zero_padding_zeroes_garbage_in_every_padding_byte_of_either_endianness(sim_msgs):
+    """rclpy leaves whatever was in its buffer in the padding and after the last field; here
+    that garbage is put in on purpose (0xAA in every byte that carries no value, as rosbags
+    decodes it) into waveform tables, joint states, wrenches (float64 after a string: 8-byte
+    alignment), diagnostics (nested sequences) and an Imu (fixed-size float64[9] arrays), little-
+    and big-endian.  Zeroing must give rosbags' own zero-padded bytes, with at most 3 zero bytes
+    after the last field; a prefix cut inside the fields (a layout the walk cannot finish) and an
+    XCDR2 payload (other alignment rules) come back untouched: the recorder never changes a
+    value byte."""
+    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+    from geometry_msgs.msg import WrenchStamped
+    from rclpy.serialization import serialize_message
+    from rosbags.typesys import Stores, get_typestore
+    from sensor_msgs.msg import Imu, JointState
+
+    from bearing_sim_ros.recording.cdr import zero_padding
+
+    scene, sim, msgs = sim_msgs
+    ts = get_typestore(Stores.ROS2_JAZZY)
+    wrench = WrenchStamped()
+    wrench.header.frame_id = "bearing"
+    wrench.wrench.force.y, wrench.wrench.torque.z = -50.0, 0.25
+    joints = JointState(name=["ab", "shaft"], position=[1.5], velocity=[], effort=[2.0, 3.0])
+    joints.header.frame_id = "abcdefg"
+    diag = DiagnosticArray(status=[DiagnosticStatus(level=b"\x01", name="bearing_sim: simulator",
+                                                    values=[KeyValue(key="tier", value="kinematic"),
+                                                            KeyValue(key="lag_s", value="0.0")])])
+    imu = Imu(orientation_covariance=[0.5] * 9, angular_velocity_covariance=[-1.0] * 9)
+    imu.header.frame_id = "x"
+    imu.linear_acceleration.z = 9.81
+    cases = [(msgs.accel(sim.advance(30)), TYPES["accel"]), (joints, TYPES["state"]),
+             (wrench, TYPES["load"]), (diag, TYPES["/diagnostics"]), (imu, "sensor_msgs/msg/Imu")]
+    for msg, msg_type in cases:
+        decoded = _cdr_fields_only(serialize_message(msg), msg_type, ts)
+        for little in (True, False):
+            clean = bytes(ts.serialize_cdr(decoded, msg_type, little_endian=little))
+            dirty = _with_garbage_where_no_value_is(clean, msg_type, little, ts)
+            assert dirty.count(0xAA) > 11, msg_type       # padding inside the fields too
+            z = zero_padding(dirty, msg_type)
+            assert z[:len(clean)] == clean, (msg_type, little)
+            assert len(z) - len(clean) < 4 and not any(z[len(clean):]), (msg_type, little)
+            for cut in range(4, len(clean)):
+                assert zero_padding(dirty[:cut], msg_type) == dirty[:cut], (msg_type, little, cut)
+            xcdr2 = dirty[:1] + (b"\x07" if little else b"\x06") + dirty[2:]
+            assert zero_padding(xcdr2, msg_type) == xcdr2, (msg_type, little)
+
+
 def test_waveform_table_padding_is_zeroed_in_the_file(tmp_path, sim_msgs):
     """PointCloud2 has padding after each PointField's datatype and after is_bigendian."""
     scene, sim, msgs = sim_msgs
