@@ -106,6 +106,11 @@ def test_every_message_reads_back_with_rosbags_and_mcap(tmp_path, sim_msgs):
         assert r.metadata["scene"] == "er16k_outer_race"
         assert r.metadata["scene_yaml"] == scene.source_text
         assert r.metadata["seed"] == "3" and r.metadata["tier"] == "kinematic"
+        # why that tier, with its figures (report prints them), and which scene file it was
+        assert r.metadata["tier_reason"] == sim.selection.reason != "kinematic"
+        assert float(r.metadata["tier_estimated_error"]) == sim.selection.estimated_error
+        assert float(r.metadata["tier_tolerance"]) == sim.selection.tolerance
+        assert r.metadata["scene_path"] == Path(scene.source_path).name == "er16k_outer_race.yaml"
         assert r.attachments["scene.yaml"].decode() == scene.source_text
         n = 0
         for topic, msg_type, t, data in r.messages(["/accel"]):
@@ -147,6 +152,17 @@ def test_unwritable_path_is_a_user_error(tmp_path):
         Recorder(tmp_path / "missing_dir" / "x.mcap", {"a": "b"})
 
 
+@pytest.mark.parametrize("rotation", [{"rotate_bytes": -1}, {"rotate_seconds": -0.5},
+                                      {"rotate_seconds": float("nan")}, {"rotate_seconds": float("inf")}])
+def test_a_rotation_that_is_not_a_size_or_span_is_a_user_error(tmp_path, rotation):
+    """A negative size would start a new file at every message, and a NaN or infinite span
+    ended in a ValueError or OverflowError: each is refused in one line before any file is
+    made."""
+    with pytest.raises(UserError, match="expected numbers >= 0"):
+        Recorder(tmp_path / "r.mcap", {"a": "b"}, **rotation)
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_full_disk_is_recorded_in_status_and_never_raises(sim_msgs):
     """/dev/full accepts open() and fails every write with ENOSPC: the publisher keeps going."""
     scene, sim, msgs = sim_msgs
@@ -164,6 +180,9 @@ def test_full_disk_is_recorded_in_status_and_never_raises(sim_msgs):
     assert not st["ok"]
     assert "No space left" in st["error"] and "\n" not in st["error"]
     assert st["dropped"] > 0
+    # every write is accounted for: recorded (before the failing chunk) or counted as dropped,
+    # those still queued when the disk failed included
+    assert st["messages"] + st["dropped"] == 200
     rec.write("accel", m, 0)             # after close: counted, not raised
     rec.close()                          # idempotent
 
@@ -179,6 +198,8 @@ def test_rotation_by_duration_gives_complete_files(tmp_path, sim_msgs):
     for k, f in enumerate(files):
         with open_recording(f) as r:
             assert r.metadata["file_index"] == str(k) and r.metadata["scene"] == "er16k_outer_race"
+            # complete on its own: the scene file is attached to every file, not only the first
+            assert r.attachments == {"scene.yaml": scene.source_text.encode()}
             total += sum(1 for _ in r.messages(["/accel"]))
             assert (r.end_ns - r.start_ns) < 0.25e9
     assert total == len(sent)
