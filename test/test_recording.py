@@ -355,7 +355,8 @@ def test_tables_and_state_read_back_by_their_own_layout(tmp_path, sim_msgs):
     accel_x, accel_y and ``contact_forces`` inner_00..inner_08, outer_00..outer_08 (README), each
     a float32 at 4 x its column, stamped at the ROS time of the batch's first sample (start +
     index / 15 kHz); ``state`` lists shaft, cage, balls, the cage turning at (1 - d/D_m) / 2 of
-    the shaft (pure rolling, kinematic tier) in angle and speed."""
+    the shaft (pure rolling, kinematic tier) in angle and speed, every joint's angle advancing by
+    its speed."""
     from rosbags.highlevel import AnyReader
 
     scene, sim, msgs = sim_msgs
@@ -390,6 +391,12 @@ def test_tables_and_state_read_back_by_their_own_layout(tmp_path, sim_msgs):
         assert list(s.name) == ["shaft", "cage"] + [f"ball_{j:02d}" for j in range(nb)]
         assert s.position[1] / s.position[0] == pytest.approx(ratio, rel=1e-6)
         assert s.velocity[1] / s.velocity[0] == pytest.approx(ratio, rel=1e-9)
+    # every joint, the balls too, is an angle advancing by its speed x the 10 ms between states
+    # (speeds are constant here: constant shaft speed, kinematic tier)
+    position = np.array([s.position for s in got["/state"]])
+    velocity = np.array([s.velocity for s in got["/state"]])
+    assert position.shape == velocity.shape == (3, 2 + nb)
+    np.testing.assert_allclose(np.diff(position, axis=0), 0.01 * velocity[1:], rtol=1e-6)
 
 
 def test_messages_are_numbered_per_channel_and_published_at_their_log_time(tmp_path):
@@ -487,3 +494,139 @@ def test_a_file_of_another_profile_is_not_a_ros2_recording(tmp_path):
         w.finish()
     with pytest.raises(UserError, match="is not 'ros2': not a ROS 2 recording"):
         open_recording(path)
+
+
+def test_from_pointcloud2_refuses_what_is_not_a_waveform_table(sim_msgs):
+    """``monitor`` and ``report`` read tables with ``from_pointcloud2``: a big-endian table, a
+    point step that is not 4 bytes per channel, or more than one row would be read as the wrong
+    numbers, so each is refused with a one-line reason instead."""
+    from bearing_sim_ros.waveform import to_pointcloud2
+
+    scene, sim, msgs = sim_msgs
+    b = sim.advance(20)
+    stamp, names, arr = from_pointcloud2(msgs.accel(b))
+    np.testing.assert_array_equal(arr, b.accel.astype(np.float32))
+    for attr, value in (("is_bigendian", True), ("point_step", 12), ("height", 2)):
+        m = to_pointcloud2(b.accel, ["accel_x", "accel_y"], stamp, "f")
+        setattr(m, attr, value)
+        with pytest.raises(ValueError, match="not a waveform table") as exc:
+            from_pointcloud2(m)
+        assert "\n" not in str(exc.value)
+
+
+def test_a_frame_id_given_to_batch_messages_is_the_frame_of_every_message(sim_msgs):
+    """The node's ``frame_id`` parameter reaches ``BatchMessages``: tables and state carry it;
+    without it (None or ''), the scene's sensor frame."""
+    scene, sim, _ = sim_msgs
+    b = sim.advance(15)
+    for given, frame in (("rig/left", "rig/left"), (None, scene.sensor.frame_id), ("", scene.sensor.frame_id)):
+        msgs = BatchMessages(sim, start_ns=0, frame_id=given)
+        got = [msgs.accel(b).header.frame_id, msgs.contact_forces(b).header.frame_id,
+               msgs.state(0).header.frame_id]
+        assert got == [frame] * 3, given
+    assert scene.sensor.frame_id != "rig/left"
+
+
+def test_each_dependency_is_defined_once():
+    """rosbag2's format lists every type the message needs once: WrenchStamped uses Vector3 twice
+    (force and torque) and DiagnosticArray a Header and KeyValue inside DiagnosticStatus; each
+    ``MSG:`` section names a distinct type, and together exactly the types rosbags finds needed."""
+    from rosbags.typesys import get_types_from_msg
+
+    for msg_type in sorted(set(TYPES.values())):
+        text = message_definition(msg_type)
+        sections = [line[len("MSG: "):] for line in text.splitlines() if line.startswith("MSG: ")]
+        assert len(sections) == len(set(sections)), (msg_type, sections)
+        assert set(sections) == set(get_types_from_msg(text, msg_type)) - {msg_type}, msg_type
+    assert message_definition("geometry_msgs/msg/WrenchStamped").count("MSG: geometry_msgs/msg/Vector3") == 1
+
+
+@pytest.mark.parametrize("avoid", [False, True])
+def test_avoid_ros_namespace_conventions_is_recorded_as_offered(tmp_path, avoid):
+    """A publisher with ``avoid_ros_namespace_conventions`` true is outside the ROS namespace
+    (no ``rt/`` prefix) and no ROS subscriber matches it: a recording that said true for the
+    node's topics would make ``play`` and ``ros2 bag play`` publish where nobody listens.  The
+    file says what was offered (rosbags reads it) and ``play``'s reader gives it back."""
+    from rclpy.qos import QoSProfile
+    from rosbags.highlevel import AnyReader
+    from std_msgs.msg import Float64
+
+    path = tmp_path / "avoid.mcap"
+    with Recorder(path, {"a": "b"}) as rec:
+        rec.add_topic("/x", "std_msgs/msg/Float64", QoSProfile(depth=3, avoid_ros_namespace_conventions=avoid))
+        rec.write("/x", Float64(data=1.0), 1)
+    with AnyReader([path]) as reader:
+        (conn,) = reader.connections
+        assert conn.ext.offered_qos_profiles[0].avoid_ros_namespace_conventions is avoid
+    with open_recording(path) as r:
+        (info,) = r.channels.values()
+    assert qos_from_yaml(info.qos_yaml).avoid_ros_namespace_conventions is avoid
+
+
+# offered_qos_profiles as rosbag2 wrote them before Jazzy's metadata version 9: enum values as
+# integers (history 3 = unknown, as discovery reports it), depth 0, and the infinite durations as
+# Foxy (2147483647 s + 4294967295 ns) or Humble (rmw's 9223372036 s + 854775807 ns) wrote them
+_ROSBAG2_INTEGER_QOS = """- history: 3
+  depth: 0
+  reliability: {reliability}
+  durability: {durability}
+  deadline:
+    sec: {sec}
+    nsec: {nsec}
+  lifespan:
+    sec: {sec}
+    nsec: {nsec}
+  liveliness: 1
+  liveliness_lease_duration:
+    sec: {sec}
+    nsec: {nsec}
+  avoid_ros_namespace_conventions: false"""
+
+
+@pytest.mark.parametrize("reliability, durability, sec, nsec",
+                         [(1, 1, 2147483647, 4294967295), (2, 2, 9223372036, 854775807)],
+                         ids=["latched_foxy", "sensor_humble"])
+def test_qos_of_older_rosbag2_recordings_is_read_as_it_was_offered(reliability, durability, sec, nsec):
+    """``play`` publishes with the recorded profile: from an older rosbag2 file's integers a
+    latched topic (reliable, transient local) stays latched and a sensor topic (best effort,
+    volatile) stays best effort; 'unknown' history becomes keep-last (a publisher cannot be
+    created with 'unknown'); the infinite durations become 'none' (0), not centuries."""
+    from rclpy.duration import Duration
+    from rclpy.qos import DurabilityPolicy, HistoryPolicy, LivelinessPolicy, ReliabilityPolicy
+
+    q = qos_from_yaml(_ROSBAG2_INTEGER_QOS.format(reliability=reliability, durability=durability,
+                                                  sec=sec, nsec=nsec))
+    assert q.reliability == {1: ReliabilityPolicy.RELIABLE, 2: ReliabilityPolicy.BEST_EFFORT}[reliability]
+    assert q.durability == {1: DurabilityPolicy.TRANSIENT_LOCAL, 2: DurabilityPolicy.VOLATILE}[durability]
+    assert q.history == HistoryPolicy.KEEP_LAST and q.depth == 10
+    assert q.liveliness == LivelinessPolicy.AUTOMATIC
+    assert q.deadline == q.lifespan == q.liveliness_lease_duration == Duration()
+    assert q.avoid_ros_namespace_conventions is False
+
+
+def test_messages_come_back_in_log_time_order_with_their_counts(tmp_path):
+    """``Recording.messages`` yields in log-time order even when the messages were written out of
+    it (the recorder takes log times as given, and a file from another writer need not be sorted;
+    ``play`` paces by this order), and each channel's count (report's and run's per-topic figures)
+    is the number of messages rosbags finds."""
+    from rosbags.highlevel import AnyReader
+    from std_msgs.msg import Float64
+
+    path = tmp_path / "order.mcap"
+    times = {"/a": [30, 10, 50, 20], "/b": [40, 5]}
+    with Recorder(path, {"a": "b"}) as rec:
+        for topic in times:
+            rec.add_topic(topic, "std_msgs/msg/Float64", 10)
+        for k in range(4):
+            for topic, ts in times.items():
+                if k < len(ts):
+                    rec.write(topic, Float64(data=float(ts[k])), ts[k])
+    with open_recording(path) as r:
+        got = [(t, topic) for topic, _type, t, _data in r.messages()]
+        counts = {c.topic: c.count for c in r.channels.values()}
+    assert got == sorted((t, topic) for topic, ts in times.items() for t in ts)
+    with AnyReader([path]) as reader:
+        found = {}
+        for conn, _t, _raw in reader.messages():
+            found[conn.topic] = found.get(conn.topic, 0) + 1
+    assert counts == found == {"/a": 4, "/b": 2}
