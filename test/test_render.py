@@ -310,6 +310,53 @@ def test_batch_duration_and_state_rate_follow_the_nodes_rule(tmp_path, kwargs, m
     assert not out.exists()
 
 
+@pytest.mark.parametrize("batch_duration, state_rate, every", [
+    (0.001, 0.0, None),       # the smallest batch (15 samples); state_rate 0: no state at all
+    (0.001, 1000.0, 1),       # the largest state_rate: a state with each 1 ms batch
+    (0.02, 50.0, 1),          # one state per batch, the most the rule allows
+    (0.01, 25.0, 4),          # one state every 4 batches
+])
+def test_batching_at_the_edges_of_the_nodes_rule_renders(tmp_path, batch_duration, state_rate, every):
+    """The ends of the allowed ranges are allowed: state_rate 0 (README: no state) and 1000 Hz,
+    the smallest batch_duration, and state_rate = 1 / batch_duration.  0.2 s of signal in tables of
+    batch_duration, contiguous, and a state every ``every`` batches, stamped at the batch's end."""
+    from rosbags.highlevel import AnyReader
+
+    out = tmp_path / "edge.mcap"
+    render("er16k_healthy", 0.2, out, fidelity="kinematic", progress=False,
+           batch_duration=batch_duration, state_rate=state_rate)
+    tables, state_stamps = [], []
+    with AnyReader([out]) as reader:
+        for conn, t, raw in reader.messages():
+            msg = reader.deserialize(raw, conn.msgtype)
+            if conn.topic == "/accel":
+                tables.append(from_pointcloud2(msg))
+            elif conn.topic == "/state":
+                state_stamps.append(msg.header.stamp.sec * NS + msg.header.stamp.nanosec)
+    widths = [arr.shape[0] for _, _, arr in tables]
+    assert widths == [round(batch_duration * FS)] * round(0.2 / batch_duration)
+    assert np.all(np.abs(np.diff([t[0] for t in tables]) - np.array(widths[:-1]) * NS / FS) <= 1)
+    ends = [stamp + round(width * NS / FS) for (stamp, _, _), width in zip(tables, widths)]
+    assert state_stamps == ([] if every is None else ends[every - 1::every])
+
+
+def test_offered_qos_is_the_readmes(rendered):
+    """README "QoS": accel and contact_forces reliable, volatile (a late subscriber gets no old
+    tables), keep-last about one second of batches (100 at 10 ms); state, diagnostics and the
+    operating point reliable, volatile, keep-last 10.  As a player of the file (rosbags) reads
+    them."""
+    from rosbags.highlevel import AnyReader
+
+    path, _ = rendered
+    with AnyReader([path]) as reader:
+        offered = {c.topic: c.ext.offered_qos_profiles[0] for c in reader.connections}
+    for topic, qos in offered.items():
+        depth = 100 if topic in ("/accel", "/contact_forces") else 10
+        assert (qos.history.name, qos.depth, qos.reliability.name, qos.durability.name) == \
+            ("KEEP_LAST", depth, "RELIABLE", "VOLATILE"), topic
+    assert len(offered) == 6
+
+
 def test_batch_duration_and_state_rate_ranges_are_the_nodes():
     from bearing_sim_ros.messages import BATCH_DURATION, BATCH_DURATION_RANGE, STATE_RATE, STATE_RATE_RANGE
     from bearing_sim_ros.nodes.bearing_sim_node import _descriptors
