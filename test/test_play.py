@@ -6,6 +6,7 @@ a teardown that hangs ends with the stacks and exit status 1."""
 from __future__ import annotations
 
 import json
+import math
 import signal
 import subprocess
 import sys
@@ -275,3 +276,94 @@ def test_a_hung_teardown_ends_with_the_stacks_and_status_1(recording, ros_env, t
     assert r.returncode == 1, r.stderr
     assert "published" in r.stderr and "Timeout (0:00:01)!" in r.stderr, r.stderr
     assert "<lambda>" in r.stderr, r.stderr        # the stack shows the hanging call
+
+
+def test_loop_length_is_measured_on_the_tables_with_or_without_a_recorded_rate():
+    """``--loop`` moves everything on by the recording's length: from the first table's stamp to
+    the end of the last table (its stamp + its width / sample rate).  A file without the
+    ``bearing_sim`` metadata (``ros2 bag record`` of the node's topics) has no sample rate: it is
+    found from the tables themselves, and gives the same length; only the first waveform topic
+    counts."""
+    from types import SimpleNamespace
+
+    from bearing_sim_ros.recording.play import _Span
+
+    def table(stamp_ns, width):
+        sec, nanosec = divmod(stamp_ns, NS)
+        return SimpleNamespace(header=SimpleNamespace(stamp=SimpleNamespace(sec=sec, nanosec=nanosec)),
+                               width=width)
+
+    start = 1_700_000_000 * NS + 123
+    widths = [150, 150, 150, 75]               # a short last table, as at the end of a recording
+    stamps = [start + sum(widths[:k]) * NS // 15000 for k in range(len(widths))]
+    for rate in (15000.0, None):
+        span = _Span(rate)
+        for stamp, width in zip(stamps, widths):
+            span.see("/accel", table(stamp, width))
+            span.see("/contact_forces", table(stamp + 7, 3 * width))     # not the span's topic
+        assert span.length_ns(0, 1) == 525 * NS // 15000, rate          # 35 ms
+    assert _Span(None).length_ns(5, 9) == 5    # no table at all: the log times, end included
+
+
+def test_shifting_a_stamp_moves_headers_and_clocks_with_the_carry():
+    """On a ``--loop`` pass every header stamp and a recorded ``/clock`` move on by the offset,
+    the nanoseconds carrying into the seconds (a recorded clock left behind would go back in
+    time at the seam)."""
+    from builtin_interfaces.msg import Time
+    from rosgraph_msgs.msg import Clock
+    from sensor_msgs.msg import JointState
+
+    from bearing_sim_ros.recording.play import _shift_stamp
+
+    clock = Clock(clock=Time(sec=4, nanosec=900_000_000))
+    state = JointState()
+    state.header.stamp = Time(sec=4, nanosec=900_000_000)
+    for msg in (clock, state):
+        _shift_stamp(msg, 1_250_000_000)
+    assert (clock.clock.sec, clock.clock.nanosec) == (6, 150_000_000)
+    assert (state.header.stamp.sec, state.header.stamp.nanosec) == (6, 150_000_000)
+
+
+@pytest.mark.parametrize("kwargs, named", [({"rate": 0.0}, "--rate"), ({"rate": math.nan}, "--rate"),
+                                           ({"wait_for_subscribers": -1.0}, "--wait"),
+                                           ({"wait_for_subscribers": math.nan}, "--wait")])
+def test_play_refuses_a_rate_or_wait_it_cannot_use(kwargs, named, recording):
+    """play() itself (not only the command line's parser) refuses a rate that is not > 0 (0 would
+    divide by zero in the pacing) and a negative or NaN wait (a NaN wait never ends), in one
+    line naming the option.  ``stop`` is set: were a value taken, play would return at once."""
+    import threading
+
+    from bearing_sim_ros.errors import UserError
+    from bearing_sim_ros.recording.play import play
+
+    path, _, _ = recording
+    stop = threading.Event()
+    stop.set()
+    with pytest.raises(UserError, match=f"^{named} = ") as exc:
+        play(path, stop=stop, log=lambda text: None, **kwargs)
+    assert "\n" not in str(exc.value)
+
+
+def test_with_clock_a_recorded_clock_is_replaced_not_published_too(ros_env, tmp_path):
+    """A recording with its own ``/clock`` (``ros2 bag record -a`` next to a node with
+    ``publish_clock``): ``--clock`` publishes the generated clock instead of the recorded one, so
+    that ``use_sim_time`` nodes see one clock, not two interleaved; without ``--clock`` the
+    recorded one is played like any topic.  In this process, no subscriber (``--wait 0``): the
+    count play returns is what it published from the file."""
+    from builtin_interfaces.msg import Time
+    from rosgraph_msgs.msg import Clock
+    from std_msgs.msg import Float64
+
+    from bearing_sim_ros.recording.play import play
+    from bearing_sim_ros.recording.recorder import Recorder
+
+    path = tmp_path / "with_clock.mcap"
+    with Recorder(path, {"scene": "clock test"}, start_time_ns=0) as rec:
+        rec.add_topic("/clock", "rosgraph_msgs/msg/Clock", 10)
+        rec.add_topic("/x", "std_msgs/msg/Float64", 10)
+        for k in range(3):
+            rec.write("/clock", Clock(clock=Time(sec=k)), k * 1_000_000)
+            rec.write("/x", Float64(data=float(k)), k * 1_000_000)
+    quiet = dict(rate=100.0, wait_for_subscribers=0.0, log=lambda text: None)
+    assert play(path, clock=True, **quiet) == 3
+    assert play(path, clock=False, **quiet) == 6
