@@ -15,8 +15,8 @@ NS = 1_000_000_000
 
 
 def sample_time_ns(start_ns: int, index: int, sample_rate: float) -> int:
-    """Time (ns) of sample ``index`` counted from ``start_ns``; exact for rates that divide 1e9
-    samples, rounded to the nearest ns otherwise (never accumulating)."""
+    """Time (ns) of sample ``index`` counted from ``start_ns``: index / sample_rate (the rate
+    taken to the mHz) rounded down to the ns, from the index each time (never accumulating)."""
     return int(start_ns) + (int(index) * NS * 1000 // int(round(sample_rate * 1000)))
 
 
