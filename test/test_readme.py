@@ -227,3 +227,13 @@ def test_the_launch_file_offers_every_node_parameter_with_its_default():
     for name in re.findall(r"bearing_sim\.launch\.py((?: \w+:=\S+)+)", README):
         for arg in re.findall(r"(\w+):=", name):
             assert arg in arguments or arg == "namespace", f"README: launch argument {arg}"
+
+
+def test_test_counts_quoted_in_the_readme_are_the_suites():
+    """"`python -m pytest -q test/test_X.py` (N tests, ...)": N is what pytest collects there."""
+    quoted = re.findall(r"`python -m pytest -q (test/\w+\.py)` \((\d+) tests", README)
+    assert quoted
+    for path, count in quoted:
+        out = subprocess.run([sys.executable, "-m", "pytest", "-q", "--collect-only", "-p", "no:cacheprovider",
+                              path], cwd=REPO, capture_output=True, text=True).stdout
+        assert f"{count} tests collected" in out, f"README: {path} has {count} tests; pytest: {out.splitlines()[-1:]}"
