@@ -126,7 +126,7 @@ def summarise(scene, tail: dict, node_figures: dict, path) -> str:
             lines.append(f"  {label:<6} {ln.expected_hz:>10.2f} {ln.found_hz:>9.2f} {ln.prominence:>8.1f}{mark}")
         lines += _verdict_lines(scene, res)
     if tail["skid_percent"]:
-        lines.append(f"skid ratios, mean of the recording's /diagnostics ({f['tier']} tier): "
+        lines.append(f"skid ratios, mean of the recording's /diagnostics ({f['tier_values']['tier']} tier): "
                      + ", ".join(f"{k.replace('_ratio', '')} {v:.3g} %" for k, v in tail["skid_percent"].items()))
     n_msgs = sum(tail["counts"].values())
     lines.append(f"recording: {path} ({f['sizes']}, {n_msgs} messages on "
@@ -173,7 +173,7 @@ def run_command(args) -> int:
             figures = {"signal_s": node.sim.time, "wall_s": node.stats.last - node.stats.started,
                        "rtf": node.stats.real_time_factor,
                        "overruns": node.stats.overruns, "worst_lag": node.stats.worst_lag,
-                       "tier": node.sim.tier, "tier_values": tier_values(node.sim),
+                       "tier_values": tier_values(node.sim),
                        "dropped": rs["dropped"], "ok": rs["ok"], "error": rs["error"],
                        "path": rs["path"], "sizes": sizes_text(rs)}
         with teardown_watchdog():

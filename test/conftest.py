@@ -61,14 +61,20 @@ def cwru_dir():
     return folder
 
 
-@pytest.fixture
-def skidding_outer_race(tmp_path):
-    """Path of er16k_outer_race moved to 10000 rpm / 10 N, where its cage skids about 7 %: the
-    outer-race line sits 7 % below the catalog's pure-rolling BPFO (552 against 595 Hz)."""
+@pytest.fixture(scope="session")
+def skidding_outer_race(tmp_path_factory):
+    """(scene path, recording path): er16k_outer_race moved to 10000 rpm / 10 N, where its cage
+    skids about 7 % (the outer-race line sits 7 % below the catalog's pure-rolling BPFO, 552
+    against 595 Hz), rendered once for 2 s on the skidding tier (test_render, test_report)."""
+    from bearing_sim_ros.recording.render import render
+
     text = (REPO / "config" / "scenes" / "er16k_outer_race.yaml").read_text()
     fast = text.replace("{shaft_speed_rpm: 1600, radial_load: [0.0, -50.0]}",
                         "{shaft_speed_rpm: 10000, radial_load: [0.0, -10.0]}")
     assert fast != text, "er16k_outer_race.yaml's operating point moved: update this fixture"
-    path = tmp_path / "skidding_outer_race.yaml"
+    folder = tmp_path_factory.mktemp("skidding_outer_race")
+    path = folder / "skidding_outer_race.yaml"
     path.write_text(fast)
-    return path
+    recording = folder / "fast.mcap"
+    render(str(path), 2.0, recording, fidelity="skidding", progress=False)
+    return path, recording

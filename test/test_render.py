@@ -385,7 +385,7 @@ def test_tier_keys_name_what_tier_values_writes():
     assert tuple(tier_values(Simulator("er16k_healthy", fidelity="kinematic"))) == TIER_KEYS
 
 
-def test_diagnostics_give_the_fault_frequencies_where_the_signal_has_them(tmp_path, skidding_outer_race):
+def test_diagnostics_give_the_fault_frequencies_where_the_signal_has_them(skidding_outer_race):
     """At 10000 rpm / 10 N the cage skids 7 %: the outer-race line of the recorded signal is
     7 % below the catalog's pure-rolling BPFO, and ``bpfo_hz`` in the recorded ``/diagnostics``
     is where the line is (envelope spectrum of accel_y, within 0.2 Hz of 552 Hz); cage_hz and the
@@ -393,9 +393,8 @@ def test_diagnostics_give_the_fault_frequencies_where_the_signal_has_them(tmp_pa
     their units (they were means of signed values named ``*_ratio``)."""
     from bearing_sim_ros.analysis.envelope import envelope_spectrum, line_at
 
-    scene = load_scene(skidding_outer_race)
-    out = tmp_path / "fast.mcap"
-    render(scene, 2.0, out, fidelity="skidding", progress=False)
+    scene_path, out = skidding_outer_race
+    scene = load_scene(scene_path)
     accel, diag = [], []
     with open_recording(out) as rec:
         from rclpy.serialization import deserialize_message

@@ -155,8 +155,7 @@ def test_report_looks_for_the_lines_where_the_recorded_cage_puts_them(tmp_path, 
     rolling's BPFO; looking there, the report called this outer-race recording a ball fault.  It
     takes the fault frequencies from the recording's /diagnostics: verdict outer, the BPFO line
     found within 0.5 Hz of the recorded bpfo_hz."""
-    rec = tmp_path / "fast.mcap"
-    render(str(skidding_outer_race), 2.0, rec, fidelity="skidding", progress=False)
+    _scene, rec = skidding_outer_race
     s = build_report(rec, tmp_path / "out")
     rolling, used = s["fault_frequencies_pure_rolling_hz"], s["fault_frequencies_hz"]
     assert used["bpfo"] < 0.95 * rolling["bpfo"] and "/diagnostics" in s["fault_frequencies_from"]
