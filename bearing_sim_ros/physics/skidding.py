@@ -1615,6 +1615,7 @@ class SkiddingModel:
         self.counters = np.zeros(5, dtype=np.int64)
         self.counters[4] = START_STEPS
         self.shaft_angle = 0.0
+        self._held = None        # (t_ref s, shaft angle rad, speed, load x, y): inputs held since t_ref
         self._speed = float(shaft_speed)
         nvar = self.y.size
         # persistent state of the split method (derivative, structure input, contact values)
@@ -1772,6 +1773,7 @@ class SkiddingModel:
         self.y[:10] = np.asarray(other.x, dtype=float)[:10]
         ang = np.asarray(other.angles, dtype=float)
         self.shaft_angle = float(ang[0])
+        self._held = None
         self._speed = float(snap.shaft_speed)
         self._set_rolling(self._speed, float(ang[1]), float(ang[2]))
         self.counters[3] = 0
@@ -1797,13 +1799,25 @@ class SkiddingModel:
         nb = self.nb
         nd = (n + m - 1) // m
         ramp = np.zeros(NRAMP)
-        ramp[R_T0] = self.counters[1] * hs
-        ramp[R_T] = n * hs
         ramp[R_S0], ramp[R_S1] = float(speed0), float(speed1)
         ramp[R_L0X], ramp[R_L0Y] = float(load0[0]), float(load0[1])
         ramp[R_L1X], ramp[R_L1Y] = float(load1[0]), float(load1[1])
-        # shaft angle at the chunk start (the state may sit a little earlier on the step grid)
-        ramp[R_A0] = self.shaft_angle
+        inputs = (float(speed1), float(load1[0]), float(load1[1]))
+        held = (float(speed0), float(load0[0]), float(load0[1])) == inputs
+        if held:
+            # inputs held since (t_ref, a_ref): the shaft angle a_ref + w (t - t_ref) is then the
+            # same number however the run is chunked (taken from each chunk's start it differed
+            # in the last bits, and with it an inner-race defect's place)
+            if self._held is None or self._held[2:] != inputs:
+                self._held = (self.counters[1] * hs, self.shaft_angle) + inputs
+            ramp[R_T0], ramp[R_A0] = self._held[:2]
+            ramp[R_T] = math.inf
+        else:
+            self._held = None
+            ramp[R_T0] = self.counters[1] * hs
+            ramp[R_T] = n * hs
+            # shaft angle at the chunk start (the state may sit a little earlier on the step grid)
+            ramp[R_A0] = self.shaft_angle
         acc = np.empty((n, 2))
         qi = np.empty((nd, nb))
         qo = np.empty((nd, nb))
@@ -1846,7 +1860,10 @@ class SkiddingModel:
             if self.solver == "rk4":
                 raise RK4Diverged(self.hstep, t_bad)
             raise SolverDiverged(f"skidding solver {self.solver!r} diverged at t = {t_bad:.4g} s")
-        self.shaft_angle = ramp[R_A0] + 0.5 * (speed0 + speed1) * n * hs
+        if held:
+            self.shaft_angle = ramp[R_A0] + ramp[R_S1] * (self.counters[1] * hs - ramp[R_T0])
+        else:
+            self.shaft_angle = ramp[R_A0] + 0.5 * (speed0 + speed1) * n * hs
         self._speed = float(speed1)
         if q > 1:
             acc = np.ascontiguousarray(acc[::q])
