@@ -174,9 +174,10 @@ def build_parser() -> argparse.ArgumentParser:
 def _scenes(_args) -> int:
     from .scene import load_scene, shipped_scenes
 
-    for name in shipped_scenes():
-        scene = load_scene(name)
-        print(f"{name:<20} {scene.description}")
+    names = shipped_scenes()
+    width = max(map(len, names), default=0)
+    for name in names:
+        print(f"{name:<{width}}  {load_scene(name).description}")
     return EXIT_OK
 
 

@@ -64,6 +64,9 @@ class Defect:
     ball changes and it meets the races only while it lies within the contact ellipse; a new
     independent latitude every ``wander_turns`` spin revolutions (linear in between, seeded).
     0 = a fixed spin axis: the defect stays on the rolling track (physics/defects.py).
+    onset: time of signal (s) at which the defect appears (0: there from the start); growth: time
+    (s) over which it then grows, width, length and depth together, from a small pit to its full
+    size (0: at full size at once; ``physics.defects.DefectSchedule``).
     """
 
     kind: str
@@ -74,6 +77,8 @@ class Defect:
     profile: str = "geometric"
     ball: int = 0
     wander_turns: float = 0.0
+    onset: float = 0.0
+    growth: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -274,6 +279,7 @@ def clock_to_angle(clock: float) -> float:
 TOLERANCE_RANGE = (1e-4, 1.0)   # relative error allowed to the fidelity choice (fidelity.tolerance)
 MAX_LOAD = 1.0e6        # N: a bound against absurd values; the bearing's own limit is checked later
 MAX_SPEED_RPM = 60000.0
+MAX_DEFECT_TIME = 1.0e6   # s (11.6 days of signal): a defect's onset_s and growth_s
 
 
 def _bearing(top: _Section) -> Bearing:
@@ -316,7 +322,7 @@ def _defects(top: _Section, bearing: Bearing) -> tuple:
     for i, raw in enumerate(top.items("defects")):
         d = _Section(raw, f"defects[{i}]",
                      ("kind", "width_mm", "depth_mm", "length_mm", "clock", "angle_deg", "profile", "ball",
-                      "wander_turns"),
+                      "wander_turns", "onset_s", "growth_s"),
                      required=("kind", "width_mm", "depth_mm"))
         kind = d.choice("kind", DEFECT_KINDS)
         # a local defect: at most half the ball spacing (and a ball diameter) wide, so one ball meets it at a time
@@ -336,8 +342,10 @@ def _defects(top: _Section, bearing: Bearing) -> tuple:
         if wander and kind != "ball":
             raise SceneError(f"{d.key('wander_turns')} = {wander:g}: only a ball defect has a spin axis "
                              f"to wander (this one is kind {kind})")
+        onset = d.number("onset_s", 0.0, lo=0.0, hi=MAX_DEFECT_TIME)
+        growth = d.number("growth_s", 0.0, lo=0.0, hi=MAX_DEFECT_TIME)
         out.append(Defect(kind, width, depth, length, angle, d.choice("profile", DEPTH_PROFILES, "geometric"), ball,
-                          wander))
+                          wander, onset, growth))
     return tuple(out)
 
 

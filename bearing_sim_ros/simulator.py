@@ -191,6 +191,13 @@ class Simulator:
                                      tolerance if tolerance is not None else scene.fidelity_tolerance)
         self.tier = self.selection.tier
         self._oversample = None if oversample is None else int(oversample)
+        from .physics.defects import DefectSchedule
+
+        # defects that appear or grow: their sizes follow the physics, which runs ahead of the
+        # output by the sensor chain's lookahead (``_physics_index``: its next output sample)
+        self._defect_schedule = DefectSchedule(scene.defects, self.sample_rate)
+        self._physics_index = 0
+        self._defect_sizes = self._defect_schedule.sizes(0)
         self._model = self._build_model(self.tier)
         self._build_chain()
 
@@ -200,12 +207,12 @@ class Simulator:
             from .physics.kinematic import KinematicModel
 
             return KinematicModel(self.scene, self.sample_rate, self._oversample, self.seed,
-                                  self._shaft_speed, self._radial_load)
+                                  self._shaft_speed, self._radial_load, defect_sizes=self._defect_sizes)
         from .physics.skidding import SkiddingModel
 
         return SkiddingModel(self.scene, self.sample_rate, self.seed, self._shaft_speed,
                              self._radial_load, solver=self.solver, rk4_step=self.rk4_step,
-                             oversample=self._oversample)
+                             oversample=self._oversample, defect_sizes=self._defect_sizes)
 
     def _build_chain(self):
         from .physics.sensor import AccelerometerChain
@@ -263,7 +270,9 @@ class Simulator:
         from the first to the second value) and feed the accelerometer chain.  Returns the
         series of every row: the pending ones first, then the n new ones (views of one new
         array per series, so that a batch never shares memory with a later one); with
-        ``index0`` (absolute output index), also the chain's n output samples (n, 2)."""
+        ``index0`` (absolute output index), also the chain's n output samples (n, 2).  Where a
+        defect appears or grows inside the n samples, the tier runs up to that sample, takes the
+        new sizes and runs on (the ramp continues across)."""
         m = self.chain_oversample
         pend = self._pending
         p = pend["cage_speed"].shape[0]
@@ -271,23 +280,58 @@ class Simulator:
         for key, val in series.items():
             val[:p] = pend[key]
         acc = self.chain.input_view(n * m)
-        loads = ((l0x, l0y), (l1x, l1y))
-        if hasattr(self._model, "advance_into"):       # writes into the buffers: no copies
-            self._model.advance_into(n * m, s0, s1, *loads, acc, series["forces"][p:],
-                                     series["cage_speed"][p:])
-        else:
-            out = self._model.advance(n * m, s0, s1, np.array(loads[0]), np.array(loads[1]))
-            acc[:] = out.accel
-            nb = self.bearing.balls
-            series["forces"][p:, :nb] = out.inner_force
-            series["forces"][p:, nb:] = out.outer_force
-            series["cage_speed"][p:] = out.cage_speed
-            for key, val in out.extras.items():
-                old = pend.get("x_" + key)
-                series["x_" + key] = val if old is None else np.concatenate([old, val], axis=0)
+        extras = {}
+        start = self._physics_index
+        done = 0
+        while done < n:
+            sizes = self._defect_sizes
+            if not self._defect_schedule.static:
+                sizes = self._defect_schedule.sizes(start + done)
+                change = self._defect_schedule.next_change(start + done)
+                end = n if change is None else min(n, change - start)
+            else:
+                end = n
+            if sizes != self._defect_sizes:
+                self._defect_sizes = sizes
+                self._model.set_defect_sizes(sizes)
+            # the ramp's values at the segment's ends, the call's own at its ends
+            sa, la = self._on_ramp(done, n, s0, s1, l0x, l0y, l1x, l1y)
+            sb, lb = self._on_ramp(end, n, s0, s1, l0x, l0y, l1x, l1y)
+            rows = slice(p + done, p + end)
+            seg_acc = acc[done * m:end * m]
+            if hasattr(self._model, "advance_into"):       # writes into the buffers: no copies
+                self._model.advance_into((end - done) * m, sa, sb, la, lb, seg_acc,
+                                         series["forces"][rows], series["cage_speed"][rows])
+            else:
+                out = self._model.advance((end - done) * m, sa, sb, np.array(la), np.array(lb))
+                seg_acc[:] = out.accel
+                nb = self.bearing.balls
+                series["forces"][rows, :nb] = out.inner_force
+                series["forces"][rows, nb:] = out.outer_force
+                series["cage_speed"][rows] = out.cage_speed
+                for key, val in out.extras.items():
+                    extras.setdefault(key, []).append(val)
+            done = end
+        for key, parts in extras.items():
+            old = pend.get("x_" + key)
+            if old is not None:
+                parts.insert(0, old)
+            series["x_" + key] = parts[0] if len(parts) == 1 else np.concatenate(parts, axis=0)
+        self._physics_index = start + n
         _ramp(series["shaft_speed"][p:], series["load"][p:], s0, s1, l0x, l0y, l1x, l1y)
         accel = self.chain.commit(n * m, index0)
         return series if index0 is None else (series, accel)
+
+    @staticmethod
+    def _on_ramp(k, n, s0, s1, l0x, l0y, l1x, l1y):
+        """Speed and (x, y) load at k / n of the way along a call's ramp (its own values at its
+        ends, so that a call that is not split runs exactly as given)."""
+        if k == 0:
+            return s0, (l0x, l0y)
+        if k == n:
+            return s1, (l1x, l1y)
+        f = k / n
+        return s0 + (s1 - s0) * f, (l0x + (l1x - l0x) * f, l0y + (l1y - l0y) * f)
 
     def advance(self, n: int, shaft_speed: float | None = None, radial_load=None) -> Batch:
         """Advance by ``n`` output samples.  ``shaft_speed`` (rad/s) and ``radial_load`` (N, (x, y))
@@ -344,6 +388,14 @@ class Simulator:
         )
         self.index += n
         return batch
+
+    @property
+    def defect_sizes(self) -> tuple:
+        """Size of each of the scene's defects (0 = not there yet, 1 = full size) at the latest
+        output sample (``index - 1``; at sample 0 before the first advance); a scene's
+        ``onset_s`` and ``growth_s`` move them.  The physics runs ahead of the output by the
+        sensor chain's lookahead and may be there already."""
+        return self._defect_schedule.sizes(max(self.index - 1, 0))
 
     # ---- fidelity -----------------------------------------------------------------------------
     def maybe_switch_tier(self, shaft_speed: float, radial_load) -> bool:

@@ -259,6 +259,8 @@ def test_stream_is_15khz_contiguous_and_paced(started, listener):
     assert max(ahead) > 0.0 and max(ahead) <= 0.06 + 1e-9      # compute_ahead 0.05 s + one batch
     assert float(values["shaft_speed_rad_s"]) == pytest.approx(167.552, rel=1e-5)
     assert values["radial_load_n"] == "0 -50"
+    # what is in the signal (test_defect_onset follows a defect's onset through them)
+    assert values["faults_present"] == "outer" and values["defect_sizes"] == "1"
     assert int(values["rejected_inputs"]) == 0
     # the fault frequencies as the signal has them, from the cage's speed over the last second
     # (test_render checks them against the envelope line where the cage skids)

@@ -498,7 +498,7 @@ class BearingSimNode(Node):
             self._stop.wait(max(0.0, wake - now))
 
     def _diagnostics(self, stamp_ns, now, published_index):
-        from ..recording.render import diagnostics_message, tier_values
+        from ..recording.render import defect_values, diagnostics_message, tier_values
 
         st = self.stats
         period = st.period_end(now, published_index)
@@ -514,6 +514,7 @@ class BearingSimNode(Node):
             "batch_compute_worst_s": f"{period['busy_worst']:.6f}",
             "sim_thread_load": f"{period['busy_fraction']:.4f}",
             **tier_values(self.sim),
+            **defect_values(self.sim),
             "shaft_speed_rad_s": f"{self.sim.shaft_speed:.6g}",
             "radial_load_n": " ".join(f"{v:.6g}" for v in self.sim.radial_load),
             "simulated_s": f"{published_index / self.sim.sample_rate:.3f}",

@@ -21,6 +21,7 @@ Seed 001 Sec. 3.3 gives simpler depth functions; all are available (``profile``)
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -37,8 +38,11 @@ D_KIND, D_HALF, D_DEPTH, D_ANGLE, D_PROFILE, D_BALL, D_RHO_I, D_RHO_O, D_HMAX_I,
 # ball defects with a wandering spin axis: spin turns between latitude draws (0 = fixed axis),
 # seed of the draws, and the reach of the contact ellipse in sin(latitude) (full / ramp width)
 D_WANDER, D_WSEED, D_WREACH, D_WRAMP = range(12, 16)
-DEFECT_COLUMNS = 16
-WANDER_STREAM = 3000           # rng stream of defect k's latitude draws: WANDER_STREAM + k
+# the defect's index in the scene: its latitude draws' stream, the same whichever of the scene's
+# defects are present yet (a defect with an onset is left out of the table before it)
+D_INDEX = 16
+DEFECT_COLUMNS = 17
+WANDER_STREAM = 3000           # rng stream of scene defect k's latitude draws: WANDER_STREAM + k
 NOMINAL_BALL_LOAD = 100.0      # N: ball load for the contact ellipse when the caller gives none
 
 
@@ -87,6 +91,7 @@ def defect_table(defects, bearing, seed: int = 0, ball_load: float | None = None
         row[D_ANGLE] = d.angle
         row[D_PROFILE] = PROFILE_CODES[resolve_profile(d, bearing.ball_diameter)]
         row[D_BALL] = d.ball
+        row[D_INDEX] = k
         row[D_RHO_I] = rho_i
         row[D_RHO_O] = rho_o
         # largest drop: at the middle of the pit
@@ -108,15 +113,84 @@ def defect_table(defects, bearing, seed: int = 0, ball_load: float | None = None
     return table
 
 
+# a growing defect's size changes in steps of this much signal (s): the tiers take the defect
+# table per call, so each change splits an advance; 10 ms is the live node's batch
+GROWTH_UPDATE = 0.01
+
+
+def scaled_defect(defect, size: float):
+    """``defect`` at ``size`` (0-1] of its full extent: width, length and depth scale together,
+    as a spall that grows from a small shallow pit."""
+    if size >= 1.0:
+        return defect
+    return dataclasses.replace(defect, width=defect.width * size, length=defect.length * size,
+                               depth=defect.depth * size)
+
+
+def active_defect_table(defects, sizes, bearing, seed: int = 0, ball_load: float | None = None) -> np.ndarray:
+    """The defect table (:func:`defect_table`) of the defects present at ``sizes`` (one factor
+    0-1 per scene defect, None = all at full size): each at its size, a defect of size 0 left
+    out.  Rows keep the defect's index in the scene (``D_INDEX``)."""
+    if sizes is None:
+        return defect_table(defects, bearing, seed, ball_load)
+    table = defect_table([scaled_defect(d, s) if s > 0.0 else d for d, s in zip(defects, sizes)],
+                         bearing, seed, ball_load)
+    return np.ascontiguousarray(table[np.asarray(sizes, dtype=float) > 0.0])
+
+
+class DefectSchedule:
+    """When a scene's defects appear and how they grow, on the grid of output samples at
+    ``sample_rate`` (Hz).  A defect with ``onset`` (s) is absent before the first sample at or
+    after it; with ``growth`` (s) it then grows in steps every ``GROWTH_UPDATE`` from
+    ``GROWTH_UPDATE / growth`` of its size to its full size at ``onset + growth``.  Sizes are
+    functions of the sample index alone, so chunking does not change them."""
+
+    def __init__(self, defects, sample_rate: float):
+        self.defects = tuple(defects)
+        rate = float(sample_rate)
+        self._onsets = [math.ceil(d.onset * rate - 1e-9) for d in self.defects]
+        self._update = max(1, int(round(GROWTH_UPDATE * rate)))
+        self._growth = [d.growth * rate for d in self.defects]
+        self.static = all(o == 0 and g == 0.0 for o, g in zip(self._onsets, self._growth))
+
+    def size(self, k: int, index: int) -> float:
+        """Size (0-1) of defect k at output sample ``index``."""
+        since = index - self._onsets[k]
+        if since < 0:
+            return 0.0
+        grow = self._growth[k]
+        if grow <= 0.0:
+            return 1.0
+        return min(1.0, (since // self._update + 1) * self._update / grow)
+
+    def sizes(self, index: int) -> tuple:
+        """Sizes of every defect at output sample ``index``."""
+        return tuple(self.size(k, index) for k in range(len(self.defects)))
+
+    def next_change(self, index: int) -> int | None:
+        """The first output sample after ``index`` at which a size changes (None: never)."""
+        best = None
+        for k in range(len(self.defects)):
+            onset = self._onsets[k]
+            if index < onset:
+                nxt = onset
+            elif self.size(k, index) < 1.0:
+                nxt = onset + ((index - onset) // self._update + 1) * self._update
+            else:
+                continue
+            best = nxt if best is None else min(best, nxt)
+        return best
+
+
 @njit(cache=True, inline="always")
 def wander_reach(table, k, ball_spin):
     """How much of ball defect k's interference loss applies (0..1) at the ball's spin angle
     (rad): 1 for a fixed spin axis.  With a wandering axis the defect's latitude, as
     s = sin(latitude), is a linear interpolation of independent uniform draws on [-1, 1]
-    (isotropic axis) made every D_WANDER spin turns, hashed from (seed, k, turn index), so it is
-    a function of the spin angle alone (chunk-invariant, the same in both tiers).  The loss
-    applies fully while |s| < reach - ramp, fades linearly to 0 at |s| = reach (the defect
-    sliding out of the contact ellipse)."""
+    (isotropic axis) made every D_WANDER spin turns, hashed from (seed, the defect's index in the
+    scene, turn index), so it is a function of the spin angle alone (chunk-invariant, the same in
+    both tiers).  The loss applies fully while |s| < reach - ramp, fades linearly to 0 at
+    |s| = reach (the defect sliding out of the contact ellipse)."""
     turns = table[k, D_WANDER]
     if turns <= 0.0:
         return 1.0
@@ -124,9 +198,10 @@ def wander_reach(table, k, ball_spin):
     kq = math.floor(q)
     f = q - kq
     seed = np.int64(table[k, D_WSEED])
+    stream = WANDER_STREAM + np.int64(table[k, D_INDEX])
     ki = np.int64(kq)
-    s0 = 2.0 * uniform(seed, WANDER_STREAM + k, np.uint64(ki)) - 1.0
-    s1 = 2.0 * uniform(seed, WANDER_STREAM + k, np.uint64(ki + 1)) - 1.0
+    s0 = 2.0 * uniform(seed, stream, np.uint64(ki)) - 1.0
+    s1 = 2.0 * uniform(seed, stream, np.uint64(ki + 1)) - 1.0
     g = (table[k, D_WREACH] - abs(s0 + (s1 - s0) * f)) / table[k, D_WRAMP]
     return 0.0 if g <= 0.0 else (1.0 if g >= 1.0 else g)
 

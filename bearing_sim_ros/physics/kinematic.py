@@ -59,7 +59,7 @@ from numba import njit
 from . import KinematicSnapshot, TierOutput
 from .defects import (D_ANGLE, D_BALL, D_DEPTH, D_HALF, D_HMAX_I, D_HMAX_O, D_KIND, D_PROFILE,
                       D_RAMP_I, D_RAMP_O, D_RHO_I, D_RHO_O, D_WANDER, DEFECT_COLUMNS, KIND_BALL,
-                      KIND_INNER, _profile_drop, defect_table, wander_reach,
+                      KIND_INNER, _profile_drop, active_defect_table, wander_reach,
                       waviness_gain, wrap)
 from .film import (FILM_EXP_Q, FILM_EXP_U, FILM_LAW_A, FILM_LOAD_FLOOR, FILM_TABLE_PER_U,
                    FILM_TABLE_U_MAX, FILM_TABLE_U_MIN, film_coefficient,
@@ -744,12 +744,14 @@ class KinematicModel:
     name = "kinematic"
 
     def __init__(self, scene, output_rate: float, oversample: int | None, seed: int, shaft_speed: float,
-                 radial_load, chain_oversample: int | None = None, event_substeps: bool = True):
+                 radial_load, chain_oversample: int | None = None, event_substeps: bool = True,
+                 defect_sizes=None):
         """``oversample``: integration steps per output sample; None picks 1 or
         ``DEFAULT_OVERSAMPLE`` from the bearing mode at each linearisation (``step_for_mode``);
         ``chain_oversample``: samples per output sample handed to the accelerometer chain (a
         multiple of every ``oversample`` used; default ``max(oversample, CHAIN_OVERSAMPLE)``),
-        the extra ones by dense output."""
+        the extra ones by dense output; ``defect_sizes``: one factor (0-1) per scene defect, None =
+        all at full size (``set_defect_sizes``)."""
         self.scene = scene
         self.output_rate = float(output_rate)
         self.auto_oversample = oversample is None
@@ -779,7 +781,9 @@ class KinematicModel:
         self.geo[P_LAM:NGEO] = film_law(scene)       # the damping entries: at the linearisation
         a = 2.0 * np.pi * np.arange(nb) / nb
         self.cj, self.sj = np.cos(a), np.sin(a)
-        self.dtab = defect_table(scene.defects, b)      # final table after the equilibrium (below)
+        self.defect_sizes = None if defect_sizes is None else tuple(defect_sizes)
+        # final table after the equilibrium (below)
+        self.dtab = active_defect_table(scene.defects, self.defect_sizes, b)
         from .defects import waviness_table
 
         self.wtab = waviness_table(scene.waviness)
@@ -795,7 +799,18 @@ class KinematicModel:
         self._lin_speed = float(shaft_speed)      # rad/s, of the films at the linearisation
         self._linearise(np.asarray(radial_load, dtype=float), float(shaft_speed), initial=True)
         # a wandering ball defect is met within the contact ellipse of the most loaded ball
-        self.dtab = defect_table(scene.defects, b, seed=self.seed, ball_load=self.static_ball_load)
+        self._table_ball_load = self.static_ball_load     # kept: later loads do not move the ellipse
+        self.dtab = active_defect_table(scene.defects, self.defect_sizes, b, seed=self.seed,
+                                        ball_load=self._table_ball_load)
+
+    def set_defect_sizes(self, sizes) -> None:
+        """Take the scene's defects at ``sizes`` (one factor 0-1 each) from the next step on: a
+        defect that appears or grows (``physics.defects.DefectSchedule``)."""
+        self.defect_sizes = tuple(sizes)
+        self.dtab = active_defect_table(self.scene.defects, self.defect_sizes, self.scene.bearing,
+                                        seed=self.seed, ball_load=self._table_ball_load)
+        self.hist[2] = 0.0       # the residual jumps with the defects: restart its history
+        self.hist[3] = 0.0       # and the balls' geometry (their defect losses) is recomputed
 
     # ---- linearisation and propagators ---------------------------------------------------------
     def _set_step(self, oversample: int):

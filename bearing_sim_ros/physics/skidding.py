@@ -90,7 +90,7 @@ from numba import njit
 from ..catalog import G
 from ..errors import UserError
 from . import KinematicSnapshot, TierOutput
-from .defects import (D_ANGLE, D_BALL, D_KIND, KIND_BALL, KIND_INNER, defect_table, interference_loss,
+from .defects import (D_ANGLE, D_BALL, D_KIND, KIND_BALL, KIND_INNER, active_defect_table, interference_loss,
                       interference_loss_slope, waviness_gain, waviness_table)
 from .film import (FILM_EXP_Q, FILM_EXP_U, FILM_LOAD_FLOOR, film_coefficient,
                    squeeze_film_coefficient, structural_damping_coefficient)
@@ -1572,13 +1572,14 @@ class SkiddingModel:
 
     def __init__(self, scene, sample_rate: float, seed: int, shaft_speed: float, radial_load,
                  solver: str = "default", rk4_step: float | None = None, method=None,
-                 oversample: int | None = None):
+                 oversample: int | None = None, defect_sizes=None):
         """``oversample``: steps of the ``"default"`` solver per output sample (default
         ``DEFAULT_OVERSAMPLE``, one step per two internal samples; 1 takes one every 4 internal
         samples, 4 one per internal sample, a multiple of 4 several; the samples between grid
         points come from the structure's exact response).  ``method``: an
         :class:`~.integrators.Method` instance overriding ``solver`` (for studies of step size
-        and method; the Simulator does not use it)."""
+        and method; the Simulator does not use it).  ``defect_sizes``: one factor (0-1) per scene
+        defect, None = all at full size (``set_defect_sizes``)."""
         self.scene = scene
         self.seed = int(seed)
         self.sample_rate = float(sample_rate)
@@ -1604,7 +1605,8 @@ class SkiddingModel:
         b = scene.bearing
         self.nb = b.balls
         self.p = parameters(scene)
-        self.dtab = defect_table(scene.defects, b)
+        self.defect_sizes = None if defect_sizes is None else tuple(defect_sizes)
+        self.dtab = active_defect_table(scene.defects, self.defect_sizes, b)
         wt = waviness_table(scene.waviness)
         self.wti = np.ascontiguousarray(wt[wt[:, 0] == 0]) if wt.size else np.zeros((0, 4))
         self.wto = np.ascontiguousarray(wt[wt[:, 0] == 1]) if wt.size else np.zeros((0, 4))
@@ -1629,6 +1631,15 @@ class SkiddingModel:
         self._lin_load = None
         if self.method.kind == SPLIT:
             self._linearise(load)
+
+    def set_defect_sizes(self, sizes) -> None:
+        """Take the scene's defects at ``sizes`` (one factor 0-1 each) from the next step on: a
+        defect that appears or grows (``physics.defects.DefectSchedule``)."""
+        self.defect_sizes = tuple(sizes)
+        self.dtab = active_defect_table(self.scene.defects, self.defect_sizes, self.scene.bearing)
+        # the split method keeps the contact values and the structure input of the step's start,
+        # which the defects change: evaluate them again
+        self.counters[3] = 0
 
     # ---- split method: linear structure ----------------------------------------------------------
     def _mean_pedestal_force(self, d: np.ndarray) -> np.ndarray:

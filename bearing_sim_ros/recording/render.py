@@ -159,6 +159,18 @@ def tier_values(sim) -> dict:
             "oversample": "none" if steps is None else steps}
 
 
+def defect_values(sim) -> dict:
+    """The ``/diagnostics`` keys on the scene's defects as they are in the signal now, the live
+    node's and a render's alike (ground truth for a monitoring node): ``faults_present``, the
+    kinds of the defects there (``outer``, ``inner, ball``; ``none``), and ``defect_sizes``, each
+    scene defect's size in scene order (0 before its ``onset_s``, 1 at full size; ``none`` for a
+    scene without defects)."""
+    sizes = sim.defect_sizes
+    kinds = [d.kind for d, s in zip(sim.scene.defects, sizes) if s > 0.0]
+    return {"faults_present": ", ".join(kinds) if kinds else "none",
+            "defect_sizes": " ".join(f"{s:.4g}" for s in sizes) if sizes else "none"}
+
+
 def tier_summary(values: dict) -> str:
     """``kinematic tier``, or after switches of ``fidelity: auto`` (``tier_values``) ``skidding
     tier at the end: 1 switch, the last kinematic -> skidding at 0.430 s``."""
@@ -323,7 +335,7 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
                 # or the output path is left out so that the file stays byte-identical
                 values = {"real_time_factor": "nan", "real_time": "false", "mode": "render",
                           "overruns": 0, "overruns_last_period": 0, "lag_s": "0.000000",
-                          "worst_lag_s": "0.000000", **tier_values(sim),
+                          "worst_lag_s": "0.000000", **tier_values(sim), **defect_values(sim),
                           "shaft_speed_rad_s": f"{sim.shaft_speed:.6g}",
                           "radial_load_n": " ".join(f"{v:.6g}" for v in sim.radial_load),
                           "simulated_s": f"{sim.time:.3f}", "rejected_inputs": 0,

@@ -1,0 +1,208 @@
+"""Defects that appear and grow mid-run (a scene's ``onset_s`` and ``growth_s``): the schedule, the
+signal before and after the onset in both tiers, chunking, tier switches and the trend a detector
+sees (README, "Faults that appear and grow")."""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from bearing_sim_ros import Simulator, load_scene
+from bearing_sim_ros.analysis.envelope import diagnose
+from bearing_sim_ros.physics.defects import (D_INDEX, D_KIND, KIND_BALL, KIND_OUTER, DefectSchedule,
+                                             active_defect_table, wander_reach)
+from bearing_sim_ros.scene import Defect
+
+FS = 15000.0
+
+
+def _with_defects(scene, **changes):
+    """``scene`` with each of its defects changed by ``changes`` (onset=..., growth=...)."""
+    return dataclasses.replace(scene, defects=tuple(dataclasses.replace(d, **changes) for d in scene.defects))
+
+
+def test_schedule_sizes_change_only_where_next_change_says():
+    """Onset at 0.5 s, growth over 0.1 s at 15 kHz: absent up to sample 7499, 0.1 of the size at
+    7500, a tenth more every 150 samples (10 ms), full from 8850; a defect without onset is at
+    full size throughout.  Walking every sample, the sizes change exactly at the samples that
+    ``next_change`` names and nowhere else."""
+    growing = Defect("outer", 1e-4, 1e-4, 1e-4, onset=0.5, growth=0.1)
+    fixed = Defect("inner", 1e-4, 1e-4, 1e-4)
+    sch = DefectSchedule((growing, fixed), FS)
+    assert not sch.static and DefectSchedule((fixed,), FS).static
+    assert sch.sizes(7499) == (0.0, 1.0)
+    assert sch.sizes(7500) == (pytest.approx(0.1), 1.0)
+    assert sch.sizes(7649)[0] == pytest.approx(0.1) and sch.sizes(7650)[0] == pytest.approx(0.2)
+    assert sch.sizes(8849)[0] == pytest.approx(0.9) and sch.sizes(8850) == (1.0, 1.0)
+    assert sch.next_change(8850) is None
+    changes, index = [], 0
+    while (nxt := sch.next_change(index)) is not None:
+        assert nxt > index
+        changes.append(nxt)
+        index = nxt
+    assert changes == [7500 + 150 * k for k in range(10)]
+    sizes = [sch.sizes(i)[0] for i in range(7000, 9500)]
+    moved = [7000 + i for i in range(1, len(sizes)) if sizes[i] != sizes[i - 1]]
+    assert moved == changes
+    # an onset between two samples takes the first sample at or after it
+    assert DefectSchedule((dataclasses.replace(fixed, onset=1.00001 / FS),), FS).sizes(1) == (0.0,)
+    assert DefectSchedule((dataclasses.replace(fixed, onset=1.00001 / FS),), FS).sizes(2) == (1.0,)
+
+
+def test_a_scene_key_out_of_range_is_one_line(tmp_path):
+    from bearing_sim_ros.errors import SceneError
+
+    text = (load_scene("cwru_6205_or007_6").source_text
+            .replace("clock: 6, profile: geometric}", "clock: 6, profile: geometric, onset_s: -1}"))
+    path = tmp_path / "bad.yaml"
+    path.write_text(text)
+    with pytest.raises(SceneError, match=r"^scene bad.yaml: defects\[0\]\.onset_s = -1: allowed range is \[0, 1e\+06\]$"):
+        load_scene(path)
+    path.write_text(text.replace("onset_s: -1", "growth_s: yes"))
+    with pytest.raises(SceneError, match=r"^scene bad.yaml: defects\[0\]\.growth_s = True: expected a number"):
+        load_scene(path)
+    path.write_text(text.replace("onset_s: -1", "onset_s: 2.5, growth_s: 4"))
+    d = load_scene(path).defects[0]
+    assert (d.onset, d.growth) == (2.5, 4.0)
+
+
+def test_shipped_growing_scene_is_the_outer_race_scene_with_an_onset():
+    grown = load_scene("cwru_6205_or007_6_growing")
+    plain = load_scene("cwru_6205_or007_6")
+    assert _with_defects(grown, onset=0.0, growth=0.0).defects == plain.defects
+    assert (grown.defects[0].onset, grown.defects[0].growth) == (5.0, 20.0)
+    for f in dataclasses.fields(plain):
+        if f.name not in ("name", "description", "defects", "source_text", "source_path"):
+            assert getattr(grown, f.name) == getattr(plain, f.name), f.name
+
+
+@pytest.mark.parametrize("tier", ["kinematic", "skidding"])
+def test_before_the_onset_the_signal_is_the_healthy_scenes(tier):
+    """ER-16K outer race with onset at 0.3 s against the same scene without defects: the same
+    samples, bit for bit, up to the sensor chain's lookahead before the onset (the linear-phase
+    anti-aliasing FIR reaches that far ahead), different from the onset on; the contact forces,
+    which no filter delays, are the same up to the onset itself."""
+    scene = load_scene("er16k_outer_race")
+    late = _with_defects(scene, onset=0.3)
+    healthy = dataclasses.replace(scene, defects=())
+    a, b = Simulator(late, fidelity=tier), Simulator(healthy, fidelity=tier)
+    onset = int(0.3 * FS)
+    ba, bb = a.advance(onset + 1500), b.advance(onset + 1500)
+    ahead = a.chain.lookahead_samples
+    assert ahead == 19                   # README: the last 19 samples, 1.3 ms
+    differs = np.nonzero(np.any(ba.accel != bb.accel, axis=1))[0]
+    assert onset - ahead <= differs[0] < onset
+    assert np.array_equal(ba.contact_forces[:onset], bb.contact_forces[:onset])
+    assert not np.array_equal(ba.contact_forces[onset:onset + 150], bb.contact_forces[onset:onset + 150])
+    assert a.defect_sizes == (1.0,) and b.defect_sizes == ()
+    # after the onset the pit is there: the ball passing it loses its outer-race load
+    full = Simulator(scene, fidelity=tier).advance(onset + 1500)
+    assert ba.accel[onset:, 1].std() == pytest.approx(full.accel[onset:, 1].std(), rel=0.1)
+    assert ba.accel[onset:, 1].std() > 3 * bb.accel[onset:, 1].std()
+
+
+@pytest.mark.parametrize("tier", ["kinematic", "skidding"])
+def test_chunking_does_not_change_a_sample_across_onset_and_growth(tier):
+    """Onset and growth steps that fall inside batches of 97 samples give the same samples as
+    one advance (every output: accel, contact forces, cage speed, the skidding tier's extras)."""
+    scene = _with_defects(load_scene("er16k_inner_race"), onset=0.02, growth=0.05)
+    n = 97 * 12
+    one = Simulator(scene, fidelity=tier, seed=3).advance(n)
+    sim = Simulator(scene, fidelity=tier, seed=3)
+    parts = [sim.advance(97) for _ in range(12)]
+    assert sim.defect_sizes == (1.0,)
+    assert np.array_equal(one.accel, np.concatenate([p.accel for p in parts]))
+    assert np.array_equal(one.contact_forces, np.concatenate([p.contact_forces for p in parts]))
+    assert np.array_equal(one.cage_speed, np.concatenate([p.cage_speed for p in parts]))
+    for key, val in one.extras.items():
+        assert np.array_equal(val, np.concatenate([p.extras[key] for p in parts])), key
+    assert (tier == "skidding") == bool(one.extras)
+
+
+def test_a_growing_outer_race_pit_raises_the_rms_and_is_called_outer_from_40_percent():
+    """The shipped ``cwru_6205_or007_6_growing`` in 1 s windows: healthy (verdict and RMS) before
+    the onset at 5 s, still healthy while the pit is under 30 % of its size, outer at 50 % and
+    above; from 30 % on the RMS rises from window to window as the pit grows, to the full-size
+    scene's level
+    (README, "Faults that appear and grow")."""
+    scene = load_scene("cwru_6205_or007_6_growing")
+    sim = Simulator(scene, seed=1)
+    fr = scene.bearing.fault_frequencies(scene.shaft_hz)
+    rows = []
+    for _ in range(27):
+        x = sim.advance(int(FS)).accel[:, 1]
+        rows.append((sim.defect_sizes[0], float(x.std()), diagnose(x, FS, fr)["verdict"]))
+    sizes, rms, verdicts = zip(*rows)
+    assert sizes[4] == 0.0 and sizes[5] == pytest.approx(0.05, abs=1e-3) and sizes[24] == 1.0
+    assert all(v == "healthy" for s, v in zip(sizes, verdicts) if s <= 0.3), rows
+    assert all(v == "outer" for s, v in zip(sizes, verdicts) if s >= 0.5), rows
+    called = next(i for i, v in enumerate(verdicts) if v == "outer")
+    assert 11 <= called <= 13           # the window that ends at 12-14 s: "13 s into the run"
+    healthy = Simulator(load_scene("cwru_6205_normal"), seed=1).advance(int(5 * FS)).accel[:, 1].std()
+    assert rms[0:5] == pytest.approx([healthy] * 5, rel=0.1)
+    assert all(b > a for a, b in zip(rms[10:24], rms[11:25])), rms          # 30 % to full size
+    full = Simulator(load_scene("cwru_6205_or007_6"), seed=1)
+    full.advance(int(FS))
+    assert rms[26] == pytest.approx(full.advance(int(FS)).accel[:, 1].std(), rel=0.15)
+
+
+def test_a_tier_switch_keeps_the_defects_as_they_are():
+    """fidelity auto switches to the skidding tier at 10000 rpm / 10 N: the new tier takes the
+    defects present at the switch (none before the onset, the pit after it), and its signal
+    shows the pit as the kinematic tier's did."""
+    scene = _with_defects(load_scene("er16k_outer_race"), onset=0.05)
+    sim = Simulator(scene)
+    assert sim.tier == "kinematic"
+    sim.advance(150)
+    sim.advance(150, shaft_speed=10000 * 2 * np.pi / 60, radial_load=(0.0, -10.0))
+    assert sim.tier == "skidding" and sim._model.dtab.shape[0] == 0
+    sim.advance(600)
+    assert sim.defect_sizes == (1.0,) and sim._model.dtab.shape[0] == 1
+    sim.advance(1500, shaft_speed=1600 * 2 * np.pi / 60, radial_load=(0.0, -50.0))
+    assert sim.tier == "kinematic" and sim._model.defect_sizes == (1.0,)
+    assert sim._model.dtab.shape[0] == 1
+
+
+def test_a_table_without_the_absent_defects_keeps_each_ones_draws():
+    """The wandering ball defect's latitude draws are a stream per scene defect: with the first
+    defect absent, the ball defect's row keeps its index (``D_INDEX``), so it is met at the same
+    spin angles as when every defect is there."""
+    b = load_scene("cwru_6205_b007").bearing
+    defects = (Defect("outer", 1e-4, 1e-4, 1e-4), Defect("ball", 1e-4, 1e-4, 1e-4, wander_turns=3.0))
+    both = active_defect_table(defects, None, b, seed=7)
+    only_ball = active_defect_table(defects, (0.0, 1.0), b, seed=7)
+    assert only_ball.shape[0] == 1 and only_ball[0, D_KIND] == KIND_BALL and only_ball[0, D_INDEX] == 1
+    assert both[0, D_KIND] == KIND_OUTER
+    spins = np.linspace(0.0, 200.0, 2001)
+    reach_both = [wander_reach(both, 1, s) for s in spins]
+    assert [wander_reach(only_ball, 0, s) for s in spins] == reach_both
+    assert 0.0 in reach_both and 1.0 in reach_both           # the draws matter to the test
+    half = active_defect_table(defects, (1.0, 0.5), b, seed=7)
+    assert half[1, 1] == pytest.approx(0.5 * both[1, 1])     # D_HALF: half the width
+
+
+def test_recorded_diagnostics_say_when_the_fault_is_there(tmp_path):
+    """``bearing-sim render`` of the CWRU outer race with its pit appearing at 1.5 s and growing
+    over 1 s: the recorded ``/diagnostics`` (read with rosbags) give ``faults_present`` none at
+    1 s, outer from 2 s, and ``defect_sizes`` 0, then the size at each second (0.5 at 2 s, full
+    at 3 s), as the node's do."""
+    from rosbags.highlevel import AnyReader
+
+    from bearing_sim_ros.recording.render import render
+
+    text = (load_scene("cwru_6205_or007_6").source_text
+            .replace("clock: 6, profile: geometric}", "clock: 6, profile: geometric, onset_s: 1.5, growth_s: 1.0}"))
+    scene = tmp_path / "onset.yaml"
+    scene.write_text(text)
+    out = tmp_path / "onset.mcap"
+    render(str(scene), 3.5, out, progress=False)
+    seen = {}
+    with AnyReader([out]) as reader:
+        conns = [c for c in reader.connections if c.topic == "/diagnostics"]
+        for conn, t, raw in reader.messages(connections=conns):
+            msg = reader.deserialize(raw, conn.msgtype)
+            values = {kv.key: kv.value for kv in msg.status[0].values}
+            seen[round(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9, 3)] = (
+                values["faults_present"], values["defect_sizes"])
+    assert seen == {1.0: ("none", "0"), 2.0: ("outer", "0.5"), 3.0: ("outer", "1")}
