@@ -206,3 +206,16 @@ def test_recorded_diagnostics_say_when_the_fault_is_there(tmp_path):
             seen[round(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9, 3)] = (
                 values["faults_present"], values["defect_sizes"])
     assert seen == {1.0: ("none", "0"), 2.0: ("outer", "0.5"), 3.0: ("outer", "1")}
+
+
+def test_both_tiers_draw_a_wandering_ball_defects_latitudes_from_the_runs_seed():
+    """The skidding tier drew them from seed 0 whatever the run's seed, so a switch of tiers
+    changed where the pit was met; now both tables carry the run's seed."""
+    from bearing_sim_ros.physics.defects import D_WSEED
+
+    scene = load_scene("cwru_6205_b007")
+    for tier in ("kinematic", "skidding"):
+        sim = Simulator(scene, fidelity=tier, seed=11)
+        assert sim._model.dtab[0, D_WSEED] == 11, tier
+        sim._model.set_defect_sizes((0.5,))
+        assert sim._model.dtab[0, D_WSEED] == 11, tier

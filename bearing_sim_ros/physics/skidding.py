@@ -1606,7 +1606,8 @@ class SkiddingModel:
         self.nb = b.balls
         self.p = parameters(scene)
         self.defect_sizes = None if defect_sizes is None else tuple(defect_sizes)
-        self.dtab = active_defect_table(scene.defects, self.defect_sizes, b)
+        # a wandering ball defect draws its latitudes from the run's seed, as in the kinematic tier
+        self.dtab = active_defect_table(scene.defects, self.defect_sizes, b, seed=self.seed)
         wt = waviness_table(scene.waviness)
         self.wti = np.ascontiguousarray(wt[wt[:, 0] == 0]) if wt.size else np.zeros((0, 4))
         self.wto = np.ascontiguousarray(wt[wt[:, 0] == 1]) if wt.size else np.zeros((0, 4))
@@ -1636,7 +1637,8 @@ class SkiddingModel:
         """Take the scene's defects at ``sizes`` (one factor 0-1 each) from the next step on: a
         defect that appears or grows (``physics.defects.DefectSchedule``)."""
         self.defect_sizes = tuple(sizes)
-        self.dtab = active_defect_table(self.scene.defects, self.defect_sizes, self.scene.bearing)
+        self.dtab = active_defect_table(self.scene.defects, self.defect_sizes, self.scene.bearing,
+                                        seed=self.seed)
         # the split method keeps the contact values and the structure input of the step's start,
         # which the defects change: evaluate them again
         self.counters[3] = 0
