@@ -283,22 +283,23 @@ class Simulator:
         extras = {}
         start = self._physics_index
         done = 0
+        whole = self._defect_schedule.static        # the usual case: one call, as given
         while done < n:
-            sizes = self._defect_sizes
-            if not self._defect_schedule.static:
+            if whole:
+                end = n
+                sa, la, sb, lb = s0, (l0x, l0y), s1, (l1x, l1y)
+                rows, seg_acc = slice(p, None), acc
+            else:
                 sizes = self._defect_schedule.sizes(start + done)
                 change = self._defect_schedule.next_change(start + done)
                 end = n if change is None else min(n, change - start)
-            else:
-                end = n
-            if sizes != self._defect_sizes:
-                self._defect_sizes = sizes
-                self._model.set_defect_sizes(sizes)
-            # the ramp's values at the segment's ends, the call's own at its ends
-            sa, la = self._on_ramp(done, n, s0, s1, l0x, l0y, l1x, l1y)
-            sb, lb = self._on_ramp(end, n, s0, s1, l0x, l0y, l1x, l1y)
-            rows = slice(p + done, p + end)
-            seg_acc = acc[done * m:end * m]
+                if sizes != self._defect_sizes:
+                    self._defect_sizes = sizes
+                    self._model.set_defect_sizes(sizes)
+                # the ramp's values at the segment's ends, the call's own at its ends
+                sa, la = self._on_ramp(done, n, s0, s1, l0x, l0y, l1x, l1y)
+                sb, lb = self._on_ramp(end, n, s0, s1, l0x, l0y, l1x, l1y)
+                rows, seg_acc = slice(p + done, p + end), acc[done * m:end * m]
             if hasattr(self._model, "advance_into"):       # writes into the buffers: no copies
                 self._model.advance_into((end - done) * m, sa, sb, la, lb, seg_acc,
                                          series["forces"][rows], series["cage_speed"][rows])
