@@ -194,25 +194,25 @@ class Simulator:
         from .physics.defects import DefectSchedule
 
         # defects that appear or grow: their sizes follow the physics, which runs ahead of the
-        # output by the sensor chain's lookahead (``_physics_index``: its next output sample)
+        # output by the sensor chain's lookahead (``_physics_index``: its next output sample);
+        # the sizes in force are the running tier's ``defect_sizes``
         self._defect_schedule = DefectSchedule(scene.defects, self.sample_rate)
         self._physics_index = 0
-        self._defect_sizes = self._defect_schedule.sizes(0)
-        self._model = self._build_model(self.tier)
+        self._model = self._build_model(self.tier, self._defect_schedule.sizes(0))
         self._build_chain()
 
     # ---- construction ---------------------------------------------------------------------
-    def _build_model(self, tier: str):
+    def _build_model(self, tier: str, defect_sizes: tuple):
         if tier == "kinematic":
             from .physics.kinematic import KinematicModel
 
             return KinematicModel(self.scene, self.sample_rate, self._oversample, self.seed,
-                                  self._shaft_speed, self._radial_load, defect_sizes=self._defect_sizes)
+                                  self._shaft_speed, self._radial_load, defect_sizes=defect_sizes)
         from .physics.skidding import SkiddingModel
 
         return SkiddingModel(self.scene, self.sample_rate, self.seed, self._shaft_speed,
                              self._radial_load, solver=self.solver, rk4_step=self.rk4_step,
-                             oversample=self._oversample, defect_sizes=self._defect_sizes)
+                             oversample=self._oversample, defect_sizes=defect_sizes)
 
     def _build_chain(self):
         from .physics.sensor import AccelerometerChain
@@ -293,8 +293,7 @@ class Simulator:
                 sizes = self._defect_schedule.sizes(start + done)
                 change = self._defect_schedule.next_change(start + done)
                 end = n if change is None else min(n, change - start)
-                if sizes != self._defect_sizes:
-                    self._defect_sizes = sizes
+                if sizes != self._model.defect_sizes:
                     self._model.set_defect_sizes(sizes)
                 # the ramp's values at the segment's ends, the call's own at its ends
                 sa, la = self._on_ramp(done, n, s0, s1, l0x, l0y, l1x, l1y)
@@ -412,7 +411,7 @@ class Simulator:
         old, old_tier = self._model, self.tier
         self.tier = sel.tier
         self.selection = sel
-        new = self._build_model(sel.tier)
+        new = self._build_model(sel.tier, old.defect_sizes)
         if hasattr(new, "adopt_state"):
             new.adopt_state(old)
         if int(round(new.internal_rate / self.sample_rate)) != self.chain_oversample:
@@ -442,7 +441,7 @@ class Simulator:
         import copy
 
         other = "skidding" if self.tier == "kinematic" else "kinematic"
-        model = self._build_model(other)
+        model = self._build_model(other, self._model.defect_sizes)
         if hasattr(model, "adopt_state"):
             # the hand-over too (it reads the old tier's films); from a copy, which it may update
             model.adopt_state(copy.deepcopy(self._model))
