@@ -202,17 +202,23 @@ class Simulator:
         self._build_chain()
 
     # ---- construction ---------------------------------------------------------------------
-    def _build_model(self, tier: str, defect_sizes: tuple):
+    def _build_model(self, tier: str, defect_sizes: tuple, ellipse_ball_load: float | None = None):
+        """The ``tier``'s model at the present operating point with the defects at
+        ``defect_sizes``; ``ellipse_ball_load`` (N) from the tier it takes over from, so that a
+        wandering ball defect meets the races as often after a switch as before (None: the new
+        model's own most loaded ball)."""
         if tier == "kinematic":
             from .physics.kinematic import KinematicModel
 
             return KinematicModel(self.scene, self.sample_rate, self._oversample, self.seed,
-                                  self._shaft_speed, self._radial_load, defect_sizes=defect_sizes)
+                                  self._shaft_speed, self._radial_load, defect_sizes=defect_sizes,
+                                  ellipse_ball_load=ellipse_ball_load)
         from .physics.skidding import SkiddingModel
 
         return SkiddingModel(self.scene, self.sample_rate, self.seed, self._shaft_speed,
                              self._radial_load, solver=self.solver, rk4_step=self.rk4_step,
-                             oversample=self._oversample, defect_sizes=defect_sizes)
+                             oversample=self._oversample, defect_sizes=defect_sizes,
+                             ellipse_ball_load=ellipse_ball_load)
 
     def _build_chain(self):
         from .physics.sensor import AccelerometerChain
@@ -411,7 +417,7 @@ class Simulator:
         old, old_tier = self._model, self.tier
         self.tier = sel.tier
         self.selection = sel
-        new = self._build_model(sel.tier, old.defect_sizes)
+        new = self._build_model(sel.tier, old.defect_sizes, old.ellipse_ball_load)
         if hasattr(new, "adopt_state"):
             new.adopt_state(old)
         if int(round(new.internal_rate / self.sample_rate)) != self.chain_oversample:
@@ -441,7 +447,7 @@ class Simulator:
         import copy
 
         other = "skidding" if self.tier == "kinematic" else "kinematic"
-        model = self._build_model(other, self._model.defect_sizes)
+        model = self._build_model(other, self._model.defect_sizes, self._model.ellipse_ball_load)
         if hasattr(model, "adopt_state"):
             # the hand-over too (it reads the old tier's films); from a copy, which it may update
             model.adopt_state(copy.deepcopy(self._model))

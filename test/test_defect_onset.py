@@ -219,3 +219,27 @@ def test_both_tiers_draw_a_wandering_ball_defects_latitudes_from_the_runs_seed()
         assert sim._model.dtab[0, D_WSEED] == 11, tier
         sim._model.set_defect_sizes((0.5,))
         assert sim._model.dtab[0, D_WSEED] == 11, tier
+
+
+def test_a_wandering_ball_defect_keeps_its_contact_ellipse_across_tier_switches():
+    """The contact ellipse that a wandering pit must lie within to be met is sized by the most
+    loaded ball's static load.  Both tiers find about the same load on the CWRU ball scene (the
+    skidding tier took a nominal 100 N, five times as much, before), and a tier switch hands the
+    old tier's on whatever the load is then, so the pit is met as often after it as before."""
+    from bearing_sim_ros.physics.defects import D_WREACH
+
+    scene = load_scene("cwru_6205_b007")
+    own = {tier: Simulator(scene, fidelity=tier)._model for tier in ("kinematic", "skidding")}
+    assert own["skidding"].ellipse_ball_load == pytest.approx(own["kinematic"].ellipse_ball_load, rel=0.02)
+    assert 15.0 < own["kinematic"].ellipse_ball_load < 25.0       # 0 N radial load: the shaft's weight
+    # the scene's 5 % tolerance keeps the kinematic tier up to 20000 rpm: ask for 0.2 %
+    sim = Simulator(dataclasses.replace(scene, fidelity_tolerance=0.002))
+    assert sim.tier == "kinematic"
+    first = (sim._model.ellipse_ball_load, sim._model.dtab[0, D_WREACH])
+    sim.advance(150)
+    sim.advance(150, shaft_speed=10000 * 2 * np.pi / 60, radial_load=(0.0, -10.0))
+    assert sim.tier == "skidding"
+    assert (sim._model.ellipse_ball_load, sim._model.dtab[0, D_WREACH]) == first
+    sim.advance(150, shaft_speed=1797 * 2 * np.pi / 60, radial_load=(0.0, -2000.0))
+    assert sim.tier == "kinematic"
+    assert (sim._model.ellipse_ball_load, sim._model.dtab[0, D_WREACH]) == first

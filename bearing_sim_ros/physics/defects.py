@@ -43,7 +43,7 @@ D_WANDER, D_WSEED, D_WREACH, D_WRAMP = range(12, 16)
 D_INDEX = 16
 DEFECT_COLUMNS = 17
 WANDER_STREAM = 3000           # rng stream of scene defect k's latitude draws: WANDER_STREAM + k
-NOMINAL_BALL_LOAD = 100.0      # N: ball load for the contact ellipse when the caller gives none
+NOMINAL_BALL_LOAD = 100.0      # N: ball load for the contact ellipse when the caller gives none (yet)
 
 
 def resolve_profile(defect, ball_diameter: float) -> str:
@@ -180,6 +180,12 @@ class DefectSchedule:
                 continue
             best = nxt if best is None else min(best, nxt)
         return best
+
+
+def has_wandering_defect(table) -> bool:
+    """Whether the defect table holds a ball defect with a wandering spin axis (the only rows
+    the contact ellipse's ball load changes)."""
+    return bool(np.any(table[:, D_WANDER] > 0.0)) if table.shape[0] else False
 
 
 @njit(cache=True, inline="always")

@@ -745,13 +745,15 @@ class KinematicModel:
 
     def __init__(self, scene, output_rate: float, oversample: int | None, seed: int, shaft_speed: float,
                  radial_load, chain_oversample: int | None = None, event_substeps: bool = True,
-                 defect_sizes=None):
+                 defect_sizes=None, ellipse_ball_load=None):
         """``oversample``: integration steps per output sample; None picks 1 or
         ``DEFAULT_OVERSAMPLE`` from the bearing mode at each linearisation (``step_for_mode``);
         ``chain_oversample``: samples per output sample handed to the accelerometer chain (a
         multiple of every ``oversample`` used; default ``max(oversample, CHAIN_OVERSAMPLE)``),
         the extra ones by dense output; ``defect_sizes``: one factor (0-1) per scene defect, None =
-        all at full size (``set_defect_sizes``)."""
+        all at full size (``set_defect_sizes``); ``ellipse_ball_load`` (N): the ball load that sizes
+        a wandering ball defect's contact ellipse, None = the most loaded ball's static load at the
+        set-up (a tier switch passes the old tier's on)."""
         self.scene = scene
         self.output_rate = float(output_rate)
         self.auto_oversample = oversample is None
@@ -798,17 +800,19 @@ class KinematicModel:
         self._lin_load = None
         self._lin_speed = float(shaft_speed)      # rad/s, of the films at the linearisation
         self._linearise(np.asarray(radial_load, dtype=float), float(shaft_speed), initial=True)
-        # a wandering ball defect is met within the contact ellipse of the most loaded ball
-        self._table_ball_load = self.static_ball_load     # kept: later loads do not move the ellipse
+        # a wandering ball defect is met within the contact ellipse of the most loaded ball at the
+        # set-up; kept: later loads and tier switches do not move the ellipse
+        self.ellipse_ball_load = (self.static_ball_load if ellipse_ball_load is None
+                                  else float(ellipse_ball_load))
         self.dtab = active_defect_table(scene.defects, self.defect_sizes, b, seed=self.seed,
-                                        ball_load=self._table_ball_load)
+                                        ball_load=self.ellipse_ball_load)
 
     def set_defect_sizes(self, sizes) -> None:
         """Take the scene's defects at ``sizes`` (one factor 0-1 each) from the next step on: a
         defect that appears or grows (``physics.defects.DefectSchedule``)."""
         self.defect_sizes = tuple(sizes)
         self.dtab = active_defect_table(self.scene.defects, self.defect_sizes, self.scene.bearing,
-                                        seed=self.seed, ball_load=self._table_ball_load)
+                                        seed=self.seed, ball_load=self.ellipse_ball_load)
         self.hist[2] = 0.0       # the residual jumps with the defects: restart its history
         self.hist[3] = 0.0       # and the balls' geometry (their defect losses) is recomputed
 

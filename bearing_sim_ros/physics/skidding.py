@@ -90,8 +90,8 @@ from numba import njit
 from ..catalog import G
 from ..errors import UserError
 from . import KinematicSnapshot, TierOutput
-from .defects import (D_ANGLE, D_BALL, D_KIND, KIND_BALL, KIND_INNER, active_defect_table, interference_loss,
-                      interference_loss_slope, waviness_gain, waviness_table)
+from .defects import (D_ANGLE, D_BALL, D_KIND, KIND_BALL, KIND_INNER, active_defect_table,
+                      has_wandering_defect, interference_loss, interference_loss_slope, waviness_gain, waviness_table)
 from .film import (FILM_EXP_Q, FILM_EXP_U, FILM_LOAD_FLOOR, film_coefficient,
                    squeeze_film_coefficient, structural_damping_coefficient)
 from .integrators import EXPLICIT, RK4_STEP_RANGE, SPLIT, method_for
@@ -1572,14 +1572,16 @@ class SkiddingModel:
 
     def __init__(self, scene, sample_rate: float, seed: int, shaft_speed: float, radial_load,
                  solver: str = "default", rk4_step: float | None = None, method=None,
-                 oversample: int | None = None, defect_sizes=None):
+                 oversample: int | None = None, defect_sizes=None, ellipse_ball_load=None):
         """``oversample``: steps of the ``"default"`` solver per output sample (default
         ``DEFAULT_OVERSAMPLE``, one step per two internal samples; 1 takes one every 4 internal
         samples, 4 one per internal sample, a multiple of 4 several; the samples between grid
         points come from the structure's exact response).  ``method``: an
         :class:`~.integrators.Method` instance overriding ``solver`` (for studies of step size
         and method; the Simulator does not use it).  ``defect_sizes``: one factor (0-1) per scene
-        defect, None = all at full size (``set_defect_sizes``)."""
+        defect, None = all at full size (``set_defect_sizes``).  ``ellipse_ball_load`` (N): the
+        ball load that sizes a wandering ball defect's contact ellipse; None = this tier's most
+        loaded ball at the set-up (a tier switch passes the old tier's on)."""
         self.scene = scene
         self.seed = int(seed)
         self.sample_rate = float(sample_rate)
@@ -1606,8 +1608,11 @@ class SkiddingModel:
         self.nb = b.balls
         self.p = parameters(scene)
         self.defect_sizes = None if defect_sizes is None else tuple(defect_sizes)
-        # a wandering ball defect draws its latitudes from the run's seed, as in the kinematic tier
-        self.dtab = active_defect_table(scene.defects, self.defect_sizes, b, seed=self.seed)
+        # a wandering ball defect draws its latitudes from the run's seed, as in the kinematic tier;
+        # its contact ellipse is sized below, once the static ball loads are known
+        self.ellipse_ball_load = None if ellipse_ball_load is None else float(ellipse_ball_load)
+        self.dtab = active_defect_table(scene.defects, self.defect_sizes, b, seed=self.seed,
+                                        ball_load=self.ellipse_ball_load)
         wt = waviness_table(scene.waviness)
         self.wti = np.ascontiguousarray(wt[wt[:, 0] == 0]) if wt.size else np.zeros((0, 4))
         self.wto = np.ascontiguousarray(wt[wt[:, 0] == 1]) if wt.size else np.zeros((0, 4))
@@ -1629,6 +1634,13 @@ class SkiddingModel:
         self._dg0 = np.zeros((self.nb, NDG))
         load = np.asarray(radial_load, dtype=float)
         self._equilibrium(load, float(shaft_speed))
+        if self.ellipse_ball_load is None:
+            # as the kinematic tier does: the most loaded ball's static load, defects left out
+            self.ellipse_ball_load = self.static_ball_load()
+            if has_wandering_defect(self.dtab):
+                self.dtab = active_defect_table(scene.defects, self.defect_sizes, b, seed=self.seed,
+                                                ball_load=self.ellipse_ball_load)
+                self._settle(float(shaft_speed))
         self._lin_load = None
         if self.method.kind == SPLIT:
             self._linearise(load)
@@ -1638,7 +1650,7 @@ class SkiddingModel:
         defect that appears or grows (``physics.defects.DefectSchedule``)."""
         self.defect_sizes = tuple(sizes)
         self.dtab = active_defect_table(self.scene.defects, self.defect_sizes, self.scene.bearing,
-                                        seed=self.seed)
+                                        seed=self.seed, ball_load=self.ellipse_ball_load)
         # the split method keeps the contact values and the structure input of the step's start,
         # which the defects change: evaluate them again
         self.counters[3] = 0
@@ -1731,6 +1743,15 @@ class SkiddingModel:
             self.y[bse + B_V] = 0.0
             # Omega = theta' - w_b, w_b = spin in the orbital frame (BSF > 0)
             self.y[bse + B_OM] = wc - p[P_SPINR] * speed
+
+    def static_ball_load(self) -> float:
+        """The most loaded ball's inner-race contact load (N) in the present state, from the
+        quasi-static contact law without defects: at the set-up's equilibrium, the load the
+        balls carry from shaft to pedestal (the kinematic tier's ``static_ball_load``)."""
+        empty = np.zeros((0, self.dtab.shape[1]))
+        loads = [_static_loads(self.p, self.y, j, self.shaft_angle, empty, self.wti, self.wto,
+                               self.film, self.y[NS0 + NBV * j + B_R])[0] for j in range(self.nb)]
+        return float(max(loads))
 
     def _settle(self, speed: float):
         """Film and quasi-static ball radii for the current structure state (two passes: the film
