@@ -401,7 +401,13 @@ class Simulator:
         output sample (``index - 1``; at sample 0 before the first advance); a scene's
         ``onset_s`` and ``growth_s`` move them.  The physics runs ahead of the output by the
         sensor chain's lookahead and may be there already."""
-        return self._defect_schedule.sizes(max(self.index - 1, 0))
+        return self.defect_sizes_at(self.index - 1)
+
+    def defect_sizes_at(self, sample: int) -> tuple:
+        """Size of each of the scene's defects at output sample ``sample`` (sample 0 for a
+        negative one): what the signal holds there, e.g. at the last sample a node has published
+        while it computes ahead."""
+        return self._defect_schedule.sizes(max(int(sample), 0))
 
     # ---- fidelity -----------------------------------------------------------------------------
     def maybe_switch_tier(self, shaft_speed: float, radial_load) -> bool:

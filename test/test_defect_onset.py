@@ -243,3 +243,17 @@ def test_a_wandering_ball_defect_keeps_its_contact_ellipse_across_tier_switches(
     sim.advance(150, shaft_speed=1797 * 2 * np.pi / 60, radial_load=(0.0, -2000.0))
     assert sim.tier == "kinematic"
     assert (sim._model.ellipse_ball_load, sim._model.dtab[0, D_WREACH]) == first
+
+
+def test_the_diagnostics_truth_is_that_of_the_sample_asked_for():
+    """The live node computes up to 50 ms ahead of what it has published; its ``faults_present``
+    and ``defect_sizes`` are those of the last published sample, which ``defect_values`` gives
+    for a sample before the latest computed one."""
+    from bearing_sim_ros.recording.render import defect_values
+
+    sim = Simulator(_with_defects(load_scene("er16k_outer_race"), onset=0.1), sample_rate=FS)
+    sim.advance(int(0.12 * FS))
+    assert defect_values(sim) == {"faults_present": "outer", "defect_sizes": "1"}
+    assert defect_values(sim, int(0.1 * FS) - 1) == {"faults_present": "none", "defect_sizes": "0"}
+    assert defect_values(sim, int(0.1 * FS))["faults_present"] == "outer"
+    assert defect_values(sim, -1)["faults_present"] == "none"

@@ -514,7 +514,8 @@ class BearingSimNode(Node):
             "batch_compute_worst_s": f"{period['busy_worst']:.6f}",
             "sim_thread_load": f"{period['busy_fraction']:.4f}",
             **tier_values(self.sim),
-            **defect_values(self.sim),
+            # the truth of the signal published so far, not of the batches computed ahead
+            **defect_values(self.sim, published_index - 1),
             "shaft_speed_rad_s": f"{self.sim.shaft_speed:.6g}",
             "radial_load_n": " ".join(f"{v:.6g}" for v in self.sim.radial_load),
             "simulated_s": f"{published_index / self.sim.sample_rate:.3f}",

@@ -159,13 +159,13 @@ def tier_values(sim) -> dict:
             "oversample": "none" if steps is None else steps}
 
 
-def defect_values(sim) -> dict:
-    """The ``/diagnostics`` keys on the scene's defects as they are in the signal now, the live
-    node's and a render's alike (ground truth for a monitoring node): ``faults_present``, the
-    kinds of the defects there (``outer``, ``inner, ball``; ``none``), and ``defect_sizes``, each
-    scene defect's size in scene order (0 before its ``onset_s``, 1 at full size; ``none`` for a
-    scene without defects)."""
-    sizes = sim.defect_sizes
+def defect_values(sim, sample: int | None = None) -> dict:
+    """The ``/diagnostics`` keys on the scene's defects as they are in the signal at output
+    ``sample`` (default: the latest computed), the live node's and a render's alike (ground truth
+    for a monitoring node): ``faults_present``, the kinds of the defects there (``outer``,
+    ``inner, ball``; ``none``), and ``defect_sizes``, each scene defect's size in scene order (0
+    before its ``onset_s``, 1 at full size; ``none`` for a scene without defects)."""
+    sizes = sim.defect_sizes if sample is None else sim.defect_sizes_at(sample)
     kinds = [d.kind for d, s in zip(sim.scene.defects, sizes) if s > 0.0]
     return {"faults_present": ", ".join(kinds) if kinds else "none",
             "defect_sizes": " ".join(f"{s:.4g}" for s in sizes) if sizes else "none"}
