@@ -161,6 +161,19 @@ def test_envelope_spectrum_is_amplitude_calibrated():
         assert line.height == pytest.approx(a, rel=0.03) and abs(line.found_hz - f_mod) < 0.1, segment
 
 
+def test_a_line_on_the_search_windows_edge_stays_there():
+    """No line at f0, only noise: the largest bin of the +-1 % search window is its upper edge,
+    with a higher bin just beyond.  The peak's sub-bin interpolation took that slope for a peak
+    and put it 69 bins away (a healthy 1 s window of cwru_6205_or007_6_growing: BPFI 162 Hz
+    "found" at 784 Hz, its neighbourhood empty, prominence infinite, verdict inner).  Now it
+    stays on the bin, with a finite prominence."""
+    f = np.arange(0.0, 400.0, 1.0)
+    s = np.full(f.size, 0.2)
+    s[162:165] = 0.5, 1.0, 1.98         # the search window around 162.186 Hz holds bins 161-163
+    line = env.line_at(f, s, 162.186)
+    assert line.found_hz == 163.0 and line.prominence == pytest.approx(1.0 / 0.2), line
+
+
 def test_band_rms_adds_up_to_the_signal_rms():
     rng = np.random.default_rng(1)
     x = rng.standard_normal(48000)

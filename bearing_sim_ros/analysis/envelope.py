@@ -108,9 +108,13 @@ def line_at(freqs: np.ndarray, spec: np.ndarray, f0: float, search_rel: float = 
     if sel.size == 0:
         return Line(f0, float("nan"), 0.0, 0.0)
     k = sel[np.argmax(spec[sel])]
-    # parabolic interpolation of the peak on the log spectrum for a sub-bin frequency
+    # parabolic interpolation of the peak on the log spectrum for a sub-bin frequency, at a local
+    # maximum only (then within half a bin): the largest bin of the search window may sit on its
+    # edge, on a slope rising beyond it, where the parabola's vertex can lie anywhere (784 Hz for a
+    # BPFI of 162 Hz, its neighbourhood then empty and the prominence infinite)
     fk = freqs[k]
-    if 0 < k < spec.size - 1 and spec[k - 1] > 0 and spec[k + 1] > 0 and spec[k] > 0:
+    if (0 < k < spec.size - 1 and spec[k - 1] > 0 and spec[k + 1] > 0 and spec[k] > 0
+            and spec[k] >= spec[k - 1] and spec[k] >= spec[k + 1]):
         a, b, c = np.log(spec[k - 1]), np.log(spec[k]), np.log(spec[k + 1])
         denom = a - 2 * b + c
         if denom < 0:
