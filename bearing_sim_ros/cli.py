@@ -75,6 +75,7 @@ def _oversample(text):
 def build_parser() -> argparse.ArgumentParser:
     from .physics.integrators import RK4_DEFAULT_STEP, RK4_STEP_RANGE
     from .simulator import AUTO_OVERSAMPLE_MAX, OVERSAMPLE_ALLOWED, SAMPLE_RATE_RANGE, SEED_RANGE
+    from .analysis.report import DEFAULT_WINDOW_S, WINDOW_RANGE_S
 
     p = _Parser(prog="bearing-sim", description="Virtual bearing accelerometer for ROS 2.")
     sub = p.add_subparsers(dest="command", parser_class=_Parser, metavar="COMMAND")
@@ -142,6 +143,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("file", metavar="F.mcap", help="the recording to analyse")
     s.add_argument("--out", required=True, metavar="DIR",
                    help="folder for the PNG plots, summary.md and summary.json, created if missing (required)")
+    s.add_argument("--window", type=_in_range(*WINDOW_RANGE_S, "s"), default=DEFAULT_WINDOW_S, metavar="SECONDS",
+                   help=f"seconds of signal per verdict of the timeline (timeline.png), {WINDOW_RANGE_S[0]:g} to "
+                        f"{WINDOW_RANGE_S[1]:g}; the whole recording when shorter than two (default: %(default)g)")
 
     s = sub.add_parser("bench", help="speed-against-error study")
     s.add_argument("--quick", action="store_true",

@@ -1,6 +1,6 @@
 """``bearing-sim report`` draws its plots from nothing but the file (the recording's samples, their
-spectra and envelope spectrum) and finds the recorded fault; bad inputs end with exit status 2 and
-one line."""
+spectra and envelope spectrum) and finds the recorded fault, over the whole recording and window
+by window against the recorded ground truth; bad inputs end with exit status 2 and one line."""
 from __future__ import annotations
 
 import json
@@ -47,23 +47,30 @@ def _line_with(ax, ydata):
     return None
 
 
-def test_report_draws_plots_and_finds_the_outer_race_fault(outer, monkeypatch):
-    import matplotlib.image as mpimg
-
-    rec, out = outer
-    # keep each figure as it is saved: what is drawn on it is checked below, against the recording
-    figures = {}
+@pytest.fixture
+def figures(monkeypatch):
+    """{file name: matplotlib figure} of every plot the report saves, kept as it is saved, so that
+    a test can check what is drawn on it."""
+    kept = {}
     save = report._save
 
     def keep_and_save(plt, fig, path):
-        figures[path.name] = fig
+        kept[path.name] = fig
         return save(plt, fig, path)
 
     monkeypatch.setattr(report, "_save", keep_and_save)
+    return kept
+
+
+def test_report_draws_plots_and_finds_the_outer_race_fault(outer, figures):
+    import matplotlib.image as mpimg
+
+    rec, out = outer
+    # what is drawn on each figure is checked below, against the recording
     code = cli.main(["report", str(rec), "--out", str(out)])
     assert code == 0
     summary = json.loads((out / "summary.json").read_text())
-    for name in ("waveform.png", "spectrum.png", "envelope.png", "operating_point.png"):
+    for name in ("waveform.png", "spectrum.png", "envelope.png", "operating_point.png", "timeline.png"):
         assert name in summary["plots"]
         img = mpimg.imread(out / name)
         assert img.shape[0] > 300 and img.shape[1] > 1000
@@ -121,6 +128,110 @@ def test_report_of_a_healthy_bearing_says_healthy(tmp_path):
     s = build_report(rec, tmp_path / "out")
     assert s["verdict"] == "healthy" and s["expected_defects"] == []
     assert "agrees with the scene" in (tmp_path / "out" / "summary.md").read_text()
+    # window by window too, and nothing to detect: no onset, no detection, no latency
+    assert [(w["verdict"], w["faults_present"]) for w in s["timeline"]] == [("healthy", [])] * 2
+    assert s["fault_onset_s"] is None and s["first_detection_s"] is None and s["detection_latency_s"] is None
+    assert s["verdict_describes_recording"] is True
+
+
+def _with_onset(tmp_path, onset_s: float):
+    """A scene YAML: cwru_6205_or007_6 with its outer-race pit appearing at ``onset_s``, at full size."""
+    text = load_scene("cwru_6205_or007_6").source_text
+    late = text.replace("clock: 6, profile: geometric}", f"clock: 6, profile: geometric, onset_s: {onset_s}}}")
+    assert late != text, "cwru_6205_or007_6.yaml's defect line moved: update this test"
+    path = tmp_path / "late.yaml"
+    path.write_text(late)
+    return path
+
+
+def test_report_timeline_scores_detection_against_the_recorded_onset(tmp_path, figures):
+    """An outer-race pit that appears 2.5 s into a 5 s recording: in 1 s windows (the default)
+    the verdict is healthy, with no fault present by /diagnostics, before the onset and outer
+    with the fault present from the first window after it.  The onset from /diagnostics (1 Hz)
+    brackets the scene's 2.5 s within its stated resolution; the first detection comes no later
+    than the end of the first whole window with the pit, so the latency is 0 to 1 s.
+    timeline.png draws each window's prominences as summary.json has them, over the windows'
+    times, with the threshold; the whole-recording verdict stays, with the note that one verdict
+    does not describe this recording."""
+    rec = tmp_path / "late.mcap"
+    render(str(_with_onset(tmp_path, 2.5)), 5.0, rec, fidelity="kinematic", seed=1, progress=False)
+    out = tmp_path / "out"
+    assert cli.main(["report", str(rec), "--out", str(out)]) == 0
+    s = json.loads((out / "summary.json").read_text())
+    timeline = s["timeline"]
+    assert s["timeline_window_s"] == pytest.approx(1.0) and len(timeline) == 5
+    assert [(w["start_s"], w["end_s"]) for w in timeline] == [pytest.approx((k, k + 1.0)) for k in range(5)]
+    before = [w for w in timeline if w["end_s"] <= 2.5]
+    after = [w for w in timeline if w["start_s"] >= 2.5]
+    assert len(before) == 2 and len(after) == 2
+    assert all(w["verdict"] == "healthy" and w["faults_present"] == [] and w["defect_sizes"] == [0.0]
+               for w in before), before
+    assert all(w["verdict"] == "outer" and w["faults_present"] == ["outer"] and w["defect_sizes"] == [1.0]
+               and w["prominences"]["outer"] > 10 for w in after), after
+    assert all(w["shaft_speed_rpm"] == pytest.approx(1797.0) for w in timeline)
+    # the ground truth's time base: the onset lies within the resolution before fault_onset_s
+    onset, resolution = s["fault_onset_s"], s["fault_onset_resolution_s"]
+    assert s["scene_defect_onsets_s"] == [2.5]
+    assert 0 < resolution <= 1.0 + 1e-6 and onset - resolution <= 2.5 <= onset, (onset, resolution)
+    assert s["ground_truth_changes"] == [{"t_s": onset, "after_s": onset - resolution,
+                                          "faults_present": ["outer"], "defect_sizes": [1.0]}]
+    assert s["first_detection_s"] <= after[0]["end_s"]
+    assert 0.0 <= s["detection_latency_s"] <= 1.0 + 1e-6
+    assert s["detection_latency_s"] == pytest.approx(s["first_detection_s"] - onset)
+    # the whole recording's verdict as before, said not to describe it
+    assert s["verdict"] == "outer" and s["verdict_describes_recording"] is False
+    md = (out / "summary.md").read_text()
+    assert "one verdict does not describe it" in md and "## Verdict over time" in md
+    assert "| 0.00-2.00 | 2 | healthy | none | 0 |" in md          # a run of windows, not each window
+    # the plot: the per-window prominences against the windows' times, and the threshold
+    assert "timeline.png" in s["plots"] and (out / "timeline.png").stat().st_size > 10_000
+    ax = figures["timeline.png"].axes[0]
+    for fault, label in (("outer", "BPFO (outer)"), ("inner", "BPFI (inner)"), ("ball", "2xBSF (ball)")):
+        (line,) = [ln for ln in ax.get_lines() if ln.get_label() == label]
+        prom = [w["prominences"][fault] for w in timeline]
+        np.testing.assert_allclose(line.get_ydata(), prom + prom[-1:], rtol=1e-12)
+        np.testing.assert_allclose(line.get_xdata(), [w["start_s"] for w in timeline] + [5.0], rtol=1e-12)
+    assert any(ln.get_label().startswith("detection threshold") and ln.get_ydata()[0] == 4.0
+               for ln in ax.get_lines())
+    sizes_ax = figures["timeline.png"].axes[1]
+    assert [tuple(ln.get_ydata()) for ln in sizes_ax.get_lines()] == [(0.0, 0.0, 1.0, 1.0, 1.0)]
+    # windows that do not end on a /diagnostics sample: 0.7 s.  Those ending between the last
+    # sample without the fault and the first with it count as before the onset, and say so
+    s = build_report(rec, tmp_path / "short", window_s=0.7)
+    assert [round(w["end_s"], 6) for w in s["timeline"]] == [0.7, 1.4, 2.1, 2.8, 3.5, 4.2, 4.9]
+    assert [w["faults_present"] for w in s["timeline"]] == [[]] * 4 + [["outer"]] * 3
+    assert s["first_detection_s"] == pytest.approx(3.5) and s["fault_onset_s"] == onset
+    md = (tmp_path / "short" / "summary.md").read_text()
+    assert f"The windows ending between {onset - resolution:.2f} and {onset:.2f} s (1.40-2.10 s: " in md
+
+
+def test_report_timeline_without_a_fault_change_has_no_latency(outer, tmp_path):
+    """er16k_outer_race has its defect from the start: every window has the outer fault present,
+    so there is no onset and no latency, only a first detection; one verdict describes the
+    recording.  ``--window`` longer than half the 2 s recording gives one window, the whole of it."""
+    rec, _ = outer
+    s = build_report(rec, tmp_path / "out")
+    assert [w["faults_present"] for w in s["timeline"]] == [["outer"]] * 2
+    assert [w["verdict"] for w in s["timeline"]] == ["outer"] * 2
+    assert s["ground_truth_changes"] == [] and s["verdict_describes_recording"] is True
+    assert s["fault_onset_s"] is None and s["detection_latency_s"] is None
+    assert s["first_detection_s"] == pytest.approx(1.0)
+    assert "does not describe" not in (tmp_path / "out" / "summary.md").read_text()
+    whole = build_report(rec, tmp_path / "whole", window_s=1.5)["timeline"]
+    assert len(whole) == 1 and (whole[0]["start_s"], whole[0]["end_s"]) == pytest.approx((0.0, 2.0))
+
+
+@pytest.mark.parametrize("window, shown", [("0.1", "0.1 s"), ("200", "200 s"), ("nan", "nan s"), ("x", "'x'")])
+def test_report_window_out_of_range_is_one_line(outer, tmp_path, capsys, window, shown):
+    rec, _ = outer
+    code = cli.main(["report", str(rec), "--out", str(tmp_path / "o"), "--window", window])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1, err
+    assert "--window" in err[0] and shown in err[0], err[0]
+    assert window == "x" or "allowed range is [0.5, 120] s" in err[0]
+    assert not (tmp_path / "o").exists()
+    with pytest.raises(cli.UserError, match=r"^--window = 0 s: allowed range is \[0.5, 120\] s$"):
+        build_report(rec, tmp_path / "o", window_s=0)
 
 
 @pytest.mark.parametrize("kind", ["not_mcap", "truncated"])
@@ -184,3 +295,31 @@ def test_report_says_when_auto_switched_tiers(tmp_path):
     assert 0.0 < t_s < 0.5 and t_s * 100 == pytest.approx(round(t_s * 100), abs=1e-9)
     md = (tmp_path / "out" / "summary.md").read_text()
     assert "kinematic tier (" in md and "at the start, then skidding: 1 tier switch, the last kinematic -> skidding at" in md
+
+
+def test_ground_truth_keys_read_the_node_s_lead_and_several_faults():
+    """The live node's /diagnostics carry the sizes of its simulator, which runs ``computed_ahead_s``
+    ahead of the stamp (the last published sample); a render's have no such key (0).  Several
+    faults present are comma-separated, sizes space-separated; a recording from before the keys
+    has no ground truth."""
+    from bearing_sim_ros.recording.render import diagnostics_message
+
+    live = diagnostics_message(5_000_000_000, {"faults_present": "inner, ball", "defect_sizes": "1 0.25",
+                                               "computed_ahead_s": "0.040"})
+    assert report.ground_truth_keys(live) == (0.04, ("inner", "ball"), (1.0, 0.25))
+    rendered = diagnostics_message(0, {"faults_present": "none", "defect_sizes": "none"})
+    assert report.ground_truth_keys(rendered) == (0.0, (), ())
+    assert report.ground_truth_keys(diagnostics_message(0, {"tier": "kinematic"})) is None
+
+
+def test_fault_onset_is_the_first_change_from_none_and_truth_holds_until_the_next_sample():
+    """The onset is where the faults present go from none to some (not where a second fault joins
+    one already there); a window's ground truth is the latest /diagnostics sample at or before its
+    end, the first sample before that."""
+    truth = [(1.0, (), (0.0, 0.0)), (2.0, ("outer",), (0.4, 0.0)), (3.0, ("outer", "inner"), (1.0, 1.0))]
+    assert report.fault_onset(truth) == (2.0, 1.0)
+    assert report.fault_onset(truth[1:]) is None          # a fault there at the first sample
+    assert report.truth_changes(truth)[1] == {"t_s": 3.0, "after_s": 2.0, "faults_present": ["outer", "inner"],
+                                              "defect_sizes": [1.0, 1.0]}
+    assert [report.truth_at(truth, t)[0] for t in (0.5, 1.0, 1.9999999, 2.5, 9.0)] == [1.0, 1.0, 2.0, 2.0, 3.0]
+    assert report.truth_at([], 1.0) is None

@@ -9,16 +9,27 @@ Writes to DIR:
 - ``operating_point.png``: shaft speed and radial load over time;
 - ``cage.png`` (when ``state`` was recorded): cage speed against pure rolling and the cage slip
   ratio, plus the skid ratios the skidding tier reports in ``/diagnostics`` when present;
+- ``timeline.png``: the verdict over time: the same detector in consecutive windows
+  (``--window``), each window's prominences against the threshold, the faults present by the
+  recorded ``/diagnostics`` (the ground truth) and the defect sizes;
 - ``summary.md`` and ``summary.json``: how the recording was made, waveform statistics, fault
-  lines against theory, the verdict, and whether the waveform tables are contiguous.
+  lines against theory, the verdict, whether the waveform tables are contiguous, and the
+  timeline scored against the ground truth (fault onset, first detection, latency).
 
 The bearing comes from the scene text in the ``bearing_sim`` metadata record, so a report needs
 nothing but the file.  Spectra use at most ``MAX_ANALYSIS_S`` seconds of signal (the start).
+
+Time bases: signal time is seconds after the first waveform sample (``header.stamp`` of the
+first table).  A ``/diagnostics`` message is stamped with the end of the last batch published,
+and its ``faults_present`` / ``defect_sizes`` are the simulator's at its latest sample: the stamp
+in ``render``, the stamp + ``computed_ahead_s`` in the live node (whose simulator computes
+ahead).  Those samples come at 1 Hz, which is the resolution of the ground truth.
 """
 from __future__ import annotations
 
 import json
 import math
+import numbers
 from pathlib import Path
 
 import numpy as np
@@ -27,9 +38,11 @@ from ..errors import UserError
 from ..paths import output_folder
 from ..recording.reader import open_recording
 from ..waveform import NS, from_pointcloud2
-from .envelope import DEFAULT_BAND, FAULT_LINES, diagnose, envelope_spectrum, statistics
+from .envelope import DEFAULT_BAND, DETECTION_THRESHOLD, FAULT_LINES, diagnose, envelope_spectrum, statistics
 
 MAX_ANALYSIS_S = 120.0
+DEFAULT_WINDOW_S = 1.0        # s: the verdict timeline's windows (the detector's own segment length)
+WINDOW_RANGE_S = (0.5, MAX_ANALYSIS_S)   # s: below 0.5 s the lines' +-20 Hz neighbourhood holds too few bins
 LINE_LABELS = {"bpfo": "BPFO", "bpfi": "BPFI", "2bsf": "2xBSF", "ftf": "FTF"}
 LINE_COLOURS = {"bpfo": "tab:red", "bpfi": "tab:green", "2bsf": "tab:purple", "ftf": "tab:orange"}
 RPM = 60.0 / (2.0 * math.pi)
@@ -61,7 +74,7 @@ class _Data:
         cmd_t, cmd_speed, load_t, load_xy = [], [], [], []
         diag = {}
         tiers = []
-        in_signal = []
+        in_signal, truth_raw = [], []
         samples = 0
         fs_meta = None
         try:
@@ -99,7 +112,10 @@ class _Data:
                     tiers.append(tier)
                 found = signal_frequencies(msg)
                 if found:
-                    in_signal.append(found)
+                    in_signal.append((_stamp(msg.header.stamp), found))
+                truth = ground_truth_keys(msg)
+                if truth is not None:
+                    truth_raw.append((_stamp(msg.header.stamp), *truth))
         if not chunks:
             raise UserError(f"{rec.path}: no accelerometer waveform tables (sensor_msgs/msg/PointCloud2 "
                             f"on .../accel) in this recording; topics: {', '.join(sorted(topics)) or 'none'}")
@@ -118,8 +134,14 @@ class _Data:
         self.load_xy = np.array(load_xy, dtype=float).reshape(-1, 2)
         self.skid = {k: np.array(v, dtype=float) for k, v in diag.items()}
         # the fault frequencies the recording's /diagnostics gave, mean over the recording
-        self.signal_frequencies = ({k: float(np.mean([f[k] for f in in_signal])) for k in in_signal[0]}
+        self.signal_frequencies = ({k: float(np.mean([f[k] for _, f in in_signal])) for k in in_signal[0][1]}
                                    if in_signal else {})
+        # ... and each /diagnostics period's, in signal time: (from s, to s, {ftf, bpfo, bpfi: Hz})
+        ends = [(ns - self.t0_ns) / NS for ns, _ in in_signal]
+        self.signal_frequency_periods = [(0.0 if k == 0 else ends[k - 1], ends[k], f)
+                                         for k, (_, f) in enumerate(in_signal)]
+        # the ground truth: (signal time s, faults present, defect sizes) of each /diagnostics
+        self.truth = [((ns - self.t0_ns) / NS + ahead, faults, sizes) for ns, ahead, faults, sizes in truth_raw]
         self.tiers = tiers
 
     @staticmethod
@@ -169,6 +191,26 @@ def signal_frequencies(diagnostics) -> dict:
         return {}
 
 
+def ground_truth_keys(diagnostics):
+    """(computed ahead s, faults present, defect sizes) of one ``/diagnostics`` message: its
+    ``faults_present`` as a tuple of kinds (``()`` for ``none``), ``defect_sizes`` as a tuple of
+    sizes 0-1 in scene order (``()`` for ``none``) and ``computed_ahead_s`` (the live node's
+    simulator runs ahead of what it has published, and the sizes are the simulator's; 0 in a
+    render, which has no such key); None in a recording made before these keys."""
+    values = {kv.key: kv.value for status in diagnostics.status for kv in status.values}
+    if "faults_present" not in values:
+        return None
+    faults = () if values["faults_present"] == "none" else tuple(
+        k.strip() for k in values["faults_present"].split(",") if k.strip())
+    try:
+        sizes = () if values.get("defect_sizes", "none") == "none" else tuple(
+            float(v) for v in values["defect_sizes"].split())
+        ahead = float(values.get("computed_ahead_s", 0.0))
+    except ValueError:
+        return None
+    return ahead, faults, sizes
+
+
 def tier_keys(diagnostics) -> dict:
     """The model-tier keys of one ``/diagnostics`` message (``recording.render.TIER_KEYS``:
     ``tier``, ``tier_switches``, ``last_tier_switch``, ...), as text; {} when it has none."""
@@ -208,6 +250,138 @@ def _scene_from_metadata(meta: dict):
         return scene_from_dict(load_yaml(text), name=meta.get("scene", "scene"), source_text=text)
     except Exception:  # noqa: BLE001 - a scene this version cannot read: report without it
         return None
+
+
+# ---- verdict over time -------------------------------------------------------------------------
+def window_bounds(samples: int, sample_rate_hz: float, window_s: float) -> list:
+    """Consecutive, non-overlapping windows of ``window_s`` seconds over ``samples`` samples at
+    ``sample_rate_hz``, as (first, end) sample indices.  Fewer samples than two windows: one
+    window, the whole signal.  Otherwise a rest shorter than a window is left out (scored on less
+    signal, its prominences would not compare with the others')."""
+    n = int(round(window_s * sample_rate_hz))
+    if samples < 2 * n:
+        return [(0, samples)]
+    return [(k * n, (k + 1) * n) for k in range(samples // n)]
+
+
+def sample_times_s(index, stamps_ns, widths, sample_rate_hz: float, t0_ns: int) -> np.ndarray:
+    """Signal time (s after sample 0) of the samples ``index`` (counted over the waveform tables
+    in order), from the stamp of each sample's table: times stay right across a lost table."""
+    index = np.asarray(index, dtype=np.int64)
+    first = np.concatenate(([0], np.cumsum(widths)[:-1]))
+    table = np.clip(np.searchsorted(first, index, side="right") - 1, 0, len(first) - 1)
+    return (stamps_ns[table] - t0_ns) / NS + (index - first[table]) / sample_rate_hz
+
+
+def mean_in_window(t_s, values, start_s: float, end_s: float):
+    """Mean of ``values`` whose time ``t_s`` (s) lies in [start_s, end_s); without any, the last
+    value before ``start_s`` (a command holds until the next); None when there is neither."""
+    t_s, values = np.asarray(t_s, dtype=float), np.asarray(values, dtype=float)
+    inside = (t_s >= start_s) & (t_s < end_s)
+    if inside.any():
+        return float(values[inside].mean())
+    before = np.flatnonzero(t_s < start_s)
+    return float(values[before[-1]]) if before.size else None
+
+
+def recorded_frequencies(periods: list, start_s: float, end_s: float) -> dict:
+    """{"ftf", "bpfo", "bpfi": Hz} as the recording's ``/diagnostics`` give them over
+    [start_s, end_s): the mean of the periods' values weighted by their overlap with the window
+    (each period runs from the previous ``/diagnostics`` to its own, s); a window outside every
+    period takes the nearest; {} without periods (a recording made before these keys)."""
+    if not periods:
+        return {}
+    overlap = np.array([max(0.0, min(end_s, p1) - max(start_s, p0)) for p0, p1, _ in periods])
+    if overlap.sum() <= 0.0:
+        mid = 0.5 * (start_s + end_s)
+        overlap = np.zeros(len(periods))
+        overlap[int(np.argmin([min(abs(mid - p0), abs(mid - p1)) for p0, p1, _ in periods]))] = 1.0
+    w = overlap / overlap.sum()
+    return {k: float(sum(wi * f[k] for wi, (_, _, f) in zip(w, periods))) for k in periods[0][2]}
+
+
+def truth_at(truth: list, t_s: float):
+    """The ground truth in force at signal time ``t_s`` (s): the latest ``/diagnostics``
+    sample (t s, faults present, defect sizes) at or before it (1 us of rounding allowed), or the
+    first one for a time before it; None without samples.  A change therefore shows up to one
+    ``/diagnostics`` period (1 s) late."""
+    if not truth:
+        return None
+    before = [item for item in truth if item[0] <= t_s + 1e-6]
+    return before[-1] if before else truth[0]
+
+
+def fault_onset(truth: list):
+    """(onset s, resolution s) of the first fault to appear: the signal time of the first
+    ``/diagnostics`` sample with a fault present after one with none, and the time since that
+    one (the fault appeared in between).  None when the faults present never go from none to
+    some: a healthy recording, or one with its fault there at the first sample."""
+    for (t_prev, faults_prev, _), (t, faults, _) in zip(truth, truth[1:]):
+        if not faults_prev and faults:
+            return t, t - t_prev
+    return None
+
+
+def truth_changes(truth: list) -> list:
+    """Where the faults present change between two ``/diagnostics`` samples: {"t_s": the first
+    sample with the new faults, "after_s": the one before it (s), faults_present, defect_sizes}."""
+    return [{"t_s": t, "after_s": t_prev, "faults_present": list(faults), "defect_sizes": list(sizes)}
+            for (t_prev, faults_prev, _), (t, faults, sizes) in zip(truth, truth[1:]) if faults != faults_prev]
+
+
+def score_windows(x, sample_rate_hz: float, bounds: list, times_s: list, frequencies: list,
+                  truth: list, speeds_rad_s: list) -> list:
+    """The envelope detector (``envelope.diagnose``, as for the whole recording) in each window:
+    ``x[first:end]`` for each (first, end) of ``bounds``, spanning ``times_s`` (start s, end s)
+    of signal, looking at ``frequencies`` ({"ftf", "bpfo", "bpfi", "bsf": Hz} per window, {}
+    when unknown) at the window's shaft speed (``speeds_rad_s``); verdict "unknown" without
+    frequencies or in less than 0.2 s of signal.  One dict per window: start_s,
+    end_s, shaft_speed_rpm, verdict, prominences ({fault: line height over local median}), and
+    the ground truth at its end (``truth_at``): faults_present, defect_sizes and the time of the
+    ``/diagnostics`` sample they come from (None each without ground truth)."""
+    rows = []
+    for (i0, i1), (t0, t1), freqs, speed in zip(bounds, times_s, frequencies, speeds_rad_s):
+        usable = freqs and freqs["bpfo"] > 0 and i1 - i0 > 0.2 * sample_rate_hz   # as for the whole
+        verdict = diagnose(x[i0:i1], sample_rate_hz, freqs) if usable else None
+        now = truth_at(truth, t1)
+        rows.append({"start_s": t0, "end_s": t1, "shaft_speed_rpm": speed * RPM,
+                     "verdict": verdict["verdict"] if verdict else "unknown",
+                     "prominences": verdict["scores"] if verdict else {},
+                     "faults_present": list(now[1]) if now else None,
+                     "defect_sizes": list(now[2]) if now else None,
+                     "truth_t_s": now[0] if now else None})
+    return rows
+
+
+def first_detection(timeline: list):
+    """End (s) of the first window whose verdict names a fault present in its ground truth;
+    None when there is none (or no ground truth)."""
+    return next((w["end_s"] for w in timeline if w["faults_present"] and w["verdict"] in w["faults_present"]),
+                None)
+
+
+def verdict_timeline(d: "_Data", x, scene, window_s: float, mean_speed_rad_s: float) -> list:
+    """``score_windows`` over the analysed signal ``x`` of ``d`` in windows of ``window_s`` s,
+    each at its own speed (the ``shaft_speed`` commands in the window, else ``state``, else
+    ``mean_speed_rad_s``) and fault frequencies (pure rolling at that speed, with the cage,
+    BPFO and BPFI of the recorded ``/diagnostics`` over the window where present)."""
+    if scene is None:
+        return []
+    fs = d.sample_rate
+    bounds = window_bounds(x.size, fs, window_s)
+    edges = sample_times_s([i for b in bounds for i in b], d.stamps, d.widths, fs, d.t0_ns)
+    times = [(float(edges[2 * k]), float(edges[2 * k + 1])) for k in range(len(bounds))]
+    cmd_t, state_t = d.cmd_t - d.t0_ns / NS, d.state_t - d.t0_ns / NS
+    speeds, freqs = [], []
+    for t0, t1 in times:
+        speed = mean_in_window(cmd_t, d.cmd_speed, t0, t1)
+        if speed is None:
+            speed = mean_in_window(state_t, d.shaft_w, t0, t1)
+        speed = mean_speed_rad_s if speed is None else speed
+        speeds.append(speed)
+        freqs.append({**scene.bearing.fault_frequencies(speed / (2 * math.pi)),
+                      **recorded_frequencies(d.signal_frequency_periods, t0, t1)})
+    return score_windows(x, fs, bounds, times, freqs, d.truth, speeds)
 
 
 # ---- plots -------------------------------------------------------------------------------------
@@ -358,9 +532,72 @@ def plot_cage(d: _Data, scene, out: Path, meta: dict) -> str | None:
     return _save(plt, fig, out / "cage.png")
 
 
+TIMELINE_LINES = (("outer", "bpfo"), ("inner", "bpfi"), ("ball", "2bsf"))   # fault, its envelope line
+
+
+def plot_timeline(timeline: list, truth: list, kinds: list, onset, detected_s, out: Path, meta: dict) -> str:
+    """Per-window prominences of BPFO, BPFI and 2xBSF against signal time (one step per window),
+    the detection threshold, the faults present by ``/diagnostics`` shaded (lighter where the
+    onset lies between two samples), the first detection; below, the defect sizes of ``truth``
+    when the recording has any (``kinds``: the scene's defect kinds, for the labels)."""
+    sized = any(sizes for _, _, sizes in truth)
+    plt, fig, axes = _figure(2 if sized else 1, 3.4 if sized else 4.2)
+    ax = axes[0]
+    edges = np.array([w["start_s"] for w in timeline] + [timeline[-1]["end_s"]])
+    for fault, key in TIMELINE_LINES:
+        prom = np.array([w["prominences"].get(fault, np.nan) for w in timeline], dtype=float)
+        ax.step(edges, np.append(prom, prom[-1]), where="post", color=LINE_COLOURS[key], lw=1.3,
+                label=f"{LINE_LABELS[key]} ({fault})")
+    ax.axhline(DETECTION_THRESHOLD, color="0.3", ls="--", lw=1.0,
+               label=f"detection threshold {DETECTION_THRESHOLD:g}")
+    end = edges[-1]
+    label = "fault present (/diagnostics)"
+    for k, (t, faults, _) in enumerate(truth):
+        if faults and (k == 0 or not truth[k - 1][1]):        # a run of samples with a fault present
+            stop = next((t2 for t2, f2, _ in truth[k:] if not f2), end)
+            # before the first sample, the first sample's state holds (``truth_at``)
+            ax.axvspan(min(t, edges[0]) if k == 0 else t, stop, color="tab:red", alpha=0.12, lw=0, label=label)
+            label = None
+    if onset is not None:
+        ax.axvspan(onset[0] - onset[1], onset[0], facecolor="none", edgecolor="tab:red", alpha=0.4,
+                   hatch="//", lw=0, label="onset somewhere here (1 Hz /diagnostics)")
+    if detected_s is not None:
+        ax.axvline(detected_s, color="k", lw=1.2, label=f"first detection {detected_s:.2f} s")
+    ax.set_yscale("log")
+    ax.set(ylabel="prominence (line / local median)", xlim=(edges[0], end),
+           title=f"Envelope verdict per {timeline[0]['end_s'] - timeline[0]['start_s']:.3g} s window - {_title(meta)}")
+    ax.legend(loc="upper left", fontsize=8, ncol=2)
+    ax.grid(alpha=0.3, which="both")
+    if sized:
+        t = [item[0] for item in truth]
+        for k in range(max(len(sizes) for _, _, sizes in truth)):
+            size = [sizes[k] if k < len(sizes) else np.nan for _, _, sizes in truth]
+            name = kinds[k] if k < len(kinds) else "?"
+            # dotted: between two samples the size is not known
+            axes[1].plot(t, size, marker="o", ms=4, lw=0.8, ls=":", label=f"defect {k + 1} ({name})")
+        axes[1].set(ylabel="defect size (1 = full)", title="Defect sizes in /diagnostics (1 Hz samples)",
+                    ylim=(-0.05, 1.05), xlim=(edges[0], end))
+        axes[1].legend(loc="upper left", fontsize=8)
+        axes[1].grid(alpha=0.3)
+    axes[-1].set_xlabel("signal time (s after the first sample)")
+    return _save(plt, fig, out / "timeline.png")
+
+
 # ---- summary -----------------------------------------------------------------------------------
-def build_report(path, out) -> dict:
-    """Read ``path``, write the plots and summaries to ``out``; return the summary dict."""
+def window_error(window_s) -> str | None:
+    """Why ``window_s`` cannot be the timeline's window (one line naming ``--window``), or None."""
+    lo, hi = WINDOW_RANGE_S
+    if isinstance(window_s, bool) or not isinstance(window_s, numbers.Real) or not lo <= window_s <= hi:
+        return f"--window = {window_s!r} s: allowed range is [{lo:g}, {hi:g}] s"
+    return None
+
+
+def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
+    """Read ``path``, write the plots and summaries to ``out``; return the summary dict.
+    ``window_s``: length (s) of the windows of the verdict timeline."""
+    reason = window_error(window_s)
+    if reason:
+        raise UserError(reason)
     rec = open_recording(path)
     try:
         d = _Data(rec)
@@ -388,6 +625,13 @@ def build_report(path, out) -> dict:
     cage = plot_cage(d, scene, out, meta)
     if cage:
         plots.append(cage)
+    timeline = verdict_timeline(d, x, scene, window_s, speed) if verdict is not None else []
+    onset = fault_onset(d.truth)
+    detected = first_detection(timeline)
+    if timeline:
+        plots.append(plot_timeline(timeline, d.truth, [df.kind for df in scene.defects], onset, detected,
+                                   out, meta))
+    changes = truth_changes(d.truth)
 
     expected = sorted({df.kind for df in scene.defects}) if scene is not None else []
     speed_var = (float(np.ptp(d.cmd_speed) / abs(speed)) if d.cmd_speed.size and speed else 0.0)
@@ -422,6 +666,16 @@ def build_report(path, out) -> dict:
         "verdict": verdict["verdict"] if verdict else "unknown",
         "expected_defects": expected,
         "skid_ratios_percent": {k: float(np.mean(v[:, 1])) for k, v in sorted(d.skid.items())},
+        "verdict_describes_recording": (not changes) if d.truth else None,
+        "timeline_window_s": (timeline[0]["end_s"] - timeline[0]["start_s"]) if timeline else None,
+        "timeline_unscored_s": ((x.size - window_bounds(x.size, fs, window_s)[-1][1]) / fs) if timeline else None,
+        "timeline": timeline,
+        "ground_truth_changes": changes,
+        "fault_onset_s": onset[0] if onset else None,
+        "fault_onset_resolution_s": onset[1] if onset else None,
+        "scene_defect_onsets_s": [df.onset for df in scene.defects] if scene is not None else [],
+        "first_detection_s": detected,
+        "detection_latency_s": detected - onset[0] if onset and detected is not None else None,
         "plots": plots,
     }
     (out / "summary.json").write_text(json.dumps(summary, indent=2, default=_json_default) + "\n")
@@ -467,6 +721,9 @@ def _markdown(s: dict) -> str:
              else "differs from the scene")
     lines += [f"**Verdict (envelope analysis of {s['envelope_channel']}): {verdict}**; the scene's defects: "
               f"{exp} (the verdict {agree}).", ""]
+    if s["verdict_describes_recording"] is False:
+        lines += [f"**The faults present change during this recording ({_changes_text(s)}): one verdict does "
+                  "not describe it; see \"Verdict over time\".**", ""]
     lines += ["| | |", "| --- | --- |",
               f"| file | `{s['file']}` |",
               f"| made by | bearing_sim_ros {s['package_version']}, {_tiers_text(s)}, seed {s['seed']} |",
@@ -486,6 +743,7 @@ def _markdown(s: dict) -> str:
                          f"{_num(line['prominence'])} |")
         lines += ["", f"A line counts as a fault above a prominence of 4 (`analysis.envelope.DETECTION_THRESHOLD`); "
                   f"which line marks which fault: {', '.join(f'{k} -> {LINE_LABELS[v]}' for k, v in FAULT_LINES.items())}.", ""]
+    lines += _timeline_markdown(s)
     if s["skid_ratios_percent"]:
         lines += ["## Skidding", "", "Mean over the recording (`/diagnostics`): "
                   + ", ".join(f"{k.replace('_ratio', '')} {v:.3g} %" for k, v in s["skid_ratios_percent"].items()), ""]
@@ -498,9 +756,104 @@ def _markdown(s: dict) -> str:
     return "\n".join(lines)
 
 
+def _faults_text(faults) -> str:
+    return "n/a" if faults is None else (", ".join(faults) or "none")
+
+
+def _changes_text(s: dict) -> str:
+    """``none, then outer from between 2.00 and 3.00 s`` from ``ground_truth_changes``."""
+    first = s["timeline"][0]["faults_present"] if s["timeline"] else None
+    parts = [_faults_text(first)] if first is not None else []
+    parts += [f"{_faults_text(c['faults_present'])} from between {c['after_s']:.2f} and {c['t_s']:.2f} s"
+              for c in s["ground_truth_changes"]]
+    return ", then ".join(parts)
+
+
+MAX_TIMELINE_ROWS = 40
+
+
+def _timeline_runs(timeline: list) -> list:
+    """The timeline as runs of consecutive windows with the same verdict and faults present, each
+    the list of its windows."""
+    runs = []
+    for w in timeline:
+        if runs and (w["verdict"], w["faults_present"]) == (runs[-1][0]["verdict"], runs[-1][0]["faults_present"]):
+            runs[-1].append(w)
+        else:
+            runs.append([w])
+    return runs
+
+
+def _timeline_markdown(s: dict) -> list:
+    """The "Verdict over time" section: onset, first detection, latency and the runs of windows."""
+    timeline = s["timeline"]
+    if not timeline:
+        return []
+    lines = ["## Verdict over time", "",
+             f"The same detector in {len(timeline)} consecutive windows of {s['timeline_window_s']:.3g} s of "
+             f"{s['envelope_channel']}"
+             + (f" (the last {s['timeline_unscored_s']:.3g} s, shorter than a window, not scored)"
+                if s["timeline_unscored_s"] > 1e-9 else "")
+             + ", each at its own shaft speed; `timeline.png`, and every window in `summary.json`.", ""]
+    if timeline[0]["faults_present"] is None:
+        lines += ["No ground truth in this recording (its `/diagnostics` have no `faults_present`: made "
+                  "before that key).", ""]
+    else:
+        lines += ["Ground truth: `faults_present` and `defect_sizes` of the recorded `/diagnostics` (1 Hz), "
+                  "the latest at or before each window's end, so a change shows up to one `/diagnostics` "
+                  "period late.", ""]
+        if s["fault_onset_s"] is not None:
+            scene = [t for t in s["scene_defect_onsets_s"] if t > 0]
+            lines.append(f"- fault onset: {s['fault_onset_s']:.2f} s (by `/diagnostics`: none at "
+                         f"{s['fault_onset_s'] - s['fault_onset_resolution_s']:.2f} s, so the fault appeared "
+                         f"within the {s['fault_onset_resolution_s']:.2f} s before"
+                         + (f"; the scene sets {', '.join(f'{t:g}' for t in scene)} s" if scene else "") + ")")
+        else:
+            lines.append("- fault onset: none seen (the faults present do not go from none to some)")
+        if s["first_detection_s"] is not None:
+            lines.append(f"- first detection: {s['first_detection_s']:.2f} s (the end of the first window whose "
+                         "verdict names a fault present)")
+        else:
+            lines.append("- first detection: none (no window's verdict names a fault present)")
+        if s["detection_latency_s"] is not None:
+            lines.append(f"- detection latency: {s['detection_latency_s']:.2f} s after the onset by `/diagnostics` "
+                         f"(from the fault's appearance: {s['detection_latency_s']:.2f} to "
+                         f"{s['detection_latency_s'] + s['fault_onset_resolution_s']:.2f} s)")
+        lines.append("")
+    runs = _timeline_runs(timeline)
+    lines += ["| signal time (s) | windows | verdict | faults present | defect sizes | "
+              "highest prominence BPFO / BPFI / 2xBSF |", "| --- | --- | --- | --- | --- | --- |"]
+    for run in runs[:MAX_TIMELINE_ROWS]:
+        sizes = sorted({v for w in run for v in (w["defect_sizes"] or [])})
+        tops = [max((w["prominences"].get(fault, float("nan")) for w in run), default=float("nan"))
+                for fault, _ in TIMELINE_LINES]
+        lines.append(f"| {run[0]['start_s']:.2f}-{run[-1]['end_s']:.2f} | {len(run)} | {run[0]['verdict']} | "
+                     f"{_faults_text(run[0]['faults_present'])} | "
+                     f"{(_num(sizes[0]) + ('-' + _num(sizes[-1]) if len(sizes) > 1 else '')) if sizes else 'n/a'} | "
+                     f"{' / '.join(_num(v) for v in tops)} |")
+    if len(runs) > MAX_TIMELINE_ROWS:
+        lines.append(f"| ... | {sum(map(len, runs[MAX_TIMELINE_ROWS:]))} more windows in "
+                     f"{len(runs) - MAX_TIMELINE_ROWS} more runs: `summary.json` | | | | |")
+    lines += ["", "A row is a run of consecutive windows with the same verdict and faults present."]
+    if s["fault_onset_s"] is not None:
+        t1, t0 = s["fault_onset_s"], s["fault_onset_s"] - s["fault_onset_resolution_s"]
+        pending = [w for w in timeline if t0 + 1e-6 < w["end_s"] < t1 - 1e-6]
+        if pending:
+            several = len(pending) > 1
+            lines.append(f"The window{'s' if several else ''} ending between {t0:.2f} and {t1:.2f} s ("
+                         + ", ".join(f"{w['start_s']:.2f}-{w['end_s']:.2f} s: {w['verdict']}" for w in pending)
+                         + f") may already hold the fault, which /diagnostics had not reported yet: "
+                         f"{'they count' if several else 'it counts'} as before the onset, and a fault verdict "
+                         "there may be an earlier detection.")
+    return lines + [""]
+
+
 def report_command(args) -> int:
     """CLI entry: ``bearing-sim report F.mcap --out DIR``."""
-    s = build_report(args.file, args.out)
+    s = build_report(args.file, args.out, window_s=args.window)
+    timing = "".join(f", {label} {s[key]:.2f} s" for key, label in (
+        ("fault_onset_s", "fault onset"), ("first_detection_s", "first detection"),
+        ("detection_latency_s", "latency")) if s[key] is not None)
     print(f"{args.out}: {', '.join(s['plots'])}, summary.md, summary.json; verdict {s['verdict']} "
-          f"(scene defects: {', '.join(s['expected_defects']) or 'none'})")
+          f"(scene defects: {', '.join(s['expected_defects']) or 'none'}{timing})")
     return 0
