@@ -297,18 +297,17 @@ def test_report_says_when_auto_switched_tiers(tmp_path):
     assert "kinematic tier (" in md and "at the start, then skidding: 1 tier switch, the last kinematic -> skidding at" in md
 
 
-def test_ground_truth_keys_read_the_node_s_lead_and_several_faults():
-    """The live node's /diagnostics carry the sizes of its simulator, which runs ``computed_ahead_s``
-    ahead of the stamp (the last published sample); a render's have no such key (0).  Several
-    faults present are comma-separated, sizes space-separated; a recording from before the keys
-    has no ground truth."""
+def test_ground_truth_keys_read_several_faults_and_sizes():
+    """Several faults present are comma-separated, sizes space-separated (the live node's keys are
+    those of the last sample it published, whatever it computed ahead: test_defect_onset); a
+    recording from before the keys has no ground truth."""
     from bearing_sim_ros.recording.render import diagnostics_message
 
     live = diagnostics_message(5_000_000_000, {"faults_present": "inner, ball", "defect_sizes": "1 0.25",
                                                "computed_ahead_s": "0.040"})
-    assert report.ground_truth_keys(live) == (0.04, ("inner", "ball"), (1.0, 0.25))
+    assert report.ground_truth_keys(live) == (("inner", "ball"), (1.0, 0.25))
     rendered = diagnostics_message(0, {"faults_present": "none", "defect_sizes": "none"})
-    assert report.ground_truth_keys(rendered) == (0.0, (), ())
+    assert report.ground_truth_keys(rendered) == ((), ())
     assert report.ground_truth_keys(diagnostics_message(0, {"tier": "kinematic"})) is None
 
 

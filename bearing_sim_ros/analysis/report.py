@@ -21,9 +21,9 @@ nothing but the file.  Spectra use at most ``MAX_ANALYSIS_S`` seconds of signal 
 
 Time bases: signal time is seconds after the first waveform sample (``header.stamp`` of the
 first table).  A ``/diagnostics`` message is stamped with the end of the last batch published,
-and its ``faults_present`` / ``defect_sizes`` are the simulator's at its latest sample: the stamp
-in ``render``, the stamp + ``computed_ahead_s`` in the live node (whose simulator computes
-ahead).  Those samples come at 1 Hz, which is the resolution of the ground truth.
+and its ``faults_present`` / ``defect_sizes`` are those of that batch's last sample, in the live
+node (whose simulator computes ahead of what it publishes) as in ``render``.  Those samples come
+at 1 Hz, which is the resolution of the ground truth.
 """
 from __future__ import annotations
 
@@ -141,7 +141,7 @@ class _Data:
         self.signal_frequency_periods = [(0.0 if k == 0 else ends[k - 1], ends[k], f)
                                          for k, (_, f) in enumerate(in_signal)]
         # the ground truth: (signal time s, faults present, defect sizes) of each /diagnostics
-        self.truth = [((ns - self.t0_ns) / NS + ahead, faults, sizes) for ns, ahead, faults, sizes in truth_raw]
+        self.truth = [((ns - self.t0_ns) / NS, faults, sizes) for ns, faults, sizes in truth_raw]
         self.tiers = tiers
 
     @staticmethod
@@ -192,11 +192,10 @@ def signal_frequencies(diagnostics) -> dict:
 
 
 def ground_truth_keys(diagnostics):
-    """(computed ahead s, faults present, defect sizes) of one ``/diagnostics`` message: its
+    """(faults present, defect sizes) of one ``/diagnostics`` message, at its stamp (the last
+    sample published; the live node computes ahead, but reports the published signal's): its
     ``faults_present`` as a tuple of kinds (``()`` for ``none``), ``defect_sizes`` as a tuple of
-    sizes 0-1 in scene order (``()`` for ``none``) and ``computed_ahead_s`` (the live node's
-    simulator runs ahead of what it has published, and the sizes are the simulator's; 0 in a
-    render, which has no such key); None in a recording made before these keys."""
+    sizes 0-1 in scene order (``()`` for ``none``); None in a recording made before these keys."""
     values = {kv.key: kv.value for status in diagnostics.status for kv in status.values}
     if "faults_present" not in values:
         return None
@@ -205,10 +204,9 @@ def ground_truth_keys(diagnostics):
     try:
         sizes = () if values.get("defect_sizes", "none") == "none" else tuple(
             float(v) for v in values["defect_sizes"].split())
-        ahead = float(values.get("computed_ahead_s", 0.0))
     except ValueError:
         return None
-    return ahead, faults, sizes
+    return faults, sizes
 
 
 def tier_keys(diagnostics) -> dict:
