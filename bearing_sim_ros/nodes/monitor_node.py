@@ -11,10 +11,24 @@ with a hole in it would smear the lines.  Every ``window`` seconds of signal it 
 envelope detector (:func:`bearing_sim_ros.analysis.envelope.diagnose`) on each accelerometer axis
 at the fault frequencies of the scene's bearing at the measured shaft speed, and prints one line:
 
-    t=4.00s shaft=1600rpm verdict=outer | bpfo 95.2/95.3Hz x266 | bpfi 144.8/144.7Hz x1.0 | 2bsf 123.8/123.8Hz x1.1
+    t=4.00s shaft=1600rpm verdict=outer truth=outer | bpfo 95.2/95.3Hz x266 | bpfi 144.8/144.7Hz x1.0 | ...
 
 ``found/theory Hz`` and ``x`` the height of the line over the median of its neighbourhood
 (threshold x4, ``envelope.DETECTION_THRESHOLD``).  The axis where a line stands highest counts.
+
+It also scores itself.  The simulator's ``/diagnostics`` (1 Hz) say which faults are in the signal
+(``faults_present``: ``none``, ``outer``, ``ball, outer``, ...), stamped with the end of the signal
+published so far, the time line of the tables' stamps.  ``truth=`` is what the latest of them
+stamped at or before the window's end says (``none``, ``outer``, ``ball,outer``; ``unknown``
+before the first, or with none at all: a real sensor, a recording without them).  So the truth
+is exact at a diagnostics stamp and up to 1 s old between two: a fault that appears between them
+counts from the second, and a detector that calls it before that is scored against ``none``.
+The diagnostics stamped at a window's very end leave the node just after its last table; a
+verdict waits for them up to ``TRUTH_GRACE_S`` after that table arrived.  On exit, beside the
+counts, a score line (``healthy`` agrees with ``none``, a fault verdict when its kind is present),
+and when the diagnostics went from ``none`` to a fault during the run, the latency: the end of
+the first window that names a present fault minus the stamp of the first diagnostics with the
+fault (it appeared after the previous one's, up to 1 s earlier: the line gives both).
 
 The analysis runs on a thread of its own, and the callbacks only decode and queue: the
 subscription keeps a bounded number of tables (``waveform_qos``: 1 s of signal, 0.5 s when a
@@ -33,13 +47,15 @@ import rclpy
 from rclpy.node import Node
 
 from ..analysis.envelope import DETECTION_THRESHOLD, FAULT_LINES, diagnose
-from ..messages import TOPIC_ACCEL, TOPIC_STATE, waveform_qos
+from ..messages import TOPIC_ACCEL, TOPIC_DIAGNOSTICS, TOPIC_STATE, waveform_qos
 from ..teardown import teardown_watchdog
 from ..waveform import NS, from_pointcloud2
 
 DEFAULT_SCENE = "er16k_outer_race"
 FAULT_NAMES = {"outer": "outer-race fault", "inner": "inner-race fault", "ball": "ball fault",
                "healthy": "healthy"}
+TRUTH_GRACE_S = 0.25        # wall s a verdict waits for the diagnostics stamped at its window's end
+SLACK_NS = 1000             # stamps this close count as the same instant (rounding to the ns)
 
 
 class Window:
@@ -112,7 +128,8 @@ def verdict(data: np.ndarray, channels, sample_rate: float, bearing, shaft_hz: f
 
 def format_verdict(t: float, result: dict) -> str:
     """One line per verdict (see the module docstring)."""
-    parts = [f"t={t:.2f}s shaft={result['shaft_hz'] * 60:.0f}rpm verdict={result['verdict']}"]
+    parts = [f"t={t:.2f}s shaft={result['shaft_hz'] * 60:.0f}rpm verdict={result['verdict']} "
+             f"truth={truth_text(result.get('truth'))}"]
     for fault, key in FAULT_LINES.items():
         if fault == "cage":
             continue
@@ -122,10 +139,81 @@ def format_verdict(t: float, result: dict) -> str:
     return " | ".join(parts)
 
 
+# ---- ground truth and score (plain functions: test/test_monitor.py checks them without ROS) ----
+def parse_faults(text: str) -> frozenset:
+    """``faults_present`` as a set of kinds: ``"none"`` -> {}, ``"ball, outer"`` -> {ball, outer}."""
+    kinds = {k.strip() for k in text.split(",")} - {"", "none"}
+    return frozenset(kinds)
+
+
+def truth_at(reports, t_ns: int):
+    """The faults in force at signal time ``t_ns`` by the diagnostics ``reports`` ((stamp ns,
+    faults) in arrival order): the latest stamped at or before it.  None (unknown) if none is."""
+    return next((faults for stamp, faults in reversed(reports) if stamp <= t_ns + SLACK_NS), None)
+
+
+def truth_text(truth) -> str:
+    """``unknown``, ``none``, ``outer``, ``ball,outer`` (no space: one ``truth=`` word)."""
+    return "unknown" if truth is None else ",".join(sorted(truth)) or "none"
+
+
+def agrees(verdict: str, truth):
+    """Does a verdict agree with the truth?  ``healthy`` with no fault, a fault verdict when
+    that kind is present; None when the truth is unknown."""
+    if truth is None:
+        return None
+    return not truth if verdict == "healthy" else verdict in truth
+
+
+def fault_onset(reports):
+    """The first place where the diagnostics go from no fault to a fault: (stamp of the last
+    ``none``, stamp of the first with the fault), the fault appeared between them (the
+    resolution is their distance, 1 s); None if they never do."""
+    for (t_before, before), (t_after, after) in zip(reports, reports[1:]):
+        if not before and after:
+            return t_before, t_after
+    return None
+
+
+def first_detection(scored, onset_ns: int):
+    """End (ns) of the first window ending at or after ``onset_ns`` whose verdict names a fault
+    present there, or None; and how many windows end at or after it."""
+    since = [(end, verdict, truth) for end, verdict, truth in scored if end >= onset_ns - SLACK_NS]
+    ends = [end for end, verdict, truth in since if verdict != "healthy" and agrees(verdict, truth)]
+    return (ends[0] if ends else None), len(since)
+
+
+def score_lines(scored, reports, t0_ns: int) -> list:
+    """The exit lines on ``scored`` ((window end ns, verdict, truth) per verdict, in order) and
+    the diagnostics ``reports``: agreement, and the latency when a fault appeared during the run.
+    Times as in the verdict lines: s from the first table (``t0_ns``)."""
+    marks = [agrees(verdict, truth) for _end, verdict, truth in scored]
+    known = [m for m in marks if m is not None]
+    lines = [f"monitor: score {sum(known)} of {len(known)} verdicts agree with the truth, "
+             f"{len(marks) - len(known)} truth=unknown"]
+    onset = fault_onset(reports)
+    if onset is None or not scored:
+        return lines
+    before, after = ((t - t0_ns) / NS for t in onset)
+    found, since = first_detection(scored, onset[1])
+    where = (f"{truth_text(truth_at(reports, onset[1]))} appeared between t={before:.2f}s and "
+             f"t={after:.2f}s by the diagnostics")
+    if found is None:
+        lines.append(f"monitor: latency none: {where}, not called in {since} verdicts since")
+    else:
+        t = (found - t0_ns) / NS
+        # from the later bound; the fault may have been there up to after - before longer
+        lines.append(f"monitor: latency {max(0.0, t - after):.2f}s (to {after - before:.2f}s more): "
+                     f"{where}, first called at t={t:.2f}s")
+    return lines
+
+
 class MonitorNode(Node):
-    """Subscribes to ``accel`` and ``state``; prints a verdict every ``window`` s of signal."""
+    """Subscribes to ``accel``, ``state`` and ``/diagnostics``; prints a verdict every ``window``
+    s of signal, with the ground truth the diagnostics give."""
 
     def __init__(self, scene, window: float, count: int = 0, out=None, **kwargs):
+        from diagnostic_msgs.msg import DiagnosticArray
         from sensor_msgs.msg import JointState, PointCloud2
 
         super().__init__("bearing_monitor", **kwargs)
@@ -138,6 +226,7 @@ class MonitorNode(Node):
         self.rejected = 0           # tables that were no waveform table or held non-finite samples
         self.windows_queued = 0
         self.verdicts = []
+        self.reports = []           # (stamp ns, faults) from /diagnostics: the ground truth
         self._speeds = []
         self._t0 = None
         self._warned = False
@@ -148,6 +237,7 @@ class MonitorNode(Node):
         # executor thread only decodes tables
         self.create_subscription(PointCloud2, TOPIC_ACCEL, self._on_accel, waveform_qos(0.01))
         self.create_subscription(JointState, TOPIC_STATE, self._on_state, 10)
+        self.create_subscription(DiagnosticArray, TOPIC_DIAGNOSTICS, self._on_diagnostics, 10)
 
     @property
     def done(self) -> bool:
@@ -156,6 +246,13 @@ class MonitorNode(Node):
     def _on_state(self, msg):
         if "shaft" in msg.name and msg.velocity:
             self._speeds.append(float(msg.velocity[list(msg.name).index("shaft")]))
+
+    def _on_diagnostics(self, msg):
+        for status in msg.status:           # the simulator's: the status with faults_present
+            values = {kv.key: kv.value for kv in status.values}
+            if "faults_present" in values:
+                stamp = msg.header.stamp.sec * NS + msg.header.stamp.nanosec
+                self.reports.append((stamp, parse_faults(values["faults_present"])))
 
     def _on_accel(self, msg):
         if self.count and self.windows_queued >= self.count:
@@ -182,17 +279,23 @@ class MonitorNode(Node):
             speeds, self._speeds = self._speeds, []
             # the speed in use comes from `state`; without it, the scene's operating point
             shaft = float(np.mean(speeds)) if speeds else float(self.scene.shaft_speed)
-            t = (stamp + data.shape[0] * NS / fs - self._t0) / NS
+            end = stamp + round(data.shape[0] * NS / fs)
             self.windows_queued += 1
-            self._analysis.submit(self._analyse, t, self.window.take(), channels, fs, shaft)
+            self._analysis.submit(self._analyse, end, self.window.take(), channels, fs, shaft,
+                                  time.monotonic() + TRUTH_GRACE_S)
 
-    def _analyse(self, t: float, x: np.ndarray, channels, fs: float, shaft: float) -> None:
-        """On the analysis thread: one verdict, printed."""
+    def _analyse(self, end: int, x: np.ndarray, channels, fs: float, shaft: float, grace: float) -> None:
+        """On the analysis thread: one verdict with the truth at the window's ``end`` (ns),
+        printed.  ``grace``: until when (monotonic s) to wait for the diagnostics stamped there."""
+        t = (end - self._t0) / NS
         try:
             result = verdict(x, channels, fs, self.scene.bearing, abs(shaft) / (2 * np.pi))
         except Exception as exc:  # noqa: BLE001 - a failed analysis must not end the monitor silently
             self.get_logger().error(f"envelope analysis at t={t:.2f}s failed: {exc}")
             return
+        while time.monotonic() < grace and not (self.reports and self.reports[-1][0] >= end - SLACK_NS):
+            time.sleep(0.01)        # the diagnostics stamped at ``end`` (if any) are not in yet
+        result.update(end_ns=end, truth=truth_at(self.reports, end))
         self.verdicts.append(result)
         print(format_verdict(t, result), file=self.out, flush=True)
 
@@ -233,5 +336,8 @@ def main(args) -> int:
                 print(f"monitor: {len(node.verdicts)} verdicts from {node.tables} tables, "
                       f"{node.window.gaps} gaps (lost tables or a restarted source), "
                       f"{node.rejected} rejected", flush=True)
+                scored = [(r["end_ns"], r["verdict"], r["truth"]) for r in node.verdicts]
+                for line in score_lines(scored, node.reports, node._t0 or 0):
+                    print(line, flush=True)
             rclpy.try_shutdown()
     return 0
