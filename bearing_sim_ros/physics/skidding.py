@@ -1636,7 +1636,7 @@ class SkiddingModel:
         self._equilibrium(load, float(shaft_speed))
         if self.ellipse_ball_load is None:
             # as the kinematic tier does: the most loaded ball's static load, defects left out
-            self.ellipse_ball_load = self.static_ball_load()
+            self.ellipse_ball_load = self._most_loaded_ball_load()
             if has_wandering_defect(self.dtab):
                 self.dtab = active_defect_table(scene.defects, self.defect_sizes, b, seed=self.seed,
                                                 ball_load=self.ellipse_ball_load)
@@ -1744,7 +1744,7 @@ class SkiddingModel:
             # Omega = theta' - w_b, w_b = spin in the orbital frame (BSF > 0)
             self.y[bse + B_OM] = wc - p[P_SPINR] * speed
 
-    def static_ball_load(self) -> float:
+    def _most_loaded_ball_load(self) -> float:
         """The most loaded ball's inner-race contact load (N) in the present state, from the
         quasi-static contact law without defects: at the set-up's equilibrium, the load the
         balls carry from shaft to pedestal (the kinematic tier's ``static_ball_load``)."""
