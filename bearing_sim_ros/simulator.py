@@ -409,6 +409,13 @@ class Simulator:
         while it computes ahead."""
         return self._defect_schedule.sizes(max(int(sample), 0))
 
+    @property
+    def defect_onsets_s(self) -> tuple:
+        """Each of the scene's defects' onset in signal time (s): its first output sample's
+        time, the scene's ``onset_s`` rounded up to the sample grid (0 for one there from the
+        start)."""
+        return tuple(k / self.sample_rate for k in self._defect_schedule.onset_samples)
+
     # ---- fidelity -----------------------------------------------------------------------------
     def maybe_switch_tier(self, shaft_speed: float, radial_load) -> bool:
         """With ``fidelity="auto"``, re-select the tier for a new operating point and switch

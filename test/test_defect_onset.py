@@ -246,14 +246,20 @@ def test_a_wandering_ball_defect_keeps_its_contact_ellipse_across_tier_switches(
 
 
 def test_the_diagnostics_truth_is_that_of_the_sample_asked_for():
-    """The live node computes up to 50 ms ahead of what it has published; its ``faults_present``
-    and ``defect_sizes`` are those of the last published sample, which ``defect_values`` gives
-    for a sample before the latest computed one."""
+    """The live node computes up to 50 ms ahead of what it has published; its ``faults_present``,
+    ``defect_sizes`` and ``fault_onsets_s`` are those of the last published sample, which
+    ``defect_values`` gives for a sample before the latest computed one.  The onset is the first
+    sample's time with the defect: the scene's ``onset_s`` rounded up to the sample grid."""
     from bearing_sim_ros.recording.render import defect_values
 
     sim = Simulator(_with_defects(load_scene("er16k_outer_race"), onset=0.1), sample_rate=FS)
     sim.advance(int(0.12 * FS))
-    assert defect_values(sim) == {"faults_present": "outer", "defect_sizes": "1"}
-    assert defect_values(sim, int(0.1 * FS) - 1) == {"faults_present": "none", "defect_sizes": "0"}
+    assert defect_values(sim) == {"faults_present": "outer", "defect_sizes": "1", "fault_onsets_s": "outer=0.100000"}
+    assert defect_values(sim, int(0.1 * FS) - 1) == {"faults_present": "none", "defect_sizes": "0",
+                                                     "fault_onsets_s": "none"}
     assert defect_values(sim, int(0.1 * FS))["faults_present"] == "outer"
     assert defect_values(sim, -1)["faults_present"] == "none"
+    off_grid = Simulator(_with_defects(load_scene("er16k_outer_race"), onset=0.10001), sample_rate=FS)
+    assert off_grid.defect_onsets_s == (1501 / FS,)
+    assert defect_values(off_grid, 1501)["fault_onsets_s"] == "outer=0.100067"
+    assert defect_values(off_grid, 1500)["fault_onsets_s"] == "none"

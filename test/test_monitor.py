@@ -18,9 +18,8 @@ import pytest
 
 from test_node_support import NS, NodeProcess, read_recording
 
-from bearing_sim_ros import load_scene
-from bearing_sim_ros.nodes.monitor_node import (Window, agrees, fault_onset, parse_faults, score_lines,
-                                                 truth_at, truth_text)
+from bearing_sim_ros import ground_truth, load_scene
+from bearing_sim_ros.nodes.monitor_node import Window, agrees, score_lines, truth_at, truth_text
 from bearing_sim_ros.recording.render import render
 
 
@@ -40,55 +39,88 @@ def test_window_gathers_contiguous_tables_and_restarts_on_a_gap():
     assert w.take().shape == (150, 1) and w.samples == 0
 
 
-def test_truth_is_the_latest_diagnostics_at_or_before_the_window_end_and_scores_the_verdicts():
-    """The plain functions behind ``truth=`` and the exit lines, on made-up diagnostics: none at
-    1 and 2 s, outer from 3 s, ball and outer from 4 s.  The truth is unknown before the first
-    diagnostics (and without any), exact at a stamp (1 us of rounding allowed), the latest one's
-    between stamps; a fault verdict agrees when its kind is among the faults present."""
-    assert parse_faults("none") == frozenset() and parse_faults("outer") == {"outer"}
-    assert parse_faults("ball, outer") == {"ball", "outer"} == parse_faults("outer,ball")
-    reports = [(s * NS, parse_faults(f))
-               for s, f in ((1, "none"), (2, "none"), (3, "outer"), (4, "ball, outer"))]
-    assert truth_at([], 5 * NS) is None and truth_at(reports, NS - 2000) is None
-    assert truth_at(reports, NS - 500) == frozenset()                    # the stamp, rounded
-    assert truth_at(reports, 3 * NS - 2000) == frozenset()               # 2 s's until 3 s's stamp
-    assert truth_at(reports, 3 * NS) == {"outer"} == truth_at(reports, 4 * NS - 2000)
-    assert truth_at(reports, 9 * NS) == {"ball", "outer"}
-    assert [truth_text(t) for t in (None, frozenset(), {"outer"}, {"outer", "ball"})] == \
+def _reports(items, onsets=None):
+    """``ground_truth.Truth`` per (stamp s, faults_present text) as the monitor parses them; with
+    ``onsets`` ({kind: onset s}) each message carries those present by its stamp."""
+    out = []
+    for t, faults in items:
+        values = {"faults_present": faults, "defect_sizes": "none", "simulated_s": f"{t - 0.5:.6f}"}
+        if onsets is not None:      # signal time = stamp - 0.5 s: the first table at 0.5 s
+            values["fault_onsets_s"] = ", ".join(f"{k}={on - 0.5:.6f}" for k, on in onsets.items() if on < t)
+        out.append(ground_truth.parse(values, t * NS, NS))
+    return out
+
+
+def test_truth_without_onsets_is_the_latest_diagnostics_and_scores_the_verdicts():
+    """The plain functions behind ``truth=`` and the exit lines, on made-up diagnostics from a
+    source without ``fault_onsets_s`` (a recording from before it): none at 1 and 2 s, outer from
+    3 s, ball and outer from 4 s.  The truth is unknown before the first diagnostics with a fault
+    (and without any), none before a first one with none, exact at a stamp (1 us of rounding
+    allowed), the latest one's between stamps; a fault verdict agrees when its kind is among the
+    faults present; a latency line per fault that appeared, with its 1 s bracket."""
+    reports = _reports(((1, "none"), (2, "none"), (3, "outer"), (4, "ball, outer")))
+    assert truth_at([], 5 * NS) is None and truth_at(reports[2:], 2 * NS) is None
+    assert truth_at(reports, NS - 2000) == ()                            # none before a none
+    assert truth_at(reports, 3 * NS - 2000) == ()                        # 2 s's until 3 s's stamp
+    assert truth_at(reports, 3 * NS - 500) == ("outer",) == truth_at(reports, 4 * NS - 2000)
+    assert truth_at(reports, 9 * NS) == ("ball", "outer")
+    assert [truth_text(t) for t in (None, (), ("outer",), ("ball", "outer"))] == \
         ["unknown", "none", "outer", "ball,outer"]
-    assert agrees("healthy", frozenset()) and not agrees("outer", frozenset())
-    assert agrees("outer", {"ball", "outer"}) and agrees("ball", {"ball", "outer"})
-    assert agrees("inner", {"ball", "outer"}) is False and agrees("healthy", {"outer"}) is False
+    assert agrees("healthy", ()) and not agrees("outer", ())
+    assert agrees("outer", ("ball", "outer")) and agrees("ball", ("ball", "outer"))
+    assert agrees("inner", ("ball", "outer")) is False and agrees("healthy", ("outer",)) is False
     assert agrees("healthy", None) is None and agrees("outer", None) is None
-    assert fault_onset(reports) == (2 * NS, 3 * NS)
-    assert fault_onset(reports[2:]) is None                              # a fault from the start
-    assert fault_onset([(NS, frozenset()), (2 * NS, frozenset())]) is None
 
     # the first table at 0.5 s: windows of 1 s end at 1.5 .. 6.5 s (t=1.00s .. 6.00s), where the
     # truth is none, none, outer, then ball and outer
     t0 = NS // 2
-    verdicts = ["healthy", "healthy", "inner", "outer", "ball", "healthy"]
-    scored = [(t0 + (k + 1) * NS, v, truth_at(reports, t0 + (k + 1) * NS)) for k, v in enumerate(verdicts)]
-    assert [truth_text(truth) for _end, _v, truth in scored] == ["none", "none", "outer"] + ["ball,outer"] * 3
-    # the fault appeared after 2 s (t=1.50s), by 3 s (t=2.50s); inner is no detection of it
+    scored = [(t0 + (k + 1) * NS, v) for k, v in enumerate(["healthy", "healthy", "inner", "outer", "ball", "healthy"])]
+    assert [truth_text(truth_at(reports, end)) for end, _v in scored] == ["none", "none", "outer"] + ["ball,outer"] * 3
+    # outer appeared after 2 s (t=1.50s), by 3 s (t=2.50s), ball between t=2.50s and 3.50s;
+    # inner is no detection of either
     assert score_lines(scored, reports, t0) == [
         "monitor: score 4 of 6 verdicts agree with the truth, 0 truth=unknown",
         "monitor: latency 1.50s (to 1.00s more): outer appeared between t=1.50s and t=2.50s by the "
-        "diagnostics, first called at t=4.00s"]
-    never = [(end, "healthy", truth) for end, _v, truth in scored]
-    assert score_lines(never, reports, t0) == [
+        "diagnostics, first called at t=4.00s",
+        "monitor: latency 1.50s (to 1.00s more): ball appeared between t=2.50s and t=3.50s by the "
+        "diagnostics, first called at t=5.00s"]
+    never = [(end, "healthy") for end, _v in scored]
+    assert score_lines(never, reports, t0)[:2] == [
         "monitor: score 2 of 6 verdicts agree with the truth, 0 truth=unknown",
         "monitor: latency none: outer appeared between t=1.50s and t=2.50s by the diagnostics, "
         "not called in 4 verdicts since"]
     # a window that ends at the stamp of the first diagnostics with the fault: latency 0, never -0.00
-    at_stamp = [(3 * NS - 500, "outer", frozenset({"outer"}))]     # 0.5 us short of the stamp: rounding
+    at_stamp = [(3 * NS - 500, "outer")]              # 0.5 us short of the stamp: rounding
     assert score_lines(at_stamp, reports, 2 * NS)[1].startswith("monitor: latency 0.00s (to 1.00s more)")
     # a real sensor or a recording without diagnostics: every truth unknown, no latency
-    blind = [(end, v, None) for end, v, _truth in scored]
-    assert score_lines(blind, [], t0) == ["monitor: score 0 of 0 verdicts agree with the truth, 6 truth=unknown"]
-    # a fault there from the first diagnostics on: scored, but no latency line
-    assert score_lines(scored, reports[2:], t0) == [
-        "monitor: score 4 of 6 verdicts agree with the truth, 0 truth=unknown"]
+    assert score_lines(scored, [], t0) == ["monitor: score 0 of 0 verdicts agree with the truth, 6 truth=unknown"]
+    # a fault there from the first diagnostics on: scored, and only the later one's latency
+    assert score_lines(scored, reports[2:], t0)[1:] == [
+        "monitor: latency 1.50s (to 1.00s more): ball appeared between t=2.50s and t=3.50s by the "
+        "diagnostics, first called at t=5.00s"]
+
+
+def test_truth_with_onsets_is_exact_between_diagnostics_and_so_is_the_latency():
+    """With ``fault_onsets_s`` (the node's and render's diagnostics) a window's truth is that of its
+    last sample whichever later diagnostics tell it, and a latency has no bracket: outer appears
+    at 2.2 s, ball at 3.7 s (stamps), messages at 1, 2, 3, 4 s."""
+    reports = _reports(((1, "none"), (2, "none"), (3, "outer"), (4, "ball, outer")),
+                       onsets={"outer": 2.2, "ball": 3.7})
+    assert reports[3].onsets == {"outer": 2_200_000_000, "ball": 3_700_000_000}
+    assert truth_at(reports, 2 * NS + NS // 10) == ()
+    assert truth_at(reports, 2 * NS + NS // 4) == ("outer",)           # between two messages: exact
+    assert truth_at(reports, 3 * NS + NS // 2) == ("outer",) and truth_at(reports, 3_800_000_000) == ("ball", "outer")
+    assert truth_at(reports, 9 * NS) == ("ball", "outer")               # past the last one: its faults
+    t0 = NS // 2
+    scored = [(t0 + k * NS // 2, v) for k, v in enumerate(
+        ["healthy", "healthy", "healthy", "healthy", "outer", "outer", "ball", "ball"], start=1)]
+    # windows end at 1.0 .. 4.5 s: the one ending 2.5 s holds 0.3 s of outer and is scored against it
+    assert [truth_text(truth_at(reports, end)) for end, _v in scored] == \
+        ["none"] * 3 + ["outer"] * 3 + ["ball,outer"] * 2
+    assert score_lines(scored, reports, t0) == [
+        "monitor: score 7 of 8 verdicts agree with the truth, 0 truth=unknown",
+        "monitor: latency 0.80s: outer appeared at t=1.70s, first called at t=2.50s",
+        "monitor: latency 0.30s: ball appeared at t=3.20s, first called at t=3.50s"]
 
 
 def _other_domain(env):
@@ -126,8 +158,8 @@ def test_monitor_detects_outer_race_and_calls_healthy_healthy(ros_env, bearing_s
 
 
 VERDICT = re.compile(r"^t=([\d.]+)s shaft=\d+rpm verdict=(\w+) truth=([\w,]+) \|", re.M)
-LATENCY = re.compile(r"^monitor: latency ([\d.]+)s \(to ([\d.]+)s more\): outer appeared between "
-                     r"t=(-?[\d.]+)s and t=([\d.]+)s by the diagnostics, first called at t=([\d.]+)s$", re.M)
+LATENCY = re.compile(r"^monitor: latency ([\d.]+)s: outer appeared at t=(-?[\d.]+)s, first called at t=([\d.]+)s$",
+                     re.M)
 
 
 def test_monitor_scores_itself_against_the_ground_truth_of_a_fault_that_appears(ros_env, bearing_sim_exe,
@@ -135,10 +167,11 @@ def test_monitor_scores_itself_against_the_ground_truth_of_a_fault_that_appears(
     """The CWRU outer race with its pit appearing 4 s into the run (a scene file), the node in
     real time, the monitor in 1 s windows from the node's start: ``truth=none`` up to the onset,
     ``outer`` after it, the verdicts outer in every window after the onset, the score line what
-    the lines say, and a latency line whose bounds bracket the onset as the lines show it and
-    whose latency is the first outer window's end minus the later bound (0 to 2 windows).  The
-    node's recorded diagnostics say ``outer`` exactly when the published end is past the onset;
-    with ``compute_ahead`` 0.5 s, sizes from the computed end would say it up to 0.5 s early."""
+    the lines say, and a latency line with the onset to the sample (``fault_onsets_s``), between
+    the last window scored none and the first scored outer, and the latency the first outer
+    window's end minus it (0 to 2 windows).  The node's recorded diagnostics say ``outer``, since
+    4 s, exactly when the published end is past the onset; with ``compute_ahead`` 0.5 s, sizes from
+    the computed end would say it up to 0.5 s early."""
     onset = 4.0
     scene = tmp_path / "or_onset.yaml"
     scene.write_text(load_scene("cwru_6205_or007_6").source_text.replace(
@@ -169,20 +202,21 @@ def test_monitor_scores_itself_against_the_ground_truth_of_a_fault_that_appears(
     assert score and tuple(map(int, score.groups())) == (agree, len(lines) - unknown, unknown), out
     latency = LATENCY.search(out)
     assert latency, out
-    delay, resolution, before, after, called = map(float, latency.groups())
+    delay, appeared, called = map(float, latency.groups())
     last_none = max(t for t, _v, truth in lines if truth == "none")
     first_outer = min(t for t, _v, truth in lines if truth == "outer")
-    assert last_none < after <= first_outer and resolution == pytest.approx(after - before, abs=0.011), out
-    assert 0.0 < resolution <= 1.5, out                    # diagnostics once a second
+    # t counts from the first table the monitor took: the node's first unless discovery lost some
+    assert last_none <= appeared < first_outer and onset - 1.0 <= appeared <= onset, out
     assert called == min(t for t, v, truth in lines if v == "outer" and truth == "outer"), out
-    assert delay == pytest.approx(called - after, abs=0.011) and 0.0 <= delay <= 2.0, out
-    assert all(v == "outer" for t, v, _truth in lines if t >= after + 1.0), out
+    assert delay == pytest.approx(called - appeared, abs=0.011) and 0.0 <= delay <= 2.0, out
+    assert all(v == "outer" for t, v, _truth in lines if t >= appeared + 1.0), out
     # the node's own diagnostics: outer exactly when the published signal reaches past the onset
     topics, _meta = read_recording(tmp_path / "node.mcap")
-    seen = [(float(v["simulated_s"]), v["faults_present"])
+    seen = [(float(v["simulated_s"]), v["faults_present"], v["fault_onsets_s"])
             for v in ({kv.key: kv.value for kv in m.status[0].values} for _t, m in topics["/diagnostics"])]
-    assert all(faults == ("outer" if simulated > onset else "none") for simulated, faults in seen), seen
-    assert any(onset - 0.5 <= simulated <= onset for simulated, _f in seen), seen
+    assert all((faults, onsets) == (("outer", "outer=4.000000") if simulated > onset else ("none", "none"))
+               for simulated, faults, onsets in seen), seen
+    assert any(onset - 0.5 <= simulated <= onset for simulated, _f, _o in seen), seen
 
 
 def _play_into(monitor, bearing_sim_exe, recording, env, *options) -> str:

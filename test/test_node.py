@@ -429,7 +429,7 @@ def test_fast_mode_runs_duration_and_ends(started, tmp_path):
     dst = np.array([m.header.stamp.sec * NS + m.header.stamp.nanosec for _t, m in diag], dtype=np.int64)
     assert list(dst - stamps[0]) == [NS, 2 * NS, 3 * NS], dst - stamps[0]
     simulated = [next(kv.value for kv in m.status[0].values if kv.key == "simulated_s") for _t, m in diag]
-    assert simulated == ["1.000", "2.000", "3.000"]
+    assert simulated == ["1.000000", "2.000000", "3.000000"]
     # the waveforms offered as the README says: reliable, keep-last 1 s of 10 ms tables
     for topic in ("/accel", "/contact_forces"):
         qos = offered_qos(out)[topic]

@@ -9,11 +9,13 @@ import numpy as np
 import pytest
 
 from bearing_sim_ros import cli, load_scene
+from bearing_sim_ros.ground_truth import faults_at
 from bearing_sim_ros.analysis import report
 from bearing_sim_ros.analysis.envelope import envelope_spectrum
 from bearing_sim_ros.analysis.report import build_report
 from bearing_sim_ros.recording.reader import open_recording
 from bearing_sim_ros.recording.render import render
+from bearing_sim_ros.waveform import NS
 from bearing_sim_ros.waveform import NS, from_pointcloud2
 
 
@@ -147,12 +149,12 @@ def _with_onset(tmp_path, onset_s: float):
 def test_report_timeline_scores_detection_against_the_recorded_onset(tmp_path, figures):
     """An outer-race pit that appears 2.5 s into a 5 s recording: in 1 s windows (the default)
     the verdict is healthy, with no fault present by /diagnostics, before the onset and outer
-    with the fault present from the first window after it.  The onset from /diagnostics (1 Hz)
-    brackets the scene's 2.5 s within its stated resolution; the first detection comes no later
-    than the end of the first whole window with the pit, so the latency is 0 to 1 s.
-    timeline.png draws each window's prominences as summary.json has them, over the windows'
-    times, with the threshold; the whole-recording verdict stays, with the note that one verdict
-    does not describe this recording."""
+    with the fault present from the window it appears in.  The onset comes to the sample from
+    /diagnostics' fault_onsets_s (1 Hz messages): the scene's 2.5 s, resolution 0; the latency is
+    the first detection minus it, per fault too.  timeline.png draws each window's prominences
+    as summary.json has them, over the windows' times, with the threshold and the onset; the
+    whole-recording verdict stays, with the note that one verdict does not describe this
+    recording."""
     rec = tmp_path / "late.mcap"
     render(str(_with_onset(tmp_path, 2.5)), 5.0, rec, fidelity="kinematic", seed=1, progress=False)
     out = tmp_path / "out"
@@ -162,27 +164,31 @@ def test_report_timeline_scores_detection_against_the_recorded_onset(tmp_path, f
     assert s["timeline_window_s"] == pytest.approx(1.0) and len(timeline) == 5
     assert [(w["start_s"], w["end_s"]) for w in timeline] == [pytest.approx((k, k + 1.0)) for k in range(5)]
     before = [w for w in timeline if w["end_s"] <= 2.5]
-    after = [w for w in timeline if w["start_s"] >= 2.5]
-    assert len(before) == 2 and len(after) == 2
+    after = [w for w in timeline if w["end_s"] > 2.5]
+    assert len(before) == 2 and len(after) == 3
     assert all(w["verdict"] == "healthy" and w["faults_present"] == [] and w["defect_sizes"] == [0.0]
                for w in before), before
     assert all(w["verdict"] == "outer" and w["faults_present"] == ["outer"] and w["defect_sizes"] == [1.0]
                and w["prominences"]["outer"] > 10 for w in after), after
     assert all(w["shaft_speed_rpm"] == pytest.approx(1797.0) for w in timeline)
-    # the ground truth's time base: the onset lies within the resolution before fault_onset_s
-    onset, resolution = s["fault_onset_s"], s["fault_onset_resolution_s"]
+    # the ground truth's time base: the onset in signal time, to the sample
+    onset = s["fault_onset_s"]
     assert s["scene_defect_onsets_s"] == [2.5]
-    assert 0 < resolution <= 1.0 + 1e-6 and onset - resolution <= 2.5 <= onset, (onset, resolution)
-    assert s["ground_truth_changes"] == [{"t_s": onset, "after_s": onset - resolution,
-                                          "faults_present": ["outer"], "defect_sizes": [1.0]}]
-    assert s["first_detection_s"] <= after[0]["end_s"]
-    assert 0.0 <= s["detection_latency_s"] <= 1.0 + 1e-6
-    assert s["detection_latency_s"] == pytest.approx(s["first_detection_s"] - onset)
+    assert onset == pytest.approx(2.5, abs=1e-6) and s["fault_onset_resolution_s"] == 0.0
+    assert s["ground_truth_to_the_sample"] is True
+    assert s["ground_truth_changes"] == [{"t_s": onset, "after_s": onset, "faults_present": ["outer"],
+                                          "defect_sizes": [1.0]}]
+    assert s["first_detection_s"] == after[0]["end_s"] == pytest.approx(3.0)    # 0.5 s of the pit
+    assert s["detection_latency_s"] == pytest.approx(0.5)
+    assert s["fault_detections"] == [{"fault": "outer", "onset_s": onset, "onset_resolution_s": 0.0,
+                                      "first_detection_s": s["first_detection_s"],
+                                      "latency_s": s["detection_latency_s"], "windows_since": 3}]
     # the whole recording's verdict as before, said not to describe it
     assert s["verdict"] == "outer" and s["verdict_describes_recording"] is False
     md = (out / "summary.md").read_text()
     assert "one verdict does not describe it" in md and "## Verdict over time" in md
     assert "| 0.00-2.00 | 2 | healthy | none | 0 |" in md          # a run of windows, not each window
+    assert "(none, then outer from 2.50 s)" in md and "- fault onset: 2.5000 s (the first sample" in md
     # the plot: the per-window prominences against the windows' times, and the threshold
     assert "timeline.png" in s["plots"] and (out / "timeline.png").stat().st_size > 10_000
     ax = figures["timeline.png"].axes[0]
@@ -193,16 +199,19 @@ def test_report_timeline_scores_detection_against_the_recorded_onset(tmp_path, f
         np.testing.assert_allclose(line.get_xdata(), [w["start_s"] for w in timeline] + [5.0], rtol=1e-12)
     assert any(ln.get_label().startswith("detection threshold") and ln.get_ydata()[0] == 4.0
                for ln in ax.get_lines())
+    (onset_line,) = [ln for ln in ax.get_lines() if ln.get_label() == "onset 2.50 s"]
+    assert onset_line.get_xdata()[0] == pytest.approx(2.5)
     sizes_ax = figures["timeline.png"].axes[1]
     assert [tuple(ln.get_ydata()) for ln in sizes_ax.get_lines()] == [(0.0, 0.0, 1.0, 1.0, 1.0)]
-    # windows that do not end on a /diagnostics sample: 0.7 s.  Those ending between the last
-    # sample without the fault and the first with it count as before the onset, and say so
+    # windows that do not end on a /diagnostics message: 0.7 s.  The one holding the onset (2.1-2.8
+    # s) has the fault present, though the message before its end did not, with the sizes of the
+    # first message that has it
     s = build_report(rec, tmp_path / "short", window_s=0.7)
     assert [round(w["end_s"], 6) for w in s["timeline"]] == [0.7, 1.4, 2.1, 2.8, 3.5, 4.2, 4.9]
-    assert [w["faults_present"] for w in s["timeline"]] == [[]] * 4 + [["outer"]] * 3
-    assert s["first_detection_s"] == pytest.approx(3.5) and s["fault_onset_s"] == onset
-    md = (tmp_path / "short" / "summary.md").read_text()
-    assert f"The windows ending between {onset - resolution:.2f} and {onset:.2f} s (1.40-2.10 s: " in md
+    assert [w["faults_present"] for w in s["timeline"]] == [[]] * 3 + [["outer"]] * 4
+    assert [(w["defect_sizes"], w["truth_t_s"]) for w in s["timeline"][2:4]] == [([0.0], 2.0), ([1.0], 3.0)]
+    assert s["fault_onset_s"] == onset and s["first_detection_s"] in (pytest.approx(2.8), pytest.approx(3.5))
+    assert "may already hold the fault" not in (tmp_path / "short" / "summary.md").read_text()
 
 
 def test_report_timeline_without_a_fault_change_has_no_latency(outer, tmp_path):
@@ -297,28 +306,80 @@ def test_report_says_when_auto_switched_tiers(tmp_path):
     assert "kinematic tier (" in md and "at the start, then skidding: 1 tier switch, the last kinematic -> skidding at" in md
 
 
-def test_ground_truth_keys_read_several_faults_and_sizes():
-    """Several faults present are comma-separated, sizes space-separated (the live node's keys are
-    those of the last sample it published, whatever it computed ahead: test_defect_onset); a
-    recording from before the keys has no ground truth."""
+def test_ground_truth_parse_reads_several_faults_sizes_and_onsets():
+    """Several faults present are comma-separated (read as a sorted tuple), sizes
+    space-separated, onsets ``kind=s`` in signal time, which ``simulated_s`` ties to the stamp:
+    on a consumer's time line in s or in ns (the live node's keys are those of the last sample it
+    published, whatever it computed ahead: test_defect_onset).  A recording from before
+    ``fault_onsets_s`` has no onsets; one from before ``faults_present`` no ground truth."""
+    from bearing_sim_ros import ground_truth
     from bearing_sim_ros.recording.render import diagnostics_message
 
-    live = diagnostics_message(5_000_000_000, {"faults_present": "inner, ball", "defect_sizes": "1 0.25",
-                                               "computed_ahead_s": "0.040"})
-    assert report.ground_truth_keys(live) == (("inner", "ball"), (1.0, 0.25))
-    rendered = diagnostics_message(0, {"faults_present": "none", "defect_sizes": "none"})
-    assert report.ground_truth_keys(rendered) == ((), ())
-    assert report.ground_truth_keys(diagnostics_message(0, {"tier": "kinematic"})) is None
+    live = {"faults_present": "inner, ball", "defect_sizes": "1 0.25", "computed_ahead_s": "0.040",
+            "fault_onsets_s": "inner=0.000000, ball=3.250000", "simulated_s": "5.000000"}
+    assert ground_truth.parse(live, 7.0) == ((7.0, ("ball", "inner"), (1.0, 0.25), {"inner": 2.0, "ball": 5.25}))
+    in_ns = ground_truth.parse(live, 7 * NS + 1, NS)
+    assert in_ns.onsets == {"inner": 2 * NS + 1, "ball": 5_250_000_001}
+    assert all(type(t) is int for t in in_ns.onsets.values())
+    old = ground_truth.parse({"faults_present": "none", "defect_sizes": "none"}, 1.0)
+    assert old == (1.0, (), (), None)
+    assert ground_truth.parse({"tier": "kinematic"}, 1.0) is None
+    assert ground_truth.parse({"faults_present": "outer", "defect_sizes": "x"}, 1.0) is None
+    # what the simulator writes: a kind once, at its earliest present defect's onset
+    written = ground_truth.diagnostics_values(["outer", "ball", "outer"], (0.5, 0.0, 1.0), (4.0, 1.0, 2.5))
+    assert written == {"faults_present": "outer", "defect_sizes": "0.5 0 1", "fault_onsets_s": "outer=2.500000"}
+    assert ground_truth.diagnostics_values([], (), ()) == {"faults_present": "none", "defect_sizes": "none",
+                                                           "fault_onsets_s": "none"}
+    message = diagnostics_message(0, {**written, "simulated_s": "3.000000"})
+    values = {kv.key: kv.value for kv in message.status[0].values}
+    assert ground_truth.parse(values, 3.0).onsets == {"outer": 2.5}
 
 
-def test_fault_onset_is_the_first_change_from_none_and_truth_holds_until_the_next_sample():
-    """The onset is where the faults present go from none to some (not where a second fault joins
-    one already there); a window's ground truth is the latest /diagnostics sample at or before its
-    end, the first sample before that."""
-    truth = [(1.0, (), (0.0, 0.0)), (2.0, ("outer",), (0.4, 0.0)), (3.0, ("outer", "inner"), (1.0, 1.0))]
+def _truth(t, faults, sizes, onsets=None):
+    from bearing_sim_ros.ground_truth import Truth
+
+    return Truth(t, tuple(sorted(faults)), sizes, onsets)
+
+
+def test_fault_onset_and_truth_with_onsets_to_the_sample():
+    """With fault_onsets_s the faults in a window's last sample are exact: those that appeared
+    before its end, whichever message tells; the onset has resolution 0; two faults that appear
+    between the same two messages are two changes."""
+    onsets = {"outer": 1.25, "inner": 1.75}
+    truth = [_truth(1.0, (), (0.0, 0.0), {}), _truth(2.0, ("outer", "inner"), (1.0, 1.0), onsets),
+             _truth(3.0, ("outer", "inner"), (1.0, 1.0), onsets)]
+    assert report.fault_onset(truth) == (1.25, 0.0)
+    assert [faults_at(truth, t, report.SLACK_S) for t in (0.5, 1.25, 1.2501, 1.75, 1.76, 9.0)] == \
+        [(), (), ("outer",), ("outer",), ("inner", "outer"), ("inner", "outer")]
+    changes = report.truth_changes(truth)
+    assert [(c["t_s"], c["after_s"], c["faults_present"]) for c in changes] == \
+        [(1.25, 1.25, ["outer"]), (1.75, 1.75, ["inner", "outer"])]
+    timeline = [{"end_s": e, "verdict": v} for e, v in ((1.0, "healthy"), (1.5, "healthy"), (2.0, "outer"),
+                                                        (2.5, "inner"))]
+    assert [(d["fault"], d["first_detection_s"], d["latency_s"], d["windows_since"])
+            for d in report.fault_detections(timeline, truth)] == [("outer", 2.0, 0.75, 3), ("inner", 2.5, 0.75, 2)]
+    # a fault there from the first sample: no onset, though another joins it later
+    assert report.fault_onset([_truth(1.0, ("ball",), (1.0,), {"ball": 0.0}),
+                               _truth(2.0, ("ball", "outer"), (1.0,), {"ball": 0.0, "outer": 1.5})]) is None
+
+
+def test_fault_onset_without_onsets_is_the_first_change_from_none_and_truth_holds_until_the_next():
+    """A recording from before fault_onsets_s: the onset is where the faults present go from none
+    to some (not where a second fault joins one already there), known between two messages; a
+    window's ground truth is the latest message at or before its end, none before the first when
+    that has none."""
+    truth = [_truth(1.0, (), (0.0, 0.0)), _truth(2.0, ("outer",), (0.4, 0.0)),
+             _truth(3.0, ("outer", "inner"), (1.0, 1.0))]
     assert report.fault_onset(truth) == (2.0, 1.0)
     assert report.fault_onset(truth[1:]) is None          # a fault there at the first sample
-    assert report.truth_changes(truth)[1] == {"t_s": 3.0, "after_s": 2.0, "faults_present": ["outer", "inner"],
+    assert report.truth_changes(truth)[1] == {"t_s": 3.0, "after_s": 2.0, "faults_present": ["inner", "outer"],
                                               "defect_sizes": [1.0, 1.0]}
-    assert [report.truth_at(truth, t)[0] for t in (0.5, 1.0, 1.9999999, 2.5, 9.0)] == [1.0, 1.0, 2.0, 2.0, 3.0]
-    assert report.truth_at([], 1.0) is None
+    assert [faults_at(truth, t, report.SLACK_S) for t in (0.5, 1.0, 1.999998, 1.9999999, 2.5, 9.0)] == \
+        [(), (), (), ("outer",), ("outer",), ("inner", "outer")]          # 1 us of rounding allowed
+    assert faults_at(truth[1:], 0.5, report.SLACK_S) is None       # before a first message with a fault
+    assert faults_at([], 1.0) is None
+    timeline = [{"end_s": e, "verdict": v} for e, v in ((1.5, "outer"), (2.0, "healthy"), (2.5, "outer"))]
+    (outer, inner) = report.fault_detections(timeline, truth)
+    assert (outer["onset_s"], outer["onset_resolution_s"], outer["first_detection_s"]) == (2.0, 1.0, 2.5)
+    assert (inner["fault"], inner["first_detection_s"], inner["windows_since"]) == ("inner", None, 0)
+

@@ -22,8 +22,10 @@ nothing but the file.  Spectra use at most ``MAX_ANALYSIS_S`` seconds of signal 
 Time bases: signal time is seconds after the first waveform sample (``header.stamp`` of the
 first table).  A ``/diagnostics`` message is stamped with the end of the last batch published,
 and its ``faults_present`` / ``defect_sizes`` are those of that batch's last sample, in the live
-node (whose simulator computes ahead of what it publishes) as in ``render``.  Those samples come
-at 1 Hz, which is the resolution of the ground truth.
+node (whose simulator computes ahead of what it publishes) as in ``render``.  Those messages
+come at 1 Hz; their ``fault_onsets_s`` give when each fault appeared to the sample
+(``bearing_sim_ros.ground_truth``), and in a recording made before that key 1 s is the resolution
+of the ground truth.
 """
 from __future__ import annotations
 
@@ -34,6 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import ground_truth
 from ..errors import UserError
 from ..paths import output_folder
 from ..recording.reader import open_recording
@@ -113,9 +116,9 @@ class _Data:
                 found = signal_frequencies(msg)
                 if found:
                     in_signal.append((_stamp(msg.header.stamp), found))
-                truth = ground_truth_keys(msg)
-                if truth is not None:
-                    truth_raw.append((_stamp(msg.header.stamp), *truth))
+                values = {kv.key: kv.value for status in msg.status for kv in status.values}
+                if ground_truth.FAULTS_KEY in values:
+                    truth_raw.append((_stamp(msg.header.stamp), values))
         if not chunks:
             raise UserError(f"{rec.path}: no accelerometer waveform tables (sensor_msgs/msg/PointCloud2 "
                             f"on .../accel) in this recording; topics: {', '.join(sorted(topics)) or 'none'}")
@@ -140,8 +143,9 @@ class _Data:
         ends = [(ns - self.t0_ns) / NS for ns, _ in in_signal]
         self.signal_frequency_periods = [(0.0 if k == 0 else ends[k - 1], ends[k], f)
                                          for k, (_, f) in enumerate(in_signal)]
-        # the ground truth: (signal time s, faults present, defect sizes) of each /diagnostics
-        self.truth = [((ns - self.t0_ns) / NS, faults, sizes) for ns, faults, sizes in truth_raw]
+        # the ground truth of each /diagnostics, in signal time (s), in stamp order
+        parsed = (ground_truth.parse(values, (ns - self.t0_ns) / NS) for ns, values in truth_raw)
+        self.truth = sorted((t for t in parsed if t is not None), key=lambda t: t.t)
         self.tiers = tiers
 
     @staticmethod
@@ -189,24 +193,6 @@ def signal_frequencies(diagnostics) -> dict:
         return {k: float(v) for k, v in found.items()} if len(found) == len(keys) else {}
     except ValueError:
         return {}
-
-
-def ground_truth_keys(diagnostics):
-    """(faults present, defect sizes) of one ``/diagnostics`` message, at its stamp (the last
-    sample published; the live node computes ahead, but reports the published signal's): its
-    ``faults_present`` as a tuple of kinds (``()`` for ``none``), ``defect_sizes`` as a tuple of
-    sizes 0-1 in scene order (``()`` for ``none``); None in a recording made before these keys."""
-    values = {kv.key: kv.value for status in diagnostics.status for kv in status.values}
-    if "faults_present" not in values:
-        return None
-    faults = () if values["faults_present"] == "none" else tuple(
-        k.strip() for k in values["faults_present"].split(",") if k.strip())
-    try:
-        sizes = () if values.get("defect_sizes", "none") == "none" else tuple(
-            float(v) for v in values["defect_sizes"].split())
-    except ValueError:
-        return None
-    return faults, sizes
 
 
 def tier_keys(diagnostics) -> dict:
@@ -298,33 +284,57 @@ def recorded_frequencies(periods: list, start_s: float, end_s: float) -> dict:
     return {k: float(sum(wi * f[k] for wi, (_, _, f) in zip(w, periods))) for k in periods[0][2]}
 
 
-def truth_at(truth: list, t_s: float):
-    """The ground truth in force at signal time ``t_s`` (s): the latest ``/diagnostics``
-    sample (t s, faults present, defect sizes) at or before it (1 us of rounding allowed), or the
-    first one for a time before it; None without samples.  A change therefore shows up to one
-    ``/diagnostics`` period (1 s) late."""
-    if not truth:
-        return None
-    before = [item for item in truth if item[0] <= t_s + 1e-6]
-    return before[-1] if before else truth[0]
+SLACK_S = 1e-6      # s: times this close count as equal (stamps rounded to the ns)
 
 
 def fault_onset(truth: list):
-    """(onset s, resolution s) of the first fault to appear: the signal time of the first
-    ``/diagnostics`` sample with a fault present after one with none, and the time since that
-    one (the fault appeared in between).  None when the faults present never go from none to
-    some: a healthy recording, or one with its fault there at the first sample."""
-    for (t_prev, faults_prev, _), (t, faults, _) in zip(truth, truth[1:]):
-        if not faults_prev and faults:
-            return t, t - t_prev
-    return None
+    """(onset s, resolution s) of the first fault to appear after the first sample, by the
+    ground truth ``truth`` (``ground_truth.Truth`` each, in signal s): to the sample (resolution
+    0) where the recording's ``/diagnostics`` have ``fault_onsets_s``, else the first message with
+    the fault and the time since the one before it (the fault appeared in between).  None when no
+    fault appears: a healthy recording, or one with its fault there from the first sample."""
+    found = ground_truth.appearances(truth, 0.0, SLACK_S)
+    if not found or faults_at_start(truth):
+        return None                           # none, or not from none: a fault from the start
+    return found[0].latest, found[0].latest - found[0].earliest
+
+
+def faults_at_start(truth: list) -> tuple:
+    """The faults in the first sample (t = 0), or where that is not known (a recording without
+    ``fault_onsets_s`` whose first message has a fault), those of the first message."""
+    at_start = ground_truth.faults_at(truth, 2 * SLACK_S, SLACK_S)
+    return at_start if at_start is not None else (truth[0].faults if truth else ())
+
+
+def fault_detections(timeline: list, truth: list) -> list:
+    """Each fault kind that appeared after the first sample, with the first window of
+    ``timeline`` that calls it once it is there: {"fault", "onset_s", "onset_resolution_s" (0 to
+    the sample), "first_detection_s" and "latency_s" (from the onset; None when never called),
+    "windows_since"}."""
+    scored = [(w["end_s"], w["verdict"]) for w in timeline]
+    rows = []
+    for fault in ground_truth.appearances(truth, 0.0, SLACK_S):
+        found, since = ground_truth.first_detection(scored, fault, SLACK_S)
+        rows.append({"fault": fault.kind, "onset_s": fault.latest,
+                     "onset_resolution_s": fault.latest - fault.earliest, "first_detection_s": found,
+                     "latency_s": None if found is None else max(0.0, found - fault.latest),
+                     "windows_since": since})
+    return rows
 
 
 def truth_changes(truth: list) -> list:
-    """Where the faults present change between two ``/diagnostics`` samples: {"t_s": the first
-    sample with the new faults, "after_s": the one before it (s), faults_present, defect_sizes}."""
-    return [{"t_s": t, "after_s": t_prev, "faults_present": list(faults), "defect_sizes": list(sizes)}
-            for (t_prev, faults_prev, _), (t, faults, sizes) in zip(truth, truth[1:]) if faults != faults_prev]
+    """Where the faults present change: {"t_s": when (exact, or the first message that shows it),
+    "after_s": the earliest it may have been (= t_s where exact), faults_present: from then on,
+    defect_sizes: of the first message at or after t_s}, in order."""
+    changes = []
+    for fault in ground_truth.appearances(truth, 0.0, SLACK_S):
+        if changes and abs(changes[-1]["t_s"] - fault.latest) <= SLACK_S:
+            continue                          # two kinds at once: one change
+        report = next(r for r in truth if r.t >= fault.latest - SLACK_S)
+        faults = ground_truth.faults_at(truth, fault.latest + 2 * SLACK_S, SLACK_S)
+        changes.append({"t_s": fault.latest, "after_s": fault.earliest, "faults_present": list(faults),
+                        "defect_sizes": list(report.sizes)})
+    return changes
 
 
 def score_windows(x, sample_rate_hz: float, bounds: list, times_s: list, frequencies: list,
@@ -335,19 +345,26 @@ def score_windows(x, sample_rate_hz: float, bounds: list, times_s: list, frequen
     when unknown) at the window's shaft speed (``speeds_rad_s``); verdict "unknown" without
     frequencies or in less than 0.2 s of signal.  One dict per window: start_s,
     end_s, shaft_speed_rpm, verdict, prominences ({fault: line height over local median}), and
-    the ground truth at its end (``truth_at``): faults_present, defect_sizes and the time of the
-    ``/diagnostics`` sample they come from (None each without ground truth)."""
+    the ground truth at its end: faults_present, those in its last sample
+    (``ground_truth.faults_at``: to the sample where the recording has ``fault_onsets_s``), and
+    defect_sizes with truth_t_s, the sizes of the latest ``/diagnostics`` at or before the end
+    with those faults (else the first after it) and that message's time (None each without
+    ground truth)."""
     rows = []
     for (i0, i1), (t0, t1), freqs, speed in zip(bounds, times_s, frequencies, speeds_rad_s):
         usable = freqs and freqs["bpfo"] > 0 and i1 - i0 > 0.2 * sample_rate_hz   # as for the whole
         verdict = diagnose(x[i0:i1], sample_rate_hz, freqs) if usable else None
-        now = truth_at(truth, t1)
+        faults = ground_truth.faults_at(truth, t1, SLACK_S)
+        sizes = ground_truth.truth_before(truth, t1, SLACK_S)
+        if sizes is not None and faults is not None and sizes.faults != faults:
+            # the fault appeared after that message: the sizes of the first one that has it
+            sizes = next((r for r in truth if r.t >= t1 - SLACK_S and r.faults == faults), sizes)
         rows.append({"start_s": t0, "end_s": t1, "shaft_speed_rpm": speed * RPM,
                      "verdict": verdict["verdict"] if verdict else "unknown",
                      "prominences": verdict["scores"] if verdict else {},
-                     "faults_present": list(now[1]) if now else None,
-                     "defect_sizes": list(now[2]) if now else None,
-                     "truth_t_s": now[0] if now else None})
+                     "faults_present": list(faults) if faults is not None else None,
+                     "defect_sizes": list(sizes.sizes) if sizes else None,
+                     "truth_t_s": sizes.t if sizes else None})
     return rows
 
 
@@ -535,10 +552,11 @@ TIMELINE_LINES = (("outer", "bpfo"), ("inner", "bpfi"), ("ball", "2bsf"))   # fa
 
 def plot_timeline(timeline: list, truth: list, kinds: list, onset, detected_s, out: Path, meta: dict) -> str:
     """Per-window prominences of BPFO, BPFI and 2xBSF against signal time (one step per window),
-    the detection threshold, the faults present by ``/diagnostics`` shaded (lighter where the
-    onset lies between two samples), the first detection; below, the defect sizes of ``truth``
-    when the recording has any (``kinds``: the scene's defect kinds, for the labels)."""
-    sized = any(sizes for _, _, sizes in truth)
+    the detection threshold, the faults present by ``/diagnostics`` shaded from the onset (a
+    dashed line where it is known to the sample, hatched where only between two messages), the
+    first detection; below, the defect sizes of ``truth`` when the recording has any (``kinds``:
+    the scene's defect kinds, for the labels)."""
+    sized = any(r.sizes for r in truth)
     plt, fig, axes = _figure(2 if sized else 1, 3.4 if sized else 4.2)
     ax = axes[0]
     edges = np.array([w["start_s"] for w in timeline] + [timeline[-1]["end_s"]])
@@ -549,16 +567,16 @@ def plot_timeline(timeline: list, truth: list, kinds: list, onset, detected_s, o
     ax.axhline(DETECTION_THRESHOLD, color="0.3", ls="--", lw=1.0,
                label=f"detection threshold {DETECTION_THRESHOLD:g}")
     end = edges[-1]
-    label = "fault present (/diagnostics)"
-    for k, (t, faults, _) in enumerate(truth):
-        if faults and (k == 0 or not truth[k - 1][1]):        # a run of samples with a fault present
-            stop = next((t2 for t2, f2, _ in truth[k:] if not f2), end)
-            # before the first sample, the first sample's state holds (``truth_at``)
-            ax.axvspan(min(t, edges[0]) if k == 0 else t, stop, color="tab:red", alpha=0.12, lw=0, label=label)
-            label = None
-    if onset is not None:
-        ax.axvspan(onset[0] - onset[1], onset[0], facecolor="none", edgecolor="tab:red", alpha=0.4,
-                   hatch="//", lw=0, label="onset somewhere here (1 Hz /diagnostics)")
+    # defects appear and never vanish: one band from where the first fault is in the signal
+    if faults_at_start(truth):
+        ax.axvspan(edges[0], end, color="tab:red", alpha=0.12, lw=0, label="fault present (/diagnostics)")
+    elif onset is not None:
+        ax.axvspan(onset[0], end, color="tab:red", alpha=0.12, lw=0, label="fault present (/diagnostics)")
+        if onset[1] > 0:
+            ax.axvspan(onset[0] - onset[1], onset[0], facecolor="none", edgecolor="tab:red", alpha=0.4,
+                       hatch="//", lw=0, label="onset somewhere here (1 Hz /diagnostics)")
+        else:
+            ax.axvline(onset[0], color="tab:red", lw=1.2, ls="--", label=f"onset {onset[0]:.2f} s")
     if detected_s is not None:
         ax.axvline(detected_s, color="k", lw=1.2, label=f"first detection {detected_s:.2f} s")
     ax.set_yscale("log")
@@ -567,9 +585,9 @@ def plot_timeline(timeline: list, truth: list, kinds: list, onset, detected_s, o
     ax.legend(loc="upper left", fontsize=8, ncol=2)
     ax.grid(alpha=0.3, which="both")
     if sized:
-        t = [item[0] for item in truth]
-        for k in range(max(len(sizes) for _, _, sizes in truth)):
-            size = [sizes[k] if k < len(sizes) else np.nan for _, _, sizes in truth]
+        t = [r.t for r in truth]
+        for k in range(max(len(r.sizes) for r in truth)):
+            size = [r.sizes[k] if k < len(r.sizes) else np.nan for r in truth]
             name = kinds[k] if k < len(kinds) else "?"
             # dotted: between two samples the size is not known
             axes[1].plot(t, size, marker="o", ms=4, lw=0.8, ls=":", label=f"defect {k + 1} ({name})")
@@ -665,6 +683,7 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
         "expected_defects": expected,
         "skid_ratios_percent": {k: float(np.mean(v[:, 1])) for k, v in sorted(d.skid.items())},
         "verdict_describes_recording": (not changes) if d.truth else None,
+        "ground_truth_to_the_sample": any(r.onsets is not None for r in d.truth) if d.truth else None,
         "timeline_window_s": (timeline[0]["end_s"] - timeline[0]["start_s"]) if timeline else None,
         "timeline_unscored_s": ((x.size - window_bounds(x.size, fs, window_s)[-1][1]) / fs) if timeline else None,
         "timeline": timeline,
@@ -674,6 +693,7 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
         "scene_defect_onsets_s": [df.onset for df in scene.defects] if scene is not None else [],
         "first_detection_s": detected,
         "detection_latency_s": detected - onset[0] if onset and detected is not None else None,
+        "fault_detections": fault_detections(timeline, d.truth),
         "plots": plots,
     }
     (out / "summary.json").write_text(json.dumps(summary, indent=2, default=_json_default) + "\n")
@@ -759,10 +779,13 @@ def _faults_text(faults) -> str:
 
 
 def _changes_text(s: dict) -> str:
-    """``none, then outer from between 2.00 and 3.00 s`` from ``ground_truth_changes``."""
+    """``none, then outer from 2.50 s`` (``from between 2.00 and 3.00 s`` from a recording
+    without ``fault_onsets_s``) from ``ground_truth_changes``."""
     first = s["timeline"][0]["faults_present"] if s["timeline"] else None
     parts = [_faults_text(first)] if first is not None else []
-    parts += [f"{_faults_text(c['faults_present'])} from between {c['after_s']:.2f} and {c['t_s']:.2f} s"
+    parts += [f"{_faults_text(c['faults_present'])} from "
+              + (f"{c['t_s']:.2f} s" if c["after_s"] == c["t_s"] else
+                 f"between {c['after_s']:.2f} and {c['t_s']:.2f} s")
               for c in s["ground_truth_changes"]]
     return ", then ".join(parts)
 
@@ -797,15 +820,21 @@ def _timeline_markdown(s: dict) -> list:
         lines += ["No ground truth in this recording (its `/diagnostics` have no `faults_present`: made "
                   "before that key).", ""]
     else:
-        lines += ["Ground truth: `faults_present` and `defect_sizes` of the recorded `/diagnostics` (1 Hz), "
-                  "the latest at or before each window's end, so a change shows up to one `/diagnostics` "
-                  "period late.", ""]
-        if s["fault_onset_s"] is not None:
-            scene = [t for t in s["scene_defect_onsets_s"] if t > 0]
+        lines += (["Ground truth: the recorded `/diagnostics`: the faults in each window's last sample by "
+                   "`fault_onsets_s` (to the sample), the defect sizes of the latest message at or before "
+                   "its end (1 Hz).", ""] if s["ground_truth_to_the_sample"] else
+                  ["Ground truth: `faults_present` and `defect_sizes` of the recorded `/diagnostics` (1 Hz), "
+                   "the latest at or before each window's end, so a change shows up to one `/diagnostics` "
+                   "period late (a recording from before `fault_onsets_s`).", ""])
+        scene = [t for t in s["scene_defect_onsets_s"] if t > 0]
+        set_by = f"; the scene sets {', '.join(f'{t:g}' for t in scene)} s" if scene else ""
+        if s["fault_onset_s"] is not None and s["fault_onset_resolution_s"] == 0:
+            lines.append(f"- fault onset: {s['fault_onset_s']:.4f} s (the first sample with the fault, by "
+                         f"`/diagnostics`{set_by})")
+        elif s["fault_onset_s"] is not None:
             lines.append(f"- fault onset: {s['fault_onset_s']:.2f} s (by `/diagnostics`: none at "
                          f"{s['fault_onset_s'] - s['fault_onset_resolution_s']:.2f} s, so the fault appeared "
-                         f"within the {s['fault_onset_resolution_s']:.2f} s before"
-                         + (f"; the scene sets {', '.join(f'{t:g}' for t in scene)} s" if scene else "") + ")")
+                         f"within the {s['fault_onset_resolution_s']:.2f} s before{set_by})")
         else:
             lines.append("- fault onset: none seen (the faults present do not go from none to some)")
         if s["first_detection_s"] is not None:
@@ -813,10 +842,19 @@ def _timeline_markdown(s: dict) -> list:
                          "verdict names a fault present)")
         else:
             lines.append("- first detection: none (no window's verdict names a fault present)")
-        if s["detection_latency_s"] is not None:
+        if s["detection_latency_s"] is not None and s["fault_onset_resolution_s"] == 0:
+            lines.append(f"- detection latency: {s['detection_latency_s']:.2f} s after the onset")
+        elif s["detection_latency_s"] is not None:
             lines.append(f"- detection latency: {s['detection_latency_s']:.2f} s after the onset by `/diagnostics` "
                          f"(from the fault's appearance: {s['detection_latency_s']:.2f} to "
                          f"{s['detection_latency_s'] + s['fault_onset_resolution_s']:.2f} s)")
+        if len(s["fault_detections"]) > 1:
+            lines.append("- each fault that appeared: " + "; ".join(
+                f"{d['fault']} at {d['onset_s']:.2f} s"
+                + ("" if d["onset_resolution_s"] == 0 else f" (up to {d['onset_resolution_s']:.2f} s earlier)")
+                + (f", first called at {d['first_detection_s']:.2f} s (latency {d['latency_s']:.2f} s)"
+                   if d["first_detection_s"] is not None else f", not called in {d['windows_since']} windows since")
+                for d in s["fault_detections"]))
         lines.append("")
     runs = _timeline_runs(timeline)
     lines += ["| signal time (s) | windows | verdict | faults present | defect sizes | "

@@ -518,7 +518,7 @@ class BearingSimNode(Node):
             **defect_values(self.sim, published_index - 1),
             "shaft_speed_rad_s": f"{self.sim.shaft_speed:.6g}",
             "radial_load_n": " ".join(f"{v:.6g}" for v in self.sim.radial_load),
-            "simulated_s": f"{published_index / self.sim.sample_rate:.3f}",
+            "simulated_s": f"{published_index / self.sim.sample_rate:.6f}",
             "computed_ahead_s": f"{(self.sim.index - published_index) / self.sim.sample_rate:.3f}",
             "rejected_inputs": sum(self.rejected.values()),
         }

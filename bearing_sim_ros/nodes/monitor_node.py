@@ -17,18 +17,18 @@ at the fault frequencies of the scene's bearing at the measured shaft speed, and
 (threshold x4, ``envelope.DETECTION_THRESHOLD``).  The axis where a line stands highest counts.
 
 It also scores itself.  The simulator's ``/diagnostics`` (1 Hz) say which faults are in the signal
-(``faults_present``: ``none``, ``outer``, ``ball, outer``, ...), stamped with the end of the signal
-published so far, the time line of the tables' stamps.  ``truth=`` is what the latest of them
-stamped at or before the window's end says (``none``, ``outer``, ``ball,outer``; ``unknown``
-before the first, or with none at all: a real sensor, a recording without them).  So the truth
-is exact at a diagnostics stamp and up to 1 s old between two: a fault that appears between them
-counts from the second, and a detector that calls it before that is scored against ``none``.
-The diagnostics stamped at a window's very end leave the node just after its last table; a
-verdict waits for them up to ``TRUTH_GRACE_S`` after that table arrived.  On exit, beside the
-counts, a score line (``healthy`` agrees with ``none``, a fault verdict when its kind is present),
-and when the diagnostics went from ``none`` to a fault during the run, the latency: the end of
-the first window that names a present fault minus the stamp of the first diagnostics with the
-fault (it appeared after the previous one's, up to 1 s earlier: the line gives both).
+and since when (``faults_present``: ``none``, ``outer``, ``ball, outer``, ...; ``fault_onsets_s``:
+the signal time each appeared), stamped with the end of the signal published so far, the time
+line of the tables' stamps; :mod:`bearing_sim_ros.ground_truth` reads them.  ``truth=`` is the
+faults in the window's last sample (``none``, ``outer``, ``ball,outer``; ``unknown`` before the
+first diagnostics, or with none at all: a real sensor, a recording without them): exact to the
+sample once the diagnostics stamped at or after the window's end are in, which leave the node
+just after its last table, so a verdict waits for them up to ``TRUTH_GRACE_S``.  On exit, beside
+the counts, a score line (``healthy`` agrees with ``none``, a fault verdict when its kind is
+present) and, for each fault that appeared during the run, the latency: the end of the first
+window that names it minus its onset.  (From a source without ``fault_onsets_s``, a recording made
+before that key, a fault is known to have appeared only between two diagnostics, up to 1 s apart:
+then the line gives both.)
 
 The analysis runs on a thread of its own, and the callbacks only decode and queue: the
 subscription keeps a bounded number of tables (``waveform_qos``: 1 s of signal, 0.5 s when a
@@ -46,6 +46,7 @@ import numpy as np
 import rclpy
 from rclpy.node import Node
 
+from .. import ground_truth
 from ..analysis.envelope import DETECTION_THRESHOLD, FAULT_LINES, diagnose
 from ..messages import TOPIC_ACCEL, TOPIC_DIAGNOSTICS, TOPIC_STATE, waveform_qos
 from ..teardown import teardown_watchdog
@@ -140,16 +141,12 @@ def format_verdict(t: float, result: dict) -> str:
 
 
 # ---- ground truth and score (plain functions: test/test_monitor.py checks them without ROS) ----
-def parse_faults(text: str) -> frozenset:
-    """``faults_present`` as a set of kinds: ``"none"`` -> {}, ``"ball, outer"`` -> {ball, outer}."""
-    kinds = {k.strip() for k in text.split(",")} - {"", "none"}
-    return frozenset(kinds)
-
-
 def truth_at(reports, t_ns: int):
-    """The faults in force at signal time ``t_ns`` by the diagnostics ``reports`` ((stamp ns,
-    faults) in arrival order): the latest stamped at or before it.  None (unknown) if none is."""
-    return next((faults for stamp, faults in reversed(reports) if stamp <= t_ns + SLACK_NS), None)
+    """The faults (a sorted tuple of kinds) in the signal just before ``t_ns`` (a window's end) by
+    the diagnostics ``reports`` (``ground_truth.Truth`` each, in arrival order), None when
+    unknown: exact where a report stamped at or after ``t_ns`` has ``fault_onsets_s``, else the
+    latest report's at or before it (``ground_truth.faults_at``)."""
+    return ground_truth.faults_at(reports, t_ns, SLACK_NS)
 
 
 def truth_text(truth) -> str:
@@ -165,46 +162,31 @@ def agrees(verdict: str, truth):
     return not truth if verdict == "healthy" else verdict in truth
 
 
-def fault_onset(reports):
-    """The first place where the diagnostics go from no fault to a fault: (stamp of the last
-    ``none``, stamp of the first with the fault), the fault appeared between them (the
-    resolution is their distance, 1 s); None if they never do."""
-    for (t_before, before), (t_after, after) in zip(reports, reports[1:]):
-        if not before and after:
-            return t_before, t_after
-    return None
-
-
-def first_detection(scored, onset_ns: int):
-    """End (ns) of the first window ending at or after ``onset_ns`` whose verdict names a fault
-    present there, or None; and how many windows end at or after it."""
-    since = [(end, verdict, truth) for end, verdict, truth in scored if end >= onset_ns - SLACK_NS]
-    ends = [end for end, verdict, truth in since if verdict != "healthy" and agrees(verdict, truth)]
-    return (ends[0] if ends else None), len(since)
-
-
 def score_lines(scored, reports, t0_ns: int) -> list:
-    """The exit lines on ``scored`` ((window end ns, verdict, truth) per verdict, in order) and
-    the diagnostics ``reports``: agreement, and the latency when a fault appeared during the run.
-    Times as in the verdict lines: s from the first table (``t0_ns``)."""
-    marks = [agrees(verdict, truth) for _end, verdict, truth in scored]
+    """The exit lines on ``scored`` ((window end ns, verdict) per verdict, in order) and all the
+    diagnostics ``reports``, which by now give the truth at every window's end that a report
+    follows (to the sample where they have ``fault_onsets_s``; a verdict line printed the truth
+    known then): agreement, and one latency line per fault kind that appeared during the run
+    (after ``t0_ns``, the first table's stamp).  Times as in the verdict lines: s from ``t0_ns``."""
+    marks = [agrees(verdict, truth_at(reports, end)) for end, verdict in scored]
     known = [m for m in marks if m is not None]
     lines = [f"monitor: score {sum(known)} of {len(known)} verdicts agree with the truth, "
              f"{len(marks) - len(known)} truth=unknown"]
-    onset = fault_onset(reports)
-    if onset is None or not scored:
+    if not scored:
         return lines
-    before, after = ((t - t0_ns) / NS for t in onset)
-    found, since = first_detection(scored, onset[1])
-    where = (f"{truth_text(truth_at(reports, onset[1]))} appeared between t={before:.2f}s and "
-             f"t={after:.2f}s by the diagnostics")
-    if found is None:
-        lines.append(f"monitor: latency none: {where}, not called in {since} verdicts since")
-    else:
+    for fault in ground_truth.appearances(reports, t0_ns, SLACK_NS):
+        before, after = ((t - t0_ns) / NS for t in (fault.earliest, fault.latest))
+        found, since = ground_truth.first_detection(scored, fault, SLACK_NS)
+        where = (f"{fault.kind} appeared at t={after:.2f}s" if fault.exact else
+                 f"{fault.kind} appeared between t={before:.2f}s and t={after:.2f}s by the diagnostics")
+        if found is None:
+            lines.append(f"monitor: latency none: {where}, not called in {since} verdicts since")
+            continue
         t = (found - t0_ns) / NS
-        # from the later bound; the fault may have been there up to after - before longer
-        lines.append(f"monitor: latency {max(0.0, t - after):.2f}s (to {after - before:.2f}s more): "
-                     f"{where}, first called at t={t:.2f}s")
+        # from the later bound; without onsets to the sample, it may have been there up to
+        # after - before longer
+        more = "" if fault.exact else f" (to {after - before:.2f}s more)"
+        lines.append(f"monitor: latency {max(0.0, t - after):.2f}s{more}: {where}, first called at t={t:.2f}s")
     return lines
 
 
@@ -226,7 +208,7 @@ class MonitorNode(Node):
         self.rejected = 0           # tables that were no waveform table or held non-finite samples
         self.windows_queued = 0
         self.verdicts = []
-        self.reports = []           # (stamp ns, faults) from /diagnostics: the ground truth
+        self.reports = []           # ground_truth.Truth of each /diagnostics (stamps in ns)
         self._speeds = []
         self._t0 = None
         self._warned = False
@@ -249,10 +231,10 @@ class MonitorNode(Node):
 
     def _on_diagnostics(self, msg):
         for status in msg.status:           # the simulator's: the status with faults_present
-            values = {kv.key: kv.value for kv in status.values}
-            if "faults_present" in values:
-                stamp = msg.header.stamp.sec * NS + msg.header.stamp.nanosec
-                self.reports.append((stamp, parse_faults(values["faults_present"])))
+            stamp = msg.header.stamp.sec * NS + msg.header.stamp.nanosec
+            truth = ground_truth.parse({kv.key: kv.value for kv in status.values}, stamp, NS)
+            if truth is not None:
+                self.reports.append(truth)
 
     def _on_accel(self, msg):
         if self.count and self.windows_queued >= self.count:
@@ -293,7 +275,7 @@ class MonitorNode(Node):
         except Exception as exc:  # noqa: BLE001 - a failed analysis must not end the monitor silently
             self.get_logger().error(f"envelope analysis at t={t:.2f}s failed: {exc}")
             return
-        while time.monotonic() < grace and not (self.reports and self.reports[-1][0] >= end - SLACK_NS):
+        while time.monotonic() < grace and not (self.reports and self.reports[-1].t >= end - SLACK_NS):
             time.sleep(0.01)        # the diagnostics stamped at ``end`` (if any) are not in yet
         result.update(end_ns=end, truth=truth_at(self.reports, end))
         self.verdicts.append(result)
@@ -336,7 +318,7 @@ def main(args) -> int:
                 print(f"monitor: {len(node.verdicts)} verdicts from {node.tables} tables, "
                       f"{node.window.gaps} gaps (lost tables or a restarted source), "
                       f"{node.rejected} rejected", flush=True)
-                scored = [(r["end_ns"], r["verdict"], r["truth"]) for r in node.verdicts]
+                scored = [(r["end_ns"], r["verdict"]) for r in node.verdicts]
                 for line in score_lines(scored, node.reports, node._t0 or 0):
                     print(line, flush=True)
             rclpy.try_shutdown()

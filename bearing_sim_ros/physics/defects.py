@@ -153,6 +153,11 @@ class DefectSchedule:
         self._growth = [d.growth * rate for d in self.defects]
         self.static = all(o == 0 and g == 0.0 for o, g in zip(self._onsets, self._growth))
 
+    @property
+    def onset_samples(self) -> tuple:
+        """Each defect's first output sample (0 for a defect there from the start)."""
+        return tuple(self._onsets)
+
     def size(self, k: int, index: int) -> float:
         """Size (0-1) of defect k at output sample ``index``."""
         since = index - self._onsets[k]

@@ -29,6 +29,7 @@ import numpy as np
 from ..errors import UserError
 from ..messages import BATCH_DURATION, STATE_RATE, TOPIC_ACCEL, TOPIC_CONTACT, TOPIC_DIAGNOSTICS, TOPIC_LOAD, \
     TOPIC_SHAFT_SPEED, TOPIC_STATE, TYPES, batching_error, waveform_qos
+from ..ground_truth import diagnostics_values
 from ..waveform import NS
 
 NODE_NAME = "bearing_sim"
@@ -160,15 +161,14 @@ def tier_values(sim) -> dict:
 
 
 def defect_values(sim, sample: int | None = None) -> dict:
-    """The ``/diagnostics`` keys on the scene's defects as they are in the signal at output
-    ``sample`` (default: the latest computed), the live node's and a render's alike (ground truth
-    for a monitoring node): ``faults_present``, the kinds of the defects there (``outer``,
-    ``inner, ball``; ``none``), and ``defect_sizes``, each scene defect's size in scene order (0
-    before its ``onset_s``, 1 at full size; ``none`` for a scene without defects)."""
+    """The ``/diagnostics`` ground-truth keys (``bearing_sim_ros.ground_truth``) on the scene's
+    defects as they are in the signal at output sample ``sample`` (default: the latest computed),
+    the live node's and a render's alike: ``faults_present`` (``outer``, ``inner, ball``;
+    ``none``), ``defect_sizes`` (each scene defect's size in scene order, 0 before its
+    ``onset_s``, 1 at full size; ``none`` for a scene without defects) and ``fault_onsets_s``
+    (``outer=5.000000``: when each kind present appeared, s of signal)."""
     sizes = sim.defect_sizes if sample is None else sim.defect_sizes_at(sample)
-    kinds = [d.kind for d, s in zip(sim.scene.defects, sizes) if s > 0.0]
-    return {"faults_present": ", ".join(kinds) if kinds else "none",
-            "defect_sizes": " ".join(f"{s:.4g}" for s in sizes) if sizes else "none"}
+    return diagnostics_values([d.kind for d in sim.scene.defects], sizes, sim.defect_onsets_s)
 
 
 def tier_summary(values: dict) -> str:
@@ -338,7 +338,7 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
                           "worst_lag_s": "0.000000", **tier_values(sim), **defect_values(sim),
                           "shaft_speed_rad_s": f"{sim.shaft_speed:.6g}",
                           "radial_load_n": " ".join(f"{v:.6g}" for v in sim.radial_load),
-                          "simulated_s": f"{sim.time:.3f}", "rejected_inputs": 0,
+                          "simulated_s": f"{sim.time:.6f}", "rejected_inputs": 0,
                           "recording": "ok"}
                 values.update(means.values())
                 means.reset()

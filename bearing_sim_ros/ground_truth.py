@@ -1,0 +1,150 @@
+"""The ground truth in ``/diagnostics``: which faults the published signal holds, written and read
+in one place.
+
+A simulator knows what a real machine does not: which defects are in the signal and since when.
+The node and ``bearing-sim render`` put that into every ``/diagnostics`` message (1 Hz), as the
+last published sample has it (the message's stamp is the end of the published signal):
+
+- ``faults_present``: the kinds of the defects there, in scene order: ``none``, ``outer``,
+  ``inner, ball``;
+- ``defect_sizes``: each scene defect's size in scene order, 0 before its onset to 1 at full size
+  (``none`` for a scene without defects);
+- ``fault_onsets_s``: for each kind present, the signal time (s after the first sample) of the
+  first sample that held it: ``outer=5.000000``, ``ball=2.000000, outer=5.000000``; ``none``.
+  With it an onset is known to the sample, not only to the 1 s between two messages;
+- ``simulated_s``: the signal time of the message's stamp (s), which ties the two time lines
+  together: an onset's stamp is ``stamp - (simulated_s - onset_s)``.
+
+Defects only appear and grow, never vanish, so the faults present at any time up to a message's
+stamp follow from its ``fault_onsets_s``: exactly those with an onset before that time.
+
+:func:`parse` reads one message's values into a :class:`Truth` on the consumer's own time line
+(ns of stamps for a live subscriber, s of signal for a recording's report); :func:`faults_at`,
+:func:`appearances` and :func:`first_detection` answer what a scorer asks.  A recording made
+before ``fault_onsets_s`` existed still works: then a change is known only between two messages,
+and :func:`appearances` says so with its bracket.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+FAULTS_KEY = "faults_present"
+SIZES_KEY = "defect_sizes"
+ONSETS_KEY = "fault_onsets_s"
+TIME_KEY = "simulated_s"
+
+
+# ---- writing (the simulator's side) --------------------------------------------------------------
+def diagnostics_values(kinds, sizes, onsets_s) -> dict:
+    """The ground-truth keys for defects of ``kinds`` (scene order) at ``sizes`` (0-1 each) whose
+    first samples came at ``onsets_s`` (signal s each): ``faults_present``, ``defect_sizes`` and
+    ``fault_onsets_s``, as text.  A kind is present when any of its defects has a size above 0;
+    its onset is the earliest of those defects'."""
+    onset_of = {}
+    for kind, size, onset in zip(kinds, sizes, onsets_s):
+        if size > 0.0:
+            onset_of[kind] = min(onset, onset_of.get(kind, onset))
+    return {FAULTS_KEY: ", ".join(onset_of) or "none",
+            SIZES_KEY: " ".join(f"{s:.4g}" for s in sizes) if len(sizes) else "none",
+            ONSETS_KEY: ", ".join(f"{k}={t:.6f}" for k, t in onset_of.items()) or "none"}
+
+
+# ---- reading (a consumer's side) -----------------------------------------------------------------
+class Truth(NamedTuple):
+    """One ``/diagnostics`` message's ground truth on a consumer's time line."""
+
+    t: float            # the message's stamp, in the consumer's unit (ns, or s of signal)
+    faults: tuple       # the kinds present, sorted: () for none
+    sizes: tuple        # each scene defect's size 0-1, scene order: () for a scene without any
+    onsets: dict | None  # kind -> when it appeared (same unit as t); None from before the key
+
+
+def parse(values: dict, t, per_second: float = 1.0):
+    """A :class:`Truth` from one message's key/value texts ``values``, stamped ``t`` in a unit of
+    which ``per_second`` make a second (1e9 for ns; an int ``t`` gives whole-unit onsets).  None when
+    the message carries no ground truth (another node's status, a recording from before the keys)
+    or an unreadable one."""
+    text = values.get(FAULTS_KEY)
+    if text is None:
+        return None
+    faults = tuple(sorted({k.strip() for k in text.split(",")} - {"", "none"}))
+    try:
+        sizes_text = values.get(SIZES_KEY, "none")
+        sizes = () if sizes_text == "none" else tuple(float(v) for v in sizes_text.split())
+        onsets = None
+        if ONSETS_KEY in values and TIME_KEY in values:
+            now = float(values[TIME_KEY])
+            onsets = {}
+            for item in values[ONSETS_KEY].split(","):
+                if item.strip() and item.strip() != "none":
+                    kind, _, onset = item.partition("=")
+                    since = (now - float(onset)) * per_second
+                    onsets[kind.strip()] = t - (round(since) if isinstance(t, int) else since)
+    except ValueError:
+        return None
+    return Truth(t, faults, sizes, onsets)
+
+
+def faults_at(truths, t, slack=0):
+    """The faults (sorted tuple of kinds) in the signal just before time ``t`` (e.g. a window's
+    end: its last sample), by ``truths`` (:class:`Truth` in stamp order), or None when unknown.
+    ``slack``: times this close count as equal (stamps rounded to the ns).
+
+    Exact wherever a message stamped at or after ``t`` gives the onsets: the kinds that appeared
+    before ``t``.  Otherwise (a recording without ``fault_onsets_s``, or ``t`` past the last
+    message) the latest message at or before ``t``; before the first message, none if that one has
+    none (defects do not vanish), else unknown."""
+    later = next((r for r in truths if r.t >= t - slack and r.onsets is not None), None)
+    if later is not None:
+        return tuple(sorted(k for k, onset in later.onsets.items() if onset < t - slack))
+    before = [r for r in truths if r.t <= t + slack]
+    if before:
+        return before[-1].faults
+    return () if truths and not truths[0].faults else None
+
+
+def truth_before(truths, t, slack=0):
+    """The latest :class:`Truth` stamped at or before ``t``, else the first; None without any (for
+    what only the messages give, such as the defect sizes)."""
+    before = [r for r in truths if r.t <= t + slack]
+    return before[-1] if before else (truths[0] if truths else None)
+
+
+class Appearance(NamedTuple):
+    """A fault kind that appeared after the signal's start ``t0``: between ``earliest`` and
+    ``latest`` (equal where ``fault_onsets_s`` gives the onset to the sample)."""
+
+    kind: str
+    earliest: float
+    latest: float
+
+    @property
+    def exact(self) -> bool:
+        return self.earliest == self.latest
+
+
+def appearances(truths, t0, slack=0) -> list:
+    """The fault kinds that appeared after ``t0`` (the first sample a consumer has), in order of
+    appearance: :class:`Appearance` each.  From the onsets of the last message that has them;
+    without them, from where consecutive messages first show a kind (the bracket between the
+    two stamps)."""
+    exact = next((r for r in reversed(truths) if r.onsets is not None), None)
+    if exact is not None:
+        found = [Appearance(k, on, on) for k, on in exact.onsets.items() if on > t0 + slack]
+    else:
+        found, seen = [], set(truths[0].faults) if truths else set()
+        for before, after in zip(truths, truths[1:]):
+            for kind in sorted(set(after.faults) - seen):
+                found.append(Appearance(kind, before.t, after.t))
+                seen.add(kind)
+    return sorted(found, key=lambda a: (a.latest, a.kind))
+
+
+def first_detection(scored, appearance: Appearance, slack=0):
+    """The end of the first window of ``scored`` ((window end, verdict) in order) that calls
+    ``appearance``'s kind once it is in the window (after ``latest``, the earliest it is certainly
+    there), or None; and how many windows end after ``latest``."""
+    since = [(end, v) for end, v in scored
+             if (end > appearance.latest + slack if appearance.exact else end >= appearance.latest - slack)]
+    found = next((end for end, v in since if v == appearance.kind), None)
+    return found, len(since)
