@@ -344,6 +344,38 @@ def test_bad_inputs_are_rejected_and_a_speed_change_moves_bpfo(started, listener
     assert line_at(freqs, spec, f_old).prominence < DETECTION_THRESHOLD     # the old line is gone
 
 
+def test_diagnostics_give_the_operating_point_at_their_stamp_not_of_what_is_computed_ahead(
+        started, listener, tmp_path):
+    """With ``compute_ahead`` 0.5 s the simulator runs up to half a second ahead of what it has
+    published.  Speed and load commands every 0.1 s: each /diagnostics (stamped with the end of
+    the published signal) gives the speed and load of the batch it was published with, the ones
+    recorded with that batch, not the computed end's, which differ by then."""
+    out = tmp_path / "ahead.mcap"
+    node = started({"scene": "er16k_outer_race", "compute_ahead": 0.5, "duration": 4.5, "record": str(out)})
+    listener.wait_matched()
+    listener.wait_for(lambda: len(listener.accel) > 0, FIRST_TABLE_S, "the first accel table")
+    k = 0
+    while node.proc.poll() is None and k < 200:
+        listener.publish_speed((1600 + 10 * (k % 7)) * 2 * math.pi / 60)
+        listener.publish_load(0.0, -50.0 - (k % 5))
+        k += 1
+        time.sleep(0.1)
+    assert node.wait(30) == 0, node.output()
+    topics, _meta = read_recording(out)
+    speed_at = {t: m.data for t, m in topics["/shaft_speed"]}        # log time: the batch's
+    load_at = {t: (m.wrench.force.x, m.wrench.force.y) for t, m in topics["/load"]}
+    diag = [(t, {kv.key: kv.value for kv in m.status[0].values}) for t, m in topics["/diagnostics"]]
+    assert len(diag) >= 3
+    for t, v in diag:
+        assert v["shaft_speed_rad_s"] == f"{speed_at[t]:.6g}", (t, v["shaft_speed_rad_s"], speed_at[t])
+        assert v["radial_load_n"] == " ".join(f"{f:.6g}" for f in load_at[t])
+        assert float(v["computed_ahead_s"]) > 0.3
+    # the test can fail: the operating point half a second later is another one
+    times = sorted(speed_at)
+    later = [speed_at[next(u for u in times if u >= t + NS // 2)] for t, _v in diag if t + NS // 2 <= times[-1]]
+    assert any(f"{s:.6g}" != v["shaft_speed_rad_s"] for s, (_t, v) in zip(later, diag))
+
+
 def test_a_command_across_the_tier_boundary_switches_tiers_and_says_so(started, listener):
     """1600 rpm / 50 N runs the kinematic tier; 10000 rpm with the load taken off needs the
     skidding tier.  The node switches at the first batch after the commands, logs it, and its

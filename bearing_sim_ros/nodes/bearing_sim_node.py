@@ -267,6 +267,7 @@ class BearingSimNode(Node):
         self.pub_state = self.create_publisher(JointState, TOPIC_STATE, self.small_qos)
         self.pub_diag = self.create_publisher(DiagnosticArray, TOPIC_DIAGNOSTICS, self.small_qos)
         self.pub_clock = None                     # created when publish_clock is first true
+        self._tier_cache = None                   # (key, tier keys) of the last batch: _tier_keys
         self.sub_speed = self.create_subscription(Float64, TOPIC_SHAFT_SPEED, self._on_speed, self.small_qos)
         self.sub_load = self.create_subscription(WrenchStamped, TOPIC_LOAD, self._on_load, self.small_qos)
 
@@ -394,7 +395,20 @@ class BearingSimNode(Node):
             clk = Clock()
             clk.clock.sec, clk.clock.nanosec = divmod(end_stamp, 1_000_000_000)
             out.append((self.pub_clock, clk))
-        return _Pending(batch, end_index, start_stamp, end_stamp, speed, load, out)
+        return _Pending(batch, end_index, start_stamp, end_stamp, speed, load, self._tier_keys(), out)
+
+    def _tier_keys(self) -> dict:
+        """The tier keys of ``/diagnostics`` (``render.tier_values``) as the batch just computed
+        ran, for the diagnostics published with it; one dict shared by every batch until the tier,
+        its selection or its steps change, so a batch allocates nothing for it."""
+        from ..recording.render import tier_values
+
+        sim = self.sim
+        key = (sim.selection, sim.tier_switches, sim.oversample)
+        cached = self._tier_cache
+        if cached is None or cached[0][0] is not key[0] or cached[0][1:] != key[1:]:
+            self._tier_cache = cached = (key, tier_values(sim))
+        return cached[1]
 
     def _loop(self):
         """Compute batches up to ``compute_ahead`` before their due time, publish each at its due
@@ -435,7 +449,7 @@ class BearingSimNode(Node):
                 if (now >= next_diag) if real_time else (item.end_index >= next_diag_index):
                     next_diag = max(next_diag + 1.0, now - 0.5)
                     next_diag_index = (math.floor(item.end_index / sr) + 1) * sr
-                    out = out + [(self.pub_diag, self._diagnostics(item.end_stamp, now, published_index))]
+                    out = out + [(self.pub_diag, self._diagnostics(item, now))]
                 if context.ok():
                     try:
                         for pub, msg in out:
@@ -497,10 +511,13 @@ class BearingSimNode(Node):
                 wake = min(wake, start_at)
             self._stop.wait(max(0.0, wake - now))
 
-    def _diagnostics(self, stamp_ns, now, published_index):
-        from ..recording.render import defect_values, diagnostics_message, tier_values
+    def _diagnostics(self, item, now):
+        """The ``/diagnostics`` message published with ``item``, the batch whose end it is
+        stamped with: what the signal held there, not at the end of what is computed ahead."""
+        from ..recording.render import defect_values, diagnostics_message
 
         st = self.stats
+        published_index = item.end_index
         period = st.period_end(now, published_index)
         rtf = period["signal_s"] / period["wall_s"] if period["wall_s"] > 0 else float("nan")
         values = {
@@ -513,11 +530,11 @@ class BearingSimNode(Node):
             "batch_compute_s": f"{period['busy_mean']:.6f}",
             "batch_compute_worst_s": f"{period['busy_worst']:.6f}",
             "sim_thread_load": f"{period['busy_fraction']:.4f}",
-            **tier_values(self.sim),
+            **item.tier,
             # the truth of the signal published so far, not of the batches computed ahead
             **defect_values(self.sim, published_index - 1),
-            "shaft_speed_rad_s": f"{self.sim.shaft_speed:.6g}",
-            "radial_load_n": " ".join(f"{v:.6g}" for v in self.sim.radial_load),
+            "shaft_speed_rad_s": f"{item.speed:.6g}",
+            "radial_load_n": " ".join(f"{v:.6g}" for v in item.load),
             "simulated_s": f"{published_index / self.sim.sample_rate:.6f}",
             "computed_ahead_s": f"{(self.sim.index - published_index) / self.sim.sample_rate:.3f}",
             "rejected_inputs": sum(self.rejected.values()),
@@ -541,19 +558,19 @@ class BearingSimNode(Node):
             if not rs["ok"]:
                 values["recording_error"] = rs["error"]
                 level, message = 2, "recording failed: " + rs["error"]
-        return diagnostics_message(stamp_ns, values, level, message)
+        return diagnostics_message(item.end_stamp, values, level, message)
 
 
 
 class _Pending:
     """A computed batch waiting for its due time (steady clock, s)."""
 
-    __slots__ = ("batch", "end_index", "start_stamp", "end_stamp", "speed", "load", "out", "due")
+    __slots__ = ("batch", "end_index", "start_stamp", "end_stamp", "speed", "load", "tier", "out", "due")
 
-    def __init__(self, batch, end_index, start_stamp, end_stamp, speed, load, out):
+    def __init__(self, batch, end_index, start_stamp, end_stamp, speed, load, tier, out):
         self.batch, self.end_index = batch, end_index
         self.start_stamp, self.end_stamp = start_stamp, end_stamp
-        self.speed, self.load, self.out = speed, load, out
+        self.speed, self.load, self.tier, self.out = speed, load, tier, out
         self.due = 0.0
 
 
