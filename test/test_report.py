@@ -383,3 +383,51 @@ def test_fault_onset_without_onsets_is_the_first_change_from_none_and_truth_hold
     assert (outer["onset_s"], outer["onset_resolution_s"], outer["first_detection_s"]) == (2.0, 1.0, 2.5)
     assert (inner["fault"], inner["first_detection_s"], inner["windows_since"]) == ("inner", None, 0)
 
+
+def _copy_without(src, dst, drop) -> int:
+    """Copy the MCAP ``src`` to ``dst`` (metadata, schemas, channels, messages) leaving out the
+    messages for which ``drop(topic, index on that topic)`` is true; how many were left out."""
+    from mcap.reader import make_reader
+    from mcap.writer import Writer
+
+    left_out, schemas, channels, counts = 0, {}, {}, {}
+    with open(src, "rb") as f, open(dst, "wb") as g:
+        reader, writer = make_reader(f), Writer(g)
+        header = reader.get_header()
+        writer.start(header.profile, header.library)
+        for meta in reader.iter_metadata():
+            writer.add_metadata(meta.name, dict(meta.metadata))
+        for schema, channel, message in reader.iter_messages(log_time_order=False):
+            k = counts[channel.topic] = counts.get(channel.topic, -1) + 1
+            if drop(channel.topic, k):
+                left_out += 1
+                continue
+            if schema.id not in schemas:
+                schemas[schema.id] = writer.register_schema(schema.name, schema.encoding, schema.data)
+            if channel.id not in channels:
+                channels[channel.id] = writer.register_channel(channel.topic, channel.message_encoding,
+                                                               schemas[schema.id], dict(channel.metadata))
+            writer.add_message(channels[channel.id], message.log_time, message.data, message.publish_time,
+                               message.sequence)
+        writer.finish()
+    return left_out
+
+
+def test_report_timeline_keeps_signal_time_across_a_lost_table(tmp_path):
+    """A recording that lost one 10 ms accel table at 1.5 s (a subscriber that fell behind): the
+    summary counts the gap, the windows take their times from the tables' stamps (the one across
+    the gap is 10 ms longer, the ones after it 10 ms later), and the ground truth follows signal
+    time, so the pit that appears at 2.5 s is present from the window that holds 2.5 s on."""
+    whole = tmp_path / "late.mcap"
+    render(str(_with_onset(tmp_path, 2.5)), 5.0, whole, fidelity="kinematic", seed=1, progress=False)
+    lost = tmp_path / "lost.mcap"
+    assert _copy_without(whole, lost, lambda topic, k: topic == "/accel" and k == 150) == 1
+    s = build_report(lost, tmp_path / "out")
+    assert s["waveform_gaps"] == 1 and s["analysed_s"] == pytest.approx(4.99)
+    spans = [(w["start_s"], w["end_s"]) for w in s["timeline"]]
+    assert spans == [pytest.approx(t, abs=1e-9) for t in ((0.0, 1.0), (1.0, 2.01), (2.01, 3.01), (3.01, 4.01))]
+    assert [w["faults_present"] for w in s["timeline"]] == [[], [], ["outer"], ["outer"]]
+    assert s["fault_onset_s"] == pytest.approx(2.5, abs=1e-6)
+    assert [w["verdict"] for w in s["timeline"]] == ["healthy", "healthy", "outer", "outer"]
+    assert s["detection_latency_s"] == pytest.approx(0.51)
+    assert "| waveform | 15000 Hz, accel_x, accel_y; 1 gap (lost tables) |" in (tmp_path / "out" / "summary.md").read_text()

@@ -747,7 +747,7 @@ def _markdown(s: dict) -> str:
               f"| made by | bearing_sim_ros {s['package_version']}, {_tiers_text(s)}, seed {s['seed']} |",
               f"| length | {s['duration_s']:.2f} s, {s['messages']} messages; analysed {s['analysed_s']:.2f} s |",
               f"| waveform | {s['sample_rate_hz']:g} Hz, {', '.join(s['channels'])}; "
-              f"{'contiguous' if s['waveform_gaps'] == 0 else str(s['waveform_gaps']) + ' gaps'} |",
+              f"{'contiguous' if s['waveform_gaps'] == 0 else _count(s['waveform_gaps'], 'gap') + ' (lost tables)'} |",
               f"| shaft speed | {s['shaft_speed_rpm']:.1f} rpm (mean"
               + (f"; varies by {100 * s['shaft_speed_variation']:.0f} %: envelope lines smear and the "
                  "verdict is not reliable" if s["shaft_speed_variation"] > 0.01 else "")
@@ -772,6 +772,10 @@ def _markdown(s: dict) -> str:
                      f"{_num(st['peak_to_peak'])} |")
     lines += ["", "## Plots", ""] + [f"![{p}]({p})" for p in s["plots"]] + [""]
     return "\n".join(lines)
+
+
+def _count(n: int, noun: str) -> str:
+    return f"{n} {noun}{'' if n == 1 else 's'}"
 
 
 def _faults_text(faults) -> str:
