@@ -19,7 +19,8 @@ import pytest
 from test_node_support import NS, NodeProcess, read_recording
 
 from bearing_sim_ros import ground_truth, load_scene
-from bearing_sim_ros.nodes.monitor_node import Window, agrees, score_lines, truth_at, truth_text
+from bearing_sim_ros.nodes.monitor_node import (TRUTH_GRACE_S, MonitorNode, Window, agrees, score_lines, truth_at,
+                                                 truth_text, verdict)
 from bearing_sim_ros.recording.render import render
 
 
@@ -121,6 +122,42 @@ def test_truth_with_onsets_is_exact_between_diagnostics_and_so_is_the_latency():
         "monitor: score 7 of 8 verdicts agree with the truth, 0 truth=unknown",
         "monitor: latency 0.80s: outer appeared at t=1.70s, first called at t=2.50s",
         "monitor: latency 0.30s: ball appeared at t=3.20s, first called at t=3.50s"]
+
+
+def test_a_verdict_waits_for_the_diagnostics_stamped_at_its_window_end(ros_env):
+    """The diagnostics stamped at a window's end leave the node just after the window's last
+    table, so they may arrive after it.  A verdict waits for them, up to ``TRUTH_GRACE_S``: here
+    they come 0.15 s later and say the pit appeared half a second before the window's end, so
+    ``truth=outer``, where the message before said none.  Without a message at the end, the
+    verdict goes out after the grace with the latest truth there is."""
+    import io
+    import threading
+
+    import rclpy
+
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx)
+    out = io.StringIO()
+    node = MonitorNode(load_scene("er16k_outer_race"), window=1.0, out=out, context=ctx)
+    try:
+        x = np.random.default_rng(0).normal(size=(15000, 2))
+        shaft = 1600 * 2 * np.pi / 60
+        verdict(x, ["accel_x", "accel_y"], 15000.0, node.scene.bearing, shaft / (2 * np.pi))   # imports scipy
+        node._t0 = NS
+        node.reports.extend(_reports(((1, "none"),), onsets={}))
+        late = _reports(((2, "outer"),), onsets={"outer": 1.5})
+        threading.Timer(0.15, node.reports.extend, (late,)).start()
+        t = time.monotonic()
+        node._analyse(2 * NS, x, ["accel_x", "accel_y"], 15000.0, shaft, time.monotonic() + TRUTH_GRACE_S)
+        waited = time.monotonic() - t
+        assert 0.15 <= waited < 0.15 + TRUTH_GRACE_S and " truth=outer " in out.getvalue(), (waited, out.getvalue())
+        t = time.monotonic()
+        node._analyse(3 * NS, x, ["accel_x", "accel_y"], 15000.0, shaft, time.monotonic() + TRUTH_GRACE_S)
+        assert time.monotonic() - t >= TRUTH_GRACE_S
+        assert [line.split(" truth=")[1].split()[0] for line in out.getvalue().splitlines()] == ["outer", "outer"]
+    finally:
+        node.destroy_node()
+        rclpy.shutdown(context=ctx)
 
 
 def _other_domain(env):
