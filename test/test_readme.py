@@ -19,6 +19,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from bearing_sim_ros.waveform import NS
+
 REPO = Path(__file__).resolve().parent.parent
 README = (REPO / "README.md").read_text()
 
@@ -89,6 +91,39 @@ def test_the_skidding_outputs_block_runs_as_written():
         assert b.extras[key].shape[0] == 1500
     for key in ("slip_inner", "slip_outer", "friction_inner", "friction_outer"):
         assert b.extras[key].shape == (1500, nb)
+
+
+def test_the_ground_truth_block_scores_with_a_rendered_recordings_diagnostics(tmp_path):
+    """"`bearing-sim monitor`": the callback, run as written on the /diagnostics of a render whose
+    outer-race pit appears at 1.5 s, keeps their ground truth; the two calls give what the
+    comments say: the fault at a window's end after the onset, and when it appeared (to the ns)."""
+    from rclpy.serialization import deserialize_message
+
+    from bearing_sim_ros import load_scene
+    from bearing_sim_ros.recording.reader import get_message, open_recording
+    from bearing_sim_ros.recording.render import render
+
+    scene = tmp_path / "late.yaml"
+    scene.write_text(load_scene("cwru_6205_or007_6").source_text.replace(
+        "profile: geometric}", "profile: geometric, onset_s: 1.5}"))
+    render(str(scene), 3.0, tmp_path / "late.mcap", fidelity="kinematic", progress=False)
+    rec = open_recording(tmp_path / "late.mcap")
+    try:
+        diag = [deserialize_message(data, get_message("diagnostic_msgs/msg/DiagnosticArray"))
+                for _t, _ty, _log, data in rec.messages(topics=["/diagnostics"])]
+    finally:
+        rec.close()
+    # the first sample's stamp: the first message's (1 s of signal) minus 1 s
+    first_ns = diag[0].header.stamp.sec * NS + diag[0].header.stamp.nanosec - NS
+    scope = {"first_ns": first_ns, "end_ns": first_ns + 2 * NS}
+    exec(_block_containing("python", "ground_truth.faults_at(truths, end_ns"), scope)
+    for msg in diag:
+        scope["on_diagnostics"](msg)
+    truths, gt = scope["truths"], scope["ground_truth"]
+    assert len(truths) == 3
+    assert gt.faults_at(truths, first_ns + 2 * NS, slack=1_000) == ("outer",)
+    assert gt.faults_at(truths, first_ns + NS, slack=1_000) == ()
+    assert gt.appearances(truths, first_ns, slack=1_000) == [("outer", first_ns + 1_500_000_000, first_ns + 1_500_000_000)]
 
 
 def test_the_rosbags_block_reads_a_rendered_recording(tmp_path, monkeypatch, bearing_sim_exe):
