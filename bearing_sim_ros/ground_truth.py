@@ -16,7 +16,9 @@ last published sample has it (the message's stamp is the end of the published si
   together: an onset's stamp is ``stamp - (simulated_s - onset_s)``.
 
 Defects only appear and grow, never vanish, so the faults present at any time up to a message's
-stamp follow from its ``fault_onsets_s``: exactly those with an onset before that time.
+stamp follow from its ``fault_onsets_s``: exactly those with an onset before that time.  (A
+recording played with ``--loop`` starts over at each seam, stamps moved on; each message's onsets
+are relative to its own stamp, so the truth between messages stays right.)
 
 :func:`parse` reads one message's values into a :class:`Truth` on the consumer's own time line
 (ns of stamps for a live subscriber, s of signal for a recording's report); :func:`faults_at`,
