@@ -28,6 +28,7 @@ and :func:`appearances` says so with its bracket.
 """
 from __future__ import annotations
 
+from bisect import bisect_left, bisect_right
 from typing import NamedTuple
 
 FAULTS_KEY = "faults_present"
@@ -95,21 +96,32 @@ def faults_at(truths, t, slack=0):
     Exact wherever a message stamped at or after ``t`` gives the onsets: the kinds that appeared
     before ``t``.  Otherwise (a recording without ``fault_onsets_s``, or ``t`` past the last
     message) the latest message at or before ``t``; before the first message, none if that one has
-    none (defects do not vanish), else unknown."""
-    later = next((r for r in truths if r.t >= t - slack and r.onsets is not None), None)
+    none (defects do not vanish), else unknown.  A bisection on the stamps: a monitor that runs
+    for hours asks this of thousands of messages at every verdict."""
+    first = bisect_left(truths, t - slack, key=_stamp)
+    later = next((truths[k] for k in range(first, len(truths)) if truths[k].onsets is not None), None)
     if later is not None:
         return tuple(sorted(k for k, onset in later.onsets.items() if onset < t - slack))
-    before = [r for r in truths if r.t <= t + slack]
-    if before:
-        return before[-1].faults
+    before = _latest_at_or_before(truths, t, slack)
+    if before is not None:
+        return before.faults
     return () if truths and not truths[0].faults else None
 
 
 def truth_before(truths, t, slack=0):
     """The latest :class:`Truth` stamped at or before ``t``, else the first; None without any (for
     what only the messages give, such as the defect sizes)."""
-    before = [r for r in truths if r.t <= t + slack]
-    return before[-1] if before else (truths[0] if truths else None)
+    before = _latest_at_or_before(truths, t, slack)
+    return before if before is not None else (truths[0] if truths else None)
+
+
+def _stamp(truth) -> float:
+    return truth.t
+
+
+def _latest_at_or_before(truths, t, slack):
+    k = bisect_right(truths, t + slack, key=_stamp)
+    return truths[k - 1] if k else None
 
 
 class Appearance(NamedTuple):
