@@ -182,6 +182,39 @@ def test_a_table_without_the_absent_defects_keeps_each_ones_draws():
     assert half[1, 1] == pytest.approx(0.5 * both[1, 1])     # D_HALF: half the width
 
 
+def test_a_wandering_ball_defect_is_met_for_the_share_of_time_its_geometry_gives():
+    """The CWRU ball scene's pit (length L = 0.1778 mm on a ball of radius r = 3.97 mm) is met
+    while sin(latitude) lies within (a + L / 2) / r, a the contact ellipse's transverse semi-axis
+    (Hamrock-Brewe, from the catalog's coefficient, at the most loaded ball's static load), and
+    fully within L less.  With sin(latitude) a linear interpolation of independent uniform draws
+    on [-1, 1], the share of spin angle in each band follows from that distribution alone: here
+    from numpy's own generator, not the kernel's hash.  The README's figures (a = 0.36 mm at
+    19 N; met 16 %, fully 9 %) are these."""
+    from bearing_sim_ros.physics.defects import D_WANDER
+
+    scene = load_scene("cwru_6205_b007")
+    model = Simulator(scene, fidelity="kinematic")._model
+    b, d = scene.bearing, scene.defects[0]
+    a = max(b.inner_contact.a_coeff, b.outer_contact.a_coeff) * model.ellipse_ball_load ** (1.0 / 3.0)
+    reach = (a + 0.5 * d.length) / (0.5 * b.ball_diameter)
+    full = reach - min(d.length, a) / (0.5 * b.ball_diameter)
+    assert a == pytest.approx(0.36e-3, abs=0.005e-3) and model.ellipse_ball_load == pytest.approx(19.0, abs=1.0)
+    rng = np.random.default_rng(1)
+    f = rng.random(1_000_000)
+    lat = (1.0 - f) * rng.uniform(-1.0, 1.0, f.size) + f * rng.uniform(-1.0, 1.0, f.size)
+    expected_met, expected_full = np.mean(np.abs(lat) < reach), np.mean(np.abs(lat) < full)
+    # 20 000 draws of the kernel's, ten spin angles between two draws
+    turns = model.dtab[0, D_WANDER]
+    spins = np.linspace(0.0, 2.0 * np.pi * turns * 20000, 200001)
+    applied = np.array([wander_reach(model.dtab, 0, s) for s in spins])
+    assert np.mean(applied > 0.0) == pytest.approx(expected_met, abs=0.01)
+    assert np.mean(applied >= 1.0) == pytest.approx(expected_full, abs=0.01)
+    assert round(expected_met, 2) == 0.16 and round(expected_full, 2) == 0.09
+    # and the faded band between: the loss falls linearly from full to none over it
+    mid = (applied > 0.0) & (applied < 1.0)
+    assert np.mean(mid) == pytest.approx(expected_met - expected_full, abs=0.01)
+
+
 def test_recorded_diagnostics_say_when_the_fault_is_there(tmp_path):
     """``bearing-sim render`` of the CWRU outer race with its pit appearing at 1.5 s and growing
     over 1 s: the recorded ``/diagnostics`` (read with rosbags) give ``faults_present`` none at
