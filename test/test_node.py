@@ -376,6 +376,26 @@ def test_diagnostics_give_the_operating_point_at_their_stamp_not_of_what_is_comp
     assert any(f"{s:.6g}" != v["shaft_speed_rad_s"] for s, (_t, v) in zip(later, diag))
 
 
+def test_diagnostics_go_on_each_second_after_real_time_is_switched_off_and_on(started, listener):
+    """``real_time:=false`` for half a second runs the signal tens of seconds ahead; the
+    diagnostics' steady-clock schedule went one second ahead per second of signal then, so after
+    ``real_time:=true`` none came for as long as the signal had run ahead, while tables flowed.
+    Now the first comes within about a second, and then one a second."""
+    started({"scene": "er16k_outer_race", "fidelity": "kinematic", "compute_ahead": 0.0})
+    listener.wait_matched()
+    listener.wait_for(lambda: len(listener.diagnostics) >= 1, FIRST_TABLE_S + 2, "the first /diagnostics")
+    assert listener.set_parameters({"real_time": False}) == [(True, "")]
+    time.sleep(0.5)
+    assert listener.set_parameters({"real_time": True}) == [(True, "")]
+    resumed = time.monotonic()
+    listener.wait_for(lambda: float(listener.diagnostics[-1][3]["simulated_s"]) > 10.0, 5.0,
+                      "the signal to run ahead")        # the test can fail: it did run ahead
+    time.sleep(3.5)
+    after = [d for d in listener.diagnostics if d[0] > resumed + 0.2]
+    assert len(after) >= 3, [(round(d[0] - resumed, 2), d[3]["simulated_s"]) for d in listener.diagnostics[-5:]]
+    assert all(d[3]["real_time"] == "true" for d in after[1:])
+
+
 def test_a_command_across_the_tier_boundary_switches_tiers_and_says_so(started, listener):
     """1600 rpm / 50 N runs the kinematic tier; 10000 rpm with the load taken off needs the
     skidding tier.  The node switches at the first batch after the commands, logs it, and its

@@ -2,6 +2,7 @@
 (by the mcap reader and by rosbags), with the metadata record and contiguous waveform tables."""
 from __future__ import annotations
 
+import json
 import signal
 import subprocess
 import time
@@ -48,3 +49,32 @@ def test_live_recording_stopped_by_a_signal_is_readable(sig, bearing_sim_exe, ro
     with AnyReader([out]) as reader:
         n = sum(1 for c, t, raw in reader.messages() if reader.deserialize(raw, c.msgtype) is not None)
     assert n > len(tables)
+
+
+def test_a_remapped_and_namespaced_node_records_its_topics_under_their_names(bearing_sim_exe, ros_env, tmp_path):
+    """``-r accel:=vibration -r __ns:=/rig1`` with ``record``: the node starts (it looked a
+    recorded topic's type up by its name's last segment, and a remap made that a KeyError and an
+    empty file), records every topic under its resolved name with its type, names each topic's
+    role in the metadata, and the report finds the waveform on the remapped topic."""
+    from rosbags.highlevel import AnyReader
+
+    from bearing_sim_ros.analysis.report import build_report
+
+    out = tmp_path / "remapped.mcap"
+    proc = subprocess.run([bearing_sim_exe, "node", "--ros-args", "-r", "accel:=vibration", "-r", "__ns:=/rig1",
+                           "-p", "scene:=er16k_outer_race", "-p", "fidelity:=kinematic", "-p", "duration:=2.0",
+                           "-p", "real_time:=false", "-p", f"record:={out}"],
+                          env=ros_env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stdout
+    with AnyReader([out]) as reader:
+        types = {c.topic: c.msgtype for c in reader.connections}
+        counts = {c.topic: c.msgcount for c in reader.connections}
+    assert types == {"/rig1/vibration": "sensor_msgs/msg/PointCloud2",
+                     "/rig1/contact_forces": "sensor_msgs/msg/PointCloud2",
+                     "/rig1/state": "sensor_msgs/msg/JointState", "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray",
+                     "/rig1/shaft_speed": "std_msgs/msg/Float64", "/rig1/load": "geometry_msgs/msg/WrenchStamped"}
+    assert counts["/rig1/vibration"] == 200
+    with open_recording(out) as rec:
+        assert json.loads(rec.metadata["topics"])["accel"] == "/rig1/vibration"
+    summary = build_report(out, tmp_path / "report")
+    assert summary["analysed_s"] == pytest.approx(2.0) and summary["verdict"] == "outer"

@@ -63,11 +63,13 @@ class _Data:
         topics = rec.topics()
         self.topics = {t: {"type": c.msg_type, "messages": c.count} for t, c in topics.items()}
         self.metadata = rec.metadata
-        self.accel_topic = self._find(topics, "accel", "sensor_msgs/msg/PointCloud2")
-        wanted = [t for t in (self.accel_topic, self._find(topics, "state", "sensor_msgs/msg/JointState"),
-                              self._find(topics, "shaft_speed", "std_msgs/msg/Float64"),
-                              self._find(topics, "load", "geometry_msgs/msg/WrenchStamped"),
-                              self._find(topics, "diagnostics", "diagnostic_msgs/msg/DiagnosticArray"))
+        roles = self._roles(self.metadata)
+        self.accel_topic = self._find(topics, "accel", "sensor_msgs/msg/PointCloud2", roles)
+        state_topic = self._find(topics, "state", "sensor_msgs/msg/JointState", roles)
+        speed_topic = self._find(topics, "shaft_speed", "std_msgs/msg/Float64", roles)
+        load_topic = self._find(topics, "load", "geometry_msgs/msg/WrenchStamped", roles)
+        wanted = [t for t in (self.accel_topic, state_topic, speed_topic, load_topic,
+                              self._find(topics, "diagnostics", "diagnostic_msgs/msg/DiagnosticArray", roles))
                   if t]
         classes = {t: get_message(topics[t].msg_type) for t in wanted}
         chunks, stamps, widths = [], [], []
@@ -96,15 +98,15 @@ class _Data:
                     continue
                 chunks.append(arr)
                 samples += arr.shape[0]
-            elif topic.endswith("state"):
+            elif topic == state_topic:
                 if len(msg.velocity) >= 2:
                     state_t.append(_stamp(msg.header.stamp))
                     shaft_w.append(msg.velocity[0])
                     cage_w.append(msg.velocity[1])
-            elif topic.endswith("shaft_speed"):
+            elif topic == speed_topic:
                 cmd_t.append(log_ns)
                 cmd_speed.append(msg.data)
-            elif topic.endswith("load"):
+            elif topic == load_topic:
                 load_t.append(_stamp(msg.header.stamp))
                 load_xy.append((msg.wrench.force.x, msg.wrench.force.y))
             else:
@@ -149,7 +151,22 @@ class _Data:
         self.tiers = tiers
 
     @staticmethod
-    def _find(topics, name, msg_type):
+    def _roles(metadata: dict) -> dict:
+        """Role (``accel``, ``/diagnostics``, ...) -> recorded topic, from the metadata's
+        ``topics`` (recordings since 2026-11-25); {} where it is missing or unreadable."""
+        try:
+            roles = json.loads(metadata.get("topics") or "{}")
+        except ValueError:
+            return {}
+        return {str(k).strip("/"): str(v) for k, v in roles.items()} if isinstance(roles, dict) else {}
+
+    @staticmethod
+    def _find(topics, name, msg_type, roles=None):
+        """The topic of role ``name`` and type ``msg_type``: the one the metadata names (a
+        remapped topic keeps its role there), else the one whose last name segment is ``name``."""
+        named = (roles or {}).get(name)
+        if named in topics and topics[named].msg_type == msg_type:
+            return named
         for t, c in sorted(topics.items()):
             if t.rstrip("/").split("/")[-1] == name and c.msg_type == msg_type:
                 return t

@@ -290,10 +290,16 @@ class BearingSimNode(Node):
         self._thread = threading.Thread(target=self._run, name="bearing-sim", daemon=True)
 
     def _open_recorder(self, cfg):
-        from ..messages import TYPES
+        from ..messages import (TOPIC_ACCEL, TOPIC_CONTACT, TOPIC_DIAGNOSTICS, TOPIC_LOAD,
+                                TOPIC_SHAFT_SPEED, TOPIC_STATE, TYPES)
         from ..recording.recorder import Recorder, recording_metadata
         from ..scene import scene_argument
 
+        # each topic under its resolved name (namespace and remaps applied), its type from its
+        # role: a remapped name (-r accel:=vibration) says nothing about the type
+        topics = ((TOPIC_SHAFT_SPEED, self.sub_speed, self.small_qos), (TOPIC_LOAD, self.sub_load, self.small_qos),
+                  (TOPIC_ACCEL, self.pub_accel, self.wave_qos), (TOPIC_CONTACT, self.pub_contact, self.wave_qos),
+                  (TOPIC_STATE, self.pub_state, self.small_qos), (TOPIC_DIAGNOSTICS, self.pub_diag, self.small_qos))
         params = dict(cfg)
         # the scene as a shipped name or an absolute path: a relative path or the name inside a
         # scene file would not load from another directory
@@ -301,14 +307,17 @@ class BearingSimNode(Node):
         params.update({"mode": "live",
                        "command": "bearing-sim node --ros-args " + " ".join(
                            f"-p {k}:={_param_text(v)}" for k, v in sorted(command_cfg.items()))})
-        meta = recording_metadata(self.scene, params, int(cfg["seed"]), self.sim.selection)
+        meta = recording_metadata(self.scene, params, int(cfg["seed"]), self.sim.selection,
+                                  topics={role: ent.topic_name for role, ent, _qos in topics})
         text = self.scene.source_text
         attachments = {f"{self.scene.name}.yaml": text.encode("utf-8")} if text else {}
         self.recorder = Recorder(cfg["record"], meta, attachments, argument=self._record_argument)
-        for ent, qos in ((self.sub_speed, self.small_qos), (self.sub_load, self.small_qos),
-                         (self.pub_accel, self.wave_qos), (self.pub_contact, self.wave_qos),
-                         (self.pub_state, self.small_qos), (self.pub_diag, self.small_qos)):
-            self.recorder.add_topic(ent.topic_name, TYPES[_relative(ent.topic_name)], qos)
+        try:
+            for role, ent, qos in topics:
+                self.recorder.add_topic(ent.topic_name, TYPES[role], qos)
+        except BaseException:
+            self.recorder.close()        # not a file that looks like a recording and holds none
+            raise
 
     # ---- inputs (executor thread) ------------------------------------------------------------
     def _reject(self, key, reason):
@@ -447,7 +456,10 @@ class BearingSimNode(Node):
                 published_index = item.end_index
                 out = item.out
                 if (now >= next_diag) if real_time else (item.end_index >= next_diag_index):
-                    next_diag = max(next_diag + 1.0, now - 0.5)
+                    # without pacing, a second of signal passes in far less than a second: the
+                    # steady-clock schedule restarts from now, or it would lie as far in the future
+                    # as the signal ran ahead, and real_time:=true again would publish none till then
+                    next_diag = max(next_diag + 1.0, now - 0.5) if real_time else now + 1.0
                     next_diag_index = (math.floor(item.end_index / sr) + 1) * sr
                     out = out + [(self.pub_diag, self._diagnostics(item, now))]
                 if context.ok():
@@ -648,15 +660,6 @@ def _allowed(desc) -> str:
     for r in desc.integer_range:
         return f"[{r.from_value}, {r.to_value}]"
     return desc.additional_constraints or "see the parameter description"
-
-
-def _relative(topic: str) -> str:
-    """'/ns/accel' -> 'accel' for the TYPES table ('/diagnostics' stays absolute)."""
-    from ..messages import TYPES
-
-    if topic in TYPES:
-        return topic
-    return topic.rsplit("/", 1)[-1]
 
 
 def _param_text(value) -> str:

@@ -341,15 +341,18 @@ def _fmt(value) -> str:
     return str(value)
 
 
-def recording_metadata(scene, params: dict, seed: int, selection) -> dict:
+def recording_metadata(scene, params: dict, seed: int, selection, topics: dict | None = None) -> dict:
     """The ``bearing_sim`` metadata record: how to reproduce this recording.
 
     scene: the :class:`~bearing_sim_ros.scene.Scene`; params: the node parameters or render
     arguments (JSON-encoded, sorted); seed; selection: ``Simulator.selection`` (tier, reason,
-    estimated error, tolerance).  Only deterministic content (no wall clock)."""
+    estimated error, tolerance); topics: each topic's role (``messages.TOPIC_*``) -> the name it
+    is recorded under (JSON, key ``topics``), which a namespace or a remap changes.  Only
+    deterministic content (no wall clock)."""
     from .. import __version__
 
-    return {
+    extra = {"topics": json.dumps(topics, sort_keys=True)} if topics else {}
+    return {**extra,
         "scene": scene.name,
         "scene_description": scene.description,
         "scene_yaml": scene.source_text,

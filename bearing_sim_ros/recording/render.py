@@ -301,10 +301,10 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
                           + (f" --solver {solver}" if solver != "default" else "")
                           + (f" --rk4-step {float(rk4_step)!r}" if rk4_step is not None else "")
                           + (f" --oversample {oversample}" if oversample else ""))}
-    meta = recording_metadata(scene, params, seed, sim.selection)
+    topics = [TOPIC_SHAFT_SPEED, TOPIC_LOAD, TOPIC_ACCEL, TOPIC_CONTACT, TOPIC_STATE, TOPIC_DIAGNOSTICS]
+    meta = recording_metadata(scene, params, seed, sim.selection, topics={t: t for t in topics})
     attachments = {f"{scene.name}.yaml": scene.source_text.encode("utf-8")} if scene.source_text else {}
     rec = Recorder(out, meta, attachments, start_time_ns=0, argument="--out")
-    topics = [TOPIC_SHAFT_SPEED, TOPIC_LOAD, TOPIC_ACCEL, TOPIC_CONTACT, TOPIC_STATE, TOPIC_DIAGNOSTICS]
     for topic in topics:
         rec.add_topic(topic, TYPES[topic], _qos_for(topic, batch_duration))
 
