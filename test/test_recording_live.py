@@ -78,3 +78,30 @@ def test_a_remapped_and_namespaced_node_records_its_topics_under_their_names(bea
         assert json.loads(rec.metadata["topics"])["accel"] == "/rig1/vibration"
     summary = build_report(out, tmp_path / "report")
     assert summary["analysed_s"] == pytest.approx(2.0) and summary["verdict"] == "outer"
+
+
+def test_a_recording_that_fails_on_the_way_is_logged_then_and_ends_with_status_2(bearing_sim_exe, ros_env, tmp_path):
+    """A file-size limit of 300 kB (RLIMIT_FSIZE, SIGXFSZ ignored: writes past it fail with
+    EFBIG, as on a full disk) stops the recording after about a second of a 4 s run: the node
+    logs it when it happens, publishes on to the end, says it again at exit and ends with status
+    2 and one error line, so that a script that checks the status knows the file is short."""
+    import resource
+
+    def limit_file_size():
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (300_000, 300_000))
+
+    out = tmp_path / "short.mcap"
+    proc = subprocess.run([bearing_sim_exe, "node", "--ros-args", "-p", "scene:=er16k_outer_race",
+                           "-p", "fidelity:=kinematic", "-p", "duration:=4.0", "-p", "real_time:=false",
+                           "-p", f"record:={out}"], env=ros_env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                          text=True, timeout=120, preexec_fn=limit_file_size)
+    log = proc.stdout
+    assert proc.returncode == 2, log
+    lines = log.splitlines()
+    failed = [i for i, line in enumerate(lines) if "recording failed, publishing goes on" in line]
+    at_exit = [i for i, line in enumerate(lines) if "] [bearing_sim]: recording: " in line]
+    assert len(failed) == 1 and "File too large" in lines[failed[0]], log
+    assert len(at_exit) == 1 and failed[0] < at_exit[0], log     # said when it happened, then at exit
+    assert lines[-1] == f"error: recording to {out} stopped: OSError: [Errno 27] File too large", log
+    assert 100_000 < out.stat().st_size <= 300_000

@@ -443,6 +443,7 @@ class BearingSimNode(Node):
         next_diag_index = sr                  # real_time:=false: once per second of signal, like render
         est = 0.0
         published_index = 0
+        rec_failed = False
         stats.period_start(time.monotonic(), 0)
         while True:
             stop = self._stop.is_set() or not context.ok()
@@ -480,6 +481,9 @@ class BearingSimNode(Node):
                     for pub, msg in out:
                         if pub is not self.pub_clock:
                             rec.write(pub.topic_name, msg, log_ns)
+                    if rec.error and not rec_failed:
+                        rec_failed = True        # said once, when it happens; again at exit
+                        self.get_logger().error(f"recording failed, publishing goes on: {rec.error}")
                 stats.work(time.monotonic() - now)
                 continue
             if stop:
@@ -727,7 +731,8 @@ def stray_arguments_error(program: str, stray: list) -> UserError:
 
 def main(argv=None) -> int:
     """``bearing_sim_node`` / ``bearing-sim node``: run the node until ``duration``, Ctrl-C or
-    SIGTERM; exit status 0, or 2 with one line for a bad parameter, scene or ROS argument."""
+    SIGTERM; exit status 0, or 2 with one line for a bad parameter, scene or ROS argument or a
+    recording that failed on the way (disk full: the node published on)."""
     from rclpy._rclpy_pybind11 import RCLError, UnknownROSArgsError
     from rclpy.executors import ExternalShutdownException
     from rclpy.utilities import remove_ros_args
@@ -764,6 +769,10 @@ def main(argv=None) -> int:
             rclpy.try_shutdown()
     if error is not None:
         raise error
+    if status == 0 and node is not None and node.recorder is not None and node.recorder.error:
+        # published in full, but the file is not: a script that checks the status must know
+        print(f"error: {node.recorder.error}", file=sys.stderr)
+        status = 2
     return status
 
 

@@ -194,6 +194,11 @@ class Recorder:
                 "files": [str(p) for p in self._files]}
 
     @property
+    def error(self) -> str:
+        """The first error (one line) that stopped the recording, "" while it is fine."""
+        return self._error
+
+    @property
     def closed(self) -> bool:
         return self._closed
 
