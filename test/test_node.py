@@ -93,7 +93,12 @@ def test_stamp_checks():
     assert check_stamp(now + 5 * NS, None, now, 1.0)[0] == "stale"       # from the future
     assert check_stamp(now - NS // 2, now - NS // 4, now, 1.0)[0] == "out_of_order"
     assert check_stamp(5 * NS, None, now, 0.0) is None                  # age check off (playback)
-    assert check_stamp(5 * NS, 6 * NS, now, 0.0)[0] == "out_of_order"
+    assert check_stamp(5 * NS, 5 * NS + NS // 2, now, 0.0)[0] == "out_of_order"
+    # further back than a second: a new time line (play --loop starting its recording again; a
+    # stray stamp a year ahead must not lock out every later load)
+    assert check_stamp(5 * NS, 6 * NS + 1, now, 0.0) is None
+    assert check_stamp(now, now + 365 * 86400 * NS, now, 0.0) is None
+    assert check_stamp(now - 3 * NS, now, now, 1.0)[0] == "stale"        # and the age check judges it
 
 
 def test_oversample_description_names_each_tiers_default():
@@ -316,7 +321,11 @@ def test_bad_inputs_are_rejected_and_a_speed_change_moves_bpfo(started, listener
     assert node.proc.poll() is None
     n = len(listener.accel)
     listener.wait_for(lambda: len(listener.accel) > n + 20, 5, "tables after the bad inputs")
-    assert "rejected" in node.output()                     # logged (throttled)
+    # logged, throttled per reason: each reason once (its inputs came within 2 s), none hidden
+    # behind another's throttle
+    log = node.output()
+    for key in ("not_finite", "out_of_range", "stale", "out_of_order"):
+        assert log.count(f"input rejected ({key})") == 1, (key, log)
 
     # a speed change: 1600 -> 2400 rpm takes effect at the next batch boundary: the first state
     # at the new speed is stamped within compute_ahead (0.05 s) + a batch + a state period (and

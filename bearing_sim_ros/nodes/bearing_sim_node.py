@@ -57,6 +57,10 @@ NDM_LIMIT = 1.0e6              # rpm * mm
 STATIC_F0 = 14.7
 LOAD_MULTIPLE_C0 = 2.0
 CLOCK_SKEW_ALLOWED = 1.0       # s: a load stamp further in the future than this is rejected
+REJECT_LOG_PERIOD = 2.0        # s: at most one log line per rejection reason this often
+TIME_LINE_JUMP = 1.0           # s: a load stamp further back than this behind the last accepted one
+                               # starts a new time line (a recording played again, a publisher
+                               # restarted with other stamps); closer, it is out of order
 
 
 class InputLimits:
@@ -104,10 +108,13 @@ def check_load(fx: float, fy: float, fz: float, limits: InputLimits):
 def check_stamp(stamp_ns: int, last_ns: int | None, now_ns: int, max_age: float):
     """None if a load stamp (ns) is acceptable, else ``(reason_key, reason)``.  A zero stamp is
     an unstamped message (accepted).  ``max_age`` 0 disables the age checks (for recordings
-    played back with their original stamps)."""
+    played back with their original stamps).  A stamp older than the last accepted one is out of
+    order only within ``TIME_LINE_JUMP``: further back it starts a new time line (``play --loop``
+    begins its recording again), which the age checks judge; else one stray stamp far ahead, with
+    the age checks off, would lock every later load out."""
     if stamp_ns == 0:
         return None
-    if last_ns is not None and stamp_ns < last_ns:
+    if last_ns is not None and last_ns - TIME_LINE_JUMP * 1e9 <= stamp_ns < last_ns:
         return "out_of_order", f"load stamp {stamp_ns * 1e-9:.6f} s is older than the last accepted one ({last_ns * 1e-9:.6f} s)"
     if max_age > 0.0:
         age = (now_ns - stamp_ns) * 1e-9
@@ -276,6 +283,7 @@ class BearingSimNode(Node):
         self._cmd_load = tuple(float(v) for v in self.sim.radial_load)
         self._last_load_stamp = None
         self.rejected = {"not_finite": 0, "out_of_range": 0, "stale": 0, "out_of_order": 0}
+        self._reject_log = {}                     # reason -> (monotonic s of its last line, since)
 
         self.start_ns = self.get_clock().now().nanoseconds
         self.msgs = BatchMessages(self.sim, self.start_ns, cfg["frame_id"] or None)
@@ -321,9 +329,19 @@ class BearingSimNode(Node):
 
     # ---- inputs (executor thread) ------------------------------------------------------------
     def _reject(self, key, reason):
+        """Count a rejected input and log it: one line per reason every REJECT_LOG_PERIOD at most
+        (one throttle for all would let a flood of NaNs hide the stale stamps after them), with
+        how many more of that reason came since its last line."""
         self.rejected[key] += 1
-        self.get_logger().warning(f"input rejected, keeping {self._cmd_speed:.6g} rad/s, "
-                                  f"load {self._cmd_load}: {reason}", throttle_duration_sec=2.0)
+        now = time.monotonic()
+        last, since = self._reject_log.get(key, (-math.inf, 0))
+        if now - last < REJECT_LOG_PERIOD:
+            self._reject_log[key] = (last, since + 1)
+            return
+        self._reject_log[key] = (now, 0)
+        more = f" ({since} more {key} since the last such line)" if since else ""
+        self.get_logger().warning(f"input rejected ({key}), keeping {self._cmd_speed:.6g} rad/s, "
+                                  f"load {self._cmd_load}: {reason}{more}")
 
     def _on_speed(self, msg):
         value = float(msg.data)
