@@ -142,7 +142,7 @@ def run_command(args) -> int:
     from rclpy.executors import ExternalShutdownException
     from rclpy.parameter import Parameter
 
-    from .nodes.bearing_sim_node import BearingSimNode, log_recording, spin_node
+    from .nodes.bearing_sim_node import BearingSimNode, build_node, log_recording, spin_node
     from .recording.recorder import sizes_text
     from .recording.render import tier_values
     from .scene import load_scene
@@ -157,7 +157,7 @@ def run_command(args) -> int:
     error = None
     try:
         rclpy.init(args=[])
-        node = BearingSimNode(record_argument="--out", parameter_overrides=overrides)
+        node = build_node(lambda: BearingSimNode(record_argument="--out", parameter_overrides=overrides))
         print(f"bearing-sim run: {scene.name} in real time "
               f"{'until Ctrl-C' if duration == 0 else f'for {duration:g} s'}, recording to {out}", flush=True)
         spin_node(node)

@@ -462,6 +462,19 @@ def test_signal_exits_0_with_a_readable_recording(started, tmp_path, sig):
     assert '"record"' in meta["bearing_sim"]["parameters"]
 
 
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_a_signal_while_the_node_is_being_built_ends_it_quietly_with_status_0(started, listener, sig):
+    """Ctrl-C or SIGTERM as soon as the node shows in the graph, while it builds its simulator
+    (on a cold cache the kernels compile for ~20 s then): rclpy's context is down, rcl refuses the
+    next publisher, and that was reported as a mistake in the ROS arguments (exit 2).  Now it is
+    the interruption it is: exit 0, no error line."""
+    node = started({"scene": "er16k_outer_race", "fidelity": "skidding"})
+    listener.wait_for(lambda: "bearing_sim" in listener.node.get_node_names(), 30, "the node in the graph")
+    node.send(sig)
+    assert node.wait(30) == 0, node.output()
+    assert "error:" not in node.output() and "Traceback" not in node.output(), node.output()
+
+
 def test_fast_mode_runs_duration_and_ends(started, tmp_path):
     """real_time:=false with duration 3 s: the node ends by itself with exactly 3 s recorded,
     log time = the end of each table (the file replays at the signal's pace), and a

@@ -711,9 +711,15 @@ def log_recording(recorder) -> None:
 def spin_node(node) -> None:
     """Serve ``node`` until its simulation ends, rclpy shuts down (SIGTERM) or Ctrl-C
     (KeyboardInterrupt, raised to the caller).  The caller then calls ``node.stop()``."""
+    from rclpy._rclpy_pybind11 import RCLError
     from rclpy.executors import SingleThreadedExecutor
 
-    executor = SingleThreadedExecutor(context=node.context)
+    try:
+        executor = SingleThreadedExecutor(context=node.context)
+    except RCLError:
+        if node.context.ok():
+            raise
+        return                      # a signal came between building the node and serving it
     executor.add_node(node)
     node.start()
     try:
@@ -723,6 +729,22 @@ def spin_node(node) -> None:
     finally:
         executor.remove_node(node)
         executor.shutdown(timeout_sec=0)
+
+
+def build_node(factory):
+    """``factory()``, the node, with a signal during start-up taken as what it is.  Ctrl-C or
+    SIGTERM while the node is being built (loading or, on a cold cache, compiling its kernels:
+    up to ~20 s) shuts rclpy's context down, and rcl then refuses the next publisher with an
+    RCLError: an interruption (ExternalShutdownException), not a mistake in the arguments."""
+    from rclpy._rclpy_pybind11 import RCLError
+    from rclpy.executors import ExternalShutdownException
+
+    try:
+        return factory()
+    except RCLError:
+        if rclpy.ok():
+            raise
+        raise ExternalShutdownException() from None
 
 
 def ros_arguments_error(exc) -> UserError:
@@ -764,7 +786,7 @@ def main(argv=None) -> int:
             stray = remove_ros_args(args)[1:]
             if stray:           # `ros2 run ... bearing_sim_node --bogus` ran the node regardless
                 raise stray_arguments_error(Path(args[0]).name, stray)
-            node = BearingSimNode()
+            node = build_node(BearingSimNode)
         except (RCLError, UnknownROSArgsError) as exc:
             if isinstance(exc, RCLError) and rclpy.ok():
                 raise                   # not the arguments: rclpy.init went through
