@@ -358,6 +358,12 @@ def test_fault_onset_and_truth_with_onsets_to_the_sample():
                                                         (2.5, "inner"))]
     assert [(d["fault"], d["first_detection_s"], d["latency_s"], d["windows_since"])
             for d in report.fault_detections(timeline, truth)] == [("outer", 2.0, 0.75, 3), ("inner", 2.5, 0.75, 2)]
+    # an onset on a message's stamp: that message tells the sample before it (no fault yet, the
+    # old sizes); the change's sizes are those of the first message that shows the fault
+    on_stamp = [_truth(1.0, (), (0.0,), {}), _truth(2.0, (), (0.0,), {}),
+                _truth(3.0, ("outer",), (1.0,), {"outer": 2.0})]
+    assert report.truth_changes(on_stamp) == [{"t_s": 2.0, "after_s": 2.0, "faults_present": ["outer"],
+                                               "defect_sizes": [1.0]}]
     # a fault there from the first sample: no onset, though another joins it later
     assert report.fault_onset([_truth(1.0, ("ball",), (1.0,), {"ball": 0.0}),
                                _truth(2.0, ("ball", "outer"), (1.0,), {"ball": 0.0, "outer": 1.5})]) is None
@@ -384,9 +390,10 @@ def test_fault_onset_without_onsets_is_the_first_change_from_none_and_truth_hold
     assert (inner["fault"], inner["first_detection_s"], inner["windows_since"]) == ("inner", None, 0)
 
 
-def _copy_without(src, dst, drop) -> int:
+def _copy_without(src, dst, drop, metadata=lambda m: m) -> int:
     """Copy the MCAP ``src`` to ``dst`` (metadata, schemas, channels, messages) leaving out the
-    messages for which ``drop(topic, index on that topic)`` is true; how many were left out."""
+    messages for which ``drop(topic, index on that topic)`` is true, each metadata record's
+    values through ``metadata``; how many were left out."""
     from mcap.reader import make_reader
     from mcap.writer import Writer
 
@@ -396,7 +403,7 @@ def _copy_without(src, dst, drop) -> int:
         header = reader.get_header()
         writer.start(header.profile, header.library)
         for meta in reader.iter_metadata():
-            writer.add_metadata(meta.name, dict(meta.metadata))
+            writer.add_metadata(meta.name, metadata(dict(meta.metadata)))
         for schema, channel, message in reader.iter_messages(log_time_order=False):
             k = counts[channel.topic] = counts.get(channel.topic, -1) + 1
             if drop(channel.topic, k):
@@ -431,3 +438,27 @@ def test_report_timeline_keeps_signal_time_across_a_lost_table(tmp_path):
     assert [w["verdict"] for w in s["timeline"]] == ["healthy", "healthy", "outer", "outer"]
     assert s["detection_latency_s"] == pytest.approx(0.51)
     assert "| waveform | 15000 Hz, accel_x, accel_y; 1 gap (lost tables) |" in (tmp_path / "out" / "summary.md").read_text()
+
+
+def test_report_of_a_recording_whose_scene_this_version_cannot_read_claims_nothing_about_it(
+        outer, tmp_path, capsys):
+    """A recording whose scene YAML this version does not accept (made by another version, or
+    edited): the report said "the scene's defects: none (healthy) (the verdict agrees with the
+    scene)" under the scene's own title.  Now the defects are unknown, with why, and no
+    agreement is claimed; the verdict itself still comes from the waveform (as it can: the lines
+    need the bearing, so without the scene it is unknown)."""
+    from bearing_sim_ros import cli
+
+    odd = tmp_path / "odd.mcap"
+    _copy_without(outer[0], odd, lambda topic, k: False,
+                  metadata=lambda m: dict(m, scene_yaml=m["scene_yaml"].replace("bearing:", "bearing_x:"))
+                  if "scene_yaml" in m else m)
+    out = tmp_path / "odd_report"
+    assert cli.main(["report", str(odd), "--out", str(out)]) == 0
+    s = json.loads((out / "summary.json").read_text())
+    assert s["expected_defects"] is None
+    assert s["scene_unknown"].startswith("this version cannot read its scene: ") and "bearing_x" in s["scene_unknown"]
+    md = (out / "summary.md").read_text()
+    assert "the scene's defects: unknown (this version cannot read its scene: " in md
+    assert "agrees" not in md and "none (healthy)" not in md
+    assert "scene defects: unknown, this version cannot read its scene" in capsys.readouterr().out

@@ -242,15 +242,16 @@ def _stamp(stamp) -> int:
 
 
 def _scene_from_metadata(meta: dict):
+    """(the recording's Scene or None, why None: "" when read)."""
     from ..scene import load_yaml, scene_from_dict
 
     text = meta.get("scene_yaml", "")
     if not text:
-        return None
+        return None, "the recording has no bearing_sim scene"
     try:
-        return scene_from_dict(load_yaml(text), name=meta.get("scene", "scene"), source_text=text)
-    except Exception:  # noqa: BLE001 - a scene this version cannot read: report without it
-        return None
+        return scene_from_dict(load_yaml(text), name=meta.get("scene", "scene"), source_text=text), ""
+    except Exception as exc:  # noqa: BLE001 - a scene this version cannot read: report without it
+        return None, f"this version cannot read its scene: {(str(exc).splitlines() or [type(exc).__name__])[0]}"
 
 
 # ---- verdict over time -------------------------------------------------------------------------
@@ -342,15 +343,16 @@ def fault_detections(timeline: list, truth: list) -> list:
 def truth_changes(truth: list) -> list:
     """Where the faults present change: {"t_s": when (exact, or the first message that shows it),
     "after_s": the earliest it may have been (= t_s where exact), faults_present: from then on,
-    defect_sizes: of the first message at or after t_s}, in order."""
+    defect_sizes: of the first message that shows the new fault (None if none does)}, in order.
+    A message stamped at the very onset does not show it: it tells the sample before its stamp."""
     changes = []
     for fault in ground_truth.appearances(truth, 0.0, SLACK_S):
         if changes and abs(changes[-1]["t_s"] - fault.latest) <= SLACK_S:
             continue                          # two kinds at once: one change
-        report = next(r for r in truth if r.t >= fault.latest - SLACK_S)
+        shows = next((r for r in truth if r.t >= fault.latest - SLACK_S and fault.kind in r.faults), None)
         faults = ground_truth.faults_at(truth, fault.latest + 2 * SLACK_S, SLACK_S)
         changes.append({"t_s": fault.latest, "after_s": fault.earliest, "faults_present": list(faults),
-                        "defect_sizes": list(report.sizes)})
+                        "defect_sizes": None if shows is None else list(shows.sizes)})
     return changes
 
 
@@ -640,7 +642,7 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
     finally:
         rec.close()
     out = output_folder(out)
-    scene = _scene_from_metadata(meta)
+    scene, scene_problem = _scene_from_metadata(meta)
     fs = d.sample_rate
     ch = "accel_y" if "accel_y" in d.channels else d.channels[0]
     x = d.accel[:, d.channels.index(ch)]
@@ -697,7 +699,8 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
                              "prominence": v.prominence} for k, v in verdict["lines"].items()}
                         if verdict else {}),
         "verdict": verdict["verdict"] if verdict else "unknown",
-        "expected_defects": expected,
+        "expected_defects": expected if scene is not None else None,
+        "scene_unknown": scene_problem or None,
         "skid_ratios_percent": {k: float(np.mean(v[:, 1])) for k, v in sorted(d.skid.items())},
         "verdict_describes_recording": (not changes) if d.truth else None,
         "ground_truth_to_the_sample": any(r.onsets is not None for r in d.truth) if d.truth else None,
@@ -750,18 +753,23 @@ def _markdown(s: dict) -> str:
     if s["description"]:
         lines += [s["description"], ""]
     verdict = s["verdict"].upper()
-    exp = ", ".join(s["expected_defects"]) or "none (healthy)"
-    found = set() if s["verdict"] in ("healthy", "unknown") else {s["verdict"]}
-    agree = ("agrees with the scene" if found <= set(s["expected_defects"]) and (found or not s["expected_defects"])
-             else "differs from the scene")
-    lines += [f"**Verdict (envelope analysis of {s['envelope_channel']}): {verdict}**; the scene's defects: "
-              f"{exp} (the verdict {agree}).", ""]
+    if s["expected_defects"] is None:      # no agreement to claim without the scene
+        lines += [f"**Verdict (envelope analysis of {s['envelope_channel']}): {verdict}**; the scene's defects: "
+                  f"unknown ({s['scene_unknown']}).", ""]
+    else:
+        exp = ", ".join(s["expected_defects"]) or "none (healthy)"
+        found = set() if s["verdict"] in ("healthy", "unknown") else {s["verdict"]}
+        agree = ("agrees with the scene" if found <= set(s["expected_defects"])
+                 and (found or not s["expected_defects"]) else "differs from the scene")
+        lines += [f"**Verdict (envelope analysis of {s['envelope_channel']}): {verdict}**; the scene's defects: "
+                  f"{exp} (the verdict {agree}).", ""]
     if s["verdict_describes_recording"] is False:
         lines += [f"**The faults present change during this recording ({_changes_text(s)}): one verdict does "
                   "not describe it; see \"Verdict over time\".**", ""]
     lines += ["| | |", "| --- | --- |",
               f"| file | `{s['file']}` |",
-              f"| made by | bearing_sim_ros {s['package_version']}, {_tiers_text(s)}, seed {s['seed']} |",
+              (f"| made by | bearing_sim_ros {s['package_version']}, {_tiers_text(s)}, seed {s['seed']} |"
+               if s["package_version"] else "| made by | unknown (no bearing_sim metadata) |"),
               f"| length | {s['duration_s']:.2f} s, {s['messages']} messages; analysed {s['analysed_s']:.2f} s |",
               f"| waveform | {s['sample_rate_hz']:g} Hz, {', '.join(s['channels'])}; "
               f"{'contiguous' if s['waveform_gaps'] == 0 else _count(s['waveform_gaps'], 'gap') + ' (lost tables)'} |",
@@ -905,6 +913,12 @@ def _timeline_markdown(s: dict) -> list:
     return lines + [""]
 
 
+def _defects_text(s: dict) -> str:
+    if s["expected_defects"] is None:
+        return f"unknown, {s['scene_unknown']}"
+    return ", ".join(s["expected_defects"]) or "none"
+
+
 def report_command(args) -> int:
     """CLI entry: ``bearing-sim report F.mcap --out DIR``."""
     s = build_report(args.file, args.out, window_s=args.window)
@@ -912,5 +926,5 @@ def report_command(args) -> int:
         ("fault_onset_s", "fault onset"), ("first_detection_s", "first detection"),
         ("detection_latency_s", "latency")) if s[key] is not None)
     print(f"{args.out}: {', '.join(s['plots'])}, summary.md, summary.json; verdict {s['verdict']} "
-          f"(scene defects: {', '.join(s['expected_defects']) or 'none'}{timing})")
+          f"(scene defects: {_defects_text(s)}{timing})")
     return 0
