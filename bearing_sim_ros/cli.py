@@ -166,8 +166,11 @@ def build_parser() -> argparse.ArgumentParser:
     sub.add_parser("scenes", help="list the shipped scenes")
 
     s = sub.add_parser("monitor", help="example condition-monitoring subscriber (envelope analysis)")
-    s.add_argument("--window", type=_positive(float), default=4.0, metavar="SECONDS",
-                   help="seconds of signal per analysis (default: %(default)g)")
+    # the report's range: below 0.5 s the lines' +-20 Hz neighbourhood holds too few bins, and a
+    # 1e-4 s window gave "x inf" prominences and a fault verdict on anything
+    s.add_argument("--window", type=_in_range(*WINDOW_RANGE_S, "s"), default=4.0, metavar="SECONDS",
+                   help=f"seconds of signal per analysis, {WINDOW_RANGE_S[0]:g} to {WINDOW_RANGE_S[1]:g} "
+                        "(default: %(default)g)")
     s.add_argument("--count", type=_nonnegative(int), default=0, metavar="N",
                    help="stop after this many verdicts (default: %(default)s = never)")
     s.add_argument("--scene", default=None, metavar="S",

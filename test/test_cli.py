@@ -84,7 +84,9 @@ def _user_mistake(capsys, argv):
     (["render", "er16k_healthy", "--duration", "1e400"], ["--duration", "'1e400'", "finite number > 0"]),
     (["play", "x.mcap", "--rate", "inf"], ["--rate", "'inf'", "finite number > 0"]),
     (["play", "x.mcap", "--wait", "inf"], ["--wait", "'inf'", "finite number >= 0"]),
-    (["monitor", "--window", "inf"], ["--window", "'inf'", "finite number > 0"]),
+    (["monitor", "--window", "inf"], ["--window", "inf s", "allowed range is [0.5, 120] s"]),
+    # a window of 0.1 ms gave "x inf" prominences and a fault verdict on anything
+    (["monitor", "--window", "0.0001"], ["--window", "0.0001 s", "allowed range is [0.5, 120] s"]),
     # a seed beyond 64 bits ended in an OverflowError traceback (exit 1)
     (["render", "er16k_healthy", "--duration", "0.1", "--seed", "99999999999999999999999"],
      ["--seed", "'99999999999999999999999'", "<= 2147483647"]),
