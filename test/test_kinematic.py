@@ -550,3 +550,51 @@ def test_an_edit_to_any_physics_source_gives_the_kernels_a_new_cache_folder(tmp_
     after = folder()
     assert Path(before).parent == Path(after).parent == tmp_path / "cache"
     assert before != after
+
+
+_PROPAGATOR_DIGEST = """
+import hashlib, numpy as np
+from bearing_sim_ros import Simulator
+h = hashlib.sha256()
+for name in ("er16k_outer_race", "cwru_6205_or007_6"):
+    m = Simulator(name, fidelity="kinematic")._model
+    for a in (m.px, m.py, m.wx, m.wy, m.psx, m.psy, m.dense_x, m.dense_y):
+        h.update(np.ascontiguousarray(a).tobytes())
+    s = Simulator(name, fidelity="skidding")._model
+    for a in (s.phi, s.g0, s.g1, s.g2, s.phis):
+        h.update(np.ascontiguousarray(a).tobytes())
+print(h.hexdigest())
+"""
+
+
+def test_the_propagators_do_not_depend_on_how_many_threads_blas_may_use():
+    """Both tiers' propagators (matrix exponentials of 10-22 rows) are built on one BLAS thread
+    (``physics.blas``): with two, OpenBLAS's threads spun against each other (a rotating load,
+    which relinearises at every batch, ran 3x slower than real time on a busy 2-core machine),
+    and the results' last bits depended on the machine's core count.  The same bits with
+    OPENBLAS_NUM_THREADS 1 and 2 (they differed before)."""
+    import os
+    import subprocess
+    import sys
+
+    digests = {subprocess.run([sys.executable, "-c", _PROPAGATOR_DIGEST], env=dict(os.environ, OPENBLAS_NUM_THREADS=n),
+                              capture_output=True, text=True, check=True, timeout=300).stdout.strip()
+               for n in ("1", "2")}
+    assert len(digests) == 1, digests
+
+
+def test_single_threaded_blas_limits_every_blas_for_the_block_only():
+    from threadpoolctl import threadpool_info
+
+    from bearing_sim_ros.physics.blas import single_threaded_blas
+
+    def blas_threads():
+        return [lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"]
+
+    with single_threaded_blas():
+        pass                              # its first use loads scipy's BLAS beside numpy's
+    before = blas_threads()
+    with single_threaded_blas():
+        inside = blas_threads()
+    assert len(inside) >= 2 and set(inside) == {1}
+    assert blas_threads() == before       # a caller's own numpy work keeps its threads

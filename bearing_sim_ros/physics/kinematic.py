@@ -51,12 +51,14 @@ multiply-adds), so the chain runs at the skidding tier's rate whatever the step.
 """
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
 from numba import njit
 
 from . import KinematicSnapshot, TierOutput
+from .blas import single_threaded_blas
 from .defects import (D_ANGLE, D_BALL, D_DEPTH, D_HALF, D_HMAX_I, D_HMAX_O, D_KIND, D_PROFILE,
                       D_RAMP_I, D_RAMP_O, D_RHO_I, D_RHO_O, D_WANDER, DEFECT_COLUMNS, KIND_BALL,
                       KIND_INNER, _profile_drop, active_defect_table, wander_reach,
@@ -297,6 +299,36 @@ def bearing_force(geo, cj, sj, dtab, wtab, seed, dx, dy, shaft_angle, cage_angle
     ball_geometry(geo, cj, sj, dtab, wtab, seed, cache, shaft_angle, cage_angle, spin_angle,
                   math.cos(cage_angle), math.sin(cage_angle), 0.0, 0.0, 0.0, eps, gc, gs, goff)
     return hertz_force(geo[P_K], gc, gs, goff, _film_law(geo, shaft_speed), dx, dy, q_out)
+
+
+@functools.lru_cache(maxsize=None)
+def _lagrange(nodes: tuple) -> np.ndarray:
+    """Inverse Vandermonde of ``nodes`` (in steps): coefficient j of the interpolant = sum_i
+    inv[j, i] u(node_i).  The nodes are the scheme's, a handful of tuples: computed once each
+    (read-only), not at every relinearisation."""
+    inv = np.linalg.inv(np.array([[t ** j for j in range(len(nodes))] for t in nodes]))
+    inv.flags.writeable = False
+    return inv
+
+
+@njit(cache=True)
+def mean_bearing_force(geo, cj, sj, dx, dy, shaft_speed, positions):
+    """``bearing_force`` (no defects, no waviness) averaged over ``positions`` cage angles
+    evenly spaced over one ball spacing: the quasi-static load-deflection law, (fx, fy) N on the
+    pedestal.  One compiled call: the linearisation's root finder evaluates it ~20 times, and a
+    load that moves by 20 % every batch (a rotating unbalance) relinearises at every batch."""
+    nb = int(geo[P_NB])
+    step = 2 * np.pi / nb / positions          # the cage angles of np.linspace(0, 2 pi / nb, n, False)
+    q = np.zeros(nb)
+    empty = np.zeros((0, DEFECT_COLUMNS))
+    no_waviness = np.zeros((0, 4))
+    fx = 0.0
+    fy = 0.0
+    for k in range(positions):
+        f0, f1 = bearing_force(geo, cj, sj, empty, no_waviness, 0, dx, dy, 0.0, k * step, 0.0, q, shaft_speed)
+        fx += f0
+        fy += f1
+    return fx / positions, fy / positions
 
 
 @njit(cache=True, inline="always")
@@ -832,17 +864,8 @@ class KinematicModel:
     def _mean_force(self, d: np.ndarray) -> np.ndarray:
         """Bearing force on the pedestal averaged over one ball spacing of cage angle (no
         defects, no slip): the quasi-static load-deflection law."""
-        nb = int(self.geo[P_NB])
-        cage = np.linspace(0.0, 2 * np.pi / nb, 12, endpoint=False)
-        geo = self._static_geo()
-        q = np.zeros(nb)
-        empty = np.zeros((0, DEFECT_COLUMNS))
-        f = np.zeros(2)
-        for c in cage:
-            fx, fy = bearing_force(geo, self.cj, self.sj, empty, np.zeros((0, 4)), 0, d[0], d[1], 0.0, c,
-                                   0.0, q, self._lin_speed)
-            f += (fx, fy)
-        return f / cage.size
+        return np.array(mean_bearing_force(self._static_geo(), self.cj, self.sj, float(d[0]), float(d[1]),
+                                           self._lin_speed, 12))
 
     def _static_geo(self) -> np.ndarray:
         """The geometry vector without slip."""
@@ -888,6 +911,10 @@ class KinematicModel:
         """The static equilibrium under ``load`` (N) at shaft ``speed`` (rad/s), the contact
         damping at its most loaded ball and the propagators of the structure with the bearing
         linearised there, each ball through its film at that speed."""
+        with single_threaded_blas():
+            self._linearise_on_one_thread(load, speed, initial)
+
+    def _linearise_on_one_thread(self, load: np.ndarray, speed: float, initial: bool):
         self._lin_speed = speed
         eq = self._equilibrium(load)
         d0 = eq[:2] - eq[2:]
@@ -946,9 +973,7 @@ class KinematicModel:
             return E[:NSTATE, :NSTATE], [E[:NSTATE, NSTATE + j * NINPUT:NSTATE + (j + 1) * NINPUT]
                                           * math.factorial(j) for j in range(order)]
 
-        def lagrange(nodes):
-            """inverse Vandermonde: coefficient j of the interpolant = sum_i inv[j, i] u(node_i)"""
-            return np.linalg.inv(np.array([[t ** j for j in range(len(nodes))] for t in nodes]))
+        lagrange = _lagrange
 
         def weights(Es, corrector, predictor):
             """what the residual at each corrector node, then each predictor node, adds"""

@@ -90,6 +90,7 @@ from numba import njit
 from ..catalog import G
 from ..errors import UserError
 from . import KinematicSnapshot, TierOutput
+from .blas import single_threaded_blas
 from .defects import (D_ANGLE, D_BALL, D_KIND, KIND_BALL, KIND_INNER, active_defect_table,
                       has_wandering_defect, interference_loss, interference_loss_slope, waviness_gain, waviness_table)
 from .film import (FILM_EXP_Q, FILM_EXP_U, FILM_LOAD_FLOOR, film_coefficient,
@@ -1676,6 +1677,10 @@ class SkiddingModel:
     def _linearise(self, load: np.ndarray):
         """Bearing stiffness at the current shaft-pedestal offset (secant over +-0.2 um) and the
         structure's propagators for the step and every sample inside it."""
+        with single_threaded_blas():
+            self._linearise_on_one_thread(load)
+
+    def _linearise_on_one_thread(self, load: np.ndarray):
         d0 = self.y[0:2] - self.y[2:4]
         self.kb = np.ascontiguousarray(secant_stiffness(self._mean_pedestal_force, d0))
         A, B, self.cacc, self.dacc = structure_system(self.scene, self.kb)
