@@ -12,6 +12,7 @@ the real-time factor and overruns, and where the recording is.
 from __future__ import annotations
 
 import math
+import signal
 from collections import deque
 
 import numpy as np
@@ -187,6 +188,12 @@ def run_command(args) -> int:
         return 0
     if not figures["ok"]:
         raise UserError(f"--out = {out!r}: {figures['error']}")
-    tail = _record_tail(figures["path"], ANALYSIS_MAX_S)
-    print(summarise(scene, tail, figures, figures["path"]), flush=True)
+    # the recording is complete.  A second Ctrl-C while its tail is read for the summary (about a
+    # second) surfaced inside rclpy's deserialiser as a TypeError traceback: it waits instead
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        tail = _record_tail(figures["path"], ANALYSIS_MAX_S)
+        print(summarise(scene, tail, figures, figures["path"]), flush=True)
+    finally:
+        signal.signal(signal.SIGINT, previous)
     return 0
