@@ -174,10 +174,11 @@ def bearing_from_mapping(name: str, data: dict, where: str = "bearing") -> Beari
         value = data.get(key, default)
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise SceneError(f"{where}.{key} = {value!r}: expected a number in [{lo}, {hi}]")
-        if integer and int(value) != value:
-            raise SceneError(f"{where}.{key} = {value!r}: expected a whole number in [{lo}, {hi}]")
+        # the range first: it refuses NaN and infinity, which int() cannot take
         if not (lo <= value <= hi) or value != value:
             raise SceneError(f"{where}.{key} = {value!r}: allowed range is [{lo}, {hi}]")
+        if integer and int(value) != value:
+            raise SceneError(f"{where}.{key} = {value!r}: expected a whole number in [{lo}, {hi}]")
         return float(value)
 
     balls = int(num("balls", None, 3, 40, integer=True))

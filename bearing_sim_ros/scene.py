@@ -224,10 +224,11 @@ class _Section:
             raise SceneError(f"{where}: missing; expected a number in {rng}")
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise SceneError(f"{where} = {value!r}: expected a number in {rng}")
-        if integer and int(value) != value:
-            raise SceneError(f"{where} = {value!r}: expected a whole number in {rng}")
+        # the range first: it refuses NaN and infinity, which int() cannot take
         if value != value or not (lo < value if lo_open else lo <= value) or not value <= hi:
             raise SceneError(f"{where} = {value!r}: allowed range is {rng}")
+        if integer and int(value) != value:
+            raise SceneError(f"{where} = {value!r}: expected a whole number in {rng}")
         return float(value)
 
     def choice(self, name, options, default=None) -> str:
@@ -393,8 +394,9 @@ def _lubrication(top: _Section) -> Lubrication:
 def _sensor(top: _Section) -> Sensor:
     s = top.section("sensor", ("axes", "resonance_hz", "damping_ratio", "noise_density", "range", "frame_id"))
     axes = s.data.get("axes", ["x", "y"])
-    if (not isinstance(axes, list) or not axes or len(set(axes)) != len(axes)
-            or any(a not in ("x", "y") for a in axes)):
+    # the names first: set() cannot take a list or a mapping among them
+    if (not isinstance(axes, list) or not axes or any(not isinstance(a, str) or a not in ("x", "y") for a in axes)
+            or len(set(axes)) != len(axes)):
         raise SceneError(f"sensor.axes = {axes!r}: expected a list of distinct axes from x, y")
     return Sensor(
         axes=tuple(a for a in ("x", "y") if a in axes),

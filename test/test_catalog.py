@@ -167,3 +167,12 @@ def test_contact_radii_are_harris_textbook_values():
     assert b.outer_contact.rx == pytest.approx(d * (dm + d) / (2 * dm), rel=1e-12)
     assert b.inner_contact.ry == pytest.approx(0.51 * d / (2 * 0.51 - 1), rel=1e-12)
     assert b.outer_contact.ry == pytest.approx(0.54 * d / (2 * 0.54 - 1), rel=1e-12)
+
+
+@pytest.mark.parametrize("value", [math.inf, -math.inf, math.nan, 1e300, 9.5])
+def test_a_ball_count_that_is_not_a_whole_number_is_a_one_line_error(value):
+    """int() of infinity or NaN raised OverflowError / ValueError: the range is checked first."""
+    with pytest.raises(SceneError) as exc:
+        bearing_from_mapping("custom", dict(CUSTOM, balls=value))
+    msg = str(exc.value)
+    assert "\n" not in msg and msg.startswith(f"bearing.balls = {value!r}: "), msg

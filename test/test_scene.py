@@ -8,7 +8,7 @@ import pytest
 
 from bearing_sim_ros import Simulator
 from bearing_sim_ros.errors import SceneError
-from bearing_sim_ros.scene import load_scene, shipped_scenes
+from bearing_sim_ros.scene import load_scene, load_yaml, scene_from_dict, shipped_scenes
 
 CONTRACT_SCENES = {
     "er16k_healthy", "er16k_inner_race", "er16k_outer_race", "er16k_skidding",
@@ -208,3 +208,30 @@ def test_top_level_mistakes_name_the_key_without_a_stray_dot(tmp_path, text, exp
     with pytest.raises(SceneError) as exc:
         load_scene(path)
     assert str(exc.value).startswith(expect), str(exc.value)
+
+
+_BALLS = "bearing: {balls: %s, ball_diameter_mm: 7.94, pitch_diameter_mm: 38.5}"
+_WHOLE = {   # key -> the scene with %s where its value goes
+    "defects[0].ball": GOOD.replace("kind: outer", "kind: ball, ball: %s"),
+    "waviness[0].order": GOOD + "waviness:\n  - {race: inner, order: %s, amplitude_um: 1}\n",
+    "bearing.balls": GOOD.replace("bearing: ER-16K", _BALLS),
+}
+_LISTS = {
+    "sensor.axes": GOOD + "sensor: {axes: %s}\n",
+    "operating_point.radial_load": GOOD.replace("[0.0, -50.0]", "%s"),
+    "fidelity.outputs": GOOD + "fidelity: {outputs: %s}\n",
+}
+
+
+@pytest.mark.parametrize("key, value", [(k, v) for k in _WHOLE for v in (
+    ".inf", "-.inf", ".nan", "1e300", "[[1]]", "{a: 1}", "x", "true", "null")] + [(k, v) for k in _LISTS for v in (
+    "[[1]]", "[{a: 1}]", "[.inf, 1]", "[.nan, 1]", "x", "{a: 1}", "null")])
+def test_a_value_of_the_wrong_kind_is_one_line_not_a_traceback(key, value):
+    """A whole number given as infinity or NaN, or a list of names holding a list or a mapping,
+    is refused in one line naming the key: int(.inf) raised OverflowError, int(.nan) ValueError,
+    set() of [[1]] TypeError (the type and range are checked before the value is converted)."""
+    text = (_WHOLE.get(key) or _LISTS[key]) % value
+    with pytest.raises(SceneError) as exc:
+        scene_from_dict(load_yaml(text))
+    msg = str(exc.value)
+    assert "\n" not in msg and msg.startswith((f"{key} = ", f"{key}: missing")), msg
