@@ -285,6 +285,8 @@ MAX_DEFECT_TIME = 1.0e6   # s (11.6 days of signal): a defect's onset_s and grow
 
 def _bearing(top: _Section) -> Bearing:
     value = top.data.get("bearing")
+    if isinstance(value, int) and not isinstance(value, bool):
+        value = str(value)      # `bearing: 6205` unquoted: YAML reads a number, the catalog names it
     if isinstance(value, str):
         bearing = get_bearing(value, where="bearing")
     elif isinstance(value, dict):

@@ -235,3 +235,12 @@ def test_a_value_of_the_wrong_kind_is_one_line_not_a_traceback(key, value):
         scene_from_dict(load_yaml(text))
     msg = str(exc.value)
     assert "\n" not in msg and msg.startswith((f"{key} = ", f"{key}: missing")), msg
+
+
+def test_a_catalog_name_that_yaml_reads_as_a_number_is_that_bearing():
+    """`bearing: 6205` unquoted is the int 6205 to YAML; it names the catalog's 6205 (it said
+    "expected a catalog name").  A number the catalog does not have is an unknown bearing."""
+    scene = scene_from_dict(load_yaml(GOOD.replace("bearing: ER-16K", "bearing: 6205")))
+    assert scene.bearing.name == "6205" and scene.bearing.balls == 9
+    with pytest.raises(SceneError, match=r"^bearing = '6999': unknown bearing; catalog has .*6205"):
+        scene_from_dict(load_yaml(GOOD.replace("bearing: ER-16K", "bearing: 6999")))
