@@ -502,13 +502,31 @@ def resolve_scene_path(name_or_path: str | Path) -> Path:
 
 def _yaml_loader():
     """A safe YAML loader that also reads ``1e7`` and ``4.24e4`` as floats (YAML 1.2 style;
-    PyYAML's 1.1 rule wants ``1.0e+7``, which surprises everyone)."""
+    PyYAML's 1.1 rule wants ``1.0e+7``, which surprises everyone) and refuses a key given twice
+    in one mapping (PyYAML keeps the last: a second ``defects:`` block dropped the first)."""
     import re
 
     import yaml
 
     class Loader(yaml.SafeLoader):
-        pass
+        def construct_mapping(self, node, deep=False):
+            if isinstance(node, yaml.MappingNode):
+                seen = {}
+                for key_node, _ in node.value:
+                    if key_node.tag == "tag:yaml.org,2002:merge":
+                        continue        # "<<: *base" then a key of base: an override, not a repeat
+                    key = self.construct_object(key_node, deep=deep)
+                    try:
+                        first = seen.setdefault(key, key_node.start_mark)
+                    except TypeError:
+                        continue        # a list as a key: the base class says so
+                    if first is not key_node.start_mark:
+                        lines = (f"on line {first.line + 1}" if first.line == key_node.start_mark.line
+                                 else f"(lines {first.line + 1} and {key_node.start_mark.line + 1})")
+                        raise yaml.constructor.ConstructorError(
+                            "while constructing a mapping", node.start_mark,
+                            f"key {key!r} appears twice {lines}; give it once", key_node.start_mark)
+            return super().construct_mapping(node, deep=deep)
 
     Loader.add_implicit_resolver(
         "tag:yaml.org,2002:float",

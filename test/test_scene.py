@@ -244,3 +244,21 @@ def test_a_catalog_name_that_yaml_reads_as_a_number_is_that_bearing():
     assert scene.bearing.name == "6205" and scene.bearing.balls == 9
     with pytest.raises(SceneError, match=r"^bearing = '6999': unknown bearing; catalog has .*6205"):
         scene_from_dict(load_yaml(GOOD.replace("bearing: ER-16K", "bearing: 6999")))
+
+
+@pytest.mark.parametrize("text, line", [
+    (GOOD + "defects:\n  - {kind: inner, width_mm: 0.6, depth_mm: 0.25}\n",
+     "not valid YAML at line 8: key 'defects' appears twice (lines 6 and 8); give it once"),
+    (GOOD.replace("damping: 1376}", "damping: 1376, mass: 2.0}"),
+     "not valid YAML at line 3: key 'mass' appears twice on line 3; give it once"),
+])
+def test_a_key_given_twice_is_refused_naming_it_and_its_lines(tmp_path, text, line):
+    """PyYAML keeps the last of two equal keys: a second defects: block silently dropped the
+    first.  A repeated key is a one-line error; a merge (<<: *base) may still override a key."""
+    path = tmp_path / "bad.yaml"
+    path.write_text(text)
+    with pytest.raises(SceneError) as exc:
+        load_scene(path)
+    assert str(exc.value) == f"scene bad.yaml: {line}"
+    merged = load_yaml("base: &b {mass: 1.0, stiffness: 2.0}\nshaft: {<<: *b, mass: 3.0}\n")
+    assert merged["shaft"] == {"mass": 3.0, "stiffness": 2.0}
