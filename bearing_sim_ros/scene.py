@@ -340,6 +340,9 @@ def _defects(top: _Section, bearing: Bearing) -> tuple:
             angle = clock_to_angle(d.number("clock", lo=0.0, hi=12.0))
         else:
             angle = math.radians(d.number("angle_deg", -90.0, lo=-360.0, hi=360.0))
+        if d.has("ball") and kind != "ball":
+            raise SceneError(f"{d.key('ball')} = {d.data['ball']!r}: only a ball defect is on a ball "
+                             f"(this one is kind {kind})")
         ball = int(d.number("ball", 0, lo=0, hi=bearing.balls - 1, integer=True))
         wander = d.number("wander_turns", 0.0, lo=0.0, hi=1e4)
         if wander and kind != "ball":

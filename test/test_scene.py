@@ -72,6 +72,9 @@ def test_numbers_in_exponent_form_are_floats(tmp_path):
     ("clock: 6", "clock: 6, angle_deg: 30", ["defects[0]", "clock", "angle_deg", "not both"]),
     # balls are numbered 0 .. 8 on the 9-ball ER-16K: ball 9 would be a defect no ball carries
     ("kind: outer", "kind: ball, ball: 9", ["defects[0].ball", "9", "[0, 8]"]),
+    # a ball number on a race defect was ignored (wander_turns there was refused already)
+    ("kind: outer", "kind: outer, ball: 3", ["defects[0].ball = 3: only a ball defect is on a ball", "kind outer"]),
+    ("kind: outer", "kind: inner, ball: 0", ["defects[0].ball = 0: only a ball defect is on a ball", "kind inner"]),
     ("clock: 6}\n", "clock: 6}\nsensor: {axes: [x, z]}\n", ["sensor.axes", "'z'", "x, y"]),
     # a range of 0 m/s^2 would clip every sample to 0
     ("clock: 6}\n", "clock: 6}\nsensor: {range: 0}\n", ["sensor.range", "0", "(0, "]),
