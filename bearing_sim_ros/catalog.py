@@ -10,7 +10,7 @@ import math
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
 
-from .errors import SceneError
+from .errors import SceneError, short_repr
 from .paths import config_dir
 
 G = 9.80665  # standard gravity, m/s^2
@@ -161,7 +161,7 @@ _REQUIRED = ("balls", "ball_diameter_mm", "pitch_diameter_mm")
 def bearing_from_mapping(name: str, data: dict, where: str = "bearing") -> Bearing:
     """Build a :class:`Bearing` from a catalog-style mapping (mm, um, deg, GPa), validating it."""
     if not isinstance(data, dict):
-        raise SceneError(f"{where}: expected a catalog name or a mapping of geometry, got {data!r}")
+        raise SceneError(f"{where}: expected a catalog name or a mapping of geometry, got {short_repr(data)}")
     unknown = sorted(set(map(str, data)) - _CATALOG_KEYS)     # str: a YAML key may be a number
     if unknown:
         raise SceneError(
@@ -173,12 +173,12 @@ def bearing_from_mapping(name: str, data: dict, where: str = "bearing") -> Beari
     def num(key, default, lo, hi, integer=False):
         value = data.get(key, default)
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise SceneError(f"{where}.{key} = {value!r}: expected a number in [{lo}, {hi}]")
+            raise SceneError(f"{where}.{key} = {short_repr(value)}: expected a number in [{lo}, {hi}]")
         # the range first: it refuses NaN and infinity, which int() cannot take
         if not (lo <= value <= hi) or value != value:
-            raise SceneError(f"{where}.{key} = {value!r}: allowed range is [{lo}, {hi}]")
+            raise SceneError(f"{where}.{key} = {short_repr(value)}: allowed range is [{lo}, {hi}]")
         if integer and int(value) != value:
-            raise SceneError(f"{where}.{key} = {value!r}: expected a whole number in [{lo}, {hi}]")
+            raise SceneError(f"{where}.{key} = {short_repr(value)}: expected a whole number in [{lo}, {hi}]")
         return float(value)
 
     balls = int(num("balls", None, 3, 40, integer=True))
@@ -232,5 +232,5 @@ def get_bearing(name: str, where: str = "bearing") -> Bearing:
     """The catalog bearing called ``name`` (e.g. ``"ER-16K"``, ``"6205"``, ``"6307"``)."""
     data = _catalog_data()
     if name not in data:
-        raise SceneError(f"{where} = {name!r}: unknown bearing; catalog has {', '.join(sorted(data))}")
+        raise SceneError(f"{where} = {short_repr(name)}: unknown bearing; catalog has {', '.join(sorted(data))}")
     return bearing_from_mapping(name, data[name], where=f"catalog[{name}]")

@@ -1,4 +1,18 @@
 """Errors that reach the user as one line (exit status 2), never as a traceback."""
+import reprlib
+
+_SHORT = reprlib.Repr()
+_SHORT.maxlevel = 3
+_SHORT.maxlist = _SHORT.maxtuple = 8
+_SHORT.maxdict = _SHORT.maxset = _SHORT.maxfrozenset = 6
+_SHORT.maxstring = _SHORT.maxother = 80
+_SHORT.maxlong = 40
+
+
+def short_repr(value) -> str:
+    """``repr(value)`` for an error message, shortened: a long list, mapping or string is cut with
+    ``...`` (a 20 000-entry ``radial_load`` made a 100 kB "one line"); a short one is unchanged."""
+    return _SHORT.repr(value)
 
 
 class UserError(Exception):

@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from .catalog import Bearing, bearing_from_mapping, get_bearing
-from .errors import SceneError
+from .errors import SceneError, short_repr
 from .paths import scenes_dir
 
 RPM = 2.0 * math.pi / 60.0  # rad/s per rpm
@@ -200,7 +200,8 @@ class _Section:
             data = {}
         if not isinstance(data, dict):
             # the top level has no key to name: the file itself is the wrong shape
-            raise SceneError(f"{path or 'top level'} = {data!r}: expected a mapping with keys {', '.join(allowed)}")
+            raise SceneError(f"{path or 'top level'} = {short_repr(data)}: expected a mapping with keys "
+                             f"{', '.join(allowed)}")
         unknown = sorted(set(map(str, data)) - set(allowed))
         if unknown:
             raise SceneError(f"{self.key(unknown[0])}: unknown key; allowed: {', '.join(allowed)}")
@@ -223,30 +224,30 @@ class _Section:
         if value is None:
             raise SceneError(f"{where}: missing; expected a number in {rng}")
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise SceneError(f"{where} = {value!r}: expected a number in {rng}")
+            raise SceneError(f"{where} = {short_repr(value)}: expected a number in {rng}")
         # the range first: it refuses NaN and infinity, which int() cannot take
         if value != value or not (lo < value if lo_open else lo <= value) or not value <= hi:
-            raise SceneError(f"{where} = {value!r}: allowed range is {rng}")
+            raise SceneError(f"{where} = {short_repr(value)}: allowed range is {rng}")
         if integer and int(value) != value:
-            raise SceneError(f"{where} = {value!r}: expected a whole number in {rng}")
+            raise SceneError(f"{where} = {short_repr(value)}: expected a whole number in {rng}")
         return float(value)
 
     def choice(self, name, options, default=None) -> str:
         value = self.data.get(name, default)
         if value not in options:
-            raise SceneError(f"{self.key(name)} = {value!r}: allowed values are {', '.join(options)}")
+            raise SceneError(f"{self.key(name)} = {short_repr(value)}: allowed values are {', '.join(options)}")
         return value
 
     def boolean(self, name, default) -> bool:
         value = self.data.get(name, default)
         if not isinstance(value, bool):
-            raise SceneError(f"{self.key(name)} = {value!r}: expected true or false")
+            raise SceneError(f"{self.key(name)} = {short_repr(value)}: expected true or false")
         return value
 
     def string(self, name, default="") -> str:
         value = self.data.get(name, default)
         if not isinstance(value, str):
-            raise SceneError(f"{self.key(name)} = {value!r}: expected a string")
+            raise SceneError(f"{self.key(name)} = {short_repr(value)}: expected a string")
         return value
 
     def vector(self, name, length, default=None, lo=-math.inf, hi=math.inf) -> tuple:
@@ -254,10 +255,10 @@ class _Section:
         where = self.key(name)
         if (not isinstance(value, (list, tuple)) or len(value) != length
                 or any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in value)):
-            raise SceneError(f"{where} = {value!r}: expected a list of {length} numbers")
+            raise SceneError(f"{where} = {short_repr(value)}: expected a list of {length} numbers")
         for v in value:
             if v != v or not lo <= v <= hi:
-                raise SceneError(f"{where} = {value!r}: each entry must be in [{lo:g}, {hi:g}]")
+                raise SceneError(f"{where} = {short_repr(value)}: each entry must be in [{lo:g}, {hi:g}]")
         return tuple(float(v) for v in value)
 
     def section(self, name, allowed, required=()) -> "_Section":
@@ -268,7 +269,7 @@ class _Section:
         if value is None:
             return []
         if not isinstance(value, list):
-            raise SceneError(f"{self.key(name)} = {value!r}: expected a list")
+            raise SceneError(f"{self.key(name)} = {short_repr(value)}: expected a list")
         return value
 
 
@@ -294,7 +295,7 @@ def _bearing(top: _Section) -> Bearing:
                                        {k: v for k, v in value.items() if k != "name"},
                                        where="bearing")
     else:
-        raise SceneError(f"bearing = {value!r}: expected a catalog name or a mapping of geometry")
+        raise SceneError(f"bearing = {short_repr(value)}: expected a catalog name or a mapping of geometry")
     if top.has("radial_clearance_um"):
         bearing = bearing.with_clearance(top.number("radial_clearance_um", lo=-50, hi=500) * 1e-6)
     return bearing
@@ -341,7 +342,7 @@ def _defects(top: _Section, bearing: Bearing) -> tuple:
         else:
             angle = math.radians(d.number("angle_deg", -90.0, lo=-360.0, hi=360.0))
         if d.has("ball") and kind != "ball":
-            raise SceneError(f"{d.key('ball')} = {d.data['ball']!r}: only a ball defect is on a ball "
+            raise SceneError(f"{d.key('ball')} = {short_repr(d.data['ball'])}: only a ball defect is on a ball "
                              f"(this one is kind {kind})")
         ball = int(d.number("ball", 0, lo=0, hi=bearing.balls - 1, integer=True))
         wander = d.number("wander_turns", 0.0, lo=0.0, hi=1e4)
@@ -402,7 +403,7 @@ def _sensor(top: _Section) -> Sensor:
     # the names first: set() cannot take a list or a mapping among them
     if (not isinstance(axes, list) or not axes or any(not isinstance(a, str) or a not in ("x", "y") for a in axes)
             or len(set(axes)) != len(axes)):
-        raise SceneError(f"sensor.axes = {axes!r}: expected a list of distinct axes from x, y")
+        raise SceneError(f"sensor.axes = {short_repr(axes)}: expected a list of distinct axes from x, y")
     return Sensor(
         axes=tuple(a for a in ("x", "y") if a in axes),
         resonance_hz=s.number("resonance_hz", 0.0, lo=0.0, hi=200000.0),
@@ -443,7 +444,7 @@ def scene_from_dict(data: Any, name: str = "scene", source_text: str = "", sourc
     fid = top.section("fidelity", ("tier", "tolerance", "outputs"))
     outputs = fid.data.get("outputs", ["accel", "contact_forces", "cage_speed"])
     if not isinstance(outputs, list) or any(o not in OUTPUTS for o in outputs):
-        raise SceneError(f"fidelity.outputs = {outputs!r}: expected a list from {', '.join(OUTPUTS)}")
+        raise SceneError(f"fidelity.outputs = {short_repr(outputs)}: expected a list from {', '.join(OUTPUTS)}")
     return Scene(
         name=top.string("name", name) or name,
         description=top.string("description", ""),
@@ -488,7 +489,7 @@ def resolve_scene_path(name_or_path: str | Path) -> Path:
     """A shipped scene name or a path to a YAML file -> the file's path."""
     if not isinstance(name_or_path, (str, os.PathLike)):
         # str() would make any value a name: load_scene(None) said "unknown scene 'None'"
-        raise SceneError(f"scene = {name_or_path!r}: expected a shipped scene name or the path of a scene "
+        raise SceneError(f"scene = {short_repr(name_or_path)}: expected a shipped scene name or the path of a scene "
                          f"YAML (str or pathlib.Path), not {type(name_or_path).__name__}")
     text = str(name_or_path)
     path = Path(text)
@@ -528,7 +529,7 @@ def _yaml_loader():
                                  else f"(lines {first.line + 1} and {key_node.start_mark.line + 1})")
                         raise yaml.constructor.ConstructorError(
                             "while constructing a mapping", node.start_mark,
-                            f"key {key!r} appears twice {lines}; give it once", key_node.start_mark)
+                            f"key {short_repr(key)} appears twice {lines}; give it once", key_node.start_mark)
             return super().construct_mapping(node, deep=deep)
 
     Loader.add_implicit_resolver(

@@ -265,3 +265,18 @@ def test_a_key_given_twice_is_refused_naming_it_and_its_lines(tmp_path, text, li
     assert str(exc.value) == f"scene bad.yaml: {line}"
     merged = load_yaml("base: &b {mass: 1.0, stiffness: 2.0}\nshaft: {<<: *b, mass: 3.0}\n")
     assert merged["shaft"] == {"mass": 3.0, "stiffness": 2.0}
+
+
+def test_a_long_value_is_shortened_in_the_error():
+    """A 20 000-entry radial_load was echoed whole: a 100 kB "one line".  Long lists, mappings
+    and strings are cut with "..."; the key and the rule stay."""
+    load = "[" + ", ".join(["1.0"] * 20000) + "]"
+    for text, start, rule in (
+            (GOOD.replace("[0.0, -50.0]", load), "operating_point.radial_load = [1.0, 1.0, ", "2 numbers"),
+            (GOOD + "fidelity: {tier: " + "k" * 10000 + "}\n", "fidelity.tier = 'kkk", "allowed values are auto"),
+            (GOOD.replace("bearing: ER-16K", "bearing: {balls: " + load + ", ball_diameter_mm: 7.94, "
+                          "pitch_diameter_mm: 38.5}"), "bearing.balls = [1.0, ", "number")):
+        with pytest.raises(SceneError) as exc:
+            scene_from_dict(load_yaml(text))
+        msg = str(exc.value)
+        assert msg.startswith(start) and "..." in msg and rule in msg and len(msg) < 300, msg[:400]
