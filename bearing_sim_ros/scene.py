@@ -16,9 +16,8 @@ from typing import Any
 
 from .catalog import Bearing, bearing_from_mapping, get_bearing
 from .errors import SceneError, short_repr
+from .limits import LOAD_MULTIPLE_C0, MAX_LOAD, MAX_SPEED_RPM, NDM_LIMIT, RPM, InputLimits
 from .paths import scenes_dir
-
-RPM = 2.0 * math.pi / 60.0  # rad/s per rpm
 
 DEFECT_KINDS = ("inner", "outer", "ball")
 DEPTH_PROFILES = ("geometric", "rectangular", "half_sine", "piecewise", "auto")
@@ -279,9 +278,24 @@ def clock_to_angle(clock: float) -> float:
 
 
 TOLERANCE_RANGE = (1e-4, 1.0)   # relative error allowed to the fidelity choice (fidelity.tolerance)
-MAX_LOAD = 1.0e6        # N: a bound against absurd values; the bearing's own limit is checked later
-MAX_SPEED_RPM = 60000.0
+# MAX_LOAD (N) and MAX_SPEED_RPM (limits.py) bound every scene's speeds and loads whatever the
+# bearing; then the bearing's own limits (InputLimits, the live node's) apply: _check_operating_point
 MAX_DEFECT_TIME = 1.0e6   # s (11.6 days of signal): a defect's onset_s and growth_s
+
+
+def _check_operating_point(where: _Section, rpm: float, load: tuple, bearing: Bearing):
+    """The bearing's own limits, as the live node applies them to its inputs (InputLimits):
+    |speed| up to n d_m = NDM_LIMIT rpm mm and |F| up to 2 x C0, or one line naming the key."""
+    limits = InputLimits(bearing)
+    if abs(rpm) * RPM > limits.max_speed:
+        raise SceneError(f"{where.key('shaft_speed_rpm')} = {rpm:g}: beyond what bearing {bearing.name} takes "
+                         f"(|speed| <= {limits.max_speed / RPM:.0f} rpm, n*dm <= {NDM_LIMIT:.0e} rpm mm)")
+    force = math.hypot(*load)
+    if force > limits.max_load:
+        bound = (f"{LOAD_MULTIPLE_C0:g} x C0 = {limits.max_load:.0f} N of bearing {bearing.name}"
+                 if limits.max_load < MAX_LOAD else f"{MAX_LOAD:g} N, the most a scene may ask for")
+        raise SceneError(f"{where.key('radial_load')} = [{load[0]:g}, {load[1]:g}] N: |F| = {force:.6g} N "
+                         f"beyond {bound}")
 
 
 def _bearing(top: _Section) -> Bearing:
@@ -414,7 +428,7 @@ def _sensor(top: _Section) -> Sensor:
     )
 
 
-def _profile(top: _Section, speed: float, load: tuple) -> tuple:
+def _profile(top: _Section, speed: float, load: tuple, bearing: Bearing) -> tuple:
     points = []
     last_t = -math.inf
     for i, raw in enumerate(top.items("profile")):
@@ -423,8 +437,10 @@ def _profile(top: _Section, speed: float, load: tuple) -> tuple:
         if t <= last_t:
             raise SceneError(f"profile[{i}].t = {t:g}: times must increase (previous {last_t:g})")
         last_t = t
-        speed = p.number("shaft_speed_rpm", speed / RPM, lo=-MAX_SPEED_RPM, hi=MAX_SPEED_RPM) * RPM
+        rpm = p.number("shaft_speed_rpm", speed / RPM, lo=-MAX_SPEED_RPM, hi=MAX_SPEED_RPM)
         load = p.vector("radial_load", 2, list(load), lo=-MAX_LOAD, hi=MAX_LOAD)
+        _check_operating_point(p, rpm, load, bearing)
+        speed = rpm * RPM
         points.append(ProfilePoint(t, speed, load))
     return tuple(points)
 
@@ -439,8 +455,10 @@ def scene_from_dict(data: Any, name: str = "scene", source_text: str = "", sourc
     top = _Section(data, "", TOP_KEYS, required=("bearing", "structure", "operating_point"))
     bearing = _bearing(top)
     op = top.section("operating_point", ("shaft_speed_rpm", "radial_load"), required=("shaft_speed_rpm",))
-    speed = op.number("shaft_speed_rpm", lo=-MAX_SPEED_RPM, hi=MAX_SPEED_RPM) * RPM
+    rpm = op.number("shaft_speed_rpm", lo=-MAX_SPEED_RPM, hi=MAX_SPEED_RPM)
     load = op.vector("radial_load", 2, [0.0, 0.0], lo=-MAX_LOAD, hi=MAX_LOAD)
+    _check_operating_point(op, rpm, load, bearing)
+    speed = rpm * RPM
     fid = top.section("fidelity", ("tier", "tolerance", "outputs"))
     outputs = fid.data.get("outputs", ["accel", "contact_forces", "cage_speed"])
     if not isinstance(outputs, list) or any(o not in OUTPUTS for o in outputs):
@@ -461,7 +479,7 @@ def scene_from_dict(data: Any, name: str = "scene", source_text: str = "", sourc
         fidelity=fid.choice("tier", TIERS, "auto"),
         fidelity_tolerance=fid.number("tolerance", 0.05, *TOLERANCE_RANGE),
         outputs=tuple(outputs),
-        profile=_profile(top, speed, load),
+        profile=_profile(top, speed, load, bearing),
         source_text=source_text,
         source_path=source_path,
     )

@@ -280,3 +280,39 @@ def test_a_long_value_is_shortened_in_the_error():
             scene_from_dict(load_yaml(text))
         msg = str(exc.value)
         assert msg.startswith(start) and "..." in msg and rule in msg and len(msg) < 300, msg[:400]
+
+
+@pytest.mark.parametrize("old, new, line", [
+    # 2 x C0 = 2 x 14.7 x 9 x 7.94^2 = 16681 N on the ER-16K: a scene ran with 900 kN
+    ("radial_load: [0.0, -50.0]", "radial_load: [0, -900000]",
+     "operating_point.radial_load = [0, -900000] N: |F| = 900000 N beyond 2 x C0 = 16681 N of bearing ER-16K"),
+    ("radial_load: [0.0, -50.0]", "radial_load: [12000, -12000]",
+     "operating_point.radial_load = [12000, -12000] N: |F| = 16970.6 N beyond 2 x C0 = 16681 N of bearing ER-16K"),
+    # n d_m <= 1e6 rpm mm: 25974 rpm on its 38.5 mm pitch circle
+    ("shaft_speed_rpm: 1600", "shaft_speed_rpm: -30000",
+     "operating_point.shaft_speed_rpm = -30000: beyond what bearing ER-16K takes (|speed| <= 25974 rpm, "
+     "n*dm <= 1e+06 rpm mm)"),
+    # every knot of a profile, named by its own key
+    ("clock: 6}\n", "clock: 6}\nprofile:\n  - {t: 1, shaft_speed_rpm: 2000}\n  - {t: 2, radial_load: [0, -20000]}\n",
+     "profile[1].radial_load = [0, -20000] N: |F| = 20000 N beyond 2 x C0 = 16681 N of bearing ER-16K"),
+    ("clock: 6}\n", "clock: 6}\nprofile:\n  - {t: 1, shaft_speed_rpm: 2000}\n  - {t: 2, shaft_speed_rpm: 26000}\n",
+     "profile[1].shaft_speed_rpm = 26000: beyond what bearing ER-16K takes (|speed| <= 25974 rpm, "
+     "n*dm <= 1e+06 rpm mm)"),
+    # a bearing too big for 2 x C0 to bind: the scene's own bound of 1 MN on |F|
+    ("bearing: ER-16K", "bearing: {balls: 12, ball_diameter_mm: 150, pitch_diameter_mm: 1000}\n"
+     "radial_clearance_um: 10", None),
+])
+def test_the_operating_point_and_profile_are_within_the_bearings_limits(old, new, line):
+    """The live node refuses a speed above n d_m = 1e6 rpm mm and a load above 2 x C0 on its
+    topics (InputLimits); a scene asking for the same was run.  Just inside the limits loads."""
+    text = GOOD.replace(old, new)
+    if line is None:
+        text = text.replace("1600, radial_load: [0.0, -50.0]", "500, radial_load: [-900000, -900000]")
+        line = ("operating_point.radial_load = [-900000, -900000] N: |F| = 1.27279e+06 N beyond 1e+06 N, "
+                "the most a scene may ask for")
+    with pytest.raises(SceneError) as exc:
+        scene_from_dict(load_yaml(text))
+    assert str(exc.value) == line
+    inside = scene_from_dict(load_yaml(GOOD.replace("shaft_speed_rpm: 1600", "shaft_speed_rpm: 25970")
+                                       .replace("[0.0, -50.0]", "[11790, -11790]")))
+    assert inside.radial_load == (11790.0, -11790.0)

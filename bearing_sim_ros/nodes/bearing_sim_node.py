@@ -39,6 +39,7 @@ from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
 
 from ..errors import UserError
+from ..limits import LOAD_MULTIPLE_C0, NDM_LIMIT, STATIC_F0, InputLimits  # noqa: F401 (names kept here)
 from ..teardown import teardown_watchdog
 
 NODE_NAME = "bearing_sim"
@@ -46,41 +47,12 @@ DEFAULT_SCENE = "er16k_outer_race"
 FIDELITIES = ("auto", "kinematic", "skidding")
 
 # ---- input limits --------------------------------------------------------------------------
-# Speed: a speed factor n * d_m (rpm x mm) of 1.0e6 is above the reference speeds that catalogs
-# give for oil-lubricated deep-groove ball bearings (0.5-0.8e6); beyond it the pure-rolling
-# kinematics this model rests on no longer hold, so such a command is a mistake, not an input.
-NDM_LIMIT = 1.0e6              # rpm * mm
-# Load: ISO 76 basic static radial load rating C0 = f0 * Z * Dw^2 * cos(alpha) (N, mm) with
-# f0 = 14.7, the lowest value of the ISO 76 deep-groove table (gives 8.3 kN for a 6205; the
-# catalog says 7.8 kN).  C0 is the load of 4.2 GPa peak contact stress, where permanent
-# denting starts; twice C0 is far beyond any working load, so more is rejected.
-STATIC_F0 = 14.7
-LOAD_MULTIPLE_C0 = 2.0
+# The bearing's limits (n d_m, 2 x C0) live in ..limits, ROS-free: the scene loader applies them too.
 CLOCK_SKEW_ALLOWED = 1.0       # s: a load stamp further in the future than this is rejected
 REJECT_LOG_PERIOD = 2.0        # s: at most one log line per rejection reason this often
 TIME_LINE_JUMP = 1.0           # s: a load stamp further back than this behind the last accepted one
                                # starts a new time line (a recording played again, a publisher
                                # restarted with other stamps); closer, it is out of order
-
-
-class InputLimits:
-    """What the bearing of a scene can take: ``max_speed`` (rad/s), ``static_capacity`` C0 and
-    ``max_load`` (N).  Derived from the catalog geometry (see the constants above)."""
-
-    def __init__(self, bearing):
-        from ..scene import MAX_LOAD, MAX_SPEED_RPM, RPM
-
-        dm_mm = bearing.pitch_diameter * 1e3
-        dw_mm = bearing.ball_diameter * 1e3
-        self.static_capacity = STATIC_F0 * bearing.balls * dw_mm ** 2 * math.cos(bearing.contact_angle)
-        # never beyond what ``Simulator.advance`` takes (a scene's bounds), which only a very
-        # small (speed) or very large (load) custom bearing reaches
-        self.max_speed = min(NDM_LIMIT / dm_mm, MAX_SPEED_RPM) * RPM
-        self.max_load = min(LOAD_MULTIPLE_C0 * self.static_capacity, MAX_LOAD)
-
-    def __repr__(self):
-        return (f"InputLimits(max_speed={self.max_speed:.1f} rad/s, "
-                f"static_capacity={self.static_capacity:.0f} N, max_load={self.max_load:.0f} N)")
 
 
 def check_speed(value: float, limits: InputLimits):
