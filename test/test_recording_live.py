@@ -76,6 +76,11 @@ def test_a_remapped_and_namespaced_node_records_its_topics_under_their_names(bea
     assert counts["/rig1/vibration"] == 200
     with open_recording(out) as rec:
         assert json.loads(rec.metadata["topics"])["accel"] == "/rig1/vibration"
+    # its status says which node it is: nodes in several namespaces share the one /diagnostics
+    with AnyReader([out]) as reader:
+        conn = next(c for c in reader.connections if c.topic == "/diagnostics")
+        status = reader.deserialize(next(reader.messages([conn]))[2], conn.msgtype).status[0]
+    assert (status.name, status.hardware_id) == ("rig1/bearing_sim: simulator", "rig1/bearing_sim")
     summary = build_report(out, tmp_path / "report")
     assert summary["analysed_s"] == pytest.approx(2.0) and summary["verdict"] == "outer"
 

@@ -564,7 +564,8 @@ class BearingSimNode(Node):
             if not rs["ok"]:
                 values["recording_error"] = rs["error"]
                 level, message = 2, "recording failed: " + rs["error"]
-        return diagnostics_message(item.end_stamp, values, level, message)
+        return diagnostics_message(item.end_stamp, values, level, message,
+                                   self.get_fully_qualified_name().lstrip("/"))
 
 
 

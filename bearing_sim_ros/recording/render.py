@@ -74,14 +74,16 @@ def load_message(load, stamp_ns: int, frame_id: str):
     return msg
 
 
-def diagnostics_message(stamp_ns: int, values: dict, level: int = 0, message: str = "ok"):
-    """A DiagnosticArray with one status ``bearing_sim: simulator`` carrying ``values``."""
+def diagnostics_message(stamp_ns: int, values: dict, level: int = 0, message: str = "ok",
+                        node: str = NODE_NAME):
+    """A DiagnosticArray with one status ``<node>: simulator`` carrying ``values``; ``node`` is
+    the node's name with its namespace (``rig1/bearing_sim``), so that nodes in several
+    namespaces, which all publish on the one ``/diagnostics``, can be told apart."""
     from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 
     arr = DiagnosticArray()
     _stamp(arr.header, stamp_ns)
-    st = DiagnosticStatus(level=bytes([level]), name=f"{NODE_NAME}: simulator", message=message,
-                          hardware_id=NODE_NAME)
+    st = DiagnosticStatus(level=bytes([level]), name=f"{node}: simulator", message=message, hardware_id=node)
     st.values = [KeyValue(key=str(k), value=str(v)) for k, v in values.items()]
     arr.status = [st]
     return arr
