@@ -475,6 +475,25 @@ def test_a_signal_while_the_node_is_being_built_ends_it_quietly_with_status_0(st
     assert "error:" not in node.output() and "Traceback" not in node.output(), node.output()
 
 
+def test_a_recording_stopped_by_a_signal_ends_where_the_published_stream_ends(started, listener, tmp_path):
+    """With ``compute_ahead`` 0.5 s, up to 50 batches are computed and not yet due when SIGINT
+    comes.  They were recorded all the same (their log times after the file was closed), so the
+    file ran up to half a second past anything a subscriber got.  Now it ends with the batch in
+    progress: its last table is at most one batch past the subscriber's last."""
+    out = tmp_path / "ahead.mcap"
+    node = started({"scene": "er16k_outer_race", "fidelity": "kinematic", "compute_ahead": 0.5,
+                    "record": str(out)})
+    listener.wait_matched()
+    listener.wait_for(lambda: len(listener.accel) > 100, FIRST_TABLE_S + 5, "a second of tables")
+    node.send(signal.SIGINT)
+    assert node.wait(20) == 0, node.output()
+    time.sleep(0.5)                       # anything still on its way to the listener
+    received = max(s for _t, s, _c, _d in listener.accel)
+    topics, _meta = read_recording(out)
+    recorded = max(m.header.stamp.sec * NS + m.header.stamp.nanosec for _t, m in topics["/accel"])
+    assert received <= recorded <= received + BATCH_NS, (recorded - received) / NS
+
+
 def test_fast_mode_runs_duration_and_ends(started, tmp_path):
     """real_time:=false with duration 3 s: the node ends by itself with exactly 3 s recorded,
     log time = the end of each table (the file replays at the signal's pace), and a

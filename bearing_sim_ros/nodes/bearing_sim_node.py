@@ -442,6 +442,10 @@ class BearingSimNode(Node):
             now = time.monotonic()
             if queue and (stop or not real_time or queue[0].due <= now):
                 item = queue.popleft()
+                if stop and real_time and item.due > now:
+                    # computed ahead and not due yet: never published, so not recorded either (the
+                    # file ended up to compute_ahead past the stream that subscribers got)
+                    continue
                 lag = max(0.0, now - item.due) if real_time else 0.0
                 stats.batch(lag, item.batch, now)
                 published_index = item.end_index
@@ -477,7 +481,7 @@ class BearingSimNode(Node):
                 stats.work(time.monotonic() - now)
                 continue
             if stop:
-                break                          # every computed batch is published and recorded
+                break                          # every batch that was due is published and recorded
             total = int(round(cfg["duration"] * sr)) if cfg["duration"] > 0 else 0
             if total and sim.index >= total:
                 if not queue:
