@@ -17,6 +17,7 @@ Advancing in chunks gives the same samples as one long advance with the same com
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -40,6 +41,11 @@ def _whole_number(value) -> bool:
     """Whether ``value`` is a Python or numpy integer and not a bool (``True`` is an int, but
     ``advance(True)`` or ``seed=True`` is a mistake, not 1)."""
     return isinstance(value, (int, np.integer)) and not isinstance(value, bool)
+
+
+def _real_number(value) -> bool:
+    """Whether ``value`` is a Python or numpy real number and not a bool or a string."""
+    return isinstance(value, (numbers.Real, np.floating, np.integer)) and not isinstance(value, (bool, np.bool_))
 
 
 # integration steps per output sample that the API, ``bearing-sim render --oversample`` and the
@@ -187,6 +193,14 @@ class Simulator:
         request = scene.fidelity if fidelity == "auto" else fidelity
         if request == "auto" and oversample is not None and oversample > AUTO_OVERSAMPLE_MAX:
             raise OversampleForAuto(oversample)
+        # as `bearing-sim render` says them: settings that would silently do nothing
+        if rk4_step is not None and solver != "rk4":
+            raise UserError(f"rk4_step = {rk4_step!r}: applies to solver='rk4' only (given solver={solver!r})")
+        if request == "kinematic" and solver != "default":
+            raise UserError(f"solver = {solver!r}: applies to the skidding tier only, and "
+                            + ("fidelity='kinematic'" if fidelity == "kinematic"
+                               else f"scene {scene.name}'s fidelity.tier: kinematic")
+                            + " runs the kinematic tier")
         self.selection = select_tier(scene, request, self._shaft_speed, self._radial_load,
                                      tolerance if tolerance is not None else scene.fidelity_tolerance)
         self.tier = self.selection.tier
@@ -346,18 +360,17 @@ class Simulator:
             raise UserError(f"n = {n!r}: expected a whole number of samples > 0")
         s0 = self._shaft_speed
         l0x, l0y = self._radial_load
-        try:
-            s1 = s0 if shaft_speed is None else float(shaft_speed)
-        except (TypeError, ValueError):
-            raise UserError(f"shaft_speed = {shaft_speed!r}: expected a number, rad/s") from None
+        # numbers only: float('167') and float(True) would take a string or a bool for one
+        if shaft_speed is not None and not _real_number(shaft_speed):
+            raise UserError(f"shaft_speed = {shaft_speed!r}: expected a number, rad/s")
+        s1 = s0 if shaft_speed is None else float(shaft_speed)
         if radial_load is None:
             l1x, l1y = l0x, l0y
         else:
-            try:
-                l1 = np.asarray(radial_load, dtype=float).reshape(2)
-            except (TypeError, ValueError):
-                raise UserError(f"radial_load = {radial_load!r}: expected two numbers (x, y), N") from None
-            l1x, l1y = float(l1[0]), float(l1[1])
+            l1 = np.asarray(radial_load) if not isinstance(radial_load, (str, bytes)) else None
+            if l1 is None or l1.size != 2 or l1.dtype.kind not in "iuf":
+                raise UserError(f"radial_load = {radial_load!r}: expected two numbers (x, y), N")
+            l1x, l1y = (float(v) for v in l1.reshape(2))
         # float(): the load in use is held as numpy scalars, whose repr is np.float64(...)
         if not math.isfinite(s1):
             raise UserError(f"shaft_speed = {float(s1)!r} rad/s: must be a finite number")

@@ -120,6 +120,11 @@ def test_seed_range_is_the_nodes():
     (lambda s: s.advance(10, shaft_speed="fast"), "shaft_speed = 'fast': expected a number, rad/s"),
     (lambda s: s.advance(10, radial_load=(1.0, 2.0, 3.0)), "radial_load = (1.0, 2.0, 3.0): expected two numbers (x, y), N"),
     (lambda s: s.advance(10, radial_load=5.0), "radial_load = 5.0: expected two numbers (x, y), N"),
+    # float() took a string or a bool for a number: '167' ran at 167 rad/s, True at 1 rad/s
+    (lambda s: s.advance(10, shaft_speed="167"), "shaft_speed = '167': expected a number, rad/s"),
+    (lambda s: s.advance(10, shaft_speed=True), "shaft_speed = True: expected a number, rad/s"),
+    (lambda s: s.advance(10, radial_load=("0", "-50")), "radial_load = ('0', '-50'): expected two numbers (x, y), N"),
+    (lambda s: s.advance(10, radial_load="05"), "radial_load = '05': expected two numbers (x, y), N"),
     # beyond a scene's bounds the kinematic tier returned NaN without a word
     (lambda s: s.advance(10, shaft_speed=1e9),
      "shaft_speed = 1e+09 rad/s: allowed range is [-6283.19, 6283.19] rad/s (+-60000 rpm, as in a scene)"),
@@ -145,6 +150,19 @@ def test_advance_names_a_bad_speed_or_load_and_what_is_allowed(call, message):
      "oversample = True: allowed values are 1, 2 or a multiple of 4 up to 64"),
 ])
 def test_bools_are_not_whole_numbers(call, message):
+    with pytest.raises(UserError) as exc:
+        call()
+    assert str(exc.value) == message
+
+
+@pytest.mark.parametrize("call, message", [
+    # settings that did nothing, silently: the CLI refuses them the same way
+    (lambda: Simulator("er16k_healthy", fidelity="kinematic", solver="rk4"),
+     "solver = 'rk4': applies to the skidding tier only, and fidelity='kinematic' runs the kinematic tier"),
+    (lambda: Simulator("er16k_healthy", fidelity="skidding", rk4_step=2e-6),
+     "rk4_step = 2e-06: applies to solver='rk4' only (given solver='default')"),
+])
+def test_solver_settings_that_would_do_nothing_are_named(call, message):
     with pytest.raises(UserError) as exc:
         call()
     assert str(exc.value) == message
