@@ -419,3 +419,13 @@ def test_diagnostics_give_the_fault_frequencies_where_the_signal_has_them(skiddi
     for key in ("slip_inner_m_s", "slip_outer_m_s", "friction_inner_n", "friction_outer_n"):
         assert float(last[key]) > 0
     assert not [k for k in last if k.endswith("_ratio") and "skid" not in k]
+
+
+def test_the_recorded_command_gives_duration_and_sample_rate_exactly(tmp_path):
+    """``{duration:g}`` kept six digits: ``--duration 12.345678`` was recorded as 12.3457, which
+    renders 185186 samples instead of 185185.  Both are recorded as given (repr)."""
+    out = tmp_path / "exact.mcap"
+    render("er16k_healthy", 0.0123456789, out, fidelity="kinematic", sample_rate=15000.0, progress=False)
+    argv = _recorded_command(out)
+    assert float(argv[argv.index("--duration") + 1]) == 0.0123456789
+    assert float(argv[argv.index("--sample-rate") + 1]) == 15000.0

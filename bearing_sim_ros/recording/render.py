@@ -297,9 +297,11 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
               "state_rate": float(state_rate), "start_time_ns": 0, "oversample": int(oversample or 0),
               "rk4_step": rk4_step,
               # solver, step and oversample only when not the default: a kinematic render must
-              # not name a solver it did not use; repr: the step exactly as it was given
-              "command": (f"bearing-sim render {shlex.quote(scene_argument(scene))} --duration {duration:g} "
-                          f"--fidelity {fidelity} --seed {seed} --sample-rate {sample_rate:g}"
+              # not name a solver it did not use; repr: duration, sample rate and step exactly as
+              # given (:g kept 6 digits: --duration 12.345678 came back as 12.3457, one sample more)
+              "command": (f"bearing-sim render {shlex.quote(scene_argument(scene))} "
+                          f"--duration {float(duration)!r} --fidelity {fidelity} --seed {seed} "
+                          f"--sample-rate {float(sample_rate)!r}"
                           + (f" --solver {solver}" if solver != "default" else "")
                           + (f" --rk4-step {float(rk4_step)!r}" if rk4_step is not None else "")
                           + (f" --oversample {oversample}" if oversample else ""))}
