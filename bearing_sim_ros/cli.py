@@ -102,7 +102,7 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("render", help="offline, as fast as possible, to MCAP")
     s.add_argument("scene", metavar="S", help=scene_help)
     s.add_argument("--duration", type=_positive(float), required=True, metavar="SECONDS",
-                   help="seconds of signal, > 0 (required)")
+                   help="seconds of signal, at least one sample (required)")
     s.add_argument("--out", required=True, metavar="F.mcap", help="MCAP file to write (required)")
     s.add_argument("--fidelity", default="auto", choices=["auto", "kinematic", "skidding"],
                    help="model tier; auto: the cheapest within the scene's error tolerance "

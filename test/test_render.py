@@ -429,3 +429,17 @@ def test_the_recorded_command_gives_duration_and_sample_rate_exactly(tmp_path):
     argv = _recorded_command(out)
     assert float(argv[argv.index("--duration") + 1]) == 0.0123456789
     assert float(argv[argv.index("--sample-rate") + 1]) == 15000.0
+
+
+def test_a_duration_shorter_than_one_sample_is_refused_in_one_line(tmp_path, capsys):
+    """``--duration 0.00001`` at 15 kHz (0.15 of a sample) wrote a file without a table, exit 0,
+    which report then refused: it is an argument error, and no file is made."""
+    out = tmp_path / "tiny.mcap"
+    assert cli.main(["render", "er16k_healthy", "--duration", "0.00001", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err == ("error: --duration = 1e-05 s: shorter than one sample at 15000 Hz; "
+                   "expected at least 6.66667e-05 s\n")
+    assert not out.exists()
+    render("er16k_healthy", 1 / FS, out, fidelity="kinematic", progress=False)     # one sample renders
+    with open_recording(out) as rec:
+        assert rec.topics()["/accel"].count == 1

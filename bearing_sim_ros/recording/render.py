@@ -276,6 +276,11 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
     reason = batching_error(sim.sample_rate, batch_duration, state_rate)
     if reason:
         raise UserError(reason)
+    total = int(round(duration * sample_rate))
+    if total < 1:
+        # a file without a single table, which report and play then refuse
+        raise UserError(f"--duration = {duration!r} s: shorter than one sample at {sample_rate:g} Hz; "
+                        f"expected at least {1.0 / sample_rate:.6g} s")
     n_batch = int(round(sample_rate * batch_duration))
     solver_unused = solver != "default" and not _runs_skidding(scene, sim, duration, sample_rate, n_batch)
     if solver_unused and "kinematic" in (fidelity, scene.fidelity):
@@ -291,7 +296,6 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
     from ..messages import BatchMessages
 
     msgs = BatchMessages(sim, start_ns=0)
-    total = int(round(duration * sample_rate))
     params = {"mode": "render", "duration": float(duration), "fidelity": fidelity, "seed": int(seed),
               "sample_rate": float(sample_rate), "solver": solver, "batch_duration": float(batch_duration),
               "state_rate": float(state_rate), "start_time_ns": 0, "oversample": int(oversample or 0),
