@@ -2,10 +2,12 @@
 from __future__ import annotations
 
 import os
+import stat
 import sys
 from pathlib import Path
 
 PACKAGE = "bearing_sim_ros"
+MCAP_MAGIC = b"\x89MCAP0\r\n"      # the first bytes of every MCAP file
 
 
 def config_dir() -> Path:
@@ -46,10 +48,12 @@ def output_folder(text, option: str = "--out") -> Path:
     return out
 
 
-def output_file(text, option: str = "--out") -> Path:
+def output_file(text, option: str = "--out", keep=(), check: bool = True) -> Path:
     """The path ``text`` (the value of ``option``) of an .mcap file to write; a one-line
     UserError naming the option when it is empty or a folder (``open`` said
-    "IsADirectoryError: '.'" for an empty one).  Whether it can be written is the writer's to say."""
+    "IsADirectoryError: '.'" for an empty one), or, with ``check``, when writing it would destroy
+    what is not a recording (``check_replaceable``; ``keep``: the scene's own file).  Whether it
+    can be written is the writer's to say."""
     from .errors import UserError
 
     where = f"{option} = {str(text)!r}"
@@ -58,4 +62,32 @@ def output_file(text, option: str = "--out") -> Path:
     out = Path(text)
     if out.is_dir():
         raise UserError(f"{where}: is a folder; expected the path of an .mcap file")
+    if check:
+        check_replaceable(out, where, keep)
     return out
+
+
+def check_replaceable(path: Path, where: str, keep=()) -> None:
+    """A one-line UserError (``where``: ``--out = 'x.mcap'``) when writing a recording to
+    ``path`` would destroy a file that is not one: a path in ``keep`` (the scene's own file:
+    ``render my.yaml --out my.yaml`` made the scene an MCAP), or an existing regular file that
+    is neither empty nor an MCAP file (``MCAP_MAGIC``).  An MCAP file may be replaced (rendering
+    to the same path again is normal use); a device or a pipe (/dev/null) is written to."""
+    from .errors import UserError
+
+    path = Path(path)
+    for kept in keep:
+        if kept and (Path(kept).resolve() == path.resolve()
+                     or (path.exists() and Path(kept).exists() and os.path.samefile(kept, path))):
+            raise UserError(f"{where}: is the scene's own file; give another path for the recording")
+    try:
+        info = path.stat()
+        if not stat.S_ISREG(info.st_mode) or info.st_size == 0:
+            return
+        with open(path, "rb") as f:
+            head = f.read(len(MCAP_MAGIC))
+    except OSError:
+        return              # missing, or not readable: the writer says whether it can write there
+    if head != MCAP_MAGIC:
+        raise UserError(f"{where}: exists and is not an MCAP recording, so it is not replaced; "
+                        "give another path or remove the file first")

@@ -151,7 +151,8 @@ def run_command(args) -> int:
     duration = float(args.duration)           # finite and >= 0: the parser's type checks it
     scene = load_scene(args.scene)
     out = str(args.out)
-    output_file(out)          # the node takes an empty record for "no recording"
+    # the node takes an empty record for "no recording"; and nothing starts if --out is the scene
+    output_file(out, keep=[scene.source_path])
     overrides = [Parameter("scene", value=str(args.scene)), Parameter("duration", value=duration),
                  Parameter("record", value=out), Parameter("real_time", value=True)]
     node = None

@@ -146,6 +146,26 @@ def test_bad_parameters_end_the_node_with_one_line(ros_env, bearing_sim_exe, par
         assert w in lines[0]
 
 
+def test_a_record_path_that_is_the_scene_file_or_not_a_recording_ends_the_node_with_one_line(
+        ros_env, bearing_sim_exe, tmp_path):
+    """``node --scene my.yaml --ros-args -p record:=my.yaml`` made the scene file a recording,
+    and record:= replaced whatever file was there: both end the node with one line, exit 2,
+    the files untouched."""
+    text = load_scene("er16k_outer_race").source_text
+    scene, notes = tmp_path / "my.yaml", tmp_path / "notes.txt"
+    scene.write_text(text)
+    notes.write_text("my notes\n")
+    for record, words in ((scene, f"record = '{scene}': is the scene's own file"),
+                          (notes, f"record = '{notes}': exists and is not an MCAP recording")):
+        r = subprocess.run([bearing_sim_exe, "node", "--scene", str(scene), "--ros-args", "-p", "real_time:=false",
+                            "-p", "duration:=0.05", "-p", f"record:={record}"],
+                           env=ros_env, capture_output=True, text=True, timeout=60)
+        assert r.returncode == 2, r.stderr
+        lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
+        assert len(lines) == 1 and lines[0].startswith("error: ") and words in lines[0], r.stderr
+    assert scene.read_text() == text and notes.read_text() == "my notes\n"
+
+
 @pytest.mark.parametrize("args, words", [
     # rclpy ignored arguments before --ros-args without a word: the node ran on
     (["--bogus"], ["unrecognized arguments: --bogus", "follow --ros-args"]),

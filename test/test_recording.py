@@ -630,3 +630,27 @@ def test_messages_come_back_in_log_time_order_with_their_counts(tmp_path):
         for conn, _t, _raw in reader.messages():
             found[conn.topic] = found.get(conn.topic, 0) + 1
     assert counts == found == {"/a": 4, "/b": 2}
+
+
+def test_a_rotated_file_that_would_replace_what_is_not_a_recording_stops_the_recording(tmp_path, sim_msgs):
+    """Each file is checked as it is opened: ``rot_001.mcap`` being someone's notes, the
+    recording stops there with one line in ``status`` and the notes are kept."""
+    scene, sim, msgs = sim_msgs
+    base = tmp_path / "rot.mcap"
+    rotated_path(base, 1).write_text("not a recording\n")
+    rec, _sent = _record(base, scene, sim, msgs, batches=40, rotate_seconds=0.1)
+    st = rec.status
+    assert not st["ok"] and "exists and is not an MCAP recording" in st["error"] and "\n" not in st["error"]
+    assert rotated_path(base, 1).read_text() == "not a recording\n"
+    with open_recording(rotated_path(base, 0)) as r:                   # the first file is complete
+        assert r.metadata["file_index"] == "0"
+
+
+def test_the_first_file_is_checked_before_anything_is_written(tmp_path):
+    kept = tmp_path / "scene.yaml"
+    kept.write_text("name: x\n")
+    with pytest.raises(UserError, match=r"^record = '.*scene.yaml': is the scene's own file"):
+        Recorder(kept, {"a": "b"}, keep=[str(kept)])
+    with pytest.raises(UserError, match="exists and is not an MCAP recording"):
+        Recorder(kept, {"a": "b"})
+    assert kept.read_text() == "name: x\n"

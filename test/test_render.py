@@ -443,3 +443,30 @@ def test_a_duration_shorter_than_one_sample_is_refused_in_one_line(tmp_path, cap
     render("er16k_healthy", 1 / FS, out, fidelity="kinematic", progress=False)     # one sample renders
     with open_recording(out) as rec:
         assert rec.topics()["/accel"].count == 1
+
+
+def test_the_scene_file_and_other_files_that_are_not_recordings_are_not_replaced(tmp_path, monkeypatch, capsys):
+    """``render my.yaml --out my.yaml`` made the scene file an MCAP (exit 0), and any existing
+    file at --out was replaced: the scene's own file (by any name) and a file that is not an MCAP
+    recording are refused in one line, exit 2, untouched; an MCAP file and an empty file are
+    replaced (rendering again to the same path is normal use)."""
+    monkeypatch.chdir(tmp_path)
+    text = load_scene("er16k_healthy").source_text
+    Path("my.yaml").write_text(text)
+    Path("notes.txt").write_text("my notes\n")
+    for out, words in (("my.yaml", "--out = 'my.yaml': is the scene's own file; give another path"),
+                       (str(tmp_path / "sub" / ".." / "my.yaml"), "is the scene's own file"),
+                       ("notes.txt", "--out = 'notes.txt': exists and is not an MCAP recording, so it is not "
+                                     "replaced; give another path or remove the file first")):
+        (tmp_path / "sub").mkdir(exist_ok=True)
+        code, err = _one_line_error(capsys, ["render", "my.yaml", "--duration", "0.05", "--out", out])
+        assert code == 2 and len(err.splitlines()) == 1 and err.startswith("error: ") and words in err, err
+        assert "Traceback" not in err
+    assert Path("my.yaml").read_text() == text and Path("notes.txt").read_text() == "my notes\n"
+    assert cli.main(["render", "my.yaml", "--duration", "0.05", "--out", "a.mcap"]) == 0
+    assert cli.main(["render", "my.yaml", "--duration", "0.1", "--out", "a.mcap"]) == 0     # an MCAP: replaced
+    Path("empty.mcap").touch()
+    assert cli.main(["render", "my.yaml", "--duration", "0.05", "--out", "empty.mcap"]) == 0
+    for name, samples in (("a.mcap", 1500), ("empty.mcap", 750)):
+        with open_recording(name) as rec:
+            assert rec.topics()["/accel"].count == samples // 150

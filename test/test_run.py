@@ -77,10 +77,15 @@ def test_run_on_a_healthy_skidding_scene_explains_the_ball_pass_line_and_shows_s
         assert shown == pytest.approx(np.mean(recorded[key]), rel=5e-3), key
 
 
-@pytest.mark.parametrize("case", ["unknown scene", "missing output folder"])
+@pytest.mark.parametrize("case", ["unknown scene", "missing output folder", "the scene's own file"])
 def test_run_user_mistakes_are_one_line(ros_env, bearing_sim_exe, tmp_path, case):
     if case == "unknown scene":
         args, word = ["--scene", "nope", "--duration", "1", "--out", str(tmp_path / "x.mcap")], "nope"
+    elif case == "the scene's own file":
+        # ``run --scene my.yaml --out my.yaml`` made the scene file a recording
+        scene = tmp_path / "my.yaml"
+        scene.write_text(_shipped_scene_text())
+        args, word = ["--scene", str(scene), "--duration", "1", "--out", str(scene)], "is the scene's own file"
     else:
         # named by the option the user gave, not the node parameter behind it
         args, word = ["--duration", "1", "--out", "/no/such/folder/r.mcap"], "--out = '/no/such/folder/r.mcap'"
@@ -89,3 +94,11 @@ def test_run_user_mistakes_are_one_line(ros_env, bearing_sim_exe, tmp_path, case
     lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
     assert len(lines) == 1 and word in lines[0], r.stderr
     assert "Traceback" not in r.stderr
+    if case == "the scene's own file":
+        assert (tmp_path / "my.yaml").read_text() == _shipped_scene_text()
+
+
+def _shipped_scene_text() -> str:
+    from bearing_sim_ros.scene import load_scene
+
+    return load_scene("er16k_outer_race").source_text

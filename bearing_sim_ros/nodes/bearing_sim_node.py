@@ -291,7 +291,8 @@ class BearingSimNode(Node):
                                   topics={role: ent.topic_name for role, ent, _qos in topics})
         text = self.scene.source_text
         attachments = {f"{self.scene.name}.yaml": text.encode("utf-8")} if text else {}
-        self.recorder = Recorder(cfg["record"], meta, attachments, argument=self._record_argument)
+        self.recorder = Recorder(cfg["record"], meta, attachments, argument=self._record_argument,
+                                 keep=[self.scene.source_path])
         try:
             for role, ent, qos in topics:
                 self.recorder.add_topic(ent.topic_name, TYPES[role], qos)

@@ -35,7 +35,7 @@ from collections import deque
 from pathlib import Path
 
 from ..errors import UserError
-from ..paths import output_file
+from ..paths import check_replaceable, output_file
 from .cdr import zero_padding
 from .schemas import message_definition, qos_to_yaml
 
@@ -90,16 +90,21 @@ class Recorder:
     many bytes of messages (0 = never); rotate_seconds: after this span of log time (s, 0 = never);
     start_time_ns: log time of the attachments (default: now; offline renders pass 0 so that the
     file does not depend on the wall clock); argument: how errors name the path (the node's
-    ``record`` parameter, render's ``--out``).
+    ``record`` parameter, render's ``--out``); keep: paths never written (the scene's file).
+    Each file is checked as it is opened (``paths.check_replaceable``): an existing file that is
+    not an MCAP recording is not replaced (the first file: a UserError; a rotated one: the
+    recording stops with that error).
     """
 
     def __init__(self, path, metadata: dict, attachments: dict | None = None,
                  rotate_bytes: int = 0, rotate_seconds: float = 0.0,
-                 start_time_ns: int | None = None, argument: str = "record"):
+                 start_time_ns: int | None = None, argument: str = "record", keep=()):
         if rotate_bytes < 0 or not math.isfinite(rotate_seconds) or rotate_seconds < 0:
             raise UserError(f"rotation = {rotate_bytes!r} bytes / {rotate_seconds!r} s: "
                             "expected numbers >= 0 (0 = no rotation)")
-        self._base = output_file(path, argument)
+        self._base = output_file(path, argument, check=False)     # each file is checked as it is opened
+        self._argument = argument
+        self._keep = tuple(str(k) for k in keep if k)
         self._rotate = bool(rotate_bytes or rotate_seconds)
         self._rotate_bytes = int(rotate_bytes)
         self._rotate_ns = int(round(rotate_seconds * 1e9))
@@ -220,6 +225,7 @@ class Recorder:
         from mcap.writer import CompressionType, Writer
 
         path = self._current_path()
+        check_replaceable(path, f"{self._argument} = {str(path)!r}", self._keep)
         stream = open(path, "wb")       # noqa: SIM115 - closed in _close_file
         try:
             writer = Writer(stream, chunk_size=CHUNK_BYTES, compression=CompressionType.ZSTD)

@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import UserError
+from ..paths import output_file
 from ..messages import BATCH_DURATION, STATE_RATE, TOPIC_ACCEL, TOPIC_CONTACT, TOPIC_DIAGNOSTICS, TOPIC_LOAD, \
     TOPIC_SHAFT_SPEED, TOPIC_STATE, TYPES, batching_error, waveform_qos
 from ..ground_truth import diagnostics_values
@@ -267,6 +268,7 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
     if isinstance(duration, bool) or not (isinstance(duration, numbers.Real) and math.isfinite(duration)
                                           and duration > 0):
         raise UserError(f"--duration = {duration!r}: expected a finite number of seconds > 0")
+    output_file(out, "--out", keep=[scene.source_path])      # before the work, not after it
     if rk4_step is not None and solver != "rk4":
         raise UserError(f"--rk4-step = {rk4_step:g} s: applies to --solver rk4 only (given --solver {solver})")
     sim = Simulator(scene, sample_rate=sample_rate, fidelity=fidelity, seed=seed, solver=solver,
@@ -312,7 +314,7 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
     topics = [TOPIC_SHAFT_SPEED, TOPIC_LOAD, TOPIC_ACCEL, TOPIC_CONTACT, TOPIC_STATE, TOPIC_DIAGNOSTICS]
     meta = recording_metadata(scene, params, seed, sim.selection, topics={t: t for t in topics})
     attachments = {f"{scene.name}.yaml": scene.source_text.encode("utf-8")} if scene.source_text else {}
-    rec = Recorder(out, meta, attachments, start_time_ns=0, argument="--out")
+    rec = Recorder(out, meta, attachments, start_time_ns=0, argument="--out", keep=[scene.source_path])
     for topic in topics:
         rec.add_topic(topic, TYPES[topic], _qos_for(topic, batch_duration))
 
