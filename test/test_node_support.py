@@ -248,3 +248,22 @@ def read_recording(path):
     with open(path, "rb") as f:
         meta = {m.name: dict(m.metadata) for m in make_reader(f).iter_metadata()}
     return out, meta
+
+
+def signal_when(proc, ready, sig, settle_s: float, what: str, timeout_s: float = 60.0):
+    """Wait up to ``timeout_s`` for ``ready()`` while ``proc`` runs (it must not end first;
+    ``what`` names what did not happen), wait ``settle_s`` more, send ``sig``: what
+    ``proc.communicate`` returns.  ``proc`` is killed if anything fails on the way."""
+    try:
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline and not ready():
+            assert proc.poll() is None, proc.communicate()
+            time.sleep(0.05)
+        assert ready(), what
+        time.sleep(settle_s)
+        proc.send_signal(sig)
+        return proc.communicate(timeout=timeout_s)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()

@@ -654,3 +654,26 @@ def test_the_first_file_is_checked_before_anything_is_written(tmp_path):
     with pytest.raises(UserError, match="exists and is not an MCAP recording"):
         Recorder(kept, {"a": "b"})
     assert kept.read_text() == "name: x\n"
+
+
+def test_replace_when_done_moves_each_finished_file_onto_its_name(tmp_path, sim_msgs):
+    """``replace_when_done`` (render's): the files are written as ``<name>.<pid>.partial`` and
+    moved onto their names once finalised, rotation included; ``discard`` removes the partial file
+    and leaves what the name held."""
+    scene, sim, msgs = sim_msgs
+    base = tmp_path / "rot.mcap"
+    rec, _sent = _record(base, scene, sim, msgs, batches=40, rotate_seconds=0.25, replace_when_done=True)
+    assert rec.status["ok"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["rot_000.mcap", "rot_001.mcap"]
+    for k in range(2):
+        with open_recording(rotated_path(base, k)) as r:
+            assert r.metadata["file_index"] == str(k)
+    earlier = rotated_path(base, 0).read_bytes()
+    one = tmp_path / "rot_000.mcap"
+    rec = Recorder(one, {"a": "b"}, replace_when_done=True)
+    rec.add_topic("accel", TYPES["accel"], waveform_qos(0.01))
+    rec.write("accel", msgs.accel(sim.advance(150)), 0)
+    assert one.read_bytes() == earlier                           # untouched while written
+    rec.discard()
+    assert one.read_bytes() == earlier
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["rot_000.mcap", "rot_001.mcap"]

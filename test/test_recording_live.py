@@ -5,10 +5,10 @@ from __future__ import annotations
 import json
 import signal
 import subprocess
-import time
 
 import numpy as np
 import pytest
+from test_node_support import signal_when
 
 from bearing_sim_ros.recording.reader import open_recording
 from bearing_sim_ros.waveform import NS, from_pointcloud2
@@ -24,19 +24,8 @@ def test_live_recording_stopped_by_a_signal_is_readable(sig, bearing_sim_exe, ro
     proc = subprocess.Popen([bearing_sim_exe, "node", "--ros-args", "-p", "scene:=er16k_outer_race",
                              "-p", "fidelity:=kinematic", "-p", f"record:={out}"],
                             env=ros_env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    try:
-        deadline = time.monotonic() + 60
-        while time.monotonic() < deadline and not (out.exists() and out.stat().st_size > 200_000):
-            assert proc.poll() is None, proc.stdout.read()
-            time.sleep(0.1)
-        assert out.exists(), "the node never started recording"
-        time.sleep(0.5)
-        proc.send_signal(sig)
-        log, _ = proc.communicate(timeout=30)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
+    log, _ = signal_when(proc, lambda: out.exists() and out.stat().st_size > 200_000, sig, 0.5,
+                         "the node never started recording")
     assert proc.returncode == 0, log
     with open_recording(out) as rec:                 # footer and summary present
         assert rec.metadata["scene"] == "er16k_outer_race"

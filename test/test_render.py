@@ -4,11 +4,14 @@ mistakes end with exit status 2 and one line."""
 from __future__ import annotations
 
 import math
+import re
 import subprocess
 from pathlib import Path
 
 import numpy as np
 import pytest
+
+from test_node_support import signal_when
 
 from bearing_sim_ros import Simulator, UserError, cli, load_scene
 from bearing_sim_ros.recording.reader import get_message, open_recording
@@ -470,3 +473,55 @@ def test_the_scene_file_and_other_files_that_are_not_recordings_are_not_replaced
     for name, samples in (("a.mcap", 1500), ("empty.mcap", 750)):
         with open_recording(name) as rec:
             assert rec.topics()["/accel"].count == samples // 150
+
+
+@pytest.mark.parametrize("sig, status", [(2, 130), (15, 143)], ids=["SIGINT", "SIGTERM"])
+def test_a_render_stopped_by_a_signal_leaves_a_finalised_file_at_out_and_says_so(tmp_path, ros_env, sig, status):
+    """SIGTERM killed a render (status 143, no word) and left a file without a footer at --out,
+    which report and play refuse.  Ctrl-C and SIGTERM both finalise what was rendered, move it
+    onto --out (it was written beside it, ``<out>.<pid>.partial``), say so in one line and exit
+    130 / 143: the file is shorter than asked."""
+    import sys
+
+    out = tmp_path / "long.mcap"
+    # far longer than the second it runs (the file's size says little: the writer lags the loop)
+    proc = subprocess.Popen([sys.executable, "-m", "bearing_sim_ros.cli", "render", "er16k_outer_race",
+                             "--duration", "3000", "--fidelity", "kinematic", "--out", str(out)],
+                            env=ros_env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    def rendering_for_a_second():
+        # nothing at --out until it is complete
+        return any(tmp_path.glob("long.mcap*")) and not out.exists()
+
+    stdout, stderr = signal_when(proc, rendering_for_a_second, sig, 1.0, "no partial file")
+    assert proc.returncode == status, stderr
+    how = "Ctrl-C" if sig == 2 else "SIGTERM"
+    line = re.fullmatch(rf"interrupted \({how}\): '{re.escape(str(out))}' holds the first ([\d.]+) s, finalised\n",
+                        stderr)
+    assert line, stderr
+    assert stdout == ""
+    assert [p.name for p in tmp_path.iterdir()] == ["long.mcap"]           # no partial file left
+    with open_recording(out) as rec:
+        assert rec.topics()["/accel"].count == round(float(line.group(1)) * FS / 150)
+
+
+def test_a_render_that_fails_keeps_the_earlier_recording_at_out(tmp_path, monkeypatch):
+    """A render that failed after it started writing unlinked --out, which (opened "wb") may have
+    held an earlier good recording: the earlier file stays, byte for byte, and the partial file
+    goes."""
+    out = tmp_path / "a.mcap"
+    render("er16k_healthy", 0.2, out, fidelity="kinematic", progress=False)
+    before = out.read_bytes()
+    calls = []
+    advance = Simulator.advance
+
+    def failing(self, *a, **kw):
+        calls.append(1)
+        if len(calls) > 30:
+            raise RuntimeError("the model failed")
+        return advance(self, *a, **kw)
+
+    monkeypatch.setattr(Simulator, "advance", failing)
+    with pytest.raises(RuntimeError, match="the model failed"):
+        render("er16k_healthy", 1.0, out, fidelity="kinematic", progress=False)
+    assert out.read_bytes() == before
+    assert [p.name for p in tmp_path.iterdir()] == ["a.mcap"]

@@ -22,6 +22,13 @@ Rotation (optional): ``rotate_bytes`` (serialised message bytes per file) and ``
 (log-time span per file) start a new file ``<stem>_001.mcap``, ``<stem>_002.mcap``... (the first
 is ``<stem>_000.mcap``).  Every file is complete on its own (schemas, channels, metadata,
 attachments), so a hard kill loses at most the file being written.
+
+Replace when done (optional, ``replace_when_done``; what ``render`` uses): each file is written
+as ``<name>.<pid>.partial`` beside it and moved onto its name (``os.replace``) once finalised,
+so the name only ever holds a complete file, and an earlier recording there stays until the new
+one is complete; ``discard`` (a failed render) removes the partial file and leaves the name
+alone.  A device or a pipe (/dev/null) is written directly.  Without it (the live node) the file
+grows under its own name while it is written.
 """
 from __future__ import annotations
 
@@ -90,7 +97,9 @@ class Recorder:
     many bytes of messages (0 = never); rotate_seconds: after this span of log time (s, 0 = never);
     start_time_ns: log time of the attachments (default: now; offline renders pass 0 so that the
     file does not depend on the wall clock); argument: how errors name the path (the node's
-    ``record`` parameter, render's ``--out``); keep: paths never written (the scene's file).
+    ``record`` parameter, render's ``--out``); keep: paths never written (the scene's file);
+    replace_when_done: write each file under a temporary name and move it onto its own once
+    finalised (see the module docstring).
     Each file is checked as it is opened (``paths.check_replaceable``): an existing file that is
     not an MCAP recording is not replaced (the first file: a UserError; a rotated one: the
     recording stops with that error).
@@ -98,13 +107,17 @@ class Recorder:
 
     def __init__(self, path, metadata: dict, attachments: dict | None = None,
                  rotate_bytes: int = 0, rotate_seconds: float = 0.0,
-                 start_time_ns: int | None = None, argument: str = "record", keep=()):
+                 start_time_ns: int | None = None, argument: str = "record", keep=(),
+                 replace_when_done: bool = False):
         if rotate_bytes < 0 or not math.isfinite(rotate_seconds) or rotate_seconds < 0:
             raise UserError(f"rotation = {rotate_bytes!r} bytes / {rotate_seconds!r} s: "
                             "expected numbers >= 0 (0 = no rotation)")
         self._base = output_file(path, argument, check=False)     # each file is checked as it is opened
         self._argument = argument
         self._keep = tuple(str(k) for k in keep if k)
+        self._replace_when_done = bool(replace_when_done)
+        self._writing = None              # (path written, its final name) of the open file
+        self._discard = False
         self._rotate = bool(rotate_bytes or rotate_seconds)
         self._rotate_bytes = int(rotate_bytes)
         self._rotate_ns = int(round(rotate_seconds * 1e9))
@@ -176,6 +189,13 @@ class Recorder:
         self._enqueued_bytes += len(data)
         self._queue.append(("msg", name, data, int(log_time_ns)))
 
+    def discard(self) -> None:
+        """Stop without finalising the open file: with ``replace_when_done`` its partial file is
+        removed and its final name left as it was (an earlier recording stays).  Files already
+        finalised (rotation) are kept."""
+        self._discard = True
+        self.close()
+
     def close(self) -> None:
         """Write everything queued and finalise the file(s).  Idempotent; does not take any lock
         that ``write`` holds, so it may run from a signal or shutdown handler."""
@@ -226,7 +246,11 @@ class Recorder:
 
         path = self._current_path()
         check_replaceable(path, f"{self._argument} = {str(path)!r}", self._keep)
-        stream = open(path, "wb")       # noqa: SIM115 - closed in _close_file
+        written = path
+        if self._replace_when_done and (not path.exists() or path.is_file()):
+            written = path.with_name(f"{path.name}.{os.getpid()}.partial")
+        stream = open(written, "wb")    # noqa: SIM115 - closed in _close_file
+        self._writing = (written, path)
         try:
             writer = Writer(stream, chunk_size=CHUNK_BYTES, compression=CompressionType.ZSTD)
             writer.start(profile=PROFILE, library=f"bearing_sim_ros {self._metadata.get('package_version', '')}".strip())
@@ -240,6 +264,7 @@ class Recorder:
                                       media_type=media, data=bytes(data))
         except BaseException:
             stream.close()
+            self._remove_partial()
             raise
         self._stream, self._writer = stream, writer
         self._schema_ids: dict = {}
@@ -276,6 +301,27 @@ class Recorder:
             os.fsync(stream.fileno())
         finally:
             stream.close()
+        written, path = self._writing
+        if written != path:
+            os.replace(written, path)
+            self._writing = None
+            try:                          # the rename itself on disk (best effort)
+                fd = os.open(path.parent, os.O_RDONLY)
+                try:
+                    os.fsync(fd)
+                finally:
+                    os.close(fd)
+            except OSError:
+                pass
+
+    def _remove_partial(self) -> None:
+        """Remove the temporary file of ``replace_when_done`` (never a file under its own name)."""
+        if self._writing is not None and self._writing[0] != self._writing[1]:
+            try:
+                self._writing[0].unlink(missing_ok=True)
+            except OSError:
+                pass
+        self._writing = None
 
     def _abandon_file(self) -> None:
         stream = self._stream
@@ -285,6 +331,7 @@ class Recorder:
                 stream.close()
             except OSError:
                 pass
+        self._remove_partial()
 
     def _maybe_rotate(self, log_time_ns: int) -> None:
         if not self._rotate or self._file_t0 is None:
@@ -324,7 +371,7 @@ class Recorder:
                 self._drained_bytes += len(data)
             if kind == "close":
                 break
-            if self._error:
+            if self._error or self._discard:
                 if kind == "msg":
                     self._dropped_writer += 1
                 continue
@@ -335,7 +382,7 @@ class Recorder:
                 if kind == "msg":
                     self._dropped_writer += 1
                 self._abandon_file()
-        if not self._error:
+        if not self._error and not self._discard:
             try:
                 self._close_file()
             except Exception as exc:  # noqa: BLE001

@@ -17,12 +17,14 @@ one batch).
 """
 from __future__ import annotations
 
+import contextlib
 import math
 import numbers
 import shlex
+import signal
 import sys
+import threading
 import time
-from pathlib import Path
 
 import numpy as np
 
@@ -34,6 +36,62 @@ from ..ground_truth import diagnostics_values
 from ..waveform import NS
 
 NODE_NAME = "bearing_sim"
+EXIT_INTERRUPTED = {signal.SIGINT: 130, signal.SIGTERM: 143}    # 128 + the signal, as the shell says
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM during a render: handled as Ctrl-C is (``render_command`` raises it)."""
+
+    signum = signal.SIGTERM
+
+
+@contextlib.contextmanager
+def _stop_at_batch_end():
+    """Ctrl-C and SIGTERM during the render loop: noted (``.signum``), and the loop stops at the
+    end of the batch in progress, so that the file holds whole batches and the seconds said are
+    exact (raised at once, the exception could fall between a batch's messages).  Only where
+    they would otherwise interrupt or kill (Python's default handlers, or ``render_command``'s),
+    and in the main thread: a caller's own handlers are left alone."""
+    class Stop:
+        signum = None
+
+    stop = Stop()
+    if threading.current_thread() is not threading.main_thread():
+        yield stop
+        return
+
+    def note(signum, _frame):
+        stop.signum = signum
+
+    saved = {}
+    for sig, ours in ((signal.SIGINT, signal.default_int_handler), (signal.SIGTERM, signal.SIG_DFL)):
+        current = signal.getsignal(sig)
+        if current is ours or current is _raise_terminated:
+            saved[sig] = signal.signal(sig, note)
+    try:
+        yield stop
+    finally:
+        for sig, handler in saved.items():
+            signal.signal(sig, handler)
+
+
+def _raise_terminated(_signum, _frame):
+    raise Terminated()
+
+
+@contextlib.contextmanager
+def _signals_held():
+    """Ctrl-C and SIGTERM ignored while a recording is finalised (a second Ctrl-C must not
+    leave it half done); only in the main thread, where Python runs signal handlers."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    saved = {sig: signal.signal(sig, signal.SIG_IGN) for sig in EXIT_INTERRUPTED}
+    try:
+        yield
+    finally:
+        for sig, handler in saved.items():
+            signal.signal(sig, handler)
 
 
 def profile_at(scene, t: float) -> tuple:
@@ -314,10 +372,10 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
     topics = [TOPIC_SHAFT_SPEED, TOPIC_LOAD, TOPIC_ACCEL, TOPIC_CONTACT, TOPIC_STATE, TOPIC_DIAGNOSTICS]
     meta = recording_metadata(scene, params, seed, sim.selection, topics={t: t for t in topics})
     attachments = {f"{scene.name}.yaml": scene.source_text.encode("utf-8")} if scene.source_text else {}
-    rec = Recorder(out, meta, attachments, start_time_ns=0, argument="--out", keep=[scene.source_path])
-    for topic in topics:
-        rec.add_topic(topic, TYPES[topic], _qos_for(topic, batch_duration))
-
+    # written as <out>.<pid>.partial and moved onto out when finalised: out only ever holds a
+    # complete file, and an earlier recording there stays until then
+    rec = Recorder(out, meta, attachments, start_time_ns=0, argument="--out", keep=[scene.source_path],
+                   replace_when_done=True)
     bar = _Progress(total / sample_rate, sys.stderr.isatty() if progress is None else progress)
     t_wall0 = time.perf_counter()
     frame = msgs.frame_id
@@ -325,50 +383,70 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
     next_diag_s = 1
     done = 0
     try:
-        while done < total:
-            n = min(n_batch, total - done)
-            t0_ns = msgs.stamp_ns(done)
-            end_t = (done + n) / sample_rate
-            speed, load = profile_at(scene, end_t)
-            rec.write(TOPIC_SHAFT_SPEED, speed_message(speed), t0_ns)
-            rec.write(TOPIC_LOAD, load_message(load, t0_ns, frame), t0_ns)
-            batch = sim.advance(n, shaft_speed=speed, radial_load=load)
-            done += n
-            pub_ns = msgs.stamp_ns(done)         # the live node publishes when the batch is complete
-            rec.write(TOPIC_ACCEL, msgs.accel(batch), pub_ns)
-            rec.write(TOPIC_CONTACT, msgs.contact_forces(batch), pub_ns)
-            if math.floor(done * state_rate / sample_rate) > math.floor((done - n) * state_rate / sample_rate):
-                rec.write(TOPIC_STATE, msgs.state(pub_ns), pub_ns)
-            means.add(batch)
-            while done >= next_diag_s * sample_rate:
-                # the live node's keys (nodes/bearing_sim_node.py); what depends on the wall clock
-                # or the output path is left out so that the file stays byte-identical
-                values = {"real_time_factor": "nan", "real_time": "false", "mode": "render",
-                          "overruns": 0, "overruns_last_period": 0, "lag_s": "0.000000",
-                          "worst_lag_s": "0.000000", **tier_values(sim), **defect_values(sim),
-                          "shaft_speed_rad_s": f"{sim.shaft_speed:.6g}",
-                          "radial_load_n": " ".join(f"{v:.6g}" for v in sim.radial_load),
-                          "simulated_s": f"{sim.time:.6f}", "rejected_inputs": 0,
-                          "recording": "ok"}
-                values.update(means.values())
-                means.reset()
-                rec.write(TOPIC_DIAGNOSTICS, diagnostics_message(pub_ns, values, 0, "ok"), pub_ns)
-                next_diag_s += 1
-            bar.update(done / sample_rate)
-    except KeyboardInterrupt:
-        # Ctrl-C: keep what was rendered, finalised, and say so
-        rec.close()
+        for topic in topics:
+            rec.add_topic(topic, TYPES[topic], _qos_for(topic, batch_duration))
+        with _stop_at_batch_end() as stop:
+            while done < total:
+                if stop.signum is not None:         # a whole batch each, so done is exact
+                    raise Terminated() if stop.signum == signal.SIGTERM else KeyboardInterrupt()
+                n = min(n_batch, total - done)
+                t0_ns = msgs.stamp_ns(done)
+                end_t = (done + n) / sample_rate
+                speed, load = profile_at(scene, end_t)
+                rec.write(TOPIC_SHAFT_SPEED, speed_message(speed), t0_ns)
+                rec.write(TOPIC_LOAD, load_message(load, t0_ns, frame), t0_ns)
+                batch = sim.advance(n, shaft_speed=speed, radial_load=load)
+                done += n
+                pub_ns = msgs.stamp_ns(done)         # the live node publishes when the batch is complete
+                rec.write(TOPIC_ACCEL, msgs.accel(batch), pub_ns)
+                rec.write(TOPIC_CONTACT, msgs.contact_forces(batch), pub_ns)
+                if math.floor(done * state_rate / sample_rate) > math.floor((done - n) * state_rate / sample_rate):
+                    rec.write(TOPIC_STATE, msgs.state(pub_ns), pub_ns)
+                means.add(batch)
+                while done >= next_diag_s * sample_rate:
+                    # the live node's keys (nodes/bearing_sim_node.py); what depends on the wall clock
+                    # or the output path is left out so that the file stays byte-identical
+                    values = {"real_time_factor": "nan", "real_time": "false", "mode": "render",
+                              "overruns": 0, "overruns_last_period": 0, "lag_s": "0.000000",
+                              "worst_lag_s": "0.000000", **tier_values(sim), **defect_values(sim),
+                              "shaft_speed_rad_s": f"{sim.shaft_speed:.6g}",
+                              "radial_load_n": " ".join(f"{v:.6g}" for v in sim.radial_load),
+                              "simulated_s": f"{sim.time:.6f}", "rejected_inputs": 0,
+                              "recording": "ok"}
+                    values.update(means.values())
+                    means.reset()
+                    rec.write(TOPIC_DIAGNOSTICS, diagnostics_message(pub_ns, values, 0, "ok"), pub_ns)
+                    next_diag_s += 1
+                bar.update(done / sample_rate)
+    except KeyboardInterrupt as exc:
+        # Ctrl-C or SIGTERM: keep what was rendered, finalised, and say so (nothing rendered:
+        # nothing replaces what out held)
+        how = "SIGTERM" if isinstance(exc, Terminated) else "Ctrl-C"
+        with _signals_held():
+            if done:
+                rec.close()
+            else:
+                rec.discard()
         bar.done()
-        print(f"interrupted: {str(out)!r} holds the first {done / sample_rate:g} s", file=sys.stderr)
+        st = rec.status
+        if not done:
+            text = f"nothing rendered, {str(out)!r} left as it was"
+        elif st["ok"]:
+            text = f"{str(out)!r} holds the first {done / sample_rate:g} s, finalised"
+        else:
+            text = st["error"]
+        print(f"interrupted ({how}): {text}", file=sys.stderr)
+        exc.reported = True
         raise
     except BaseException:
-        # a failed render (solver diverged, ...) must not leave a short file that looks complete
-        rec.close()
+        # a failed render (solver diverged, ...) must not leave a short file that looks complete:
+        # its partial file goes, and out keeps what it held
+        with _signals_held():
+            rec.discard()
         bar.done()
-        for f in rec.status["files"]:
-            Path(f).unlink(missing_ok=True)
         raise
-    rec.close()
+    with _signals_held():
+        rec.close()
     bar.update(done / sample_rate, force=True)
     bar.done()
     wall = time.perf_counter() - t_wall0
@@ -381,18 +459,38 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
             "solver_unused": solver_unused}
 
 
+@contextlib.contextmanager
+def _terminated_on_sigterm():
+    """SIGTERM raises ``Terminated`` (a KeyboardInterrupt), so that a render ends as on Ctrl-C:
+    what was rendered, finalised (it killed the process and left a file without a footer)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    saved = signal.signal(signal.SIGTERM, _raise_terminated)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, saved)
+
+
 def render_command(args) -> int:
     """CLI entry: ``bearing-sim render S --duration SEC --out F.mcap [...]``."""
     from ..physics.skidding import RK4Diverged
     from ..scene import load_scene
     from ..simulator import OversampleForAuto
 
-    scene = load_scene(args.scene)
     out = str(args.out)
     try:
-        summary = render(scene, float(args.duration), out, fidelity=args.fidelity, seed=int(args.seed),
-                         sample_rate=float(args.sample_rate), solver=args.solver,
-                         oversample=args.oversample, rk4_step=args.rk4_step)
+        with _terminated_on_sigterm():
+            scene = load_scene(args.scene)
+            summary = render(scene, float(args.duration), out, fidelity=args.fidelity, seed=int(args.seed),
+                             sample_rate=float(args.sample_rate), solver=args.solver,
+                             oversample=args.oversample, rk4_step=args.rk4_step)
+    except KeyboardInterrupt as exc:
+        # 130 / 143: the file holds less than asked, and a script should know
+        if not getattr(exc, "reported", False):
+            print(f"interrupted: nothing rendered, {out!r} left as it was", file=sys.stderr)
+        return EXIT_INTERRUPTED[getattr(exc, "signum", signal.SIGINT)]
     except RK4Diverged as exc:
         # the model words its advice for the Python API; here the knobs are options
         raise UserError(exc.worded("--rk4-step", "--solver default")) from None
