@@ -30,7 +30,7 @@ import numpy as np
 
 from .analysis.envelope import fault_lines
 from .errors import UserError
-from .paths import output_folder
+from .paths import output_folder, writing_into
 from .scene import RPM, load_scene
 
 
@@ -432,16 +432,18 @@ def bench_command(args) -> int:
         result = calibrate_fidelity(progress=say)
         target = config_dir() / "fidelity.yaml"
         write_calibration(result, target)
-        write_calibration(result, out / "fidelity.yaml")
+        with writing_into(out):
+            write_calibration(result, out / "fidelity.yaml")
         print(f"fit: error = {result['floor']:.4g} + {result['clearance_gain']:.4g} C_r/d "
               f"+ {result['scale']:.4g} chi^{result['power']:.3g} "
               f"(worst point off by x{result['worst_factor']:.2f}); wrote {target}")
         return 0
     result = study(quick=args.quick, progress=say)
     result["default_against_rk4"] = default_against_rk4(result["rows"])
-    (out / "bench.json").write_text(json.dumps(result, indent=2))
-    (out / "bench.md").write_text(markdown(result))
-    plot(result, out / "bench.png")
+    with writing_into(out):           # after minutes of work: one line, not a traceback
+        (out / "bench.json").write_text(json.dumps(result, indent=2))
+        (out / "bench.md").write_text(markdown(result))
+        plot(result, out / "bench.png")
     print(markdown(result))
     print(f"wrote {out / 'bench.md'}, {out / 'bench.json'}, {out / 'bench.png'}")
     return 0

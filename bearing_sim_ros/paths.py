@@ -1,9 +1,11 @@
 """Where the shipped configuration lives: the source tree, or share/ of an installed package."""
 from __future__ import annotations
 
+import contextlib
 import os
 import stat
 import sys
+import tempfile
 from pathlib import Path
 
 PACKAGE = "bearing_sim_ros"
@@ -32,7 +34,9 @@ def scenes_dir() -> Path:
 
 def output_folder(text, option: str = "--out") -> Path:
     """The folder ``text`` (the value of ``option``) for a command's files, created if missing;
-    a one-line UserError naming the option when it is empty, a file or cannot be created."""
+    a one-line UserError naming the option when it is empty, a file, cannot be created or cannot
+    be written in (a file is made and removed there: ``report --out /proc/self`` found out after
+    all its work, and bench after minutes)."""
     from .errors import UserError
 
     where = f"{option} = {str(text)!r}"
@@ -45,7 +49,28 @@ def output_folder(text, option: str = "--out") -> Path:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise UserError(f"{where}: cannot create the folder ({exc.strerror})") from None
+    try:
+        fd, probe = tempfile.mkstemp(dir=out, prefix=".bearing-sim-probe-")
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        raise UserError(f"{where}: cannot write in the folder ({exc.strerror})") from None
     return out
+
+
+@contextlib.contextmanager
+def writing_into(folder, option: str = "--out"):
+    """Around a command's writes into ``folder`` (``output_folder``): an OSError (full disk,
+    the folder gone or made read-only meanwhile) becomes a one-line UserError naming the option,
+    the file and why, not a traceback."""
+    from .errors import UserError
+
+    try:
+        yield
+    except OSError as exc:
+        name = f" {exc.filename}" if exc.filename else ""
+        raise UserError(f"{option} = {str(folder)!r}: cannot write{name} "
+                        f"({exc.strerror or exc.__class__.__name__})") from None
 
 
 def output_file(text, option: str = "--out", keep=(), check: bool = True) -> Path:

@@ -187,6 +187,9 @@ def test_tolerance_outside_the_scenes_range_is_named(tolerance):
     ("", ["--out = ''", "expected the path of a folder"]),              # wrote into the current folder
     ("a_file", ["--out = ", "a_file", "exists and is not a folder"]),
     ("/proc/no_folder_here", ["--out = '/proc/no_folder_here'", "cannot create the folder"]),
+    # a folder that exists and cannot be written: report ended in a FileNotFoundError traceback
+    # after all its work, bench after minutes of it
+    ("/proc/self", ["--out = '/proc/self'", "cannot write in the folder"]),
 ])
 @pytest.mark.parametrize("command", ["report", "bench", "validate"])
 def test_output_folders_are_checked_before_the_work(tmp_path, capsys, monkeypatch, command, out, words):
@@ -212,6 +215,35 @@ def test_output_folders_are_checked_before_the_work(tmp_path, capsys, monkeypatc
     for w in words:
         assert w in line, line
     assert {p.name for p in tmp_path.iterdir()} <= {"a_file", "rec.mcap", "normal_0_97.mat"}    # nothing written
+
+
+@pytest.mark.parametrize("command", ["report", "bench"])
+def test_a_failed_final_write_is_one_line(tmp_path, capsys, monkeypatch, command):
+    """A full disk (or the folder made read-only) during the final writes ended in a traceback,
+    exit 1: it is one line naming --out and why, exit 2."""
+    import errno
+
+    def full(*_a, **_kw):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.chdir(tmp_path)
+    if command == "report":
+        from bearing_sim_ros.analysis import report
+        from bearing_sim_ros.recording.render import render
+
+        render("er16k_healthy", 0.05, tmp_path / "rec.mcap", fidelity="kinematic")
+        monkeypatch.setattr(report, "plot_spectrum", full)
+        argv = ["report", "rec.mcap", "--out", "rep"]
+    else:
+        from bearing_sim_ros import bench
+
+        monkeypatch.setattr(bench, "study", lambda **_kw: {"rows": []})
+        monkeypatch.setattr(bench, "default_against_rk4", lambda rows: {})
+        monkeypatch.setattr(bench, "plot", full)
+        monkeypatch.setattr(bench, "markdown", lambda result: "")
+        argv = ["bench", "--quick", "--out", "rep"]
+    code, line = _user_mistake(capsys, argv)
+    assert code == 2 and line == "error: --out = 'rep': cannot write (No space left on device)", line
 
 
 @pytest.mark.parametrize("out, words", [

@@ -38,7 +38,7 @@ import numpy as np
 
 from .. import ground_truth
 from ..errors import UserError
-from ..paths import output_folder
+from ..paths import output_folder, writing_into
 from ..recording.reader import open_recording
 from ..waveform import NS, from_pointcloud2
 from .envelope import DEFAULT_BAND, DETECTION_THRESHOLD, FAULT_LINES, diagnose, envelope_spectrum, statistics
@@ -653,19 +653,20 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
     freqs = {**rolling, **d.signal_frequencies} if rolling else {}
     verdict = diagnose(x, fs, freqs) if freqs and x.size > fs * 0.2 else None
 
-    plots = [plot_waveform(d, freqs, out, meta), plot_spectrum(d, out, meta)]
-    if verdict is not None:
-        plots.append(plot_envelope(x, fs, freqs, verdict, ch, out, meta))
-    plots.append(plot_operating_point(d, scene, out, meta))
-    cage = plot_cage(d, scene, out, meta)
-    if cage:
-        plots.append(cage)
-    timeline = verdict_timeline(d, x, scene, window_s, speed) if verdict is not None else []
-    onset = fault_onset(d.truth)
-    detected = first_detection(timeline)
-    if timeline:
-        plots.append(plot_timeline(timeline, d.truth, [df.kind for df in scene.defects], onset, detected,
-                                   out, meta))
+    with writing_into(out):             # a full disk: one line, not a traceback
+        plots = [plot_waveform(d, freqs, out, meta), plot_spectrum(d, out, meta)]
+        if verdict is not None:
+            plots.append(plot_envelope(x, fs, freqs, verdict, ch, out, meta))
+        plots.append(plot_operating_point(d, scene, out, meta))
+        cage = plot_cage(d, scene, out, meta)
+        if cage:
+            plots.append(cage)
+        timeline = verdict_timeline(d, x, scene, window_s, speed) if verdict is not None else []
+        onset = fault_onset(d.truth)
+        detected = first_detection(timeline)
+        if timeline:
+            plots.append(plot_timeline(timeline, d.truth, [df.kind for df in scene.defects], onset, detected,
+                                       out, meta))
     changes = truth_changes(d.truth)
 
     expected = sorted({df.kind for df in scene.defects}) if scene is not None else []
@@ -716,8 +717,9 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
         "fault_detections": fault_detections(timeline, d.truth),
         "plots": plots,
     }
-    (out / "summary.json").write_text(json.dumps(summary, indent=2, default=_json_default) + "\n")
-    (out / "summary.md").write_text(_markdown(summary))
+    with writing_into(out):
+        (out / "summary.json").write_text(json.dumps(summary, indent=2, default=_json_default) + "\n")
+        (out / "summary.md").write_text(_markdown(summary))
     return summary
 
 

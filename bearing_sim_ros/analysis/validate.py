@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..paths import output_folder
+from ..paths import output_folder, writing_into
 from . import envelope as env
 from .cwru import Recording, find_recordings, read_recording, shaft_order_check
 
@@ -559,7 +559,8 @@ def run_validation(cwru, out=None, seconds: float | None = None, extras: bool = 
         zone = load_zone_check(outer, extra_seconds)
         robust = robustness(seconds=extra_seconds)
     if out is not None:
-        write_report(out, rows, robust, zone)
+        with writing_into(out):
+            write_report(out, rows, robust, zone)
     return rows
 
 
