@@ -329,6 +329,13 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
     output_file(out, "--out", keep=[scene.source_path])      # before the work, not after it
     if rk4_step is not None and solver != "rk4":
         raise UserError(f"--rk4-step = {rk4_step:g} s: applies to --solver rk4 only (given --solver {solver})")
+    if solver != "default" and (scene.fidelity if fidelity == "auto" else fidelity) == "kinematic":
+        # said in the CLI's words before the Simulator says it in the API's
+        given = f"--solver {solver}" + (f" --rk4-step {float(rk4_step)!r}" if rk4_step is not None else "")
+        asked_by = ("--fidelity kinematic" if fidelity == "kinematic"
+                    else f"scene {scene.name}'s fidelity.tier: kinematic")
+        raise UserError(f"{given}: the solver applies to the skidding tier only, and {asked_by} runs the "
+                        f"kinematic tier; drop {given.split(' ', 1)[0]} or use --fidelity skidding")
     sim = Simulator(scene, sample_rate=sample_rate, fidelity=fidelity, seed=seed, solver=solver,
                     oversample=oversample, rk4_step=rk4_step)
     # the node's rule for its parameters of the same names (a render's batching also runs live);
@@ -343,12 +350,6 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
                         f"expected at least {1.0 / sample_rate:.6g} s")
     n_batch = int(round(sample_rate * batch_duration))
     solver_unused = solver != "default" and not _runs_skidding(scene, sim, duration, sample_rate, n_batch)
-    if solver_unused and "kinematic" in (fidelity, scene.fidelity):
-        given = f"--solver {solver}" + (f" --rk4-step {float(rk4_step)!r}" if rk4_step is not None else "")
-        asked_by = ("--fidelity kinematic" if fidelity == "kinematic"
-                    else f"scene {scene.name}'s fidelity.tier: kinematic")
-        raise UserError(f"{given}: the solver applies to the skidding tier only, and {asked_by} runs the "
-                        f"kinematic tier; drop {given.split(' ', 1)[0]} or use --fidelity skidding")
     if solver_unused:
         # auto keeps to the kinematic tier: the file is the default solver's, and says so
         solver, rk4_step = "default", None
