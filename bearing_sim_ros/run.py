@@ -19,7 +19,7 @@ import numpy as np
 
 from .errors import UserError
 from .paths import output_file
-from .teardown import teardown_watchdog
+from .teardown import signal_handlers, teardown_watchdog
 
 ANALYSIS_MAX_S = 30.0       # s of signal (the end of the recording) that the summary analyses
 
@@ -191,10 +191,7 @@ def run_command(args) -> int:
         raise UserError(f"--out = {out!r}: {figures['error']}")
     # the recording is complete.  A second Ctrl-C while its tail is read for the summary (about a
     # second) surfaced inside rclpy's deserialiser as a TypeError traceback: it waits instead
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    try:
+    with signal_handlers({signal.SIGINT: signal.SIG_IGN}):
         tail = _record_tail(figures["path"], ANALYSIS_MAX_S)
         print(summarise(scene, tail, figures, figures["path"]), flush=True)
-    finally:
-        signal.signal(signal.SIGINT, previous)
     return 0

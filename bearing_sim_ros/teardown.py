@@ -7,10 +7,15 @@ hang forever there: its work is done by then (the recording closed, the messages
 ``TEARDOWN_TIMEOUT`` the Python stacks of all threads go to stderr, which says where it hung, and
 the process exits with status 1.  faulthandler's watchdog is a C thread: it fires even if the hang
 holds the GIL.
+
+And ``signal_handlers``: handlers for a block of a command's shutdown (``render`` finishing at a
+batch's end, ``render`` and ``run`` holding Ctrl-C while a recording is finalised or read).
 """
 from __future__ import annotations
 
 import faulthandler
+import signal
+import threading
 from contextlib import contextmanager
 
 TEARDOWN_TIMEOUT = 30.0      # s: the longest the teardown may take
@@ -25,3 +30,19 @@ def teardown_watchdog():
         yield
     finally:
         faulthandler.cancel_dump_traceback_later()
+
+
+@contextmanager
+def signal_handlers(handlers: dict):
+    """Install ``handlers`` ({signal: handler}) for the block and put the previous ones back
+    after it.  In the main thread only, where Python runs signal handlers and may set them;
+    elsewhere (a caller's worker thread) the block runs with the handlers as they are."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    saved = {sig: signal.signal(sig, handler) for sig, handler in handlers.items()}
+    try:
+        yield
+    finally:
+        for sig, handler in saved.items():
+            signal.signal(sig, handler)

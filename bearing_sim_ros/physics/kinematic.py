@@ -973,16 +973,14 @@ class KinematicModel:
             return E[:NSTATE, :NSTATE], [E[:NSTATE, NSTATE + j * NINPUT:NSTATE + (j + 1) * NINPUT]
                                           * math.factorial(j) for j in range(order)]
 
-        lagrange = _lagrange
-
         def weights(Es, corrector, predictor):
             """what the residual at each corrector node, then each predictor node, adds"""
-            vc, vp = lagrange(corrector), lagrange(predictor)
+            vc, vp = _lagrange(corrector), _lagrange(predictor)
             wc = [sum(Es[j] * vc[j, i] for j in range(order)) for i in range(order)]
             wp = [sum(Es[j] * vp[j, i] for j in range(len(predictor))) for i in range(len(predictor))]
             return wc + wp
 
-        vc = lagrange(CORRECTOR_NODES)
+        vc = _lagrange(CORRECTOR_NODES)
         phi, Es = blocks(1.0)
         xb, yb = list(X_BLOCK), list(Y_BLOCK)
         # the blocks must decouple (diagonal kb, resonator on y only)

@@ -23,13 +23,13 @@ import numbers
 import shlex
 import signal
 import sys
-import threading
 import time
 
 import numpy as np
 
 from ..errors import UserError
 from ..paths import output_file
+from ..teardown import signal_handlers
 from ..messages import BATCH_DURATION, STATE_RATE, TOPIC_ACCEL, TOPIC_CONTACT, TOPIC_DIAGNOSTICS, TOPIC_LOAD, \
     TOPIC_SHAFT_SPEED, TOPIC_STATE, TYPES, batching_error, waveform_qos
 from ..ground_truth import diagnostics_values
@@ -56,42 +56,24 @@ def _stop_at_batch_end():
         signum = None
 
     stop = Stop()
-    if threading.current_thread() is not threading.main_thread():
-        yield stop
-        return
 
     def note(signum, _frame):
         stop.signum = signum
 
-    saved = {}
-    for sig, ours in ((signal.SIGINT, signal.default_int_handler), (signal.SIGTERM, signal.SIG_DFL)):
-        current = signal.getsignal(sig)
-        if current is ours or current is _raise_terminated:
-            saved[sig] = signal.signal(sig, note)
-    try:
+    ours = {signal.SIGINT: signal.default_int_handler, signal.SIGTERM: signal.SIG_DFL}
+    noted = {sig: note for sig, default in ours.items() if signal.getsignal(sig) in (default, _raise_terminated)}
+    with signal_handlers(noted):
         yield stop
-    finally:
-        for sig, handler in saved.items():
-            signal.signal(sig, handler)
 
 
 def _raise_terminated(_signum, _frame):
     raise Terminated()
 
 
-@contextlib.contextmanager
 def _signals_held():
     """Ctrl-C and SIGTERM ignored while a recording is finalised (a second Ctrl-C must not
-    leave it half done); only in the main thread, where Python runs signal handlers."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    saved = {sig: signal.signal(sig, signal.SIG_IGN) for sig in EXIT_INTERRUPTED}
-    try:
-        yield
-    finally:
-        for sig, handler in saved.items():
-            signal.signal(sig, handler)
+    leave it half done)."""
+    return signal_handlers({sig: signal.SIG_IGN for sig in EXIT_INTERRUPTED})
 
 
 def profile_at(scene, t: float) -> tuple:
@@ -460,18 +442,10 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
             "solver_unused": solver_unused}
 
 
-@contextlib.contextmanager
 def _terminated_on_sigterm():
     """SIGTERM raises ``Terminated`` (a KeyboardInterrupt), so that a render ends as on Ctrl-C:
     what was rendered, finalised (it killed the process and left a file without a footer)."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    saved = signal.signal(signal.SIGTERM, _raise_terminated)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, saved)
+    return signal_handlers({signal.SIGTERM: _raise_terminated})
 
 
 def render_command(args) -> int:
