@@ -73,6 +73,28 @@ def writing_into(folder, option: str = "--out"):
                         f"({exc.strerror or exc.__class__.__name__})") from None
 
 
+def input_file(text, where: str, expected: str, error=None) -> Path:
+    """The existing regular file ``text`` to read; else a one-line ``error`` (a UserError class,
+    default UserError) ``{where}: <what it is>; {expected}``: missing, a folder, not a regular
+    file (a device, a pipe) or not to be looked at.  A folder used to be called "no such file",
+    which sends the user looking for a typo in a path that exists."""
+    from .errors import UserError
+
+    path = Path(text)
+    try:
+        mode = path.stat().st_mode
+    except (FileNotFoundError, NotADirectoryError):
+        problem = "no such file"
+    except OSError as exc:
+        problem = f"cannot read it ({exc.strerror or exc.__class__.__name__})"
+    else:
+        if stat.S_ISREG(mode):
+            return path
+        problem = "is a folder, not a file" if stat.S_ISDIR(mode) else \
+            "is not a regular file (a device, pipe or socket)"
+    raise (error or UserError)(f"{where}: {problem}; {expected}")
+
+
 def output_file(text, option: str = "--out", keep=(), check: bool = True) -> Path:
     """The path ``text`` (the value of ``option``) of an .mcap file to write; a one-line
     UserError naming the option when it is empty or a folder (``open`` said

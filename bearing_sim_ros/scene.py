@@ -17,7 +17,7 @@ from typing import Any
 from .catalog import Bearing, bearing_from_mapping, get_bearing
 from .errors import SceneError, short_repr
 from .limits import LOAD_MULTIPLE_C0, MAX_LOAD, MAX_SPEED_RPM, NDM_LIMIT, RPM, InputLimits
-from .paths import scenes_dir
+from .paths import input_file, scenes_dir
 
 DEFECT_KINDS = ("inner", "outer", "ball")
 DEPTH_PROFILES = ("geometric", "rectangular", "half_sine", "piecewise", "auto")
@@ -512,10 +512,8 @@ def resolve_scene_path(name_or_path: str | Path) -> Path:
     text = str(name_or_path)
     path = Path(text)
     if path.suffix in (".yaml", ".yml") or path.exists() or "/" in text:
-        if not path.is_file():
-            raise SceneError(f"scene = {text!r}: no such file; give a YAML path or one of "
-                             f"{', '.join(shipped_scenes())}")
-        return path
+        return input_file(path, f"scene = {text!r}", f"give a YAML path or one of {', '.join(shipped_scenes())}",
+                          error=SceneError)
     shipped = scenes_dir() / f"{text}.yaml"
     if not shipped.is_file():
         raise SceneError(f"scene = {text!r}: unknown scene; shipped scenes are {', '.join(shipped_scenes())}")

@@ -238,7 +238,7 @@ def test_play_offers_each_topic_its_recorded_qos(bearing_sim_exe, ros_env, tmp_p
     assert seen == {t: [r.name, d.name] for t, (r, d) in recorded.items()}, (seen, play.stderr)
 
 
-@pytest.mark.parametrize("kind", ["not_mcap", "truncated", "missing"])
+@pytest.mark.parametrize("kind", ["not_mcap", "truncated", "missing", "folder"])
 def test_bad_files_exit_2_with_one_line(kind, recording, bearing_sim_exe, ros_env, tmp_path):
     path, _, _ = recording
     bad = tmp_path / f"{kind}.mcap"
@@ -247,11 +247,14 @@ def test_bad_files_exit_2_with_one_line(kind, recording, bearing_sim_exe, ros_en
     elif kind == "truncated":
         data = path.read_bytes()
         bad.write_bytes(data[: len(data) // 2])
+    elif kind == "folder":          # was "no such file": it exists
+        bad.mkdir()
     r = subprocess.run([bearing_sim_exe, "play", str(bad)], env=ros_env, capture_output=True, text=True,
                        timeout=60)
     lines = r.stderr.strip().splitlines()
     assert r.returncode == 2 and len(lines) == 1, r.stderr
-    assert {"not_mcap": "not an MCAP file", "truncated": "truncated", "missing": "no such file"}[kind] in lines[0]
+    assert {"not_mcap": "not an MCAP file", "truncated": "truncated", "missing": "no such file",
+            "folder": f"{bad}: is a folder, not a file; expected an .mcap recording"}[kind] in lines[0]
 
 
 @pytest.mark.parametrize("args, named", [(["--wait", "-1"], "--wait"), (["--wait", "soon"], "--wait"),

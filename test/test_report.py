@@ -243,19 +243,22 @@ def test_report_window_out_of_range_is_one_line(outer, tmp_path, capsys, window,
         build_report(rec, tmp_path / "o", window_s=0)
 
 
-@pytest.mark.parametrize("kind", ["not_mcap", "truncated"])
+@pytest.mark.parametrize("kind", ["not_mcap", "truncated", "folder"])
 def test_report_bad_files_exit_2_with_one_line(kind, outer, tmp_path, capsys):
     rec, _ = outer
     bad = tmp_path / "bad.mcap"
     if kind == "not_mcap":
         bad.write_bytes(b"\x89PNG\r\n\x1a\n" + bytes(100))
-    else:
+    elif kind == "truncated":
         data = rec.read_bytes()
         bad.write_bytes(data[: len(data) - 500])
+    else:                           # was "no such file": it exists
+        bad.mkdir()
     code = cli.main(["report", str(bad), "--out", str(tmp_path / "o")])
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1
-    assert ("not an MCAP file" if kind == "not_mcap" else "truncated") in err[0]
+    assert {"not_mcap": "not an MCAP file", "truncated": "truncated",
+            "folder": f"{bad}: is a folder, not a file; expected an .mcap recording"}[kind] in err[0]
 
 
 def test_report_of_a_skidding_run_shows_cage_and_skid_ratios(tmp_path):

@@ -188,6 +188,24 @@ def test_cli_bad_scene_exit_2_one_line(tmp_path, bearing_sim_exe):
     assert len(lines) == 1 and "structure.shaft.mass" in lines[0] and "Traceback" not in out.stderr
 
 
+def test_a_folder_given_as_the_scene_is_named_a_folder_not_missing(tmp_path, bearing_sim_exe, ros_env):
+    """A folder where a scene file is expected said "no such file" (it exists): the API, render
+    and the node say it is a folder, in one line naming the scene and what is allowed."""
+    folder = tmp_path / "scenes"
+    folder.mkdir()
+    start = f"scene = {str(folder)!r}: is a folder, not a file; give a YAML path or one of "
+    for load in (load_scene, Simulator):
+        with pytest.raises(SceneError) as exc:
+            load(folder)
+        assert str(exc.value).startswith(start) and "er16k_outer_race" in str(exc.value)
+    for argv in (["render", str(folder), "--duration", "0.1", "--out", str(tmp_path / "x.mcap")],
+                 ["node", "--ros-args", "-p", f"scene:={folder}"]):
+        r = subprocess.run([bearing_sim_exe, *argv], env=ros_env, capture_output=True, text=True, timeout=60)
+        lines = r.stderr.strip().splitlines()
+        assert r.returncode == 2 and len(lines) == 1 and lines[0].startswith(f"error: {start}"), r.stderr
+    assert not (tmp_path / "x.mcap").exists()
+
+
 def test_cli_scenes_lists_one_line_each(bearing_sim_exe):
     out = subprocess.run([bearing_sim_exe, "scenes"], capture_output=True, text=True, timeout=60)
     assert out.returncode == 0

@@ -10,9 +10,9 @@ from __future__ import annotations
 import importlib
 import os
 from dataclasses import dataclass
-from pathlib import Path
 
 from ..errors import UserError
+from ..paths import input_file
 
 MAGIC = b"\x89MCAP0\r\n"
 
@@ -46,10 +46,8 @@ class Recording:
     def __init__(self, path):
         from mcap.reader import SeekingReader
 
-        self.path = Path(path)
         name = str(path)
-        if not self.path.is_file():
-            raise UserError(f"{name}: no such file (expected an .mcap recording)")
+        self.path = input_file(path, name, "expected an .mcap recording")
         size = self.path.stat().st_size
         try:
             self._stream = open(self.path, "rb")  # noqa: SIM115 - closed in close()
