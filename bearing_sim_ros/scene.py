@@ -17,7 +17,7 @@ from typing import Any
 from .catalog import Bearing, bearing_from_mapping, get_bearing
 from .errors import SceneError, short_repr
 from .limits import LOAD_MULTIPLE_C0, MAX_LOAD, MAX_SPEED_RPM, NDM_LIMIT, RPM, InputLimits
-from .paths import input_file, scenes_dir
+from .paths import MCAP_MAGIC, input_file, scenes_dir
 
 DEFECT_KINDS = ("inner", "outer", "ball")
 DEPTH_PROFILES = ("geometric", "rectangular", "half_sine", "piecewise", "auto")
@@ -571,10 +571,23 @@ def load_scene(name_or_path: str | Path) -> Scene:
     import yaml
 
     path = resolve_scene_path(name_or_path)
+    where = f"scene = {str(path)!r}"
     try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SceneError(f"scene = {str(path)!r}: cannot read it ({exc.__class__.__name__}: {exc})") from None
+        with open(path, "rb") as f:
+            # a recording where the scene goes (both end up as arguments of render and report)
+            # is told by its first bytes, before a possibly large file is read
+            if f.read(len(MCAP_MAGIC)) == MCAP_MAGIC:
+                raise SceneError(f"{where}: not a YAML scene but an MCAP recording; "
+                                 "`bearing-sim play` and `bearing-sim report` take recordings")
+            f.seek(0)
+            data = f.read()
+    except OSError as exc:
+        raise SceneError(f"{where}: cannot read it ({exc.strerror or exc.__class__.__name__})") from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise SceneError(f"{where}: not a YAML scene: not UTF-8 text (byte 0x{data[exc.start]:02x} at offset "
+                         f"{exc.start}); expected a scene YAML file") from None
     try:
         data = load_yaml(text)
     except yaml.YAMLError as exc:

@@ -206,6 +206,33 @@ def test_a_folder_given_as_the_scene_is_named_a_folder_not_missing(tmp_path, bea
     assert not (tmp_path / "x.mcap").exists()
 
 
+def test_a_recording_or_binary_file_as_the_scene_is_not_a_yaml_scene(tmp_path, bearing_sim_exe):
+    """A recording where the scene goes (``render run.mcap ...``, both are file arguments) said
+    "cannot read it (UnicodeDecodeError: 'utf-8' codec can't decode byte 0x89 ...)": now one line
+    that it is not a YAML scene, and for an MCAP file that recordings go to play and report."""
+    from std_msgs.msg import Float64
+
+    from bearing_sim_ros.recording.recorder import Recorder
+
+    recording = tmp_path / "run.mcap"
+    with Recorder(recording, {"scene": "tiny"}, start_time_ns=0) as rec:
+        rec.add_topic("/x", "std_msgs/msg/Float64", 10)
+        rec.write("/x", Float64(data=1.0), 0)
+    binary = tmp_path / "scene.yaml"
+    binary.write_bytes(b"bearing: ER-16K\n\xff\xfe\n")
+    expected = {recording: f"scene = {str(recording)!r}: not a YAML scene but an MCAP recording; "
+                           "`bearing-sim play` and `bearing-sim report` take recordings",
+                binary: f"scene = {str(binary)!r}: not a YAML scene: not UTF-8 text (byte 0xff at offset 16); "
+                        "expected a scene YAML file"}
+    for path, message in expected.items():
+        with pytest.raises(SceneError) as exc:
+            load_scene(path)
+        assert str(exc.value) == message
+    r = subprocess.run([bearing_sim_exe, "render", str(recording), "--duration", "0.1", "--out",
+                        str(tmp_path / "x.mcap")], capture_output=True, text=True, timeout=60)
+    assert (r.returncode, r.stderr) == (2, f"error: {expected[recording]}\n")
+
+
 def test_cli_scenes_lists_one_line_each(bearing_sim_exe):
     out = subprocess.run([bearing_sim_exe, "scenes"], capture_output=True, text=True, timeout=60)
     assert out.returncode == 0
