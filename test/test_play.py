@@ -116,6 +116,7 @@ def test_play_delivers_every_message_to_another_process(recording, bearing_sim_e
     path, counts, accel = recording
     sub, result = _subscriber(tmp_path, ros_env, len(accel), 40)
     play = _play_to(sub, [bearing_sim_exe, "play", str(path), "--rate", "2", "--clock", *WAIT], ros_env)
+    assert "playing anyway" not in play.stderr, play.stderr
     got = json.loads(result.read_text())
     for topic, n in counts.items():
         assert len(got.get(topic, [])) == n, f"{topic}: {len(got.get(topic, []))} of {n}; play: {play.stderr}"
@@ -255,6 +256,23 @@ def test_bad_files_exit_2_with_one_line(kind, recording, bearing_sim_exe, ros_en
     assert r.returncode == 2 and len(lines) == 1, r.stderr
     assert {"not_mcap": "not an MCAP file", "truncated": "truncated", "missing": "no such file",
             "folder": f"{bad}: is a folder, not a file; expected an .mcap recording"}[kind] in lines[0]
+
+
+def test_waiting_for_a_subscriber_is_said_and_so_is_playing_to_nobody(recording, bearing_sim_exe, ros_env):
+    """With nobody on the graph, play waited the whole --wait without a word (5 s of what looked
+    like a hung command): it says it is waiting, how long and how to skip that, then that it
+    plays anyway.  --wait 0 waits for nothing and says nothing about it."""
+    path, counts, _ = recording
+    r = subprocess.run([bearing_sim_exe, "play", str(path), "--rate", "50", "--wait", "1.5"], env=ros_env,
+                       capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    assert r.stderr.splitlines()[1:] == [
+        f"play {path}: no subscriber yet; waiting up to 1.5 s in all before publishing (--wait 0 starts at once)",
+        f"play {path}: no subscriber after 1.5 s; playing anyway (to nobody until one matches)",
+        f"play {path}: published {sum(counts.values())} messages"], r.stderr
+    r = subprocess.run([bearing_sim_exe, "play", str(path), "--rate", "50", "--wait", "0"], env=ros_env,
+                       capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0 and len(r.stderr.splitlines()) == 2 and "subscriber" not in r.stderr, r.stderr
 
 
 @pytest.mark.parametrize("args, named", [(["--wait", "-1"], "--wait"), (["--wait", "soon"], "--wait"),

@@ -18,6 +18,7 @@ point in use.  Played into a graph with a live node, they drive it through the s
 
 Before the first message, play waits up to ``--wait`` seconds (``WAIT_FOR_SUBSCRIBERS`` by
 default) for a subscriber to appear: messages sent before a subscriber is matched are lost for it.
+After ``WAIT_NOTICE`` s without one it says that it is waiting, and at the end that it plays anyway.
 Discovery on one machine usually takes well under a second, but when a participant's first
 announcements are missed it waits for the next periodic one (Fast DDS: every 3 s).  In this
 project's test runs that happened to about 1 play in 3.  With the former 3 s default about 1 play
@@ -40,6 +41,7 @@ from .schemas import qos_from_yaml
 
 WAIT_FOR_SUBSCRIBERS = 5.0    # s, the default of --wait: one missed 3 s announcement period and margin
 DISCOVERY_GRACE = 0.5         # s without a new match: the subscriber's topics have all matched
+WAIT_NOTICE = 1.0             # s without a subscriber before saying that play is waiting for one
 ACK_TIMEOUT = 2.0             # s to let reliable subscribers receive the tail at the end
 WAVEFORM_TYPE = "sensor_msgs/msg/PointCloud2"
 
@@ -139,7 +141,7 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
             log(f"play {path}: {rec.message_count} messages on {len(pubs)} topics, "
                 f"{(rec.end_ns - rec.start_ns) / NS:.2f} s at {rate:g}x"
                 + (", looping" if loop else "") + (", publishing /clock" if clock else ""))
-            _wait_for_subscribers(pubs, wait_for_subscribers, running)
+            _wait_for_subscribers(pubs, wait_for_subscribers, running, lambda text: log(f"play {path}: {text}"))
 
             published = 0
             offset = 0
@@ -192,18 +194,23 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
         rec.close()
 
 
-def _wait_for_subscribers(pubs: dict, timeout: float, running) -> None:
+def _wait_for_subscribers(pubs: dict, timeout: float, running, log) -> None:
     """Wait up to ``timeout`` s for a first subscriber; once one appears, until the number of
     matched subscriptions has not changed for ``DISCOVERY_GRACE`` s (a subscriber's topics
-    match one by one), at most ``timeout`` s more."""
+    match one by one), at most ``timeout`` s more.  After ``WAIT_NOTICE`` s without one it
+    ``log``s once that it is waiting (a silent 5 s looked like a hung command), then whether one
+    came or it plays anyway."""
     start = time.perf_counter()
     first_match = stable_since = counts = None
+    noticed = False
     while running():
         now = time.perf_counter()
         new = tuple(p.get_subscription_count() for p in pubs.values())
         if any(new):
             if first_match is None:
                 first_match = now
+                if noticed:
+                    log(f"a subscriber matched after {now - start:.1f} s")
             if new != counts:
                 counts, stable_since = new, now
             elif now - stable_since >= DISCOVERY_GRACE:
@@ -211,7 +218,13 @@ def _wait_for_subscribers(pubs: dict, timeout: float, running) -> None:
             if now - first_match >= timeout:
                 return
         elif now - start >= timeout:
+            if timeout > 0:
+                log(f"no subscriber after {timeout:g} s; playing anyway (to nobody until one matches)")
             return
+        elif not noticed and now - start >= WAIT_NOTICE:
+            log(f"no subscriber yet; waiting up to {timeout:g} s in all before publishing "
+                "(--wait 0 starts at once)")
+            noticed = True
         time.sleep(0.02)
 
 
