@@ -388,3 +388,37 @@ def test_with_clock_a_recorded_clock_is_replaced_not_published_too(ros_env, tmp_
     quiet = dict(rate=100.0, wait_for_subscribers=0.0, log=lambda text: None)
     assert play(path, clock=True, **quiet) == 3
     assert play(path, clock=False, **quiet) == 6
+
+
+def _foreign_mcap(path, log_times_ns, statistics=True, topic="/x"):
+    """An MCAP file written by the mcap library itself (another tool's recording), with one
+    std_msgs/Float64 message per log time (ns) on ``topic``; ``statistics``: whether it has the
+    optional statistics record."""
+    from mcap.writer import Writer
+    from rclpy.serialization import serialize_message
+    from std_msgs.msg import Float64
+
+    with open(path, "wb") as f:
+        writer = Writer(f, use_statistics=statistics)
+        writer.start("ros2", "another tool")
+        schema = writer.register_schema("std_msgs/msg/Float64", "ros2msg", b"float64 data")
+        channel = writer.register_channel(topic, "cdr", schema, {})
+        for k, t in enumerate(log_times_ns):
+            writer.add_message(channel, t, serialize_message(Float64(data=float(k))), t)
+        writer.finish()
+    return path
+
+
+def test_a_recording_without_the_optional_statistics_record_is_counted_and_played(ros_env, tmp_path):
+    """The MCAP statistics record is optional: without it the reader gave 0 messages and times 0,
+    and play refused a file with messages ("holds no messages").  Now they are counted from the
+    messages themselves, and played (in this process, no subscriber: the count play returns)."""
+    from bearing_sim_ros.recording.play import play
+
+    start = 1_700_000_000 * NS
+    path = _foreign_mcap(tmp_path / "no_statistics.mcap", [start, start + NS // 100, start + NS // 50],
+                         statistics=False)
+    with open_recording(path) as rec:
+        assert (rec.message_count, rec.start_ns, rec.end_ns) == (3, start, start + NS // 50)
+        assert {t: c.count for t, c in rec.topics().items()} == {"/x": 3}
+    assert play(path, wait_for_subscribers=0.0, log=lambda text: None) == 3

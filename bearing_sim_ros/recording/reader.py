@@ -77,6 +77,15 @@ class Recording:
             if summary is None:
                 raise UserError(f"{name}: MCAP recording without a summary section; "
                                 "`mcap recover` can rebuild it")
+            stats = summary.statistics
+            if stats is not None and sum(stats.channel_message_counts.values()) == stats.message_count:
+                counts = stats.channel_message_counts
+                self.message_count = int(stats.message_count)
+                self.start_ns, self.end_ns = int(stats.message_start_time), int(stats.message_end_time)
+            else:
+                # the statistics record is optional in MCAP: without it (another writer's file)
+                # the counts and times were 0, and play said "holds no messages" of one with some
+                counts, self.message_count, self.start_ns, self.end_ns = self._count()
         except BaseException:
             self._stream.close()
             raise
@@ -86,17 +95,22 @@ class Recording:
         for m in metas:
             if m.name == "bearing_sim":
                 self.metadata = dict(m.metadata)
-        counts = summary.statistics.channel_message_counts if summary.statistics else {}
         self.channels = {}
         for cid, ch in summary.channels.items():
             schema = summary.schemas.get(ch.schema_id)
             self.channels[cid] = ChannelInfo(ch.topic, schema.name if schema else "",
                                              ch.metadata.get("offered_qos_profiles", ""),
                                              int(counts.get(cid, 0)))
-        stats = summary.statistics
-        self.message_count = int(stats.message_count) if stats else 0
-        self.start_ns = int(stats.message_start_time) if stats else 0
-        self.end_ns = int(stats.message_end_time) if stats else 0
+
+    def _count(self) -> tuple:
+        """({channel id: messages}, messages, first log time ns, last log time ns) read from the
+        messages themselves; times 0 without any."""
+        counts, first, last = {}, None, None
+        for _, _, channel_id, log_ns, _ in self._records():
+            counts[channel_id] = counts.get(channel_id, 0) + 1
+            first = log_ns if first is None else min(first, log_ns)
+            last = log_ns if last is None else max(last, log_ns)
+        return counts, sum(counts.values()), first or 0, last or 0
 
     # -----------------------------------------------------------------------------------------
     def topics(self) -> dict:
@@ -105,11 +119,17 @@ class Recording:
 
     def messages(self, topics=None):
         """(topic, msg_type, log_time_ns, CDR bytes) in log-time order."""
+        for topic, msg_type, _, log_ns, data in self._records(topics, log_time_order=True):
+            yield topic, msg_type, log_ns, data
+
+    def _records(self, topics=None, log_time_order=False):
+        """(topic, msg_type, channel id, log_time_ns, CDR bytes) of the messages; a damaged file
+        is a one-line UserError."""
         from mcap.exceptions import McapError
 
         try:
-            for schema, channel, msg in self._reader.iter_messages(topics=topics, log_time_order=True):
-                yield channel.topic, (schema.name if schema else ""), int(msg.log_time), msg.data
+            for schema, channel, msg in self._reader.iter_messages(topics=topics, log_time_order=log_time_order):
+                yield channel.topic, (schema.name if schema else ""), channel.id, int(msg.log_time), msg.data
         except (McapError, ValueError, KeyError, EOFError) as exc:
             raise UserError(f"{self.path}: corrupt MCAP recording ({exc.__class__.__name__}: "
                             f"{str(exc).splitlines()[0] if str(exc) else 'unreadable'})") from None
