@@ -324,6 +324,7 @@ def test_loop_length_is_measured_on_the_tables_with_or_without_a_recorded_rate()
             span.see("/contact_forces", table(stamp + 7, 3 * width))     # not the span's topic
         assert span.length_ns(0, 1) == 525 * NS // 15000, rate          # 35 ms
     assert _Span(None).length_ns(5, 9) == 5    # no table at all: the log times, end included
+    assert _Span(None).length_ns(5, 5) == 0    # ... and one log time: no length (play refuses --loop)
 
 
 def test_shifting_a_stamp_moves_headers_and_clocks_with_the_carry():
@@ -422,3 +423,35 @@ def test_a_recording_without_the_optional_statistics_record_is_counted_and_playe
         assert (rec.message_count, rec.start_ns, rec.end_ns) == (3, start, start + NS // 50)
         assert {t: c.count for t, c in rec.topics().items()} == {"/x": 3}
     assert play(path, wait_for_subscribers=0.0, log=lambda text: None) == 3
+
+
+@pytest.mark.parametrize("case", ["one_log_time", "one_message", "clock_only"])
+def test_loop_over_nothing_or_no_time_is_refused_not_spun(case, bearing_sim_exe, ros_env, tmp_path):
+    """--loop went round at 100 % CPU forever over a recording with nothing on the topics it
+    plays (all on /clock, which --clock replaces) or with no length to move on by (every message
+    at one log time, no waveform table): now one line, exit 2, before anything is published
+    (the timeout is what the old code ran into)."""
+    from builtin_interfaces.msg import Time
+    from rosgraph_msgs.msg import Clock
+
+    from bearing_sim_ros.recording.recorder import Recorder
+
+    path = tmp_path / f"{case}.mcap"
+    args = ["--loop", "--wait", "0"]
+    if case == "clock_only":
+        with Recorder(path, {"scene": "clock only"}, start_time_ns=0) as rec:
+            rec.add_topic("/clock", "rosgraph_msgs/msg/Clock", 10)
+            for k in range(3):
+                rec.write("/clock", Clock(clock=Time(sec=k)), k * NS)
+        args.append("--clock")
+        expected = (f"error: {path}: nothing to play: its messages are all on /clock, which --clock replaces; "
+                    "play it without --clock")
+    else:
+        n = 3 if case == "one_log_time" else 1
+        _foreign_mcap(path, [1_700_000_000 * NS] * n)
+        expected = (f"error: {path}: --loop: the recording spans no time ({n} message{'s' if n > 1 else ''} at one "
+                    "log time, no waveform table with a sample rate), so the loop would repeat without a pause; "
+                    "play it without --loop")
+    r = subprocess.run([bearing_sim_exe, "play", str(path), *args], env=ros_env, capture_output=True, text=True,
+                       timeout=30)
+    assert (r.returncode, r.stderr) == (2, expected + "\n")

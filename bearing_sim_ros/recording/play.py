@@ -8,7 +8,11 @@ from the live node: contiguous waveform tables, state, diagnostics.
 
 ``--loop`` repeats the recording with every header stamp (and log time) moved on by the
 recording's length, measured on the waveform tables (last stamp + last width / sample rate -
-first stamp), so the tables stay contiguous across the seam and time never goes back.
+first stamp), so the tables stay contiguous across the seam and time never goes back.  A
+recording that spans no time (every message at one log time, no table with a sample rate) has
+no length to move on by: ``--loop`` refuses it rather than repeat it without a pause.  Play
+refuses, looped or not, a recording with nothing on the topics it plays (all on ``/clock``, with
+``--clock``).
 ``--clock`` publishes ``/clock`` with the recording's time (log time, shifted like the stamps)
 before each new instant, for nodes running with ``use_sim_time``.  A recorded ``/clock`` topic
 is replaced by the generated one then.
@@ -80,13 +84,13 @@ class _Span:
         self.samples += int(msg.width)
 
     def length_ns(self, start_ns: int, end_ns: int) -> int:
-        if self.first is None:
-            return max(1, end_ns - start_ns + 1)
-        fs = self.sample_rate
-        if not fs and self.last > self.first:
+        """The recording's length (ns) for ``--loop``; 0 when it has none (every message at one
+        log time and no table with a sample rate): looping that would never pause."""
+        fs = self.sample_rate if self.first is not None else None
+        if self.first is not None and not fs and self.last > self.first:
             fs = (self.samples - self.last_width) * NS / (self.last - self.first)
         if not fs:
-            return max(1, end_ns - start_ns + 1)
+            return end_ns - start_ns + 1 if end_ns > start_ns else 0
         return self.last - self.first + int(round(self.last_width * NS / fs))
 
 
@@ -116,6 +120,14 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
             sample_rate = float(rec.parameters().get("sample_rate") or 0) or None
         except (TypeError, ValueError):
             sample_rate = None
+        played = [c for t, c in topics.items() if not (clock and t == "/clock")]
+        if not any(c.count for c in played):
+            # --loop went round this empty loop at 100 % CPU forever
+            raise UserError(f"{path}: nothing to play: its messages are all on /clock, which --clock "
+                            "replaces; play it without --clock")
+        if loop and rec.end_ns == rec.start_ns and not (
+                sample_rate and any(c.msg_type == WAVEFORM_TYPE for c in played)):
+            raise UserError(_no_length(path, rec.message_count))
 
         from rclpy.signals import SignalHandlerOptions
 
@@ -176,7 +188,14 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
                     published += 1
                 if not loop or not running():
                     break
-                offset += span.length_ns(rec.start_ns, rec.end_ns)   # measured on the first pass
+                length = span.length_ns(rec.start_ns, rec.end_ns)    # measured on the first pass
+                # what the checks above cannot see (a summary that counts messages the file does
+                # not hold; tables of no width): the loop would spin without a pause
+                if not published:
+                    raise UserError(f"{path}: nothing to play: no message found on its topics")
+                if length <= 0:
+                    raise UserError(_no_length(path, published))
+                offset += length
             if not stop.is_set():          # let reliable subscribers receive the tail
                 for pub in pubs.values():
                     try:
@@ -192,6 +211,13 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
                     rclpy.shutdown()
     finally:
         rec.close()
+
+
+def _no_length(path, messages: int) -> str:
+    """Why ``--loop`` cannot repeat ``path``: it has no length to move the stamps on by."""
+    return (f"{path}: --loop: the recording spans no time ({messages} message{'' if messages == 1 else 's'} at "
+            "one log time, no waveform table with a sample rate), so the loop would repeat without a "
+            "pause; play it without --loop")
 
 
 def _wait_for_subscribers(pubs: dict, timeout: float, running, log) -> None:
