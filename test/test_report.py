@@ -465,3 +465,35 @@ def test_report_of_a_recording_whose_scene_this_version_cannot_read_claims_nothi
     assert "the scene's defects: unknown (this version cannot read its scene: " in md
     assert "agrees" not in md and "none (healthy)" not in md
     assert "scene defects: unknown, this version cannot read its scene" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("kept", [("/accel",), ("/accel", "/state")])
+def test_report_of_a_recording_with_no_operating_point_says_so_without_a_warning(outer, tmp_path, figures, kept):
+    """Only /accel (no /shaft_speed, /load, /state, /diagnostics) and no scene in the metadata,
+    as from `ros2 bag record /accel`: the report let matplotlib's "No artists with labels found to
+    put in legend" through to the terminal (the operating-point plot had nothing to draw and a
+    legend of nothing).  Now nothing is warned; with no operating point at all the plot is not
+    drawn and the summary says why, with a shaft speed (from /state) but no load the load panel
+    says what is missing in the figure."""
+    import warnings
+
+    rec = tmp_path / "partial.mcap"
+    _copy_without(outer[0], rec, lambda topic, k: topic not in kept,
+                  metadata=lambda m: {k: v for k, v in m.items() if k != "scene_yaml"})
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        s = build_report(rec, tmp_path / "out")
+    assert [str(w.message) for w in caught] == []
+    no_verdict = "no verdict: no bearing to place the fault lines on (the recording has no bearing_sim scene)"
+    md = (tmp_path / "out" / "summary.md").read_text()
+    if kept == ("/accel",):
+        why = "no /shaft_speed, /state or /load in the recording and no scene to take the operating point from"
+        assert s["plots_not_drawn"] == {"envelope.png": no_verdict, "timeline.png": no_verdict,
+                                        "operating_point.png": why}
+        assert s["plots"] == ["waveform.png", "spectrum.png"] and not (tmp_path / "out" / "operating_point.png").exists()
+        assert f"- `operating_point.png`: {why}" in md
+    else:
+        assert "operating_point.png" in s["plots"] and "operating_point.png" not in s["plots_not_drawn"]
+        speed, load = figures["operating_point.png"].axes
+        assert speed.get_legend() is not None and load.get_legend() is None
+        assert [t.get_text() for t in load.texts] == ["radial load not recorded (no /load) and no scene"]

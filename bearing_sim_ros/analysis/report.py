@@ -6,7 +6,8 @@ Writes to DIR:
 - ``spectrum.png``: power spectral density of each channel (Welch);
 - ``envelope.png``: envelope spectrum (``analysis.envelope``) with the fault frequencies of the
   recorded bearing marked, and the verdict;
-- ``operating_point.png``: shaft speed and radial load over time;
+- ``operating_point.png``: shaft speed and radial load over time (not drawn when neither is
+  recorded and there is no scene: ``plots_not_drawn`` in the summary says why);
 - ``cage.png`` (when ``state`` was recorded): cage speed against pure rolling and the cage slip
   ratio, plus the skid ratios the skidding tier reports in ``/diagnostics`` when present;
 - ``timeline.png``: the verdict over time: the same detector in consecutive windows
@@ -515,6 +516,23 @@ def plot_envelope(x: np.ndarray, fs: float, freqs: dict, verdict: dict, channel:
     return _save(plt, fig, out / "envelope.png")
 
 
+def _legend_or_note(ax, note: str) -> None:
+    """A legend of what ``ax`` shows, or, with nothing drawn on it, ``note`` (why) in its middle:
+    an empty legend is a matplotlib warning on the user's terminal."""
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(loc="best", fontsize=8)
+    else:
+        ax.text(0.5, 0.5, note, transform=ax.transAxes, ha="center", va="center", color="0.4")
+
+
+def operating_point_missing(d: _Data, scene) -> str | None:
+    """Why ``operating_point.png`` has nothing to show, or None: no shaft speed or load recorded
+    and no scene to take the operating point from."""
+    if d.cmd_t.size or d.state_t.size or d.load_t.size or scene is not None:
+        return None
+    return "no /shaft_speed, /state or /load in the recording and no scene to take the operating point from"
+
+
 def plot_operating_point(d: _Data, scene, out: Path, meta: dict) -> str:
     plt, fig, (ax_s, ax_l) = _figure(2, 2.8)
     if d.cmd_t.size:
@@ -524,7 +542,7 @@ def plot_operating_point(d: _Data, scene, out: Path, meta: dict) -> str:
     if not d.cmd_t.size and not d.state_t.size and scene is not None:
         ax_s.axhline(scene.shaft_speed * RPM, label="scene operating point (nothing recorded)")
     ax_s.set(ylabel="shaft speed (rpm)", title=f"Operating point - {_title(meta)}")
-    ax_s.legend(loc="best", fontsize=8)
+    _legend_or_note(ax_s, "shaft speed not recorded (no /shaft_speed or /state) and no scene")
     ax_s.grid(alpha=0.3)
     if d.load_t.size:
         ax_l.step(d.load_t, d.load_xy[:, 0], where="post", label="Fx (horizontal)")
@@ -533,7 +551,7 @@ def plot_operating_point(d: _Data, scene, out: Path, meta: dict) -> str:
         ax_l.axhline(scene.radial_load[0], color="tab:blue", label="Fx scene (load not recorded)")
         ax_l.axhline(scene.radial_load[1], color="tab:orange", label="Fy scene (load not recorded)")
     ax_l.set(xlabel="time (s)", ylabel="radial load (N)")
-    ax_l.legend(loc="best", fontsize=8)
+    _legend_or_note(ax_l, "radial load not recorded (no /load) and no scene")
     ax_l.grid(alpha=0.3)
     return _save(plt, fig, out / "operating_point.png")
 
@@ -653,11 +671,19 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
     freqs = {**rolling, **d.signal_frequencies} if rolling else {}
     verdict = diagnose(x, fs, freqs) if freqs and x.size > fs * 0.2 else None
 
+    not_drawn = {}                      # plot -> why it is not drawn
+    if verdict is None:
+        why = "less than 0.2 s of signal" if freqs else f"no bearing to place the fault lines on ({scene_problem})"
+        not_drawn["envelope.png"] = not_drawn["timeline.png"] = f"no verdict: {why}"
+    missing = operating_point_missing(d, scene)
+    if missing:
+        not_drawn["operating_point.png"] = missing
     with writing_into(out):             # a full disk: one line, not a traceback
         plots = [plot_waveform(d, freqs, out, meta), plot_spectrum(d, out, meta)]
         if verdict is not None:
             plots.append(plot_envelope(x, fs, freqs, verdict, ch, out, meta))
-        plots.append(plot_operating_point(d, scene, out, meta))
+        if "operating_point.png" not in not_drawn:
+            plots.append(plot_operating_point(d, scene, out, meta))
         cage = plot_cage(d, scene, out, meta)
         if cage:
             plots.append(cage)
@@ -716,6 +742,7 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
         "detection_latency_s": detected - onset[0] if onset and detected is not None else None,
         "fault_detections": fault_detections(timeline, d.truth),
         "plots": plots,
+        "plots_not_drawn": not_drawn,
     }
     with writing_into(out):
         (out / "summary.json").write_text(json.dumps(summary, indent=2, default=_json_default) + "\n")
@@ -798,6 +825,8 @@ def _markdown(s: dict) -> str:
         lines.append(f"| {name} | {_num(st['rms'])} | {_num(st['kurtosis'])} | {_num(st['crest_factor'])} | "
                      f"{_num(st['peak_to_peak'])} |")
     lines += ["", "## Plots", ""] + [f"![{p}]({p})" for p in s["plots"]] + [""]
+    if s["plots_not_drawn"]:
+        lines += ["Not drawn:", ""] + [f"- `{p}`: {why}" for p, why in s["plots_not_drawn"].items()] + [""]
     return "\n".join(lines)
 
 
