@@ -677,3 +677,30 @@ def test_replace_when_done_moves_each_finished_file_onto_its_name(tmp_path, sim_
     rec.discard()
     assert one.read_bytes() == earlier
     assert sorted(p.name for p in tmp_path.iterdir()) == ["rot_000.mcap", "rot_001.mcap"]
+
+
+
+@pytest.mark.parametrize("when_full", ["drop", "wait"])
+def test_a_writer_that_falls_behind_costs_counted_messages_or_holds_the_producer_up(tmp_path, when_full):
+    """A burst of 100 writes against a queue limit of 5 messages (60 bytes of CDR): the writer
+    thread, which sleeps 20 ms whenever it finds the queue empty, falls behind for real.  "drop"
+    (the live node's) loses messages and counts exactly those it lost; "wait" (render's) holds the
+    producer up and loses none.  The file reads back with rosbags: every message sent, or those
+    not dropped, in the order sent."""
+    from rosbags.highlevel import AnyReader
+    from std_msgs.msg import Float64
+
+    path = tmp_path / "burst.mcap"
+    with Recorder(path, {"a": "b"}, when_full=when_full, max_queue_bytes=60) as rec:
+        rec.add_topic("/x", "std_msgs/msg/Float64", 10)
+        for k in range(100):
+            rec.write("/x", Float64(data=float(k)), k)
+    with AnyReader([path]) as reader:
+        kept = [reader.deserialize(raw, conn.msgtype).data for conn, _t, raw in reader.messages()]
+    st = rec.status
+    assert st["ok"] and st["messages"] == len(kept), st
+    if when_full == "wait":
+        assert st["dropped"] == 0 and kept == list(range(100))
+    else:
+        assert st["dropped"] == 100 - len(kept) > 0, st
+        assert kept == sorted(set(kept)) and set(kept) <= set(range(100))

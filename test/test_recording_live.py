@@ -8,7 +8,7 @@ import subprocess
 
 import numpy as np
 import pytest
-from test_node_support import signal_when
+from test_node_support import Listener, read_recording, signal_when
 
 from bearing_sim_ros.recording.reader import open_recording
 from bearing_sim_ros.waveform import NS, from_pointcloud2
@@ -107,3 +107,41 @@ def test_a_recording_that_fails_on_the_way_is_logged_then_and_ends_with_status_2
     assert len(at_exit) == 1 and failed[0] < at_exit[0], log     # said when it happened, then at exit
     assert lines[-1] == f"error: recording to {out} stopped: OSError: [Errno 27] File too large", log
     assert 100_000 < out.stat().st_size <= 300_000
+
+
+def test_messages_the_live_node_drops_are_counted_in_diagnostics_and_at_exit(ros_env, tmp_path):
+    """The node's recorder drops (and counts) what the disk cannot take, so that no batch waits for
+    it.  With a queue limit of 0 bytes (set before the node starts) every batch's burst of writes
+    finds the writer thread behind: each /diagnostics says how many were dropped in its second, as
+    a warning, and the line at exit says how many in all and that the file has gaps; the count
+    is exactly what the file lacks."""
+    import sys
+
+    out = tmp_path / "gaps.mcap"
+    script = tmp_path / "no_queue.py"
+    script.write_text("\n".join([
+        "import sys",
+        "from bearing_sim_ros.recording import recorder",
+        "recorder.MAX_QUEUE_BYTES = 0          # a disk that never keeps up",
+        "from bearing_sim_ros.nodes.bearing_sim_node import main",
+        "sys.exit(main(sys.argv[1:]))",
+        ""]))
+    listener = Listener()
+    try:
+        r = subprocess.run([sys.executable, str(script), "--ros-args", "-p", "scene:=er16k_outer_race",
+                            "-p", "fidelity:=kinematic", "-p", "duration:=3.0", "-p", f"record:={out}"],
+                           env=ros_env, capture_output=True, text=True, timeout=120)
+        diagnostics = list(listener.diagnostics)
+    finally:
+        listener.close()
+    assert r.returncode == 0, r.stderr
+    assert diagnostics, r.stderr
+    for _t, level, message, values, _stamp in diagnostics:
+        assert int(values["recording_dropped"]) > 0 and values["recording"] == "ok", values
+        assert level == 1 and "recording dropped " in message and "in the last second" in message, message
+    (exit_line,) = [line for line in r.stderr.splitlines() if "] [bearing_sim]: recording " in line]
+    assert "[WARN]" in exit_line and exit_line.endswith("dropped: the disk did not keep up, the file has gaps")
+    topics, _meta = read_recording(out)
+    kept = sum(len(v) for v in topics.values())
+    written = 300 * 4 + 150 + 3        # 300 batches: speed, load, accel, contact; state at 50 Hz; diagnostics
+    assert f" {kept} messages, " in exit_line and f", {written - kept} dropped:" in exit_line, exit_line

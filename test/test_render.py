@@ -525,3 +525,25 @@ def test_a_render_that_fails_keeps_the_earlier_recording_at_out(tmp_path, monkey
         render("er16k_healthy", 1.0, out, fidelity="kinematic", progress=False)
     assert out.read_bytes() == before
     assert [p.name for p in tmp_path.iterdir()] == ["a.mcap"]
+
+
+def test_a_writer_that_falls_behind_holds_the_render_up_and_loses_nothing(tmp_path, monkeypatch):
+    """render has no deadline, so a disk slower than the simulator must cost time, not messages.
+    With a queue limit of 0 bytes every write finds the writer thread behind (it sleeps 20 ms
+    whenever it finds the queue empty), where the node's recorder would drop: every message of
+    the 0.2 s render reads back with rosbags all the same (20 batches: speed, load, accel and
+    contact forces each; state at 50 Hz)."""
+    from rosbags.highlevel import AnyReader
+
+    from bearing_sim_ros.recording import recorder
+
+    monkeypatch.setattr(recorder, "MAX_QUEUE_BYTES", 0)
+    out = tmp_path / "slow.mcap"
+    summary = render("er16k_outer_race", 0.2, out, fidelity="kinematic", progress=False)
+    with AnyReader([out]) as reader:
+        counts = {c.topic: c.msgcount for c in reader.connections}
+        samples = sum(reader.deserialize(raw, c.msgtype).width
+                      for c, _t, raw in reader.messages([c for c in reader.connections if c.topic == "/accel"]))
+    assert counts == {"/shaft_speed": 20, "/load": 20, "/accel": 20, "/contact_forces": 20, "/state": 10,
+                      "/diagnostics": 0}, counts
+    assert samples == 0.2 * FS and summary["messages"] == 90

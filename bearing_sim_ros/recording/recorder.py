@@ -3,7 +3,7 @@
     rec = Recorder("run.mcap", recording_metadata(scene, params, seed, sim.selection),
                    attachments={"scene.yaml": scene.source_text.encode()})
     rec.add_topic("/accel", "sensor_msgs/msg/PointCloud2", qos)
-    rec.write("/accel", msg, log_time_ns)      # never blocks, never raises
+    rec.write("/accel", msg, log_time_ns)      # never raises; never blocks unless when_full="wait"
     rec.close()                                # finalise (idempotent)
 
 The file: profile ``ros2``, ``cdr`` messages serialised by rclpy itself, ``ros2msg`` schemas with
@@ -17,6 +17,12 @@ no lock), so publishing never waits for the disk and a signal handler that inter
 can still call ``close``.  A background thread drains the deque into the MCAP writer.  A write
 error (full disk, path gone) stops recording: the error goes into ``status``, queued messages
 are counted as dropped, and nothing is raised into the publisher.
+
+A disk slower than the producer: once ``max_queue_bytes`` (default ``MAX_QUEUE_BYTES``) of
+serialised messages wait for it, ``when_full`` decides.  ``"drop"`` (the live node, which must
+never hold up a real-time batch): the message is dropped and counted (``status["dropped"]``).
+``"wait"`` (``render``, which has no deadline and must lose nothing): ``write`` waits until the
+writer thread has drained the queue below the limit (back-pressure; polled, no lock).
 
 Rotation (optional): ``rotate_bytes`` (serialised message bytes per file) and ``rotate_seconds``
 (log-time span per file) start a new file ``<stem>_001.mcap``, ``<stem>_002.mcap``... (the first
@@ -48,9 +54,11 @@ from .schemas import message_definition, qos_to_yaml
 
 PROFILE = "ros2"
 METADATA_NAME = "bearing_sim"
-MAX_QUEUE_BYTES = 512 * 1024 * 1024   # beyond this the disk is not keeping up: drop, count
+MAX_QUEUE_BYTES = 512 * 1024 * 1024   # beyond this the disk is not keeping up: drop or wait
+WHEN_FULL = ("drop", "wait")          # what ``write`` does when the queue holds max_queue_bytes
 CHUNK_BYTES = 1024 * 1024             # MCAP chunk size (uncompressed)
 _POLL_S = 0.02                        # writer thread wake-up period (s)
+_WAIT_POLL_S = 0.002                  # a waiting producer's wake-up period (when_full="wait", s)
 
 
 def _one_line(exc: BaseException) -> str:
@@ -99,7 +107,8 @@ class Recorder:
     file does not depend on the wall clock); argument: how errors name the path (the node's
     ``record`` parameter, render's ``--out``); keep: paths never written (the scene's file);
     replace_when_done: write each file under a temporary name and move it onto its own once
-    finalised (see the module docstring).
+    finalised (see the module docstring); when_full: "drop" (count) or "wait" (back-pressure) once
+    max_queue_bytes (bytes of serialised messages; default MAX_QUEUE_BYTES) wait for the disk.
     Each file is checked as it is opened (``paths.check_replaceable``): an existing file that is
     not an MCAP recording is not replaced (the first file: a UserError; a rotated one: the
     recording stops with that error).
@@ -108,7 +117,10 @@ class Recorder:
     def __init__(self, path, metadata: dict, attachments: dict | None = None,
                  rotate_bytes: int = 0, rotate_seconds: float = 0.0,
                  start_time_ns: int | None = None, argument: str = "record", keep=(),
-                 replace_when_done: bool = False):
+                 replace_when_done: bool = False, when_full: str = "drop",
+                 max_queue_bytes: int | None = None):
+        if when_full not in WHEN_FULL:
+            raise ValueError(f"when_full = {when_full!r}: allowed values are {', '.join(WHEN_FULL)}")
         if rotate_bytes < 0 or not math.isfinite(rotate_seconds) or rotate_seconds < 0:
             raise UserError(f"rotation = {rotate_bytes!r} bytes / {rotate_seconds!r} s: "
                             "expected numbers >= 0 (0 = no rotation)")
@@ -119,6 +131,8 @@ class Recorder:
         self._writing = None              # (path written, its final name) of the open file
         self._discard = False
         self._rotate = bool(rotate_bytes or rotate_seconds)
+        self._wait_when_full = when_full == "wait"
+        self._max_queue_bytes = MAX_QUEUE_BYTES if max_queue_bytes is None else int(max_queue_bytes)
         self._rotate_bytes = int(rotate_bytes)
         self._rotate_ns = int(round(rotate_seconds * 1e9))
         self._metadata = {str(k): str(v) for k, v in metadata.items()}
@@ -166,8 +180,8 @@ class Recorder:
         self._queue.append(("topic", name, None, 0))
 
     def write(self, topic: str, msg, log_time_ns: int) -> None:
-        """Queue ``msg`` for ``topic`` with log time = publish time ``log_time_ns``.  Never
-        blocks on the disk and never raises into the publisher."""
+        """Queue ``msg`` for ``topic`` with log time = publish time ``log_time_ns``.  Never raises
+        into the publisher; waits for the disk only with ``when_full="wait"`` and a full queue."""
         if self._closing or self._error:
             self._dropped += 1
             return
@@ -183,11 +197,22 @@ class Recorder:
             self._set_error(f"cannot serialise a message on {name}: {_one_line(exc)}")
             self._dropped += 1
             return
-        if self._enqueued_bytes - self._drained_bytes > MAX_QUEUE_BYTES:
-            self._dropped += 1
-            return
+        if self._queue_full():
+            if not self._wait_when_full:
+                self._dropped += 1
+                return
+            # the writer thread drains the queue (or, once recording has failed, discards it) and
+            # ends only after close: nothing else to wait for
+            while self._queue_full() and self._thread.is_alive():
+                time.sleep(_WAIT_POLL_S)
+            if self._closing or self._error:
+                self._dropped += 1
+                return
         self._enqueued_bytes += len(data)
         self._queue.append(("msg", name, data, int(log_time_ns)))
+
+    def _queue_full(self) -> bool:
+        return self._enqueued_bytes - self._drained_bytes > self._max_queue_bytes
 
     def discard(self) -> None:
         """Stop without finalising the open file: with ``replace_when_done`` its partial file is

@@ -356,9 +356,10 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
     meta = recording_metadata(scene, params, seed, sim.selection, topics={t: t for t in topics})
     attachments = {f"{scene.name}.yaml": scene.source_text.encode("utf-8")} if scene.source_text else {}
     # written as <out>.<pid>.partial and moved onto out when finalised: out only ever holds a
-    # complete file, and an earlier recording there stays until then
+    # complete file, and an earlier recording there stays until then; a disk slower than the
+    # simulator holds the render up (nothing waits for it), never costs messages
     rec = Recorder(out, meta, attachments, start_time_ns=0, argument="--out", keep=[scene.source_path],
-                   replace_when_done=True)
+                   replace_when_done=True, when_full="wait")
     bar = _Progress(total / sample_rate, sys.stderr.isatty() if progress is None else progress)
     t_wall0 = time.perf_counter()
     frame = msgs.frame_id
@@ -429,13 +430,21 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
         bar.done()
         raise
     with _signals_held():
-        rec.close()
+        # a file with messages missing is not the render asked for: out keeps what it held
+        dropped = rec.status["dropped"]
+        if dropped:
+            rec.discard()
+        else:
+            rec.close()
     bar.update(done / sample_rate, force=True)
     bar.done()
     wall = time.perf_counter() - t_wall0
     status = rec.status
     if not status["ok"]:
         raise UserError(f"--out = {str(out)!r}: {status['error']}")
+    if dropped:
+        raise UserError(f"--out = {str(out)!r}: {dropped} messages were not recorded; "
+                        f"nothing written, {str(out)!r} left as it was")
     return {"messages": status["messages"], "bytes": status["bytes"], "wall_s": wall,
             "signal_s": total / sample_rate, "real_time_factor": (total / sample_rate) / max(wall, 1e-9),
             "tier": sim.tier, "tier_values": tier_values(sim), "path": status["path"],
