@@ -30,7 +30,7 @@ import numpy as np
 
 from .analysis.envelope import fault_lines
 from .errors import UserError
-from .paths import output_folder, writing_into
+from .paths import output_folder, replace_file, replaceable_file, writing_into
 from .scene import RPM, load_scene
 
 
@@ -412,13 +412,20 @@ def calibrate_fidelity(sample_rate: float = 15000.0, settle: float = 0.3, second
             "source": "bearing-sim bench --calibrate-fidelity"}
 
 
-def write_calibration(result: dict, path: Path) -> None:
+def write_calibration(result: dict, path: Path, where: str = "--calibrate-fidelity") -> None:
+    """Write the calibration ``result`` to ``path`` atomically (``paths.replace_file``): the
+    simulator reads config/fidelity.yaml, and a write cut short (full disk) must leave the file it
+    had, not half of a new one.  A failure is a one-line UserError starting with ``where``."""
     import yaml
 
     head = ("# Fidelity calibration: the kinematic tier's cage-speed (fault-frequency) error against the\n"
             "# skidding tier's reference, error = floor + scale * skid_index^power (bearing_sim_ros/fidelity.py).\n"
             "# Written by `bearing-sim bench --calibrate-fidelity --out DIR`; do not edit by hand.\n")
-    path.write_text(head + yaml.safe_dump(json.loads(json.dumps(result)), sort_keys=False))
+    try:
+        replace_file(path, head + yaml.safe_dump(json.loads(json.dumps(result)), sort_keys=False))
+    except OSError as exc:
+        raise UserError(f"{where}: cannot write {str(path)!r} ({exc.strerror or exc.__class__.__name__}); "
+                        "the file there is as it was") from None
 
 
 def bench_command(args) -> int:
@@ -429,11 +436,15 @@ def bench_command(args) -> int:
     if getattr(args, "calibrate_fidelity", False):
         from .paths import config_dir
 
+        # before minutes of work (an installed package's config/ may be read-only)
+        target = replaceable_file(config_dir() / "fidelity.yaml", "--calibrate-fidelity")
         result = calibrate_fidelity(progress=say)
-        target = config_dir() / "fidelity.yaml"
-        write_calibration(result, target)
-        with writing_into(out):
-            write_calibration(result, out / "fidelity.yaml")
+        copy = out / "fidelity.yaml"
+        write_calibration(result, copy, f"--out = {str(out)!r}")    # first: kept if the target fails
+        try:
+            write_calibration(result, target)
+        except UserError as exc:
+            raise UserError(f"{exc}; the new calibration is in {str(copy)!r}") from None
         print(f"fit: error = {result['floor']:.4g} + {result['clearance_gain']:.4g} C_r/d "
               f"+ {result['scale']:.4g} chi^{result['power']:.3g} "
               f"(worst point off by x{result['worst_factor']:.2f}); wrote {target}")

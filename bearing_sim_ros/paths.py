@@ -50,12 +50,61 @@ def output_folder(text, option: str = "--out") -> Path:
     except OSError as exc:
         raise UserError(f"{where}: cannot create the folder ({exc.strerror})") from None
     try:
-        fd, probe = tempfile.mkstemp(dir=out, prefix=".bearing-sim-probe-")
-        os.close(fd)
-        os.unlink(probe)
+        _probe(out)
     except OSError as exc:
         raise UserError(f"{where}: cannot write in the folder ({exc.strerror})") from None
     return out
+
+
+def _probe(folder: Path) -> None:
+    """Make a file in ``folder`` and remove it: whether a file can be written there (OSError)."""
+    fd, probe = tempfile.mkstemp(dir=folder, prefix=".bearing-sim-probe-")
+    os.close(fd)
+    os.unlink(probe)
+
+
+def replaceable_file(path, where: str) -> Path:
+    """The file ``path`` that a command replaces at the end of its work (``replace_file``),
+    checked before the work: a one-line UserError (``where``: what writes it,
+    ``--calibrate-fidelity``) when a folder is there or its folder cannot take a new file (one is
+    made and removed there).  A symbolic link is followed: the file it points to is the one
+    replaced, and is returned."""
+    from .errors import UserError
+
+    target = Path(path).resolve()
+    if target.is_dir():
+        raise UserError(f"{where}: cannot write {str(target)!r} (a folder is there)")
+    try:
+        _probe(target.parent)
+    except OSError as exc:
+        raise UserError(f"{where}: cannot write {str(target)!r} ({exc.strerror})") from None
+    return target
+
+
+def replace_file(path, text: str) -> None:
+    """Write ``text`` (UTF-8) to ``path`` atomically: into a temporary file beside it, synced,
+    then moved onto it, so that ``path`` holds the old text or the new, never part of one (a full
+    disk), and the temporary file goes when that fails (OSError).  A symbolic link is followed;
+    the file keeps its permissions (a new one gets the umask's)."""
+    path = Path(path).resolve()
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".partial")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(text)
+            f.flush()
+            os.fsync(f.fileno())
+        try:
+            mode = stat.S_IMODE(path.stat().st_mode)
+        except FileNotFoundError:
+            umask = os.umask(0)
+            os.umask(umask)
+            mode = 0o666 & ~umask
+        os.chmod(tmp, mode)
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
 
 
 @contextlib.contextmanager

@@ -2,6 +2,7 @@
 import json
 import math
 import subprocess
+from pathlib import Path
 
 
 def test_quick_bench_writes_table_json_and_plot(tmp_path, bearing_sim_exe):
@@ -83,3 +84,58 @@ def test_round_robin_times_every_setting_in_turn_and_reports_a_divergence(monkey
     for label in ("kinematic x2", "default"):
         first, again = [accel for lab, accel in timed if lab == label]
         assert np.array_equal(first, again) and np.array_equal(runs[label].accel, again), label
+
+
+def test_calibrate_fidelity_that_cannot_write_its_file_stops_before_the_work(tmp_path, bearing_sim_exe):
+    """``--calibrate-fidelity`` rewrites the package's config/fidelity.yaml after about 4 minutes
+    of work, and an unwritable one ended in a traceback then.  A copy of the package whose
+    config/fidelity.yaml links to a path under a regular file: one line naming the file and why,
+    exit 2, before anything is measured (no progress line), and nothing written to --out."""
+    import os
+    import shutil
+
+    from bearing_sim_ros.paths import config_dir
+
+    pkg = tmp_path / "pkg"
+    source = Path(__file__).resolve().parent.parent / "bearing_sim_ros"
+    shutil.copytree(source, pkg / "bearing_sim_ros", ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copytree(config_dir(), pkg / "config")
+    blocker = tmp_path / "blocker"
+    blocker.write_text("x")
+    (pkg / "config" / "fidelity.yaml").unlink()
+    (pkg / "config" / "fidelity.yaml").symlink_to(blocker / "fidelity.yaml")
+    out = tmp_path / "out"
+    run = subprocess.run([bearing_sim_exe, "bench", "--calibrate-fidelity", "--out", str(out)],
+                         env=dict(os.environ, PYTHONPATH=str(pkg)), capture_output=True, text=True, timeout=60)
+    assert run.returncode == 2, run.stderr
+    assert run.stderr == (f"error: --calibrate-fidelity: cannot write '{blocker}/fidelity.yaml' "
+                          "(Not a directory)\n"), run.stderr
+    assert list(out.iterdir()) == [] and blocker.read_text() == "x"
+
+
+def test_a_calibration_write_cut_short_leaves_the_file_as_it_was(tmp_path):
+    """The calibration is written beside its file and moved onto it: a write that fails on the
+    way (a file-size limit of 1000 bytes, as a full disk would) is one line naming the file, and
+    leaves the file as it was and no temporary file (the simulator reads what is there)."""
+    import sys
+
+    target = tmp_path / "fidelity.yaml"
+    target.write_text("floor: 0.01\n")
+    code = "\n".join([
+        "import resource, signal, sys",
+        "from pathlib import Path",
+        "from bearing_sim_ros.bench import write_calibration",
+        "from bearing_sim_ros.errors import UserError",
+        "signal.signal(signal.SIGXFSZ, signal.SIG_IGN)",
+        "resource.setrlimit(resource.RLIMIT_FSIZE, (1000, resource.RLIM_INFINITY))",
+        "try:",
+        "    write_calibration({'floor': 0.02, 'points': [{'chi': k / 7} for k in range(200)]}, Path(sys.argv[1]))",
+        "except UserError as exc:",
+        "    sys.exit(f'error: {exc}')",
+    ])
+    run = subprocess.run([sys.executable, "-c", code, str(target)], capture_output=True, text=True, timeout=60)
+    assert run.returncode == 1, run.stderr
+    assert run.stderr == (f"error: --calibrate-fidelity: cannot write '{target}' (File too large); "
+                          "the file there is as it was\n"), run.stderr
+    assert target.read_text() == "floor: 0.01\n"
+    assert [p.name for p in tmp_path.iterdir()] == ["fidelity.yaml"]
