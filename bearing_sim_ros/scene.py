@@ -358,11 +358,12 @@ def _defects(top: _Section, bearing: Bearing) -> tuple:
         if d.has("ball") and kind != "ball":
             raise SceneError(f"{d.key('ball')} = {short_repr(d.data['ball'])}: only a ball defect is on a ball "
                              f"(this one is kind {kind})")
+        # the key at all, 0 included (0 = no wander, which means nothing on a race either)
+        if d.has("wander_turns") and kind != "ball":
+            raise SceneError(f"{d.key('wander_turns')} = {short_repr(d.data['wander_turns'])}: only a ball "
+                             f"defect has a spin axis to wander (this one is kind {kind})")
         ball = int(d.number("ball", 0, lo=0, hi=bearing.balls - 1, integer=True))
         wander = d.number("wander_turns", 0.0, lo=0.0, hi=1e4)
-        if wander and kind != "ball":
-            raise SceneError(f"{d.key('wander_turns')} = {wander:g}: only a ball defect has a spin axis "
-                             f"to wander (this one is kind {kind})")
         onset = d.number("onset_s", 0.0, lo=0.0, hi=MAX_DEFECT_TIME)
         growth = d.number("growth_s", 0.0, lo=0.0, hi=MAX_DEFECT_TIME)
         out.append(Defect(kind, width, depth, length, angle, d.choice("profile", DEPTH_PROFILES, "geometric"), ball,

@@ -75,6 +75,11 @@ def test_numbers_in_exponent_form_are_floats(tmp_path):
     # a ball number on a race defect was ignored (wander_turns there was refused already)
     ("kind: outer", "kind: outer, ball: 3", ["defects[0].ball = 3: only a ball defect is on a ball", "kind outer"]),
     ("kind: outer", "kind: inner, ball: 0", ["defects[0].ball = 0: only a ball defect is on a ball", "kind inner"]),
+    # wander_turns: 0 on a race defect was accepted (only a non-zero value was refused)
+    ("kind: outer", "kind: outer, wander_turns: 0",
+     ["defects[0].wander_turns = 0: only a ball defect has a spin axis to wander", "kind outer"]),
+    ("kind: outer", "kind: inner, wander_turns: 2.5",
+     ["defects[0].wander_turns = 2.5: only a ball defect has a spin axis to wander", "kind inner"]),
     ("clock: 6}\n", "clock: 6}\nsensor: {axes: [x, z]}\n", ["sensor.axes", "'z'", "x, y"]),
     # a range of 0 m/s^2 would clip every sample to 0
     ("clock: 6}\n", "clock: 6}\nsensor: {range: 0}\n", ["sensor.range", "0", "(0, "]),
