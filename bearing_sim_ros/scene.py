@@ -9,6 +9,7 @@ line names the key, the value and what is allowed.
 from __future__ import annotations
 
 import math
+import numbers
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -177,6 +178,19 @@ class Scene:
     source_text: str = field(default="", compare=False, repr=False)
     source_path: str = field(default="", compare=False, repr=False)
 
+    def __post_init__(self):
+        # the bearing's limits for a scene made in Python too (dataclasses.replace(scene,
+        # radial_load=...) ran a scene that load_scene refuses); a YAML scene has met them already,
+        # named by its own keys
+        knots = [(f"profile[{i}].", p.shaft_speed, p.radial_load) for i, p in enumerate(self.profile)]
+        for prefix, speed, load in [("", self.shaft_speed, self.radial_load), *knots]:
+            error = _operating_point_type_error(speed, load, f"{prefix}shaft_speed", f"{prefix}radial_load")
+            if not error:
+                error = _operating_point_error(self.bearing, speed, load, f"{prefix}shaft_speed",
+                                               f"{speed:g} rad/s ({speed / RPM:g} rpm)", f"{prefix}radial_load")
+            if error:
+                raise SceneError(f"scene {self.name}: {error}")
+
     @property
     def shaft_hz(self) -> float:
         return self.shaft_speed / (2.0 * math.pi)
@@ -284,18 +298,43 @@ MAX_DEFECT_TIME = 1.0e6   # s (11.6 days of signal): a defect's onset_s and grow
 
 
 def _check_operating_point(where: _Section, rpm: float, load: tuple, bearing: Bearing):
-    """The bearing's own limits, as the live node applies them to its inputs (InputLimits):
-    |speed| up to n d_m = NDM_LIMIT rpm mm and |F| up to 2 x C0, or one line naming the key."""
+    """The bearing's own limits (``_operating_point_error``) for a YAML operating point or
+    profile knot: one line naming its keys."""
+    error = _operating_point_error(bearing, rpm * RPM, load, where.key("shaft_speed_rpm"), f"{rpm:g}",
+                                   where.key("radial_load"))
+    if error:
+        raise SceneError(error)
+
+
+def _operating_point_error(bearing: Bearing, speed: float, load, speed_key: str, speed_text: str,
+                           load_key: str) -> str:
+    """"" when a shaft speed (rad/s) and load ((x, y) N) are within the bearing's own limits, as
+    the live node applies them to its inputs (InputLimits): |speed| up to n d_m = NDM_LIMIT rpm mm
+    and |F| up to 2 x C0; else the line naming the key (``speed_key = speed_text``)."""
     limits = InputLimits(bearing)
-    if abs(rpm) * RPM > limits.max_speed:
-        raise SceneError(f"{where.key('shaft_speed_rpm')} = {rpm:g}: beyond what bearing {bearing.name} takes "
-                         f"(|speed| <= {limits.max_speed / RPM:.0f} rpm, n*dm <= {NDM_LIMIT:.0e} rpm mm)")
+    if abs(speed) > limits.max_speed:
+        return (f"{speed_key} = {speed_text}: beyond what bearing {bearing.name} takes "
+                f"(|speed| <= {limits.max_speed / RPM:.0f} rpm, n*dm <= {NDM_LIMIT:.0e} rpm mm)")
     force = math.hypot(*load)
     if force > limits.max_load:
         bound = (f"{LOAD_MULTIPLE_C0:g} x C0 = {limits.max_load:.0f} N of bearing {bearing.name}"
                  if limits.max_load < MAX_LOAD else f"{MAX_LOAD:g} N, the most a scene may ask for")
-        raise SceneError(f"{where.key('radial_load')} = [{load[0]:g}, {load[1]:g}] N: |F| = {force:.6g} N "
-                         f"beyond {bound}")
+        return f"{load_key} = [{load[0]:g}, {load[1]:g}] N: |F| = {force:.6g} N beyond {bound}"
+    return ""
+
+
+def _operating_point_type_error(speed, load, speed_key: str, load_key: str) -> str:
+    """"" when ``speed`` is a finite number and ``load`` two (a bool is neither), else the line
+    naming the key: a scene made in Python has not been through the YAML's readers."""
+    def finite(v):
+        return isinstance(v, numbers.Real) and not isinstance(v, bool) and math.isfinite(v)
+
+    if not finite(speed):
+        return f"{speed_key} = {short_repr(speed)}: expected a finite number, rad/s"
+    if isinstance(load, (str, bytes)) or not (hasattr(load, "__len__") and len(load) == 2
+                                              and all(finite(v) for v in load)):
+        return f"{load_key} = {short_repr(load)}: expected two finite numbers (x, y), N"
+    return ""
 
 
 def _bearing(top: _Section) -> Bearing:

@@ -1,14 +1,16 @@
 """Scene loading: every shipped scene loads; every mistake is one line naming key, value and
 what is allowed; the CLI turns it into exit status 2 without a traceback."""
+import dataclasses
 import math
 import subprocess
 import textwrap
 
+import numpy as np
 import pytest
 
 from bearing_sim_ros import Simulator
 from bearing_sim_ros.errors import SceneError
-from bearing_sim_ros.scene import load_scene, load_yaml, scene_from_dict, shipped_scenes
+from bearing_sim_ros.scene import RPM, ProfilePoint, load_scene, load_yaml, scene_from_dict, shipped_scenes
 
 CONTRACT_SCENES = {
     "er16k_healthy", "er16k_inner_race", "er16k_outer_race", "er16k_skidding",
@@ -366,3 +368,27 @@ def test_the_operating_point_and_profile_are_within_the_bearings_limits(old, new
     inside = scene_from_dict(load_yaml(GOOD.replace("shaft_speed_rpm: 1600", "shaft_speed_rpm: 25970")
                                        .replace("[0.0, -50.0]", "[11790, -11790]")))
     assert inside.radial_load == (11790.0, -11790.0)
+
+
+@pytest.mark.parametrize("change, line", [
+    ({"radial_load": (0.0, -900000.0)},
+     "radial_load = [0, -900000] N: |F| = 900000 N beyond 2 x C0 = 16681 N of bearing ER-16K"),
+    ({"shaft_speed": 30000 * RPM},
+     "shaft_speed = 3141.59 rad/s (30000 rpm): beyond what bearing ER-16K takes (|speed| <= 25974 rpm, "
+     "n*dm <= 1e+06 rpm mm)"),
+    ({"profile": (ProfilePoint(1.0, 2000 * RPM, (0.0, -50.0)), ProfilePoint(2.0, 2000 * RPM, (0.0, -20000.0)))},
+     "profile[1].radial_load = [0, -20000] N: |F| = 20000 N beyond 2 x C0 = 16681 N of bearing ER-16K"),
+    ({"shaft_speed": float("nan")}, "shaft_speed = nan: expected a finite number, rad/s"),
+    ({"radial_load": "0 -50"}, "radial_load = '0 -50': expected two finite numbers (x, y), N"),
+])
+def test_a_scene_changed_in_python_is_held_to_the_bearings_limits(change, line):
+    """``dataclasses.replace(scene, radial_load=...)``, the Python API's way to another operating
+    point, skipped the limits that load_scene applies: a Simulator ran the ER-16K at 900 kN.  Now
+    the scene itself refuses, in the YAML's words with the Python field's name and unit, and a
+    Simulator never sees it; within the limits (a numpy load too) it runs."""
+    scene = load_scene("er16k_outer_race")
+    with pytest.raises(SceneError) as exc:
+        Simulator(dataclasses.replace(scene, **change), fidelity="kinematic")
+    assert str(exc.value) == f"scene er16k_outer_race: {line}"
+    inside = dataclasses.replace(scene, shaft_speed=25970 * RPM, radial_load=np.array([11790.0, -11790.0]))
+    assert Simulator(inside, fidelity="kinematic").advance(150).accel.shape == (150, 2)
