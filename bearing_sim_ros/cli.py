@@ -165,7 +165,12 @@ def build_parser() -> argparse.ArgumentParser:
 
     sub.add_parser("scenes", help="list the shipped scenes")
 
-    s = sub.add_parser("monitor", help="example condition-monitoring subscriber (envelope analysis)")
+    s = sub.add_parser("monitor", help="example condition-monitoring subscriber (envelope analysis)",
+                       usage="%(prog)s [-h] [--window SECONDS] [--count N] [--scene S] [--simulator NAME] "
+                             "[--ros-args ...]",
+                       formatter_class=argparse.RawDescriptionHelpFormatter,
+                       epilog="ROS arguments follow --ros-args, for example the namespace of the rig to watch:\n"
+                              "  bearing-sim monitor --window 4 --ros-args -r __ns:=/rig1")
     # the report's range: below 0.5 s the lines' +-20 Hz neighbourhood holds too few bins, and a
     # 1e-4 s window gave "x inf" prominences and a fault verdict on anything
     s.add_argument("--window", type=_in_range(*WINDOW_RANGE_S, "s"), default=4.0, metavar="SECONDS",
@@ -175,6 +180,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="stop after this many verdicts (default: %(default)s = never)")
     s.add_argument("--scene", default=None, metavar="S",
                    help="scene giving the bearing geometry (default: er16k_outer_race)")
+    s.add_argument("--simulator", default=None, metavar="NAME",
+                   help="full name of the simulator node whose /diagnostics give the ground truth, "
+                        "rig1/bearing_sim (default: bearing_sim in the namespace of the accel topic)")
     return p
 
 
@@ -203,6 +211,10 @@ def _dispatch(args, rest) -> int:
         if args.scene:
             argv += ["--ros-args", "-p", f"scene:={args.scene}"]
         return node_main(argv + rest) or EXIT_OK
+    if cmd == "monitor":
+        from .nodes.monitor_node import main as monitor_main
+
+        return monitor_main(args, rest) or EXIT_OK
     if rest:
         raise UserError(f"bearing-sim {cmd}: unrecognized arguments: {' '.join(rest)}")
     if cmd == "run":
@@ -229,10 +241,6 @@ def _dispatch(args, rest) -> int:
         from .analysis.validate import validate_command
 
         return validate_command(args)
-    if cmd == "monitor":
-        from .nodes.monitor_node import main as monitor_main
-
-        return monitor_main(args) or EXIT_OK
     raise UserError(f"bearing-sim: unknown command {cmd!r}")
 
 
@@ -243,6 +251,10 @@ def main(argv=None) -> int:
         # `node` passes everything after it to ROS (--ros-args ...)
         if argv[:1] == ["node"]:
             args, rest = parser.parse_known_args(argv)
+        elif argv[:1] == ["monitor"] and "--ros-args" in argv:
+            # the monitor's own options, then ROS's (a namespace, remaps) as the node takes them
+            cut = argv.index("--ros-args")
+            args, rest = parser.parse_args(argv[:cut]), argv[cut:]
         else:
             args, rest = parser.parse_args(argv), []
         return int(_dispatch(args, rest) or EXIT_OK)

@@ -3,7 +3,8 @@ in one place.
 
 A simulator knows what a real machine does not: which defects are in the signal and since when.
 The node and ``bearing-sim render`` put that into every ``/diagnostics`` message (1 Hz), as the
-last published sample has it (the message's stamp is the end of the published signal):
+last published sample has it (the message's stamp is the end of the published signal), in the
+status named by :func:`status_name` (every rig publishes on the one ``/diagnostics``):
 
 - ``faults_present``: the kinds of the defects there, in scene order: ``none``, ``outer``,
   ``inner, ball``;
@@ -35,6 +36,14 @@ FAULTS_KEY = "faults_present"
 SIZES_KEY = "defect_sizes"
 ONSETS_KEY = "fault_onsets_s"
 TIME_KEY = "simulated_s"
+STATUS_SUFFIX = ": simulator"
+
+
+def status_name(node: str) -> str:
+    """The name of the simulator's status in ``/diagnostics``: ``<node>: simulator``, ``node`` the
+    publishing node's full name without its leading slash (``bearing_sim``, ``rig1/bearing_sim``).
+    Simulators in several namespaces all publish on the one ``/diagnostics``: this tells them apart."""
+    return f"{node.strip('/')}{STATUS_SUFFIX}"
 
 
 # ---- writing (the simulator's side) --------------------------------------------------------------

@@ -57,6 +57,13 @@ def test_node_help_says_where_ros_arguments_go(capsys):
     assert "--ros-args -p duration:=10" in out
 
 
+def test_monitor_help_says_where_ros_arguments_go(capsys):
+    assert cli.main(["monitor", "--help"]) == 0
+    out = capsys.readouterr().out
+    assert "[--ros-args ...]" in out.splitlines()[0]
+    assert "--ros-args -r __ns:=/rig1" in out and "--simulator NAME" in out
+
+
 def test_non_finite_inputs_are_named_with_plain_numbers():
     sim = Simulator("er16k_outer_race", fidelity="kinematic")
     with pytest.raises(UserError) as speed:

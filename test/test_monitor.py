@@ -16,7 +16,7 @@ import time
 import numpy as np
 import pytest
 
-from test_node_support import NS, NodeProcess, read_recording
+from test_node_support import NS, NodeProcess, assert_one_error_line, read_recording
 
 from bearing_sim_ros import ground_truth, load_scene
 from bearing_sim_ros.nodes.monitor_node import (TRUTH_GRACE_S, MonitorNode, Window, agrees, score_lines, truth_at,
@@ -254,6 +254,46 @@ def test_monitor_scores_itself_against_the_ground_truth_of_a_fault_that_appears(
     assert all((faults, onsets) == (("outer", "outer=4.000000") if simulated > onset else ("none", "none"))
                for simulated, faults, onsets in seen), seen
     assert any(onset - 0.5 <= simulated <= onset for simulated, _f, _o in seen), seen
+
+
+def test_monitor_takes_the_ground_truth_of_the_rig_it_watches_only(ros_env, bearing_sim_exe, tmp_path):
+    """Two rigs on one domain: ``rig2`` (the outer race, as fast as it runs: a dozen diagnostics a
+    second, stamped ever further ahead) and ``rig1`` (the healthy CWRU 6205, real time).
+    Both publish their ground truth on the one ``/diagnostics``; a monitor in ``rig1`` scores
+    against rig1's only (``rig1/bearing_sim: simulator``, from the namespace of ``/rig1/accel``):
+    ``truth=none``, never rig2's ``outer``, and it says once that it ignores rig2's."""
+    monitor = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / "monitor.log",
+                          command=("monitor", "--window", "1", "--count", "2", "--scene", "cwru_6205_normal",
+                                   "--ros-args", "-r", "__ns:=/rig1"))
+    rigs = []
+    try:
+        monitor.wait_for_output("envelope analysis every")       # subscribed before the rigs start
+        for rig, scene, params in (("rig2", "er16k_outer_race", {"real_time": False, "duration": 300.0}),
+                                   ("rig1", "cwru_6205_normal", {"duration": 30.0})):
+            rigs.append(NodeProcess(bearing_sim_exe, ros_env, params, tmp_path / f"{rig}.log",
+                                    command=("node", "--scene", scene, "--ros-args", "-r", f"__ns:=/{rig}")))
+            rigs[-1].wait_for_output("scene ", timeout=60)       # rig2 is under way before rig1
+        assert monitor.wait(60) == 0, monitor.output()
+        out = monitor.output()
+    finally:
+        monitor.close()
+        for rig in rigs:
+            rig.close()
+    assert "of /rig1/accel, ground truth from /diagnostics 'rig1/bearing_sim: simulator'" in out, out
+    truths = [truth for _t, _v, truth in VERDICT.findall(out)]
+    assert len(truths) == 2 and set(truths) <= {"none", "unknown"} and "none" in truths, out
+    assert out.count("monitor: ground truth of 'rig2/bearing_sim: simulator' ignored") == 1, out
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--ros-args", "--bogus"], ["ROS arguments: unknown --bogus", "-r from:=to"]),
+    (["--ros-args", "-r", "__ns:=rig1"], ["ROS arguments:", "'-r __ns:=rig1'"]),   # not absolute
+])
+def test_bad_ros_arguments_end_the_monitor_with_one_error_line(ros_env, bearing_sim_exe, args, words):
+    """The monitor takes ROS arguments (a namespace, remaps) after ``--ros-args`` like the node,
+    and a bad one is one line, exit 2 (before, ``--ros-args`` itself was refused)."""
+    r = subprocess.run([bearing_sim_exe, "monitor", *args], env=ros_env, capture_output=True, text=True, timeout=60)
+    assert_one_error_line(r, words)
 
 
 def _play_into(monitor, bearing_sim_exe, recording, env, *options) -> str:

@@ -33,6 +33,18 @@ def hung_teardown_script(call: str) -> str:
     ])
 
 
+def assert_one_error_line(result, words) -> None:
+    """``result`` (a finished ``subprocess.run``) ended with exit status 2 and one ``error:`` line
+    holding each of ``words`` on stderr, no traceback; rcl's own log lines (it logs "[ERROR]
+    [rcl]: Failed to parse global arguments" before it raises) aside."""
+    assert result.returncode == 2, result.stderr
+    assert "Traceback" not in result.stderr + result.stdout
+    lines = [ln for ln in result.stderr.splitlines() if ln.strip() and "[rcl]" not in ln]
+    assert len(lines) == 1 and lines[0].startswith("error: "), result.stderr
+    for w in words:
+        assert w in lines[0], lines[0]
+
+
 def param_text(value) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"

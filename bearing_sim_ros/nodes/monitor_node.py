@@ -2,6 +2,7 @@
 
     bearing-sim node &                       # or any recording played with `bearing-sim play`
     bearing-sim monitor --window 4 --count 3
+    bearing-sim monitor --window 4 --ros-args -r __ns:=/rig1    # the node in namespace rig1
 
 It subscribes to ``accel`` (waveform tables, reliable like the node offers them) and ``state``
 (for the shaft speed in use), decodes each table with :func:`bearing_sim_ros.waveform.from_pointcloud2`
@@ -19,7 +20,10 @@ at the fault frequencies of the scene's bearing at the measured shaft speed, and
 It also scores itself.  The simulator's ``/diagnostics`` (1 Hz) say which faults are in the signal
 and since when (``faults_present``: ``none``, ``outer``, ``ball, outer``, ...; ``fault_onsets_s``:
 the signal time each appeared), stamped with the end of the signal published so far, the time
-line of the tables' stamps; :mod:`bearing_sim_ros.ground_truth` reads them.  ``truth=`` is the
+line of the tables' stamps; :mod:`bearing_sim_ros.ground_truth` reads them.  Only the status of
+the simulator whose waveform it watches counts (``--simulator``; by default ``bearing_sim`` in the
+namespace of the resolved ``accel`` topic, ``rig1/bearing_sim: simulator`` for ``/rig1/accel``):
+the simulators of several rigs all publish on the one ``/diagnostics``.  ``truth=`` is the
 faults in the window's last sample (``none``, ``outer``, ``ball,outer``; ``unknown`` before the
 first diagnostics, or with none at all: a real sensor, a recording without them): exact to the
 sample once the diagnostics stamped at or after the window's end are in, which leave the node
@@ -50,6 +54,7 @@ from .. import ground_truth
 from ..analysis.envelope import DETECTION_THRESHOLD, FAULT_LINES, diagnose
 from ..messages import TOPIC_ACCEL, TOPIC_DIAGNOSTICS, TOPIC_STATE, waveform_qos
 from ..teardown import teardown_watchdog
+from .bearing_sim_node import NODE_NAME as SIMULATOR_NODE
 from ..waveform import NS, from_pointcloud2
 
 DEFAULT_SCENE = "er16k_outer_race"
@@ -154,6 +159,14 @@ def truth_text(truth) -> str:
     return "unknown" if truth is None else ",".join(sorted(truth)) or "none"
 
 
+def default_simulator(accel_topic: str) -> str:
+    """The full name of the simulator whose ground truth goes with the waveform on ``accel_topic``
+    (resolved: ``/rig1/accel``): ``bearing_sim`` in that topic's namespace (``rig1/bearing_sim``),
+    since the node publishes ``accel`` relative to its own."""
+    namespace = accel_topic.rsplit("/", 1)[0].strip("/")
+    return f"{namespace}/{SIMULATOR_NODE}" if namespace else SIMULATOR_NODE
+
+
 def agrees(verdict: str, truth):
     """Does a verdict agree with the truth?  ``healthy`` with no fault, a fault verdict when
     that kind is present; None when the truth is unknown."""
@@ -192,9 +205,10 @@ def score_lines(scored, reports, t0_ns: int) -> list:
 
 class MonitorNode(Node):
     """Subscribes to ``accel``, ``state`` and ``/diagnostics``; prints a verdict every ``window``
-    s of signal, with the ground truth the diagnostics give."""
+    s of signal, with the ground truth the diagnostics of ``simulator`` give (its full name,
+    ``rig1/bearing_sim``; default: :func:`default_simulator` of the resolved ``accel``)."""
 
-    def __init__(self, scene, window: float, count: int = 0, out=None, **kwargs):
+    def __init__(self, scene, window: float, count: int = 0, out=None, simulator: str | None = None, **kwargs):
         from diagnostic_msgs.msg import DiagnosticArray
         from sensor_msgs.msg import JointState, PointCloud2
 
@@ -209,6 +223,9 @@ class MonitorNode(Node):
         self.windows_queued = 0
         self.verdicts = []
         self.reports = []           # ground_truth.Truth of each /diagnostics (stamps in ns)
+        self.simulator = (simulator or default_simulator(self.resolve_topic_name(TOPIC_ACCEL))).strip("/")
+        self.truth_status = ground_truth.status_name(self.simulator)
+        self.ignored = set()        # names of other simulators' statuses, said once each
         self._speeds = []
         self._t0 = None
         self._warned = False
@@ -230,11 +247,20 @@ class MonitorNode(Node):
             self._speeds.append(float(msg.velocity[list(msg.name).index("shaft")]))
 
     def _on_diagnostics(self, msg):
-        for status in msg.status:           # the simulator's: the status with faults_present
-            stamp = msg.header.stamp.sec * NS + msg.header.stamp.nanosec
+        stamp = msg.header.stamp.sec * NS + msg.header.stamp.nanosec
+        for status in msg.status:           # a simulator's: a status with faults_present
             truth = ground_truth.parse({kv.key: kv.value for kv in status.values}, stamp, NS)
-            if truth is not None:
-                self.reports.append(truth)
+            if truth is None:
+                continue
+            if status.name != self.truth_status:
+                # another rig's simulator (all publish on the one /diagnostics): its faults are
+                # not in this waveform
+                if status.name not in self.ignored:
+                    self.ignored.add(status.name)
+                    print(f"monitor: ground truth of {status.name!r} ignored: truth= is "
+                          f"{self.truth_status!r}'s (--simulator names another)", file=self.out, flush=True)
+                continue
+            self.reports.append(truth)
 
     def _on_accel(self, msg):
         if self.count and self.windows_queued >= self.count:
@@ -287,20 +313,29 @@ class MonitorNode(Node):
         return super().destroy_node()
 
 
-def main(args) -> int:
-    """``bearing-sim monitor --window S --count N --scene S``; exit 0 after ``count`` verdicts,
-    on Ctrl-C or SIGTERM."""
+def main(args, ros_args=()) -> int:
+    """``bearing-sim monitor --window S --count N --scene S --simulator NAME [--ros-args ...]``;
+    exit 0 after ``count`` verdicts, on Ctrl-C or SIGTERM; 2 with one line for a bad scene or ROS
+    argument.  ``ros_args``: from ``--ros-args`` on (a namespace, remaps)."""
+    from rclpy._rclpy_pybind11 import RCLError, UnknownROSArgsError
     from rclpy.executors import ExternalShutdownException
 
     from ..scene import load_scene
+    from .bearing_sim_node import ros_arguments_error
 
     scene = load_scene(getattr(args, "scene", None) or DEFAULT_SCENE)   # UserError: exit 2
     node = None
     try:
-        rclpy.init()
-        node = MonitorNode(scene, args.window, args.count)
+        try:
+            rclpy.init(args=["bearing-sim monitor", *ros_args])
+            node = MonitorNode(scene, args.window, args.count, simulator=getattr(args, "simulator", None))
+        except (RCLError, UnknownROSArgsError) as exc:
+            if isinstance(exc, RCLError) and rclpy.ok():
+                raise                   # not the arguments: rclpy.init went through
+            raise ros_arguments_error(exc) from None
         print(f"monitor: {scene.bearing.name} ({scene.name}), envelope analysis every {args.window:g} s "
-              f"of {node.resolve_topic_name(TOPIC_ACCEL)}", flush=True)
+              f"of {node.resolve_topic_name(TOPIC_ACCEL)}, ground truth from /diagnostics "
+              f"{node.truth_status!r}", flush=True)
         t_start = time.monotonic()
         while rclpy.ok() and not node.done:
             rclpy.spin_once(node, timeout_sec=0.2)

@@ -32,7 +32,7 @@ from ..paths import output_file
 from ..teardown import signal_handlers
 from ..messages import BATCH_DURATION, STATE_RATE, TOPIC_ACCEL, TOPIC_CONTACT, TOPIC_DIAGNOSTICS, TOPIC_LOAD, \
     TOPIC_SHAFT_SPEED, TOPIC_STATE, TYPES, batching_error, waveform_qos
-from ..ground_truth import diagnostics_values
+from ..ground_truth import diagnostics_values, status_name
 from ..waveform import NS
 
 NODE_NAME = "bearing_sim"
@@ -117,14 +117,15 @@ def load_message(load, stamp_ns: int, frame_id: str):
 
 def diagnostics_message(stamp_ns: int, values: dict, level: int = 0, message: str = "ok",
                         node: str = NODE_NAME):
-    """A DiagnosticArray with one status ``<node>: simulator`` carrying ``values``; ``node`` is
-    the node's name with its namespace (``rig1/bearing_sim``), so that nodes in several
-    namespaces, which all publish on the one ``/diagnostics``, can be told apart."""
+    """A DiagnosticArray with one status ``<node>: simulator`` (``ground_truth.status_name``)
+    carrying ``values``; ``node`` is the node's name with its namespace (``rig1/bearing_sim``), so
+    that nodes in several namespaces, which all publish on the one ``/diagnostics``, can be told
+    apart."""
     from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 
     arr = DiagnosticArray()
     _stamp(arr.header, stamp_ns)
-    st = DiagnosticStatus(level=bytes([level]), name=f"{node}: simulator", message=message, hardware_id=node)
+    st = DiagnosticStatus(level=bytes([level]), name=status_name(node), message=message, hardware_id=node)
     st.values = [KeyValue(key=str(k), value=str(v)) for k, v in values.items()]
     arr.status = [st]
     return arr
