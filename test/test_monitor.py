@@ -52,6 +52,12 @@ def _reports(items, onsets=None):
     return out
 
 
+def _printed(calls, reports):
+    """(window end ns, verdict, truth) per (window end ns, verdict) of ``calls``: the truth its
+    verdict line printed with ``reports`` in."""
+    return [(end, v, truth_at(reports, end)) for end, v in calls]
+
+
 def test_truth_without_onsets_is_the_latest_diagnostics_and_scores_the_verdicts():
     """The plain functions behind ``truth=`` and the exit lines, on made-up diagnostics from a
     source without ``fault_onsets_s`` (a recording from before it): none at 1 and 2 s, outer from
@@ -79,24 +85,24 @@ def test_truth_without_onsets_is_the_latest_diagnostics_and_scores_the_verdicts(
     assert [truth_text(truth_at(reports, end)) for end, _v in scored] == ["none", "none", "outer"] + ["ball,outer"] * 3
     # outer appeared after 2 s (t=1.50s), by 3 s (t=2.50s), ball between t=2.50s and 3.50s;
     # inner is no detection of either
-    assert score_lines(scored, reports, t0) == [
+    assert score_lines(_printed(scored, reports), reports, t0) == [
         "monitor: score 4 of 6 verdicts agree with the truth, 0 truth=unknown",
         "monitor: latency 1.50s (to 1.00s more): outer appeared between t=1.50s and t=2.50s by the "
         "diagnostics, first called at t=4.00s",
         "monitor: latency 1.50s (to 1.00s more): ball appeared between t=2.50s and t=3.50s by the "
         "diagnostics, first called at t=5.00s"]
     never = [(end, "healthy") for end, _v in scored]
-    assert score_lines(never, reports, t0)[:2] == [
+    assert score_lines(_printed(never, reports), reports, t0)[:2] == [
         "monitor: score 2 of 6 verdicts agree with the truth, 0 truth=unknown",
         "monitor: latency none: outer appeared between t=1.50s and t=2.50s by the diagnostics, "
         "not called in 4 verdicts since"]
     # a window that ends at the stamp of the first diagnostics with the fault: latency 0, never -0.00
     at_stamp = [(3 * NS - 500, "outer")]              # 0.5 us short of the stamp: rounding
-    assert score_lines(at_stamp, reports, 2 * NS)[1].startswith("monitor: latency 0.00s (to 1.00s more)")
+    assert score_lines(_printed(at_stamp, reports), reports, 2 * NS)[1].startswith("monitor: latency 0.00s (to 1.00s more)")
     # a real sensor or a recording without diagnostics: every truth unknown, no latency
-    assert score_lines(scored, [], t0) == ["monitor: score 0 of 0 verdicts agree with the truth, 6 truth=unknown"]
+    assert score_lines(_printed(scored, []), [], t0) == ["monitor: score 0 of 0 verdicts agree with the truth, 6 truth=unknown"]
     # a fault there from the first diagnostics on: scored, and only the later one's latency
-    assert score_lines(scored, reports[2:], t0)[1:] == [
+    assert score_lines(_printed(scored, reports[2:]), reports[2:], t0)[1:] == [
         "monitor: latency 1.50s (to 1.00s more): ball appeared between t=2.50s and t=3.50s by the "
         "diagnostics, first called at t=5.00s"]
 
@@ -118,10 +124,15 @@ def test_truth_with_onsets_is_exact_between_diagnostics_and_so_is_the_latency():
     # windows end at 1.0 .. 4.5 s: the one ending 2.5 s holds 0.3 s of outer and is scored against it
     assert [truth_text(truth_at(reports, end)) for end, _v in scored] == \
         ["none"] * 3 + ["outer"] * 3 + ["ball,outer"] * 2
-    assert score_lines(scored, reports, t0) == [
+    assert score_lines(_printed(scored, reports), reports, t0) == [
         "monitor: score 7 of 8 verdicts agree with the truth, 0 truth=unknown",
         "monitor: latency 0.80s: outer appeared at t=1.70s, first called at t=2.50s",
         "monitor: latency 0.30s: ball appeared at t=3.20s, first called at t=3.50s"]
+    # lines printed before the onsets were known (their grace ran out) said none throughout: the
+    # score counts that, the later diagnostics give only the latencies
+    assert score_lines(_printed(scored, reports[:2]), reports, t0)[:2] == [
+        "monitor: score 4 of 8 verdicts agree with the truth, 0 truth=unknown",
+        "monitor: latency 0.80s: outer appeared at t=1.70s, first called at t=2.50s"]
 
 
 def test_a_verdict_waits_for_the_diagnostics_stamped_at_its_window_end(ros_env):
@@ -285,6 +296,62 @@ def test_monitor_takes_the_ground_truth_of_the_rig_it_watches_only(ros_env, bear
     assert out.count("monitor: ground truth of 'rig2/bearing_sim: simulator' ignored") == 1, out
 
 
+def _wait_for_subscribers(monitor, *publishers, timeout: float = 30.0) -> None:
+    """Wait until the monitor's subscriptions match each of ``publishers`` (DDS discovery)."""
+    deadline = time.monotonic() + timeout
+    while not all(p.get_subscription_count() for p in publishers) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert all(p.get_subscription_count() for p in publishers), monitor.output()
+
+
+def test_the_score_counts_the_truth_the_verdict_lines_printed(ros_env, bearing_sim_exe, tmp_path):
+    """A verdict whose grace runs out before the diagnostics stamped after its window's end come
+    prints the truth known then; the exit score must count that truth, not the one that later
+    diagnostics tell (it did: the line said none, the score counted outer).  The test publishes,
+    as a simulator would: diagnostics at 1.0 s (none), the window 1.0-1.5 s (noise), then, once
+    its line is out, diagnostics at 2.5 s (outer since 1.2 s) and the window 1.5-2.0 s."""
+    import rclpy
+    from diagnostic_msgs.msg import DiagnosticArray
+    from sensor_msgs.msg import PointCloud2
+
+    from bearing_sim_ros.ground_truth import diagnostics_values
+    from bearing_sim_ros.messages import TOPIC_ACCEL, TOPIC_DIAGNOSTICS, waveform_qos
+    from bearing_sim_ros.recording.render import diagnostics_message
+    from bearing_sim_ros.waveform import to_pointcloud2
+
+    def diagnostics(stamp_s, onsets):
+        values = diagnostics_values(list(onsets), [1.0] * len(onsets), list(onsets.values()))
+        values["simulated_s"] = f"{stamp_s - 1.0:.6f}"          # signal time: the first table at 1 s
+        return diagnostics_message(round(stamp_s * NS), values)
+
+    x = np.random.default_rng(0).normal(size=(15000, 2))
+    monitor = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / "monitor.log",
+                          command=("monitor", "--window", "0.5", "--count", "2"))
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    try:
+        node = rclpy.create_node("rig", context=context)
+        accel = node.create_publisher(PointCloud2, TOPIC_ACCEL, waveform_qos(0.01))
+        diag = node.create_publisher(DiagnosticArray, TOPIC_DIAGNOSTICS, 10)
+        _wait_for_subscribers(monitor, accel, diag)
+        for k, (stamp_s, onsets) in enumerate(((1.0, {}), (2.5, {"outer": 0.2}))):
+            diag.publish(diagnostics(stamp_s, onsets))
+            for i in range(50 * k, 50 * k + 50):                 # 0.5 s in tables of 10 ms
+                accel.publish(to_pointcloud2(x[150 * i:150 * i + 150], ["accel_x", "accel_y"],
+                                             NS + i * 10_000_000, "bearing_accel"))
+            if k == 0:
+                monitor.wait_for_output("t=0.50s")
+        assert monitor.wait(30) == 0, monitor.output()
+        out = monitor.output()
+    finally:
+        monitor.close()
+        rclpy.try_shutdown(context=context)
+    lines = VERDICT.findall(out)
+    assert [truth for _t, _v, truth in lines] == ["none", "outer"], out
+    agree = sum(v == {"none": "healthy"}.get(truth, truth) for _t, v, truth in lines)
+    assert f"monitor: score {agree} of 2 verdicts agree with the truth, 0 truth=unknown" in out, out
+
+
 @pytest.mark.parametrize("args, words", [
     (["--ros-args", "--bogus"], ["ROS arguments: unknown --bogus", "-r from:=to"]),
     (["--ros-args", "-r", "__ns:=rig1"], ["ROS arguments:", "'-r __ns:=rig1'"]),   # not absolute
@@ -343,10 +410,7 @@ def test_monitor_rejects_a_bad_table_and_keeps_going(ros_env, bearing_sim_exe, t
     try:
         node = rclpy.create_node("bad_tables", context=context)
         pub = node.create_publisher(PointCloud2, TOPIC_ACCEL, waveform_qos(0.01))
-        deadline = time.monotonic() + 30
-        while pub.get_subscription_count() == 0 and time.monotonic() < deadline:
-            time.sleep(0.1)
-        assert pub.get_subscription_count() > 0, monitor.output()
+        _wait_for_subscribers(monitor, pub)
         channels = ["accel_x", "accel_y"]
         wrong_step = to_pointcloud2(np.zeros((150, 2)), channels, 0, "bearing_accel")
         wrong_step.point_step = 12

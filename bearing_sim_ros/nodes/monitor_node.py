@@ -28,8 +28,8 @@ faults in the window's last sample (``none``, ``outer``, ``ball,outer``; ``unkno
 first diagnostics, or with none at all: a real sensor, a recording without them): exact to the
 sample once the diagnostics stamped at or after the window's end are in, which leave the node
 just after its last table, so a verdict waits for them up to ``TRUTH_GRACE_S``.  On exit, beside
-the counts, a score line (``healthy`` agrees with ``none``, a fault verdict when its kind is
-present) and, for each fault that appeared during the run, the latency: the end of the first
+the counts, a score line over the ``truth=`` that each verdict line printed (``healthy`` agrees
+with ``none``, a fault verdict when its kind is present) and, for each fault that appeared during the run, the latency: the end of the first
 window that names it minus its onset.  (From a source without ``fault_onsets_s``, a recording made
 before that key, a fault is known to have appeared only between two diagnostics, up to 1 s apart:
 then the line gives both.)
@@ -176,20 +176,22 @@ def agrees(verdict: str, truth):
 
 
 def score_lines(scored, reports, t0_ns: int) -> list:
-    """The exit lines on ``scored`` ((window end ns, verdict) per verdict, in order) and all the
-    diagnostics ``reports``, which by now give the truth at every window's end that a report
-    follows (to the sample where they have ``fault_onsets_s``; a verdict line printed the truth
-    known then): agreement, and one latency line per fault kind that appeared during the run
-    (after ``t0_ns``, the first table's stamp).  Times as in the verdict lines: s from ``t0_ns``."""
-    marks = [agrees(verdict, truth_at(reports, end)) for end, verdict in scored]
+    """The exit lines on ``scored`` ((window end ns, verdict, truth) per verdict, in order) and
+    all the diagnostics ``reports``: agreement of each verdict with the truth its line printed
+    (the diagnostics that came later may tell a window's truth better, after a grace that ran
+    out, but the score must count what the lines say), and one latency line per fault kind that
+    appeared during the run (after ``t0_ns``, the first table's stamp), by all the ``reports``.
+    Times as in the verdict lines: s from ``t0_ns``."""
+    marks = [agrees(verdict, truth) for _end, verdict, truth in scored]
     known = [m for m in marks if m is not None]
     lines = [f"monitor: score {sum(known)} of {len(known)} verdicts agree with the truth, "
              f"{len(marks) - len(known)} truth=unknown"]
     if not scored:
         return lines
+    calls = [(end, verdict) for end, verdict, _truth in scored]
     for fault in ground_truth.appearances(reports, t0_ns, SLACK_NS):
         before, after = ((t - t0_ns) / NS for t in (fault.earliest, fault.latest))
-        found, since = ground_truth.first_detection(scored, fault, SLACK_NS)
+        found, since = ground_truth.first_detection(calls, fault, SLACK_NS)
         where = (f"{fault.kind} appeared at t={after:.2f}s" if fault.exact else
                  f"{fault.kind} appeared between t={before:.2f}s and t={after:.2f}s by the diagnostics")
         if found is None:
@@ -353,7 +355,7 @@ def main(args, ros_args=()) -> int:
                 print(f"monitor: {len(node.verdicts)} verdicts from {node.tables} tables, "
                       f"{node.window.gaps} gaps (lost tables or a restarted source), "
                       f"{node.rejected} rejected", flush=True)
-                scored = [(r["end_ns"], r["verdict"]) for r in node.verdicts]
+                scored = [(r["end_ns"], r["verdict"], r["truth"]) for r in node.verdicts]
                 for line in score_lines(scored, node.reports, node._t0 or 0):
                     print(line, flush=True)
             rclpy.try_shutdown()
