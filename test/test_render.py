@@ -504,6 +504,35 @@ def test_a_render_stopped_by_a_signal_leaves_a_finalised_file_at_out_and_says_so
         assert rec.topics()["/accel"].count == round(float(line.group(1)) * FS / 150)
 
 
+def test_a_pipe_or_a_device_at_out_gets_a_complete_recording(tmp_path):
+    """A pipe or a device at --out is written directly (README), but finalising fsynced it, which
+    they refuse (EINVAL): ``--out /dev/null`` and a named pipe ended in exit 2, "could not be
+    finalised".  Both render now, and what comes out of the pipe is a whole recording."""
+    import os
+    import threading
+
+    from mcap.reader import make_reader
+
+    assert cli.main(["render", "er16k_healthy", "--duration", "0.05", "--out", os.devnull]) == 0
+    fifo = tmp_path / "pipe.mcap"
+    os.mkfifo(fifo)
+    got = []
+    reader = threading.Thread(target=lambda: got.append(fifo.read_bytes()), daemon=True)
+    reader.start()
+    try:
+        assert cli.main(["render", "er16k_healthy", "--duration", "0.05", "--out", str(fifo)]) == 0
+    finally:
+        if not got:
+            open(fifo, "wb").close()            # the reader ends (EOF) if the render never wrote
+        reader.join(30)
+    (tmp_path / "copy.mcap").write_bytes(got[0])
+    with open(tmp_path / "copy.mcap", "rb") as f:
+        summary = make_reader(f).get_summary()    # footer, summary: the file was finalised
+    assert summary is not None and summary.statistics.channel_message_counts
+    with open_recording(tmp_path / "copy.mcap") as rec:
+        assert rec.topics()["/accel"].count == 5
+
+
 def test_a_render_that_fails_keeps_the_earlier_recording_at_out(tmp_path, monkeypatch):
     """A render that failed after it started writing unlinked --out, which (opened "wb") may have
     held an earlier good recording: the earlier file stays, byte for byte, and the partial file

@@ -42,6 +42,7 @@ import atexit
 import json
 import math
 import os
+import stat
 import threading
 import time
 from collections import deque
@@ -275,6 +276,8 @@ class Recorder:
         if self._replace_when_done and (not path.exists() or path.is_file()):
             written = path.with_name(f"{path.name}.{os.getpid()}.partial")
         stream = open(written, "wb")    # noqa: SIM115 - closed in _close_file
+        if not stream.seekable():
+            stream = _Counted(stream)     # a pipe: the MCAP writer asks where each record starts
         self._writing = (written, path)
         try:
             writer = Writer(stream, chunk_size=CHUNK_BYTES, compression=CompressionType.ZSTD)
@@ -323,7 +326,10 @@ class Recorder:
         try:
             writer.finish()
             stream.flush()
-            os.fsync(stream.fileno())
+            if stat.S_ISREG(os.fstat(stream.fileno()).st_mode):
+                # a pipe or a device (/dev/null), written directly, has nothing to sync and
+                # refuses fsync (EINVAL): that failed every recording to one
+                os.fsync(stream.fileno())
         finally:
             stream.close()
         written, path = self._writing
@@ -415,6 +421,26 @@ class Recorder:
                 self._abandon_file()
         else:
             self._abandon_file()
+
+
+class _Counted:
+    """A stream that cannot ``tell`` (a pipe), with its position counted: the MCAP writer asks
+    where records start (bytes from the file's start) for the summary's indexes."""
+
+    def __init__(self, stream):
+        self._stream = stream
+        self._position = 0
+
+    def write(self, data) -> int:
+        self._stream.write(data)
+        self._position += memoryview(data).nbytes
+        return memoryview(data).nbytes
+
+    def tell(self) -> int:
+        return self._position
+
+    def __getattr__(self, name):        # flush, fileno, close
+        return getattr(self._stream, name)
 
 
 # --------------------------------------------------------------------------------------------
