@@ -181,7 +181,7 @@ def run_command(args) -> int:
         with teardown_watchdog():
             if node is not None:
                 node.destroy_node()
-                log_recording(node.recorder)
+                log_recording(node)
             rclpy.try_shutdown()
     if error is not None:
         raise error

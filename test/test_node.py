@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import shlex
 import signal
 import subprocess
@@ -191,6 +192,19 @@ def test_stray_arguments_to_the_node_itself_end_it_with_one_error_line(ros_env):
     lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
     assert len(lines) == 1 and "unrecognized arguments: --bogus (ROS arguments follow --ros-args)" in lines[0], \
         r.stderr
+
+
+def test_every_log_line_of_a_node_in_a_namespace_names_it(ros_env, bearing_sim_exe, tmp_path):
+    """The node's last line, where its recording went, came from the logger ``bearing_sim``
+    while the others said ``rig1.bearing_sim``: with rigs in several namespaces it did not say
+    whose recording it was.  Every line now names the node in its namespace."""
+    r = subprocess.run([bearing_sim_exe, "node", "--ros-args", "-r", "__ns:=/rig1", "-p", "real_time:=false",
+                        "-p", "duration:=0.1", "-p", f"record:={tmp_path / 'rig1.mcap'}"],
+                       env=ros_env, capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    lines = [ln for ln in r.stderr.splitlines() if ln.startswith("[")]
+    assert len(lines) == 2 and f"recording {tmp_path / 'rig1.mcap'}: " in lines[-1], r.stderr
+    assert all(re.match(r"\[INFO\] \[[\d.]+\] \[rig1\.bearing_sim\]: ", ln) for ln in lines), r.stderr
 
 
 def test_a_misspelt_parameter_is_named_in_a_warning(ros_env, bearing_sim_exe):

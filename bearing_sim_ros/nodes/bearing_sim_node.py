@@ -678,15 +678,18 @@ def _param_text(value) -> str:
     return repr(value)
 
 
-def log_recording(recorder) -> None:
-    """Log where a closed recording went.  Call after ``destroy_node``: after a signal the node's
-    context is gone, and its logger's /rosout publisher with it."""
+def log_recording(node) -> None:
+    """Log where the node's closed recording went.  Call after ``destroy_node``: after a signal
+    the node's context is gone, and its logger's /rosout publisher with it.  Under the node's own
+    logger name (``rig1.bearing_sim`` in namespace rig1), like its other lines: with nodes in
+    several namespaces, ``bearing_sim`` did not say which one's recording it was."""
     from ..recording.recorder import sizes_text
 
+    recorder = node.recorder
     if recorder is None:
         return
     st = recorder.status
-    log = rclpy.logging.get_logger(NODE_NAME)
+    log = rclpy.logging.get_logger(node.get_logger().name)
     if not st["ok"]:
         log.error(f"recording: {st['error']}")
         return
@@ -794,7 +797,7 @@ def main(argv=None) -> int:
         with teardown_watchdog():
             if node is not None:
                 node.destroy_node()
-                log_recording(node.recorder)
+                log_recording(node)
             rclpy.try_shutdown()
     if error is not None:
         raise error
