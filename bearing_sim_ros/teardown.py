@@ -9,7 +9,8 @@ the process exits with status 1.  faulthandler's watchdog is a C thread: it fire
 holds the GIL.
 
 And ``signal_handlers``: handlers for a block of a command's shutdown (``render`` finishing at a
-batch's end, ``render`` and ``run`` holding Ctrl-C while a recording is finalised or read).
+batch's end, ``render`` and ``run`` holding Ctrl-C while a recording is finalised or read);
+``signals_noted``: Ctrl-C and SIGTERM noted, not raised, while the node shuts down.
 """
 from __future__ import annotations
 
@@ -19,6 +20,7 @@ import threading
 from contextlib import contextmanager
 
 TEARDOWN_TIMEOUT = 30.0      # s: the longest the teardown may take
+EXIT_INTERRUPTED = {signal.SIGINT: 130, signal.SIGTERM: 143}    # 128 + the signal, as the shell says
 
 
 @contextmanager
@@ -46,3 +48,20 @@ def signal_handlers(handlers: dict):
     finally:
         for sig, handler in saved.items():
             signal.signal(sig, handler)
+
+
+@contextmanager
+def signals_noted(on_signal=None):
+    """Ctrl-C and SIGTERM noted, not raised, for the block: a shutdown that must run to its end (a
+    KeyboardInterrupt in the middle of finalising a recording lost the file).  Yields the list of
+    the signals that came (numbers, in order); ``on_signal(signum)`` is called at each, in the main
+    thread between two steps of the block.  In the main thread only, like ``signal_handlers``."""
+    noted = []
+
+    def note(signum, _frame):
+        noted.append(signum)
+        if on_signal is not None:
+            on_signal(signum)
+
+    with signal_handlers({signal.SIGINT: note, signal.SIGTERM: note}):
+        yield noted

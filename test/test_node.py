@@ -490,6 +490,51 @@ def test_signal_exits_0_with_a_readable_recording(started, tmp_path, sig):
     assert '"record"' in meta["bearing_sim"]["parameters"]
 
 
+def test_a_second_ctrl_c_while_the_recording_is_finalised_keeps_it_and_exits_130(started, tmp_path):
+    """A second Ctrl-C while the node finalised its recording raised KeyboardInterrupt into the
+    wait for the writer: the process ended at once (status 0 by ``bearing-sim node``, a traceback
+    and 130 by ``bearing_sim_node``) and the file had no footer.  The recording goes to a named
+    pipe that the test reads only after the second Ctrl-C, so the finalisation waits for the
+    test: the second Ctrl-C surely comes during it.  The node says it heard it, finalises the
+    file all the same and exits 130, the status of an interrupted command."""
+    import os
+    import threading
+
+    from mcap.reader import make_reader
+
+    fifo = tmp_path / "pipe.mcap"
+    os.mkfifo(fifo)
+    fd = os.open(fifo, os.O_RDONLY | os.O_NONBLOCK)     # there, so that the node's open goes through
+    try:
+        node = started({"scene": "er16k_outer_race", "fidelity": "kinematic", "record": str(fifo)})
+        node.wait_for_output("recording " + str(fifo), FIRST_TABLE_S)
+        time.sleep(1.0)                   # a second of signal: more than the pipe holds (64 kB)
+        node.send(signal.SIGINT)
+        time.sleep(0.5)
+        assert node.proc.poll() is None, node.output()     # the writer waits for the test
+        node.send(signal.SIGINT)
+        node.wait_for_output("Ctrl-C during shutdown", 10)
+        os.set_blocking(fd, True)
+        hung = threading.Timer(60.0, node.kill)             # a node that never ends the file: EOF
+        hung.start()
+        data = b"".join(iter(lambda: os.read(fd, 1 << 20), b""))      # up to the end of the file
+        hung.cancel()
+    finally:
+        os.close(fd)
+    assert node.wait(20) == 130, node.output()
+    log = node.output()
+    assert "Traceback" not in log, log
+    assert ("Ctrl-C during shutdown: the node finalises its recording and shuts down first, then exits "
+            "with status 130") in log, log
+    messages = int(re.search(rf"recording {re.escape(str(fifo))}: (\d+) messages", log).group(1))
+    (tmp_path / "copy.mcap").write_bytes(data)
+    with open(tmp_path / "copy.mcap", "rb") as f:
+        summary = make_reader(f).get_summary()     # footer and summary: finalised
+    assert summary is not None and summary.statistics.message_count == messages > 100, log
+    topics, _meta = read_recording(tmp_path / "copy.mcap")
+    assert len(topics["/accel"]) >= 100, log
+
+
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
 def test_a_signal_while_the_node_is_being_built_ends_it_quietly_with_status_0(started, listener, sig):
     """Ctrl-C or SIGTERM as soon as the node shows in the graph, while it builds its simulator

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 import shlex
+import signal
 import sys
 import threading
 import time
@@ -40,7 +41,7 @@ from rclpy.node import Node
 
 from ..errors import UserError
 from ..limits import LOAD_MULTIPLE_C0, NDM_LIMIT, STATIC_F0, InputLimits  # noqa: F401 (names kept here)
-from ..teardown import teardown_watchdog
+from ..teardown import EXIT_INTERRUPTED, signals_noted, teardown_watchdog
 
 NODE_NAME = "bearing_sim"
 DEFAULT_SCENE = "er16k_outer_race"
@@ -700,6 +701,29 @@ def log_recording(node) -> None:
         log.info(text)
 
 
+def signals_held_in_shutdown(node):
+    """``teardown.signals_noted`` for the node's shutdown, said once in its log: a second Ctrl-C
+    (or SIGTERM) there raised KeyboardInterrupt into the wait for the recording's writer, and the
+    file was lost (no footer; the interrupted join let the exit skip the writer too).  The caller
+    finishes the shutdown, then exits with ``EXIT_INTERRUPTED`` of the first signal noted."""
+    said = []
+
+    def say(signum):
+        if said:
+            return                  # once: a user who presses Ctrl-C again reads it once
+        said.append(signum)
+        how = "Ctrl-C" if signum == signal.SIGINT else "SIGTERM"
+        what = "finalises its recording and " if node is not None and node.recorder is not None else ""
+        # a child of the node's logger: the node's own still has its /rosout publisher, whose
+        # context the first Ctrl-C ended (rcl would add "Failed to publish log message to rosout")
+        name = node.get_logger().name if node is not None else NODE_NAME
+        rclpy.logging.get_logger(f"{name}.shutdown").warning(
+            f"{how} during shutdown: the node {what}shuts down first, then exits with status "
+            f"{EXIT_INTERRUPTED[signum]}")
+
+    return signals_noted(say)
+
+
 def spin_node(node) -> None:
     """Serve ``node`` until its simulation ends, rclpy shuts down (SIGTERM) or Ctrl-C
     (KeyboardInterrupt, raised to the caller).  The caller then calls ``node.stop()``."""
@@ -791,20 +815,25 @@ def main(argv=None) -> int:
         status = 2
     finally:
         error = None
-        if node is not None:
-            node.stop()                 # the recording is closed here, before anything can hang
-            error = node.error
-        with teardown_watchdog():
+        with signals_held_in_shutdown(node) as held:
             if node is not None:
-                node.destroy_node()
-                log_recording(node)
-            rclpy.try_shutdown()
+                node.stop()             # the recording is closed here, before anything can hang
+                error = node.error
+            with teardown_watchdog():
+                if node is not None:
+                    node.destroy_node()
+                    log_recording(node)
+                rclpy.try_shutdown()
     if error is not None:
         raise error
     if status == 0 and node is not None and node.recorder is not None and node.recorder.error:
         # published in full, but the file is not: a script that checks the status must know
         print(f"error: {node.recorder.error}", file=sys.stderr)
         status = 2
+    if status == 0 and held:
+        # the user insisted (a second Ctrl-C): say so to a script, as the shell does; the
+        # recording is complete all the same
+        status = EXIT_INTERRUPTED[held[0]]
     return status
 
 

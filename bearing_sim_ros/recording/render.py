@@ -29,14 +29,13 @@ import numpy as np
 
 from ..errors import UserError
 from ..paths import output_file
-from ..teardown import signal_handlers
+from ..teardown import EXIT_INTERRUPTED, signal_handlers
 from ..messages import BATCH_DURATION, STATE_RATE, TOPIC_ACCEL, TOPIC_CONTACT, TOPIC_DIAGNOSTICS, TOPIC_LOAD, \
     TOPIC_SHAFT_SPEED, TOPIC_STATE, TYPES, batching_error, waveform_qos
 from ..ground_truth import diagnostics_values, status_name
 from ..waveform import NS
 
 NODE_NAME = "bearing_sim"
-EXIT_INTERRUPTED = {signal.SIGINT: 130, signal.SIGTERM: 143}    # 128 + the signal, as the shell says
 
 
 class Terminated(KeyboardInterrupt):
