@@ -24,10 +24,16 @@ never hold up a real-time batch): the message is dropped and counted (``status["
 ``"wait"`` (``render``, which has no deadline and must lose nothing): ``write`` waits until the
 writer thread has drained the queue below the limit (back-pressure; polled, no lock).
 
-Rotation (optional): ``rotate_bytes`` (serialised message bytes per file) and ``rotate_seconds``
-(log-time span per file) start a new file ``<stem>_001.mcap``, ``<stem>_002.mcap``... (the first
-is ``<stem>_000.mcap``).  Every file is complete on its own (schemas, channels, metadata,
-attachments), so a hard kill loses at most the file being written.
+Rotation (optional): ``rotate_bytes`` (bytes on disk per file, as rosbag2's ``--max-bag-size``)
+and ``rotate_seconds`` (log-time span per file, as ``--max-bag-duration``) start a new file
+``<stem>_001.mcap``, ``<stem>_002.mcap``... (the first is ``<stem>_000.mcap``).  Every file is
+complete on its own (schemas, channels, metadata, attachments), so a hard kill loses at most the
+file being written.  A new file starts only where the log time moves on: the messages of one
+instant (the node's batch: its tables, state, inputs and diagnostics) stay in one file.  The size
+counts what is on disk plus the chunk being filled, before compression (it shrinks when written),
+so a file ends at most one instant's messages past ``rotate_bytes``, and its index comes on top.
+Pieces of an earlier split recording under the same name are not replaced: two recordings'
+pieces would mix in one folder (``existing_pieces``).
 
 Replace when done (optional, ``replace_when_done``; what ``render`` uses): each file is written
 as ``<name>.<pid>.partial`` beside it and moved onto its name (``os.replace``) once finalised,
@@ -39,9 +45,11 @@ grows under its own name while it is written.
 from __future__ import annotations
 
 import atexit
+import glob
 import json
 import math
 import os
+import re
 import stat
 import threading
 import time
@@ -98,12 +106,24 @@ def rotated_path(path: Path, index: int) -> Path:
     return path.with_name(f"{path.stem}_{index:03d}{path.suffix or '.mcap'}")
 
 
+def existing_pieces(path) -> list:
+    """The files of a split recording to ``path`` that exist (``run_000.mcap``, ``run_001.mcap``,
+    ...; ``rotated_path``), in order."""
+    path = Path(path)
+    suffix = path.suffix or ".mcap"
+    name = re.compile(rf"{re.escape(path.stem)}_(\d{{3,}}){re.escape(suffix)}")
+    found = [(int(m.group(1)), p) for p in path.parent.glob(f"{glob.escape(path.stem)}_*{glob.escape(suffix)}")
+             if (m := name.fullmatch(p.name))]
+    return [p for _index, p in sorted(found)]
+
+
 class Recorder:
     """Record ROS 2 messages to MCAP off the publishing path (see the module docstring).
 
     path: output file (``.mcap``); metadata: the ``bearing_sim`` record (str -> str);
-    attachments: name -> bytes (e.g. the scene YAML); rotate_bytes: start a new file after this
-    many bytes of messages (0 = never); rotate_seconds: after this span of log time (s, 0 = never);
+    attachments: name -> bytes (e.g. the scene YAML); rotate_bytes: start a new file once this
+    one holds this many bytes on disk (0 = never); rotate_seconds: after this span of log time
+    (s, 0 = never);
     start_time_ns: log time of the attachments (default: now; offline renders pass 0 so that the
     file does not depend on the wall clock); argument: how errors name the path (the node's
     ``record`` parameter, render's ``--out``); keep: paths never written (the scene's file);
@@ -112,7 +132,8 @@ class Recorder:
     max_queue_bytes (bytes of serialised messages; default MAX_QUEUE_BYTES) wait for the disk.
     Each file is checked as it is opened (``paths.check_replaceable``): an existing file that is
     not an MCAP recording is not replaced (the first file: a UserError; a rotated one: the
-    recording stops with that error).
+    recording stops with that error).  With rotation, existing pieces of that name are a
+    UserError before anything is written (``existing_pieces``).
     """
 
     def __init__(self, path, metadata: dict, attachments: dict | None = None,
@@ -157,6 +178,8 @@ class Recorder:
         # open the first file now so that an unwritable path is the caller's error, at once
         self._writer = None
         self._stream = None
+        if self._rotate:
+            self._refuse_earlier_pieces()
         try:
             self._open_file()
         except OSError as exc:
@@ -263,6 +286,21 @@ class Recorder:
     def _current_path(self) -> Path:
         return rotated_path(self._base, self._file_index) if self._rotate else self._base
 
+    def _where(self, path: Path) -> str:
+        """How an error names ``path``: by the argument's value, and the piece when rotating."""
+        where = f"{self._argument} = {str(self._base)!r}"
+        return f"{where} (file {path})" if self._rotate else where
+
+    def _refuse_earlier_pieces(self) -> None:
+        # replacing run_000..run_002 of an earlier run of ten pieces would leave run_003.. beside
+        # this run's, as if they were its continuation
+        pieces = existing_pieces(self._base)
+        if pieces:
+            more = f" and {len(pieces) - 1} more exist" if len(pieces) > 1 else " exists"
+            raise UserError(f"{self._argument} = {str(self._base)!r}: {pieces[0]}{more}, and a split "
+                            "recording does not replace pieces of its name (two recordings' pieces would mix); "
+                            "give another path or remove them first")
+
     def _set_error(self, text: str) -> None:
         if not self._error:
             self._error = text
@@ -271,7 +309,7 @@ class Recorder:
         from mcap.writer import CompressionType, Writer
 
         path = self._current_path()
-        check_replaceable(path, f"{self._argument} = {str(path)!r}", self._keep)
+        check_replaceable(path, self._where(path), self._keep)
         written = path
         if self._replace_when_done and (not path.exists() or path.is_file()):
             written = path.with_name(f"{path.name}.{os.getpid()}.partial")
@@ -280,7 +318,7 @@ class Recorder:
             stream = _Counted(stream)     # a pipe: the MCAP writer asks where each record starts
         self._writing = (written, path)
         try:
-            writer = Writer(stream, chunk_size=CHUNK_BYTES, compression=CompressionType.ZSTD)
+            writer = Writer(stream, chunk_size=self._chunk_bytes(), compression=CompressionType.ZSTD)
             writer.start(profile=PROFILE, library=f"bearing_sim_ros {self._metadata.get('package_version', '')}".strip())
             meta = dict(self._metadata)
             if self._rotate:
@@ -298,11 +336,20 @@ class Recorder:
         self._schema_ids: dict = {}
         self._channel_ids: dict = {}
         self._seq: dict = {}
-        self._file_bytes = 0
-        self._file_t0 = None
+        self._file_t0 = self._file_t1 = None     # log time of the first and last message (ns)
+        self._file_pos = stream.tell() if self._rotate_bytes else 0   # bytes in the file
+        self._open_chunk = 0              # message bytes since the file last grew: the open chunk
         self._files.append(path)
         for name in list(self._topics):
             self._register(name)
+
+    def _chunk_bytes(self) -> int:
+        """MCAP chunk size (uncompressed bytes).  A file split by size counts its open chunk before
+        compression: smaller chunks keep that estimate, and so the files, within a few percent of
+        ``rotate_bytes`` (1 MB chunks made 1 MB files of 0.38 MB)."""
+        if not self._rotate_bytes:
+            return CHUNK_BYTES
+        return max(4096, min(CHUNK_BYTES, self._rotate_bytes // 16))
 
     def _register(self, name: str) -> None:
         if name in self._channel_ids:     # already registered by a rotation that saw it first
@@ -365,9 +412,10 @@ class Recorder:
         self._remove_partial()
 
     def _maybe_rotate(self, log_time_ns: int) -> None:
-        if not self._rotate or self._file_t0 is None:
+        # only where the log time moves on: one instant's messages (a batch) stay together
+        if not self._rotate or self._file_t0 is None or log_time_ns == self._file_t1:
             return
-        if ((self._rotate_bytes and self._file_bytes >= self._rotate_bytes)
+        if ((self._rotate_bytes and self._file_pos + self._open_chunk >= self._rotate_bytes)
                 or (self._rotate_ns and log_time_ns - self._file_t0 >= self._rotate_ns)):
             self._close_file()
             self._file_index += 1
@@ -380,6 +428,7 @@ class Recorder:
         self._maybe_rotate(log_time_ns)
         if self._file_t0 is None:
             self._file_t0 = log_time_ns
+        self._file_t1 = log_time_ns
         # rclpy leaves CDR alignment padding uninitialised: zero it so that equal messages give
         # equal bytes (byte-identical renders; better compression too)
         data = zero_padding(data, self._topics[name][0])
@@ -389,7 +438,12 @@ class Recorder:
                                  data=data, publish_time=log_time_ns, sequence=seq)
         self._messages += 1
         self._bytes += len(data)
-        self._file_bytes += len(data)
+        if self._rotate_bytes:
+            pos = self._stream.tell()
+            if pos != self._file_pos:     # a chunk went to the file, this message with it
+                self._file_pos, self._open_chunk = pos, 0
+            else:
+                self._open_chunk += len(data)
 
     def _run(self) -> None:
         queue = self._queue
