@@ -76,6 +76,7 @@ def build_parser() -> argparse.ArgumentParser:
     from .physics.integrators import RK4_DEFAULT_STEP, RK4_STEP_RANGE
     from .simulator import AUTO_OVERSAMPLE_MAX, OVERSAMPLE_ALLOWED, SAMPLE_RATE_RANGE, SEED_RANGE
     from .analysis.report import DEFAULT_WINDOW_S, WINDOW_RANGE_S
+    from .recording.recorder import SPLIT_MAX_BYTES, SPLIT_MIN_BYTES
 
     p = _Parser(prog="bearing-sim", description="Virtual bearing accelerometer for ROS 2.")
     sub = p.add_subparsers(dest="command", parser_class=_Parser, metavar="COMMAND")
@@ -98,6 +99,13 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--duration", type=_nonnegative(float), default=10.0, metavar="SECONDS",
                    help="seconds of signal in real time; 0 = until Ctrl-C (default: %(default)g)")
     s.add_argument("--out", required=True, metavar="F.mcap", help="MCAP file to record to (required)")
+    s.add_argument("--max-file-duration", type=_nonnegative(float, hi=1e9), default=0.0, metavar="SECONDS",
+                   help="split the recording into complete files of this many seconds, F_000.mcap, "
+                        "F_001.mcap, ... (the node's record_max_duration); 0 = one file (default: %(default)g)")
+    s.add_argument("--max-file-size", type=_nonnegative(int, hi=SPLIT_MAX_BYTES), default=0, metavar="BYTES",
+                   help=f"split the recording into complete files of about this many bytes on disk, "
+                        f"F_000.mcap, ... (the node's record_max_size), at least {SPLIT_MIN_BYTES}; 0 = one "
+                        f"file (default: %(default)s)")
 
     s = sub.add_parser("render", help="offline, as fast as possible, to MCAP")
     s.add_argument("scene", metavar="S", help=scene_help)

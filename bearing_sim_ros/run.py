@@ -4,10 +4,12 @@
 
 Runs the ``bearing_sim`` node in this process in real time for ``--duration`` seconds (0 = until
 Ctrl-C or SIGTERM), publishing on the ROS graph like ``bearing-sim node`` and recording to
-``--out``.  Then it reads the recording back (so the summary also proves the file is readable)
-and prints one screen: the envelope lines found at the fault frequencies against theory (the
-shared detector, ``analysis.envelope``, over the last ``ANALYSIS_MAX_S`` seconds), the verdict,
-the real-time factor and overruns, and where the recording is.
+``--out`` (split into ``F_000.mcap``, ``F_001.mcap``, ... with ``--max-file-duration`` or
+``--max-file-size``).  Then it reads the recording back (so the summary also proves the files are
+readable) and prints one screen: the envelope lines found at the fault frequencies against theory
+(the shared detector, ``analysis.envelope``, over the last ``ANALYSIS_MAX_S`` seconds, across the
+pieces of a split recording), the verdict, the real-time factor and overruns, and where the
+recording is.
 """
 from __future__ import annotations
 
@@ -24,8 +26,9 @@ from .teardown import signal_handlers, teardown_watchdog
 ANALYSIS_MAX_S = 30.0       # s of signal (the end of the recording) that the summary analyses
 
 
-def _record_tail(path, max_s: float) -> dict:
-    """The last ``max_s`` seconds of ``accel`` from a recording, the shaft speed in use, and the
+def _record_tail(paths, max_s: float) -> dict:
+    """The last ``max_s`` seconds of ``accel`` from a recording (its files in order: the pieces
+    of a split one, whose tables continue across the seams), the shaft speed in use, and the
     skid ratios of the whole recording (percent; the skidding tier's ``/diagnostics``)."""
     from rclpy.serialization import deserialize_message
 
@@ -39,37 +42,40 @@ def _record_tail(path, max_s: float) -> dict:
     skids: dict = {}
     channels, rate = None, None
     prev = None
-    with open_recording(path) as rec:
-        topics = rec.topics()
-        accel_topic = next((t for t in topics if t.rsplit("/", 1)[-1] == "accel"), None)
-        speed_topic = next((t for t in topics if t.rsplit("/", 1)[-1] == "shaft_speed"), None)
-        diag_topic = next((t for t in topics if t.rsplit("/", 1)[-1] == "diagnostics"), None)
-        if accel_topic is None:
-            raise UserError(f"{path}: no accel topic in the recording")
-        wanted = [t for t in (accel_topic, speed_topic, diag_topic) if t]
-        types = {t: get_message(topics[t].msg_type) for t in wanted}
-        for topic, _type, _log_ns, data in rec.messages(topics=wanted):
-            msg = deserialize_message(data, types[topic])
-            if topic == speed_topic:
-                speeds.append(float(msg.data))
-                continue
-            if topic == diag_topic:
-                for key, percent in skid_ratios(msg).items():
-                    skids.setdefault(key, []).append(percent)
-                continue
-            stamp, channels, arr = from_pointcloud2(msg)
-            if prev is not None and rate is None:
-                rate = prev[1] * NS / (stamp - prev[0])
-            prev = (stamp, arr.shape[0])
-            parts.append(arr)
-            held += arr.shape[0]
-            if rate:
-                while held - parts[0].shape[0] >= max_s * rate:
-                    held -= parts.popleft().shape[0]
-                while len(speeds) > len(parts):       # one speed record per batch
-                    speeds.popleft()
-        meta = dict(rec.metadata)
-        counts = {t: c.count for t, c in topics.items()}
+    meta, counts = None, {}
+    for path in paths:
+        with open_recording(path) as rec:
+            topics = rec.topics()
+            accel_topic = next((t for t in topics if t.rsplit("/", 1)[-1] == "accel"), None)
+            speed_topic = next((t for t in topics if t.rsplit("/", 1)[-1] == "shaft_speed"), None)
+            diag_topic = next((t for t in topics if t.rsplit("/", 1)[-1] == "diagnostics"), None)
+            if accel_topic is None:
+                raise UserError(f"{path}: no accel topic in the recording")
+            wanted = [t for t in (accel_topic, speed_topic, diag_topic) if t]
+            types = {t: get_message(topics[t].msg_type) for t in wanted}
+            for topic, _type, _log_ns, data in rec.messages(topics=wanted):
+                msg = deserialize_message(data, types[topic])
+                if topic == speed_topic:
+                    speeds.append(float(msg.data))
+                    continue
+                if topic == diag_topic:
+                    for key, percent in skid_ratios(msg).items():
+                        skids.setdefault(key, []).append(percent)
+                    continue
+                stamp, channels, arr = from_pointcloud2(msg)
+                if prev is not None and rate is None:
+                    rate = prev[1] * NS / (stamp - prev[0])
+                prev = (stamp, arr.shape[0])
+                parts.append(arr)
+                held += arr.shape[0]
+                if rate:
+                    while held - parts[0].shape[0] >= max_s * rate:
+                        held -= parts.popleft().shape[0]
+                    while len(speeds) > len(parts):       # one speed record per batch
+                        speeds.popleft()
+            meta = dict(rec.metadata) if meta is None else meta
+            for t, c in topics.items():
+                counts[t] = counts.get(t, 0) + c.count
     data = np.concatenate(list(parts)) if parts else np.zeros((0, 0), np.float32)
     return {"accel": data, "channels": channels, "sample_rate": rate,
             "shaft_speed": float(np.mean(speeds)) if speeds else None, "metadata": meta,
@@ -100,7 +106,8 @@ def _verdict_lines(scene, res: dict) -> list:
 
 
 def summarise(scene, tail: dict, node_figures: dict, path) -> str:
-    """The one-screen summary (text)."""
+    """The one-screen summary (text); ``path``: the file that ``report`` and ``play`` are shown
+    with (of a split recording, its last piece)."""
     from .analysis.envelope import DETECTION_THRESHOLD
     from .nodes.monitor_node import verdict
     from .recording.render import tier_summary
@@ -130,7 +137,7 @@ def summarise(scene, tail: dict, node_figures: dict, path) -> str:
         lines.append(f"skid ratios, mean of the recording's /diagnostics ({f['tier_values']['tier']} tier): "
                      + ", ".join(f"{k.replace('_ratio', '')} {v:.3g} %" for k, v in tail["skid_percent"].items()))
     n_msgs = sum(tail["counts"].values())
-    lines.append(f"recording: {path} ({f['sizes']}, {n_msgs} messages on "
+    lines.append(f"recording: {f['files']} ({f['sizes']}, {n_msgs} messages on "
                  f"{len(tail['counts'])} topics, {f['dropped']} dropped)")
     lines.append(f"  next: bearing-sim report {path} --out {str(path).rsplit('.', 1)[0]}_report"
                  f"   |   bearing-sim play {path}")
@@ -138,13 +145,15 @@ def summarise(scene, tail: dict, node_figures: dict, path) -> str:
 
 
 def run_command(args) -> int:
-    """CLI entry: ``bearing-sim run --scene S --duration SEC --out F.mcap``."""
+    """CLI entry: ``bearing-sim run --scene S --duration SEC --out F.mcap [--max-file-duration SEC]
+    [--max-file-size BYTES]`` (the last two: the node's ``record_max_duration``, ``record_max_size``)."""
     import rclpy
     from rclpy.executors import ExternalShutdownException
     from rclpy.parameter import Parameter
 
     from .nodes.bearing_sim_node import BearingSimNode, build_node, log_recording, spin_node
-    from .recording.recorder import sizes_text
+    from .messages import BATCH_DURATION
+    from .recording.recorder import files_text, sizes_text, split_error
     from .recording.render import tier_values
     from .scene import load_scene
 
@@ -153,8 +162,13 @@ def run_command(args) -> int:
     out = str(args.out)
     # the node takes an empty record for "no recording"; and nothing starts if --out is the scene
     output_file(out, keep=[scene.source_path])
+    split = (float(args.max_file_duration), int(args.max_file_size))
+    reason = split_error(*split, BATCH_DURATION, names=("--max-file-duration", "--max-file-size"))
+    if reason:                                # said in run's words, not the node parameter's
+        raise UserError(reason)
     overrides = [Parameter("scene", value=str(args.scene)), Parameter("duration", value=duration),
-                 Parameter("record", value=out), Parameter("real_time", value=True)]
+                 Parameter("record", value=out), Parameter("real_time", value=True),
+                 Parameter("record_max_duration", value=split[0]), Parameter("record_max_size", value=split[1])]
     node = None
     error = None
     try:
@@ -177,7 +191,8 @@ def run_command(args) -> int:
                        "overruns": node.stats.overruns, "worst_lag": node.stats.worst_lag,
                        "tier_values": tier_values(node.sim),
                        "dropped": rs["dropped"], "ok": rs["ok"], "error": rs["error"],
-                       "path": rs["path"], "sizes": sizes_text(rs)}
+                       "path": rs["path"], "paths": rs["files"], "files": files_text(rs),
+                       "sizes": sizes_text(rs)}
         with teardown_watchdog():
             if node is not None:
                 node.destroy_node()
@@ -192,6 +207,6 @@ def run_command(args) -> int:
     # the recording is complete.  A second Ctrl-C while its tail is read for the summary (about a
     # second) surfaced inside rclpy's deserialiser as a TypeError traceback: it waits instead
     with signal_handlers({signal.SIGINT: signal.SIG_IGN}):
-        tail = _record_tail(figures["path"], ANALYSIS_MAX_S)
+        tail = _record_tail(figures["paths"], ANALYSIS_MAX_S)
         print(summarise(scene, tail, figures, figures["path"]), flush=True)
     return 0

@@ -22,6 +22,8 @@ ARGUMENTS = [
     ("real_time", "true", bool, "pace on the steady clock; false = as fast as possible"),
     ("duration", "0.0", float, "seconds of signal, then exit; 0 = forever"),
     ("record", "", str, "MCAP file to record to; empty = no recording"),
+    ("record_max_duration", "0.0", float, "split the recording: s per file (run_000.mcap, ...); 0 = one file"),
+    ("record_max_size", "0", int, "split the recording: bytes on disk per file; 0 = one file"),
     ("fidelity", "auto", str, "auto | kinematic | skidding"),
     ("seed", "0", int, "seed of random slip and sensor noise"),
     ("oversample", "0", int, "integration steps per output sample; 0 = each tier's own"),

@@ -133,6 +133,15 @@ def test_oversample_description_names_each_tiers_default():
     ({"oversample": 3}, ["oversample = 3", "multiple of 4"]),
     ({"oversample": 8}, ["oversample = 8", "fidelity auto"]),
     ({"record": "/no/such/dir/x.mcap"}, ["record", "/no/such/dir/x.mcap"]),
+    # a split recording (a node without these parameters would run 0.05 s and exit 0)
+    ({"record_max_duration": -1.0, "real_time": False, "duration": 0.05},
+     ["parameter record_max_duration = -1.0: allowed range is [0, 1e+09]; 0, or at least batch_duration"]),
+    ({"record_max_duration": 0.001, "real_time": False, "duration": 0.05},
+     ["record_max_duration = 0.001 s: 0 (one file) or at least one batch, batch_duration = 0.01 s"]),
+    ({"record_max_size": 1000, "real_time": False, "duration": 0.05},
+     ["record_max_size = 1000 bytes: 0 (one file) or at least 1000000 (1 MB)"]),
+    ({"record_max_size": 0.5, "real_time": False, "duration": 0.05},
+     ["record_max_size = 0.5: wrong type, expected a whole number"]),
 ])
 def test_bad_parameters_end_the_node_with_one_line(ros_env, bearing_sim_exe, params, words):
     args = [bearing_sim_exe, "node", "--ros-args"]
@@ -565,6 +574,37 @@ def test_a_recording_stopped_by_a_signal_ends_where_the_published_stream_ends(st
     topics, _meta = read_recording(out)
     recorded = max(m.header.stamp.sec * NS + m.header.stamp.nanosec for _t, m in topics["/accel"])
     assert received <= recorded <= received + BATCH_NS, (recorded - received) / NS
+
+
+def test_a_split_recording_whose_folder_goes_away_stops_at_the_next_piece_and_says_so(started, listener, tmp_path):
+    """``record_max_duration:=0.5`` in real time, and the folder is moved away while
+    ``run_001.mcap`` is written: that piece is finished in the moved folder, the next one cannot
+    be opened, and the recording stops there.  ``/diagnostics`` name the piece being written
+    (``recording_path``, ``recording_files``) and then the failure with that piece; the node
+    publishes on to the end and exits 2 with one line naming it; the pieces before are complete."""
+    folder, moved = tmp_path / "runs", tmp_path / "moved"
+    folder.mkdir()
+    node = started({"scene": "er16k_outer_race", "fidelity": "kinematic", "duration": 3.0,
+                    "record": str(folder / "run.mcap"), "record_max_duration": 0.5})
+    # (a node that does not split records to run.mcap)
+    listener.wait_for(lambda: (folder / "run_001.mcap").exists() or (folder / "run.mcap").exists(), FIRST_TABLE_S,
+                      "the second piece")
+    assert not (folder / "run.mcap").exists()
+    folder.rename(moved)
+    failed = listener.wait_for(lambda: [d for d in listener.diagnostics if d[3].get("recording") == "error"],
+                               10, "recording: error in /diagnostics")
+    _t, level, message, values, _stamp = failed[0]
+    lost = folder / "run_002.mcap"
+    assert level == 2 and message.startswith(f"recording failed: recording to {lost} stopped: FileNotFoundError")
+    assert values["recording_path"] == str(lost) and values["recording_files"] == "2", values
+    before = [d[3] for d in listener.diagnostics if d[3].get("recording") == "ok"]
+    assert {v["recording_path"] for v in before} <= {str(folder / "run_000.mcap"), str(folder / "run_001.mcap")}
+    assert node.wait(20) == 2, node.output()
+    assert node.output().splitlines()[-1].startswith(f"error: recording to {lost} stopped: FileNotFoundError")
+    for k in range(2):
+        topics, meta = read_recording(moved / f"run_00{k}.mcap")
+        assert meta["bearing_sim"]["file_index"] == str(k) and len(topics["/accel"]) >= 45
+    assert sorted(p.name for p in moved.iterdir()) == ["run_000.mcap", "run_001.mcap"]
 
 
 def test_fast_mode_runs_duration_and_ends(started, tmp_path):

@@ -145,3 +145,105 @@ def test_messages_the_live_node_drops_are_counted_in_diagnostics_and_at_exit(ros
     kept = sum(len(v) for v in topics.values())
     written = 300 * 4 + 150 + 3        # 300 batches: speed, load, accel, contact; state at 50 Hz; diagnostics
     assert f" {kept} messages, " in exit_line and f", {written - kept} dropped:" in exit_line, exit_line
+
+
+def _split_node(bearing_sim_exe, out, duration: float | None, **params):
+    """``bearing-sim node`` on er16k_outer_race, as fast as possible, recording to ``out`` in
+    files of 0.5 s of recording (a subprocess; ``duration`` None = until stopped)."""
+    args = [bearing_sim_exe, "node", "--ros-args", "-p", "scene:=er16k_outer_race", "-p", "fidelity:=kinematic",
+            "-p", "real_time:=false", "-p", f"record:={out}", "-p", "record_max_duration:=0.5"]
+    if duration is not None:
+        args += ["-p", f"duration:={duration}"]
+    for key, value in params.items():
+        args += ["-p", f"{key}:={value}"]
+    return args
+
+
+def _accel_tables(path):
+    """[(stamp ns, width)] of ``/accel`` in one file, read with ``rosbags`` (an independent reader),
+    and {topic: messages} of every topic, each message deserialised."""
+    from rosbags.highlevel import AnyReader
+
+    tables, counts = [], {}
+    with AnyReader([path]) as reader:
+        for conn, _t, raw in reader.messages():
+            msg = reader.deserialize(raw, conn.msgtype)
+            counts[conn.topic] = counts.get(conn.topic, 0) + 1
+            if conn.topic == "/accel":
+                tables.append((msg.header.stamp.sec * NS + msg.header.stamp.nanosec, msg.width))
+    return tables, counts
+
+
+def _assert_contiguous(tables) -> None:
+    stamps = np.array([s for s, _w in tables], dtype=np.int64)
+    widths = np.array([w for _s, w in tables], dtype=np.int64)
+    assert np.all(np.diff(stamps) == widths[:-1] * NS // 15000), np.diff(stamps)[:10]
+
+
+def test_a_split_live_recording_is_complete_files_that_continue_each_other(bearing_sim_exe, ros_env, tmp_path):
+    """``record_max_duration:=0.5`` on a 2 s run: run_000.mcap .. run_003.mcap and nothing else,
+    each complete on its own (footer and summary for the mcap reader; rosbags reads every
+    message), each with the metadata that reproduces the run, the scene attached and every
+    topic's channel and schema, whole batches; together their /accel tables continue each other
+    to the nanosecond, 30000 samples, none lost or twice at the seams.  ``report`` reads one
+    piece alone."""
+    from bearing_sim_ros.analysis.report import build_report
+    from bearing_sim_ros.scene import load_scene
+
+    out = tmp_path / "run.mcap"
+    proc = subprocess.run(_split_node(bearing_sim_exe, out, 2.0), env=ros_env, stdout=subprocess.PIPE,
+                          stderr=subprocess.STDOUT, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stdout
+    pieces = [tmp_path / f"run_{k:03d}.mcap" for k in range(4)]
+    assert sorted(tmp_path.iterdir()) == pieces, proc.stdout
+    assert f"recording {pieces[0]} .. {pieces[-1]}, 4 files: " in proc.stdout, proc.stdout
+    tables = []
+    for k, piece in enumerate(pieces):
+        with open_recording(piece) as rec:                       # footer and summary present
+            meta, attachments, topics = rec.metadata, rec.attachments, rec.topics()
+        assert meta["file_index"] == str(k) and meta["scene"] == "er16k_outer_race"
+        assert json.loads(meta["parameters"])["record_max_duration"] == 0.5
+        assert "-p record_max_duration:=0.5" in json.loads(meta["parameters"])["command"]
+        assert attachments == {"er16k_outer_race.yaml": load_scene("er16k_outer_race").source_text.encode()}
+        assert {t: c.msg_type for t, c in topics.items()} == {
+            "/accel": "sensor_msgs/msg/PointCloud2", "/contact_forces": "sensor_msgs/msg/PointCloud2",
+            "/state": "sensor_msgs/msg/JointState", "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray",
+            "/shaft_speed": "std_msgs/msg/Float64", "/load": "geometry_msgs/msg/WrenchStamped"}
+        piece_tables, counts = _accel_tables(piece)
+        assert len(piece_tables) == 50                            # 0.5 s of 10 ms tables
+        assert counts["/contact_forces"] == counts["/shaft_speed"] == counts["/load"] == 50   # whole batches
+        tables += piece_tables
+    _assert_contiguous(tables)
+    assert sum(w for _s, w in tables) == 30000
+    summary = build_report(pieces[2], tmp_path / "report")
+    assert summary["analysed_s"] == pytest.approx(0.5) and summary["waveform_gaps"] == 0
+    assert summary["verdict"] == "outer"
+
+
+def test_a_hard_kill_loses_only_the_piece_being_written(bearing_sim_exe, ros_env, tmp_path):
+    """SIGKILL in the middle of a split recording (no finalising at all): every piece but the
+    last is complete and readable, and together they hold the stream from its first table on,
+    contiguous; the last one is what a kill leaves: a file without its footer, or an empty one
+    (the writer's buffer never reached the disk)."""
+    from bearing_sim_ros.errors import UserError
+
+    out = tmp_path / "run.mcap"
+    proc = subprocess.Popen(_split_node(bearing_sim_exe, out, None), env=ros_env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.STDOUT)
+    # stop waiting at once when the node writes one file (a node that does not split)
+    signal_when(proc, lambda: len(list(tmp_path.glob("run_*.mcap"))) >= 5 or out.exists(), signal.SIGKILL, 0.0,
+                "the node never split its recording")
+    assert proc.returncode == -signal.SIGKILL and not out.exists()
+    pieces = sorted(tmp_path.glob("run_*.mcap"))
+    tables = []
+    for piece in pieces[:-1]:
+        with open_recording(piece) as rec:
+            assert rec.metadata["scene"] == "er16k_outer_race"
+        tables += _accel_tables(piece)[0]
+    assert len(tables) == 50 * (len(pieces) - 1)                  # 0.5 s in each
+    _assert_contiguous(tables)
+    try:                       # unless the kill came between two pieces, the last one has no footer
+        open_recording(pieces[-1]).close()
+    except UserError as exc:
+        empty = pieces[-1].stat().st_size == 0
+        assert ("not an MCAP file" if empty else "truncated MCAP recording") in str(exc)

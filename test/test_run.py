@@ -77,7 +77,28 @@ def test_run_on_a_healthy_skidding_scene_explains_the_ball_pass_line_and_shows_s
         assert shown == pytest.approx(np.mean(recorded[key]), rel=5e-3), key
 
 
-@pytest.mark.parametrize("case", ["unknown scene", "missing output folder", "the scene's own file"])
+def test_run_splits_its_recording_and_summarises_across_the_pieces(ros_env, bearing_sim_exe, tmp_path):
+    """``--max-file-duration 0.5`` (the node's record_max_duration) for 2 s: r_000.mcap, ... each
+    0.5 s or so, contiguous across the seams, and the summary analyses the last 2 s across them
+    (the last piece alone holds less than the 1 s it needs) and names them all."""
+    out = tmp_path / "r.mcap"
+    r = subprocess.run([bearing_sim_exe, "run", "--duration", "2", "--out", str(out), "--max-file-duration", "0.5"],
+                       env=ros_env, capture_output=True, text=True, timeout=90)
+    assert r.returncode == 0, r.stdout + r.stderr
+    pieces = sorted(tmp_path.iterdir())
+    assert len(pieces) >= 4 and [p.name for p in pieces] == [f"r_{k:03d}.mcap" for k in range(len(pieces))]
+    stamps = []
+    for piece in pieces:
+        topics, meta = read_recording(piece)
+        stamps += [m.header.stamp.sec * NS + m.header.stamp.nanosec for _t, m in topics["/accel"]]
+    assert len(stamps) == 200 and np.all(np.diff(stamps) == 10_000_000)
+    assert "envelope analysis of the last 2.0 s" in r.stdout and "verdict: outer-race fault" in r.stdout, r.stdout
+    assert f"recording: {pieces[0]} .. {pieces[-1]}, {len(pieces)} files (" in r.stdout, r.stdout
+    assert f"bearing-sim report {pieces[-1]} " in r.stdout
+
+
+@pytest.mark.parametrize("case", ["unknown scene", "missing output folder", "the scene's own file",
+                                  "files too small"])
 def test_run_user_mistakes_are_one_line(ros_env, bearing_sim_exe, tmp_path, case):
     if case == "unknown scene":
         args, word = ["--scene", "nope", "--duration", "1", "--out", str(tmp_path / "x.mcap")], "nope"
@@ -86,6 +107,10 @@ def test_run_user_mistakes_are_one_line(ros_env, bearing_sim_exe, tmp_path, case
         scene = tmp_path / "my.yaml"
         scene.write_text(_shipped_scene_text())
         args, word = ["--scene", str(scene), "--duration", "1", "--out", str(scene)], "is the scene's own file"
+    elif case == "files too small":
+        # in run's words, not the node parameter's (record_max_size)
+        args = ["--duration", "1", "--out", str(tmp_path / "x.mcap"), "--max-file-size", "1000"]
+        word = "--max-file-size = 1000 bytes: 0 (one file) or at least 1000000 (1 MB)"
     else:
         # named by the option the user gave, not the node parameter behind it
         args, word = ["--duration", "1", "--out", "/no/such/folder/r.mcap"], "--out = '/no/such/folder/r.mcap'"

@@ -109,6 +109,7 @@ def _descriptors():
     from ..physics.kinematic import SOFT_MODE_FRACTION
     from ..physics.skidding import DEFAULT_OVERSAMPLE as SKIDDING_OVERSAMPLE
     from ..messages import BATCH_DURATION, BATCH_DURATION_RANGE, STATE_RATE, STATE_RATE_RANGE
+    from ..recording.recorder import SPLIT_MAX_BYTES, SPLIT_MIN_BYTES
     from ..simulator import AUTO_OVERSAMPLE_MAX, OVERSAMPLE_ALLOWED, SAMPLE_RATE_RANGE, SEED_RANGE
 
     def d(kind, text, read_only=False, lo=None, hi=None, constraints=""):
@@ -130,6 +131,13 @@ def _descriptors():
         "real_time": (True, d(T.PARAMETER_BOOL, "pace on the steady clock; false = as fast as possible")),
         "duration": (0.0, d(T.PARAMETER_DOUBLE, "seconds of signal, then exit; 0 = forever", False, 0.0, 1.0e9)),
         "record": ("", d(T.PARAMETER_STRING, "MCAP file to record to; empty = no recording", True)),
+        "record_max_duration": (0.0, d(T.PARAMETER_DOUBLE, "split the recording: seconds of it per file "
+                                       "(record:=run.mcap writes run_000.mcap, run_001.mcap, ..., each "
+                                       "complete); 0 = one file", True, 0.0, 1.0e9,
+                                       "0, or at least batch_duration")),
+        "record_max_size": (0, d(T.PARAMETER_INTEGER, "split the recording: bytes on disk per file "
+                                 "(run_000.mcap, run_001.mcap, ..., each complete); 0 = one file", True,
+                                 0, SPLIT_MAX_BYTES, f"0, or at least {SPLIT_MIN_BYTES}")),
         "fidelity": ("auto", d(T.PARAMETER_STRING, "model tier", True, constraints="auto | kinematic | skidding")),
         "seed": (0, d(T.PARAMETER_INTEGER, "seed of random slip and sensor noise", True, *SEED_RANGE)),
         "oversample": (0, d(T.PARAMETER_INTEGER, "integration steps per output sample (speed against "
@@ -155,8 +163,10 @@ def check_config(cfg: dict):
     if cfg["fidelity"] not in FIDELITIES:
         return f"fidelity = {cfg['fidelity']!r}: allowed values are {', '.join(FIDELITIES)}"
     from ..messages import batching_error
+    from ..recording.recorder import split_error
 
-    return batching_error(cfg["sample_rate"], cfg["batch_duration"], cfg["state_rate"])
+    return (batching_error(cfg["sample_rate"], cfg["batch_duration"], cfg["state_rate"])
+            or split_error(cfg["record_max_duration"], cfg["record_max_size"], cfg["batch_duration"]))
 
 
 # ---- the node ----------------------------------------------------------------------------------
@@ -295,7 +305,9 @@ class BearingSimNode(Node):
         attachments = {f"{self.scene.name}.yaml": text.encode("utf-8")} if text else {}
         # a disk that falls behind costs messages (dropped, counted, reported), never a late batch
         self.recorder = Recorder(cfg["record"], meta, attachments, argument=self._record_argument,
-                                 keep=[self.scene.source_path], when_full="drop")
+                                 keep=[self.scene.source_path], when_full="drop",
+                                 rotate_seconds=float(cfg["record_max_duration"]),
+                                 rotate_bytes=int(cfg["record_max_size"]))
         try:
             for role, ent, qos in topics:
                 self.recorder.add_topic(ent.topic_name, TYPES[role], qos)
@@ -350,7 +362,7 @@ class BearingSimNode(Node):
             f"scene {self.scene.name}: {self.sim.tier} tier ({self.sim.selection.reason}), "
             f"{self.sim.sample_rate:g} Hz in batches of {self.n_batch}, "
             f"real_time {self._cfg['real_time']}, duration {self._cfg['duration']:g} s, "
-            f"recording {self._cfg['record'] or 'off'}; input limits {self.limits}")
+            f"recording {_recording_text(self._cfg)}; input limits {self.limits}")
         self._thread.start()
 
     def stop(self, timeout: float = 10.0):
@@ -565,7 +577,8 @@ class BearingSimNode(Node):
         else:
             rs = rec.status
             values["recording"] = "ok" if rs["ok"] else "error"
-            values["recording_path"] = rs["path"]
+            values["recording_path"] = rs["path"]          # of a split recording: the piece being written
+            values["recording_files"] = len(rs["files"])
             values["recording_messages"] = rs["messages"]
             values["recording_bytes"] = rs["bytes"]
             values["recording_dropped"] = rs["dropped"]
@@ -664,11 +677,28 @@ def _override_value(node, name):
 
 
 def _allowed(desc) -> str:
+    # the range, and what else is asked (record_max_size: "0, or at least 1000000")
+    more = f"; {desc.additional_constraints}" if desc.additional_constraints else ""
     for r in desc.floating_point_range:
-        return f"[{r.from_value:g}, {r.to_value:g}]"
+        return f"[{r.from_value:g}, {r.to_value:g}]{more}"
     for r in desc.integer_range:
-        return f"[{r.from_value}, {r.to_value}]"
+        return f"[{r.from_value}, {r.to_value}]{more}"
     return desc.additional_constraints or "see the parameter description"
+
+
+def _recording_text(cfg) -> str:
+    """'off', 'runs/run.mcap', or where a split recording goes: 'runs/run.mcap in files of at most
+    600 s: runs/run_000.mcap, runs/run_001.mcap, ...'."""
+    from ..recording.recorder import rotated_path
+
+    if not cfg["record"]:
+        return "off"
+    limits = ([f"{cfg['record_max_duration']:g} s"] if cfg["record_max_duration"] else []) + \
+             ([f"{cfg['record_max_size']} bytes"] if cfg["record_max_size"] else [])
+    if not limits:
+        return cfg["record"]
+    first, second = (rotated_path(Path(cfg["record"]), k) for k in (0, 1))
+    return f"{cfg['record']} in files of at most {' or '.join(limits)}: {first}, {second}, ..."
 
 
 def _param_text(value) -> str:
@@ -684,7 +714,7 @@ def log_recording(node) -> None:
     the node's context is gone, and its logger's /rosout publisher with it.  Under the node's own
     logger name (``rig1.bearing_sim`` in namespace rig1), like its other lines: with nodes in
     several namespaces, ``bearing_sim`` did not say which one's recording it was."""
-    from ..recording.recorder import sizes_text
+    from ..recording.recorder import files_text, sizes_text
 
     recorder = node.recorder
     if recorder is None:
@@ -694,7 +724,7 @@ def log_recording(node) -> None:
     if not st["ok"]:
         log.error(f"recording: {st['error']}")
         return
-    text = f"recording {st['path']}: {st['messages']} messages, {sizes_text(st)}, {st['dropped']} dropped"
+    text = f"recording {files_text(st)}: {st['messages']} messages, {sizes_text(st)}, {st['dropped']} dropped"
     if st["dropped"]:
         log.warning(f"{text}: the disk did not keep up, the file has gaps")
     else:

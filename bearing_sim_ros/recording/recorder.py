@@ -68,6 +68,11 @@ WHEN_FULL = ("drop", "wait")          # what ``write`` does when the queue holds
 CHUNK_BYTES = 1024 * 1024             # MCAP chunk size (uncompressed)
 _POLL_S = 0.02                        # writer thread wake-up period (s)
 _WAIT_POLL_S = 0.002                  # a waiting producer's wake-up period (when_full="wait", s)
+# a split recording's files (the node's record_max_size, run's --max-file-size; bytes on disk):
+# below this one would hold little more than the metadata and the attached scene (a scene with a
+# long profile takes hundreds of kB), and a file would start at every batch
+SPLIT_MIN_BYTES = 1_000_000
+SPLIT_MAX_BYTES = 10**15
 
 
 def _one_line(exc: BaseException) -> str:
@@ -115,6 +120,30 @@ def existing_pieces(path) -> list:
     found = [(int(m.group(1)), p) for p in path.parent.glob(f"{glob.escape(path.stem)}_*{glob.escape(suffix)}")
              if (m := name.fullmatch(p.name))]
     return [p for _index, p in sorted(found)]
+
+
+def split_error(max_duration: float, max_size: int, batch_duration: float,
+                names=("record_max_duration", "record_max_size")):
+    """None if a split recording's ``max_duration`` (s per file) and ``max_size`` (bytes on disk
+    per file) are usable with batches of ``batch_duration`` (s), else a one-line reason naming
+    them as ``names`` (the node's parameters; ``run``'s options).  Their ranges are checked where
+    they are declared; this refuses a split so fine that every batch would be a file."""
+    if 0 < max_duration < batch_duration:
+        return (f"{names[0]} = {max_duration!r} s: 0 (one file) or at least one batch, "
+                f"batch_duration = {batch_duration:g} s")
+    if 0 < max_size < SPLIT_MIN_BYTES:
+        return (f"{names[1]} = {max_size!r} bytes: 0 (one file) or at least {SPLIT_MIN_BYTES} "
+                f"({SPLIT_MIN_BYTES / 1e6:g} MB)")
+    return None
+
+
+def files_text(status: dict) -> str:
+    """Where a recording went, for a log line: ``runs/run.mcap``, or for a split one
+    ``runs/run_000.mcap .. runs/run_004.mcap, 5 files``."""
+    files = status["files"] or [status["path"]]
+    if len(files) == 1:
+        return str(files[0])
+    return f"{files[0]} .. {files[-1]}, {len(files)} files"
 
 
 class Recorder:
