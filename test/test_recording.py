@@ -684,6 +684,17 @@ def test_a_split_recording_never_mixes_with_the_pieces_of_an_earlier_one(tmp_pat
     assert notes.read_text() == "my notes\n"
 
 
+def test_an_empty_file_is_said_to_be_empty(tmp_path):
+    """The last piece of a split recording killed hard is often empty (its first bytes were still
+    in the writer's buffer): the reader said it was "not an MCAP file ... expected a recording made
+    by the node's record", which it is."""
+    empty = tmp_path / "run_004.mcap"
+    empty.write_bytes(b"")
+    with pytest.raises(UserError, match=rf"^{empty}: empty file \(0 bytes\): its writer wrote nothing to it "
+                                        r"before it stopped, e\.g\. the last file of a recording killed hard"):
+        open_recording(empty)
+
+
 def test_the_first_file_is_checked_before_anything_is_written(tmp_path):
     kept = tmp_path / "scene.yaml"
     kept.write_text("name: x\n")

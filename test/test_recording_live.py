@@ -246,4 +246,4 @@ def test_a_hard_kill_loses_only_the_piece_being_written(bearing_sim_exe, ros_env
         open_recording(pieces[-1]).close()
     except UserError as exc:
         empty = pieces[-1].stat().st_size == 0
-        assert ("not an MCAP file" if empty else "truncated MCAP recording") in str(exc)
+        assert ("empty file (0 bytes)" if empty else "truncated MCAP recording") in str(exc)

@@ -2,8 +2,8 @@
 ``bearing_sim`` metadata and its messages in log-time order.
 
 Every problem with the file is a :class:`~bearing_sim_ros.errors.UserError` of one line: no such
-file, not an MCAP file, a truncated file (no footer: the writer never finished, e.g. the process
-was killed hard), a corrupt chunk, a file that is not a ROS 2 recording.
+file, an empty file, not an MCAP file, a truncated file (no footer: the writer never finished,
+e.g. the process was killed hard), a corrupt chunk, a file that is not a ROS 2 recording.
 """
 from __future__ import annotations
 
@@ -55,6 +55,11 @@ class Recording:
             raise UserError(f"{name}: cannot read it ({exc.strerror})") from None
         try:
             head = self._stream.read(8)
+            if size == 0:
+                # what a hard kill leaves of the file just begun (a split recording's last piece):
+                # "not an MCAP file ... expected a recording made by the node" said the opposite
+                raise UserError(f"{name}: empty file (0 bytes): its writer wrote nothing to it before it "
+                                "stopped, e.g. the last file of a recording killed hard (kill -9)")
             if head != MAGIC:
                 raise UserError(f"{name}: not an MCAP file (it does not start with the MCAP magic); "
                                 "expected a recording made by `bearing-sim render` or the node's `record`")
