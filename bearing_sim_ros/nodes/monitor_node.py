@@ -30,9 +30,9 @@ sample once the diagnostics stamped at or after the window's end are in, which l
 just after its last table, so a verdict waits for them up to ``TRUTH_GRACE_S``.  On exit, beside
 the counts, a score line over the ``truth=`` that each verdict line printed (``healthy`` agrees
 with ``none``, a fault verdict when its kind is present) and, for each fault that appeared
-during the run, the latency: the end of the first window that names it minus its onset.  (From a source without ``fault_onsets_s``, a recording made
-before that key, a fault is known to have appeared only between two diagnostics, up to 1 s apart:
-then the line gives both.)
+during the run, the latency: the end of the first window that names it minus its onset.  (From a
+source without ``fault_onsets_s``, a recording made before that key, a fault is known to have
+appeared only between two diagnostics, up to 1 s apart: then the line gives both.)
 
 The analysis runs on a thread of its own, and the callbacks only decode and queue: the
 subscription keeps a bounded number of tables (``waveform_qos``: 1 s of signal, 0.5 s when a
