@@ -19,11 +19,10 @@ patch at S = 1 gives the same bits) are used when present.
 import os
 from pathlib import Path
 
-import numpy as np
-
 from bearing_sim_ros import bench
 from bearing_sim_ros.physics import kinematic as kin
 from bearing_sim_ros.simulator import Simulator
+from cached import cached_run   # this folder (the script's) is first on the import path
 
 RATE, SETTLE, SECONDS = 15000.0, 0.2, 0.5          # bench.study(quick=False)
 CACHE = Path(os.environ.get("QS_PROBE_OUT", "/tmp/qs_probe"))
@@ -32,9 +31,7 @@ CACHE = Path(os.environ.get("QS_PROBE_OUT", "/tmp/qs_probe"))
 def reference(isc: int, scene) -> bench.Run:
     cached = CACHE / f"sc{isc}_S1_d32.npz"
     if cached.exists():
-        z = np.load(cached)
-        return bench.Run(accel=z["accel"], cage_speed=float(z["cage_speed"]),
-                         cage_skid=float(z["cage_skid"]), cpu=1.0, repeats=[])
+        return cached_run(cached)[0]
     cpu, batch = bench._timed_run(bench.reference_config(), scene, RATE, SETTLE, SECONDS)
     return bench._as_run(batch, [cpu], SECONDS)
 

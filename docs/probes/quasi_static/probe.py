@@ -40,6 +40,7 @@ import numpy as np
 
 from bearing_sim_ros import bench
 from bearing_sim_ros.physics import skidding
+from cached import cached_run   # this folder (the script's) is first on the import path
 
 OUT = Path(os.environ.get("QS_PROBE_OUT", "/tmp/qs_probe"))
 RATE, SETTLE, SECONDS = 15000.0, 0.2, 0.5          # bench.study(quick=False)
@@ -92,11 +93,8 @@ def load(isc, label, div):
     path = fname(isc, label, div)
     if not path.exists():
         return None
-    z = np.load(path)
-    if "failed" in z:
-        return "failed"
-    return bench.Run(accel=z["accel"], cage_speed=float(z["cage_speed"]), cage_skid=float(z["cage_skid"]),
-                     cpu=1.0, repeats=[]), z["forces"]
+    run, z = cached_run(path)
+    return "failed" if run is None else (run, z["forces"])
 
 
 def mode_frequencies(scene, forces) -> tuple:

@@ -31,9 +31,11 @@ import numpy as np
 
 from bearing_sim_ros import bench
 from bearing_sim_ros.physics import skidding
+from cached import cached_run   # this folder (the script's) is first on the import path
 
 OUT = Path(os.environ.get("QS_DEFAULT_OUT", "/tmp/qs_default"))
-REF = Path(os.environ.get("QS_PROBE_OUT", "/tmp/qs_probe"))   # probe.py's runs
+REF = Path(os.environ.get("QS_PROBE_OUT", "/tmp/qs_probe"))
+LOCAL = Path(os.environ.get("QS_LOCAL_OUT", "/tmp/qs_local"))      # probe_local.py's runs   # probe.py's runs
 RATE, SETTLE, SECONDS = 15000.0, 0.2, 0.5
 NEAR_DT = 2e-4
 # label, S_r, near dt
@@ -61,14 +63,12 @@ def own_ref(isc, label):
     healthy = not bench.SCENARIOS[isc].build().defects
     cands = {"S1": [REF / f"sc{isc}_S1_d32.npz"],
              "Sr16loc": ([REF / f"sc{isc}_Sr16_d128.npz"] if healthy else [])
-             + [Path("/tmp/qs_local") / f"sc{isc}_0.2ms_d128.npz", OUT / f"ref_sc{isc}_Sr16loc_d128.npz"],
+             + [LOCAL / f"sc{isc}_0.2ms_d128.npz", OUT / f"ref_sc{isc}_Sr16loc_d128.npz"],
              "Sr64loc": ([REF / f"sc{isc}_Sr64_d512.npz"] if healthy else [])
              + [OUT / f"ref_sc{isc}_Sr64loc_d512.npz"]}[label]
     for c in cands:
         if c.exists():
-            z = np.load(c)
-            return bench.Run(accel=z["accel"], cage_speed=float(z["cage_speed"]),
-                             cage_skid=float(z["cage_skid"]), cpu=1.0, repeats=[])
+            return cached_run(c)[0]
     return None
 
 
@@ -116,14 +116,6 @@ def run_one(out, isc, label, sr, dt, os_, probe=True, nball=1, div=None):
           f"{cpu / nsamp * 1e6:.1f} us/sample, steps {cnt[0]:.0f} event {cnt[1]:.0f} redo {cnt[2]:.0f}", flush=True)
 
 
-def load(path):
-    z = np.load(path)
-    if "failed" in z and str(z["failed"]):
-        return None, z
-    return bench.Run(accel=z["accel"], cage_speed=float(z["cage_speed"]), cage_skid=float(z["cage_skid"]),
-                     cpu=1.0, repeats=[]), z
-
-
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("cmd", choices=["run", "report", "unmod", "compare", "ref", "nball"])
@@ -155,8 +147,8 @@ def main():
     elif a.cmd == "compare":        # S1 here vs unmod in --out
         for isc in a.scen:
             for os_ in a.os:
-                x, _ = load(fname(OUT, isc, "S1", os_))
-                u, _ = load(fname(out, isc, "unmod", os_))
+                x, _ = cached_run(fname(OUT, isc, "S1", os_))
+                u, _ = cached_run(fname(out, isc, "unmod", os_))
                 zx, zu = np.load(fname(OUT, isc, "S1", os_)), np.load(fname(out, isc, "unmod", os_))
                 same = (np.array_equal(x.accel, u.accel) and np.array_equal(zx["forces"], zu["forces"])
                         and x.cage_speed == u.cage_speed and x.cage_skid == u.cage_skid)
@@ -168,30 +160,27 @@ def main():
         for isc in a.scen:
             sc = bench.SCENARIOS[isc]
             scene = sc.build()
-            z = np.load(REF / f"sc{isc}_S1_d32.npz")
-            ref = bench.Run(accel=z["accel"], cage_speed=float(z["cage_speed"]),
-                            cage_skid=float(z["cage_skid"]), cpu=1.0, repeats=[])
+            ref, _ = cached_run(REF / f"sc{isc}_S1_d32.npz")
             variants = [(os_, label, fname(out, isc, label, os_)) for os_ in a.os for label, _s, _d in SETTINGS]
             variants += [(f"1 nball{nb}", label, out / f"sc{isc}_{label}_x1_nball{nb}.npz") for nb in (2, 4, 8) for label, _s, _d in SETTINGS]
             for os_, label, path in variants:
-                if True:
-                    if not path.exists():
-                        continue
-                    run, zz = load(path)
-                    if run is None or not bool(zz["finite"]):
-                        print(f"| {sc.label} | x{os_} {label} | FAILED/NaN | | | | | |")
-                        continue
-                    e = bench.errors(run, ref, scene, RATE)
-                    own = own_ref(isc, label)
-                    if own is None:
-                        ocol = "-"
-                    else:
-                        eo = bench.errors(run, own, scene, RATE)
-                        ocol = f"{100 * eo['error']:.2f} ({100 * eo['rms']:.2f} / {100 * eo['lines']:.2f})"
-                    print(f"| {sc.label} | x{os_} {label} | {100 * e['error']:.2f} | {100 * e['rms']:.2f} | "
-                          f"{100 * e['lines']:.2f} | {100 * e['cage']:.3f} | "
-                          f"{100 * zz['nevt'] / max(zz['nstep'], 1):.1f} ({100 * zz['nredo'] / max(zz['nstep'], 1):.1f}) | "
-                          f"{float(zz['us']):.1f} | {ocol} |")
+                if not path.exists():
+                    continue
+                run, zz = cached_run(path)
+                if run is None or not bool(zz["finite"]):
+                    print(f"| {sc.label} | x{os_} {label} | FAILED/NaN | | | | | |")
+                    continue
+                e = bench.errors(run, ref, scene, RATE)
+                own = own_ref(isc, label)
+                if own is None:
+                    ocol = "-"
+                else:
+                    eo = bench.errors(run, own, scene, RATE)
+                    ocol = f"{100 * eo['error']:.2f} ({100 * eo['rms']:.2f} / {100 * eo['lines']:.2f})"
+                print(f"| {sc.label} | x{os_} {label} | {100 * e['error']:.2f} | {100 * e['rms']:.2f} | "
+                      f"{100 * e['lines']:.2f} | {100 * e['cage']:.3f} | "
+                      f"{100 * zz['nevt'] / max(zz['nstep'], 1):.1f} ({100 * zz['nredo'] / max(zz['nstep'], 1):.1f}) | "
+                      f"{float(zz['us']):.1f} | {ocol} |")
 
 
 if __name__ == "__main__":

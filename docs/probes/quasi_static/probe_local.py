@@ -28,6 +28,7 @@ import numpy as np
 from bearing_sim_ros import bench
 from bearing_sim_ros.physics import skidding
 from bearing_sim_ros.physics.defects import D_HALF, D_KIND, KIND_BALL, KIND_INNER
+from cached import cached_run   # this folder (the script's) is first on the import path
 
 OUT = Path(os.environ.get("QS_LOCAL_OUT", "/tmp/qs_local"))
 SRC = Path(os.environ.get("QS_PROBE_OUT", "/tmp/qs_probe"))   # probe.py's runs
@@ -91,9 +92,8 @@ def run(args):
 
 
 def load(isc, label):
-    z = np.load(fname(isc, label))
-    return bench.Run(accel=z["accel"], cage_speed=float(z["cage_speed"]), cage_skid=float(z["cage_skid"]),
-                     cpu=1.0, repeats=[]), (float(z["near"]) if "near" in z else None)
+    run, z = cached_run(fname(isc, label))
+    return run, (float(z["near"]) if "near" in z else None)
 
 
 def analytic_near(scene, cage, dt):

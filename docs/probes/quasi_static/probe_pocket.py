@@ -21,7 +21,7 @@ import numpy as np
 
 from bearing_sim_ros import bench
 from bearing_sim_ros.physics import skidding
-from probe_default import load        # this folder (the script's) is first on the import path
+from cached import cached_run   # this folder (the script's) is first on the import path
 
 OUT = Path(os.environ.get("QS_POCKET_OUT", "/tmp/qs5_pocket"))
 REF = Path(os.environ.get("QS_PROBE_OUT", "/tmp/qs_probe"))
@@ -81,13 +81,13 @@ def main():
     print("| --- | --- | --- | ---: | ---: | ---: | --- |")
     for isc in a.scen:
         scene = bench.SCENARIOS[isc].build()
-        ref, _ = load(REF / f"sc{isc}_S1_d32.npz")
+        ref, _ = cached_run(REF / f"sc{isc}_S1_d32.npz")
         for os_ in a.os:
             for label, _sr, _st, _dt, own in SETTINGS:
                 path = OUT / f"sc{isc}_{label}_x{os_}.npz"
                 if not path.exists():
                     continue
-                run, z = load(path)
+                run, z = cached_run(path)
                 if run is None or not bool(z["finite"]):
                     print(f"| sc{isc} | x{os_} {label} | FAILED/NaN | | | | |")
                     continue
@@ -95,7 +95,7 @@ def main():
                 oc = "-"
                 op = REF / f"sc{isc}_{own}.npz"
                 if op.exists() and not (label == "St16Sr16loc" and scene.defects):
-                    o, _ = load(op)
+                    o, _ = cached_run(op)
                     eo = bench.errors(run, o, scene, RATE)
                     oc = f"{100 * eo['error']:.2f} ({100 * eo['rms']:.2f} / {100 * eo['lines']:.2f})"
                 print(f"| {bench.SCENARIOS[isc].label} | x{os_} {label} | {100 * e['error']:.2f} "
