@@ -111,7 +111,7 @@ class Lubrication:
     traction_d: float = 0.1
     creep_velocity: float = 0.01
     drag_coefficient: float = 0.5
-    fluid_density: float = 30.0
+    fluid_density: float = 30.0       # a placeholder, not fitted (README, "Model"); ER-16K: 300
     ehl_film: bool = True
     cage_stiffness: float = 1.0e8
     cage_pocket_clearance: float = 0.0

@@ -8,9 +8,16 @@ an arc distance s from the nearer edge the ball centre can drop by
     drop(s) = rho - sqrt(rho^2 - s^2),     rho = R_x = 1 / (1/r +- 1/R_race)
 
 (the effective radius of the contact in the rolling direction: "+" for the convex inner race,
-"-" for the concave outer race), and never deeper than the pit itself.  This is seed 000's H_i /
-H_o (eqs 5-9) written with the effective radius, and it reduces to the flat-race sagitta
-r - sqrt(r^2 - s^2).  The same expression holds for a pit on the ball meeting either race.
+"-" for the concave outer race), and never deeper than the pit itself.  It reduces to the
+flat-race sagitta r - sqrt(r^2 - s^2).  The same expression holds for a pit on the ball meeting
+either race.  Seed 000's H_i / H_o (eqs 5-9) are sagittas of the same kind, but measure the
+distance l from the edge where the ball enters (l = 0.5 D sin(phi), phi the angle turned since
+it entered), so their drop grows across the whole pit and falls back to 0 in one jump at the
+exit edge; for the ER-16K's 0.6 mm pits that is 57.4 um (inner) and 37.8 um (outer) at the exit
+edge, against 14.3 and 9.4 um at the middle here.  A ball bridges a pit: it sinks from both
+edges at once and climbs out along the exit edge as it went in, so the distance here is to the
+nearer edge.  Impact amplitudes are therefore not comparable with seed 000's Figs 10-13; the
+fault frequencies are.
 Seed 001 Sec. 3.3 gives simpler depth functions; all are available (``profile``):
 
     geometric    the expression above (default)

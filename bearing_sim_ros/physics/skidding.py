@@ -44,7 +44,8 @@ Forces (seed 000 Sec. 2, with the corrections of PHYSICS_NOTES):
       dv_o = rho theta' + (r_b - delta_o/2) Omega
   (rho - e - r_b: the inner-race radius at the contact, measured from the shaft centre, so the
   clearance, the shaft offset and a ball inside an inner-race pit all enter the kinematics; each
-  body's rolling radius gives up half the contact deflection, as eq. 21's 0.5 d - delta_in)
+  body's rolling radius gives up half the contact deflection, where eq. 21 takes the whole inner
+  deflection off the ball, 0.5 d - delta_in: 1.9 um of 3.97 mm at 200 N, 0.05 % of the spin)
   and f = -Q mu(dv) with mu(v) = sign(v) [(A + B|v|) exp(-C|v|) + D] the traction curve (eq. 23;
   NOT times the viscosity: eq. 24 is dimensionally wrong).  Its jump A + D at zero slip is
   regularised as (A + D) v / sqrt(v^2 + v_c^2) (``creep_velocity`` v_c); the rest is continuous.
@@ -360,7 +361,7 @@ def _rhs(y, f, ws, sh_ang, fx_ext, fy_ext, p, dtab, wti, wto, film, aux, dg, scr
             co = 0.0
         # traction at both races (force on the ball, along e_t)
         # rolling radii at the deformed contacts: each body takes half the deflection (seed 000
-        # eq. 21 writes the ball's as 0.5 d - delta_in)
+        # eq. 21 takes the whole inner deflection off the ball, 0.5 d - delta_in)
         hdi = 0.5 * di if di > 0.0 else 0.0
         hdo = 0.5 * do if do > 0.0 else 0.0
         sli = r * w - (rb - hdi) * om - (r - rb - e + hdi) * ws
