@@ -15,10 +15,25 @@ PYTEST_ARGS ?=
 export AMENT_PREFIX_PATH := $(CURDIR)/$(VENV)
 export RMW_IMPLEMENTATION ?= rmw_fastrtps_cpp
 export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
-export NUMBA_CACHE_DIR ?= $(CURDIR)/.venv/numba_cache
 export PYTHONDONTWRITEBYTECODE := 1
 
 .PHONY: run test bench venv clean
+
+# `make test PYTHON=python3.10` where .venv was made with another Python would run the old venv
+# without a word: say so and stop (`make clean` first switches)
+ifeq ($(origin PYTHON),command line)
+ifeq ($(filter clean,$(MAKECMDGOALS)),)
+ifneq ($(wildcard $(PY)),)
+PYTHON_WANTED := $(shell $(PYTHON) -c 'import sys; print("%d.%d" % sys.version_info[:2])' 2>/dev/null)
+PYTHON_IN_VENV := $(shell $(PY) -c 'import sys; print("%d.%d" % sys.version_info[:2])' 2>/dev/null)
+ifeq ($(PYTHON_WANTED),)
+$(error PYTHON=$(PYTHON) does not run)
+else ifneq ($(PYTHON_WANTED),$(PYTHON_IN_VENV))
+$(error .venv has Python $(PYTHON_IN_VENV), PYTHON=$(PYTHON) is $(PYTHON_WANTED): run 'make clean' first to switch)
+endif
+endif
+endif
+endif
 
 # ROS 2 Jazzy's wheels and the pins of requirements.lock cover Python 3.10-3.12
 define PYTHON_CHECK
