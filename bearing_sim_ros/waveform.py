@@ -48,18 +48,38 @@ def to_pointcloud2(data: np.ndarray, channels, stamp_ns: int, frame_id: str, fie
     return msg
 
 
+FLOAT32 = 7        # sensor_msgs/msg/PointField.FLOAT32, without importing the message here
+
+
 def from_pointcloud2(msg) -> tuple:
     """(stamp_ns, channel names, (n, c) float32 array) from a waveform table.
 
     Accepts any object with the PointCloud2 attributes (an rclpy message or a ``rosbags``
-    deserialised one)."""
+    deserialised one).  Each column is the field at its own offset, in the order of ``fields``
+    (a table whose offsets are not in field order is still read right).  Anything that is not a
+    waveform table (big-endian, more than one row, a field that is not one FLOAT32, offsets that
+    are not 4 bytes per channel, a data length that is not width x point_step) is a ValueError
+    of one line, not numbers read wrongly."""
     names = [f.name for f in msg.fields]
     c = len(names)
+    width = int(msg.width)
     if msg.point_step != 4 * c or msg.is_bigendian or msg.height != 1:
         raise ValueError(f"not a waveform table: point_step {msg.point_step}, channels {c}, "
                          f"height {msg.height}, big-endian {msg.is_bigendian}")
+    bad = [f.name for f in msg.fields if f.datatype != FLOAT32 or f.count != 1]
+    if bad:
+        raise ValueError(f"not a waveform table: field(s) {', '.join(bad)} not one FLOAT32 each")
+    offsets = [int(f.offset) for f in msg.fields]
+    if sorted(offsets) != list(range(0, 4 * c, 4)):
+        raise ValueError(f"not a waveform table: field offsets {offsets}, expected 0, 4, .. {4 * c - 4} "
+                         "in any order")
     raw = msg.data
     buf = raw.tobytes() if hasattr(raw, "tobytes") else bytes(raw)
-    arr = np.frombuffer(buf, dtype="<f4").reshape(int(msg.width), c)
+    if len(buf) != width * 4 * c:
+        raise ValueError(f"not a waveform table: {len(buf)} bytes of data, expected width {width} x "
+                         f"point_step {4 * c} = {width * 4 * c}")
+    arr = np.frombuffer(buf, dtype="<f4").reshape(width, c)
+    if offsets != list(range(0, 4 * c, 4)):
+        arr = arr[:, [o // 4 for o in offsets]]
     stamp = msg.header.stamp
     return int(stamp.sec) * NS + int(stamp.nanosec), names, arr

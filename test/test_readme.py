@@ -53,7 +53,8 @@ def _shell_lines() -> list[str]:
 # ---- the Python blocks, run as written --------------------------------------------------------
 def test_the_waveform_table_recipe_reads_a_published_table():
     """"Consuming a waveform table": the callback's lines, run on a table the node's own
-    builder makes from a batch, give that batch's accel_y (float32) and the stamp of sample 0."""
+    builder makes from a batch, give that batch's accel_y (float32) and the stamp of sample 0 to
+    the ns; also where the fields are listed in another order than their offsets."""
     from bearing_sim_ros import Simulator, load_scene
     from bearing_sim_ros.waveform import to_pointcloud2
 
@@ -61,13 +62,16 @@ def test_the_waveform_table_recipe_reads_a_published_table():
     head, body = block.split("def on_accel(msg):", 1)
     batch = Simulator(load_scene("er16k_outer_race"), fidelity="kinematic").advance(150)
     stamp_ns = 1_700_000_000_123_456_789
-    msg = to_pointcloud2(batch.accel, batch.accel_channels, stamp_ns, "bearing_accel")
-    scope = {"msg": msg}
-    exec(head, scope)
-    exec(textwrap.dedent(body.split("\n", 1)[1]), scope)
-    assert scope["names"] == ["accel_x", "accel_y"]
-    np.testing.assert_array_equal(scope["accel_y"], batch.accel[:, 1].astype("<f4"))
-    assert scope["t0"] == pytest.approx(stamp_ns * 1e-9, abs=1e-6)
+    for reverse in (False, True):
+        msg = to_pointcloud2(batch.accel, batch.accel_channels, stamp_ns, "bearing_accel")
+        if reverse:
+            msg.fields = list(reversed(msg.fields))
+        scope = {"msg": msg}
+        exec(head, scope)
+        exec(textwrap.dedent(body.split("\n", 1)[1]), scope)
+        assert scope["column"] == {"accel_x": 0, "accel_y": 1}
+        np.testing.assert_array_equal(scope["accel_y"], batch.accel[:, 1].astype("<f4"))
+        assert scope["t0_ns"] == stamp_ns
 
 
 def test_the_python_api_block_runs_as_written():

@@ -508,18 +508,43 @@ def test_from_pointcloud2_refuses_what_is_not_a_waveform_table(sim_msgs):
     """``monitor`` and ``report`` read tables with ``from_pointcloud2``: a big-endian table, a
     point step that is not 4 bytes per channel, or more than one row would be read as the wrong
     numbers, so each is refused with a one-line reason instead."""
+    from sensor_msgs.msg import PointField
+
     from bearing_sim_ros.waveform import to_pointcloud2
 
     scene, sim, msgs = sim_msgs
     b = sim.advance(20)
     stamp, names, arr = from_pointcloud2(msgs.accel(b))
     np.testing.assert_array_equal(arr, b.accel.astype(np.float32))
-    for attr, value in (("is_bigendian", True), ("point_step", 12), ("height", 2)):
+    for attr, value in (("is_bigendian", True), ("point_step", 12), ("height", 2), ("width", 21)):
         m = to_pointcloud2(b.accel, ["accel_x", "accel_y"], stamp, "f")
         setattr(m, attr, value)
         with pytest.raises(ValueError, match="not a waveform table") as exc:
             from_pointcloud2(m)
         assert "\n" not in str(exc.value)
+    # a field of another type, or offsets that are not the channels' 4-byte slots
+    for field, attr, value in ((1, "datatype", PointField.INT32), (0, "count", 2), (1, "offset", 8),
+                               (1, "offset", 0)):
+        m = to_pointcloud2(b.accel, ["accel_x", "accel_y"], stamp, "f")
+        setattr(m.fields[field], attr, value)
+        with pytest.raises(ValueError, match="not a waveform table") as exc:
+            from_pointcloud2(m)
+        assert "\n" not in str(exc.value)
+
+
+def test_from_pointcloud2_reads_each_column_at_its_own_offset(sim_msgs):
+    """A table whose fields are listed in another order than their offsets (legal PointCloud2)
+    gives each name the column at that field's offset, not the column at its list position."""
+    from bearing_sim_ros.waveform import to_pointcloud2
+
+    scene, sim, msgs = sim_msgs
+    b = sim.advance(20)
+    m = to_pointcloud2(b.accel, ["accel_x", "accel_y"], 0, "f")
+    m.fields = [m.fields[1], m.fields[0]]             # accel_y (offset 4) listed first
+    _, names, arr = from_pointcloud2(m)
+    assert names == ["accel_y", "accel_x"]
+    np.testing.assert_array_equal(arr[:, 0], b.accel[:, 1].astype(np.float32))
+    np.testing.assert_array_equal(arr[:, 1], b.accel[:, 0].astype(np.float32))
 
 
 def test_a_frame_id_given_to_batch_messages_is_the_frame_of_every_message(sim_msgs):
