@@ -264,7 +264,10 @@ def main(argv=None) -> int:
             cut = argv.index("--ros-args")
             args, rest = parser.parse_args(argv[:cut]), argv[cut:]
         else:
-            args, rest = parser.parse_args(argv), []
+            # known args first, so that a stray one is named with its command, as `node` does
+            args, rest = parser.parse_known_args(argv)
+            if rest:
+                raise UserError(f"bearing-sim {args.command}: unrecognized arguments: {' '.join(rest)}")
         return int(_dispatch(args, rest) or EXIT_OK)
     except UserError as exc:
         print(f"error: {exc}", file=sys.stderr)

@@ -64,6 +64,21 @@ def test_monitor_help_says_where_ros_arguments_go(capsys):
     assert "--ros-args -r __ns:=/rig1" in out and "--simulator NAME" in out
 
 
+@pytest.mark.parametrize("argv", [
+    ["monitor", "--bogus"],
+    ["play", "a.mcap", "b.mcap"],
+    ["report", "a.mcap", "--out", "r", "--bogus"],
+    ["scenes", "extra"],
+    ["validate", "--cwru", "c", "--out", "v", "--bogus"],
+])
+def test_a_stray_argument_is_named_with_its_command(capsys, argv):
+    """As `node` does: one line that says which command did not take it, exit status 2, before
+    any work (nothing is read or written)."""
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"error: bearing-sim {argv[0]}: unrecognized arguments: "), err
+
+
 def test_non_finite_inputs_are_named_with_plain_numbers():
     sim = Simulator("er16k_outer_race", fidelity="kinematic")
     with pytest.raises(UserError) as speed:
