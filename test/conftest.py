@@ -6,9 +6,11 @@ localhost, both in this process's environment and in the environment handed to s
 """
 from __future__ import annotations
 
+import fcntl
 import itertools
 import os
 import sys
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -20,17 +22,38 @@ VENV_BIN = Path(sys.executable).parent
 # domain ids 1..101 are valid for Fast DDS on localhost; start from the pid to keep parallel
 # pytest runs on one machine apart
 _domains = itertools.count(1 + (os.getpid() % 50))
+# a test holds a lock on its domain id for as long as it runs, so that two suites on one machine
+# (two checkouts, a helper's run beside make test) never share one: walking from the pid alone,
+# two suites started close together met on the same ids and saw each other's nodes
+_DOMAIN_LOCKS = Path(tempfile.gettempdir()) / "bearing_sim_ros_test_domains"
 
 
 def _next_domain() -> int:
     return 1 + (next(_domains) - 1) % 100
 
 
+def _claim_domain():
+    """(domain id, open lock file): the next id no other running test holds (flock, released
+    when the file is closed, also if the process dies)."""
+    _DOMAIN_LOCKS.mkdir(exist_ok=True)
+    for _ in range(100):
+        domain = _next_domain()
+        lock = open(_DOMAIN_LOCKS / f"{domain}.lock", "w")
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            return domain, lock
+        except OSError:
+            lock.close()
+    raise RuntimeError(f"every ROS domain id 1-100 is held by a running test ({_DOMAIN_LOCKS})")
+
+
 @pytest.fixture
 def ros_env(monkeypatch):
-    """An environment dict for subprocesses with a fresh ROS_DOMAIN_ID; also applied to this
-    process (call ``rclpy.init`` after requesting the fixture)."""
-    domain = str(_next_domain())
+    """An environment dict for subprocesses with a fresh ROS_DOMAIN_ID that no other test on
+    this machine holds while this one runs; also applied to this process (call ``rclpy.init``
+    after requesting the fixture)."""
+    domain, lock = _claim_domain()
+    domain = str(domain)
     env = dict(os.environ)
     env.update({
         "ROS_DOMAIN_ID": domain,
@@ -41,7 +64,10 @@ def ros_env(monkeypatch):
     })
     for key in ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE", "AMENT_PREFIX_PATH", "RMW_IMPLEMENTATION"):
         monkeypatch.setenv(key, env[key])
-    return env
+    try:
+        yield env
+    finally:
+        lock.close()
 
 
 @pytest.fixture
