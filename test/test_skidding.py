@@ -382,6 +382,121 @@ def test_traction_curve_is_eq_23_on_both_sides_of_its_series_switch():
     np.testing.assert_allclose(got[away, 1], ((up - down) / (2 * dv))[away], rtol=1e-5, atol=1e-5)
 
 
+def _free_balls(sc):
+    """A model of ``sc``, its parameter vector without squeeze films and with a small pocket
+    clearance, and a state with shaft and
+    pedestal centred and every ball at the pitch radius in the middle of its pocket, no film:
+    every ball in free flight in the clearance (no race, no pocket contact)."""
+    w, load = sc.shaft_speed, np.array(sc.radial_load)
+    model = sk.SkiddingModel(sc, FS, 0, w, load)
+    p = model.p.copy()
+    p[sk.P_SQI] = p[sk.P_SQO] = 0.0
+    p[sk.P_CPK] = 1e-6            # a pocket clearance of 1 um: a centred ball touches no face
+    y = model.y.copy()
+    y[:10] = 0.0
+    nb = model.nb
+    y[10] = 0.0
+    spacing = 2.0 * np.pi / nb
+    for j in range(nb):
+        b = sk.NS0 + sk.NBV * j
+        y[b + sk.B_TH] = j * spacing
+        y[b + sk.B_R] = p[sk.P_RM]
+    return model, p, y
+
+
+def _rhs(model, p, y, film, ws):
+    nb = model.nb
+    f = np.zeros_like(y)
+    aux, dg, scr, frc = np.zeros((nb, sk.NAUX)), np.zeros((nb, sk.NDG)), np.zeros((nb, 5)), np.zeros(4)
+    sk._rhs(y, f, ws, 0.0, 0.0, 0.0, p, model.dtab, model.wti, model.wto, film, aux, dg, scr, frc)
+    return f, dg, frc
+
+
+def test_a_free_ball_obeys_newton_in_polar_coordinates():
+    """A ball touching neither race nor its pocket feels only gravity and the lubricant drag:
+    theta'' = (F_v / m - 2 rho' theta' - g cos theta) / rho (drag against the revolution, Coriolis),
+    rho'' = rho theta'^2 - g sin theta (centrifugal, gravity), Omega' = 0, and it pushes neither
+    shaft nor pedestal (seed 000 eqs 30-31).  Each ball's accelerations against the closed forms,
+    with Harris' drag F_v = c_v pi xi d^2 (D_m theta')^1.95 / 32 and moving in and out; and the
+    cage, which no ball pushes, slows by its own drag only: omega_c' = -c_c omega_c / J_c."""
+    sc = make_scene()
+    assert sc.bearing.radial_clearance > 0 and sc.gravity
+    model, p, y = _free_balls(sc)
+    b_, lub = sc.bearing, sc.lubrication
+    nb = model.nb
+    c_v = lub.drag_coefficient * np.pi * lub.fluid_density * b_.ball_diameter ** 2 / 32
+    film = np.zeros((nb, sk.NFILM))
+    rng = np.random.default_rng(5)
+    for j in range(nb):
+        b = sk.NS0 + sk.NBV * j
+        y[b + sk.B_W] = rng.uniform(50.0, 150.0) * (1 if j % 2 else -1)
+        y[b + sk.B_V] = rng.uniform(-0.02, 0.02)
+        y[b + sk.B_OM] = -5 * y[b + sk.B_W]
+        w = abs(y[b + sk.B_W])
+        film[j, sk.F_DRAG] = c_v * b_.pitch_diameter ** 1.95 * w ** -0.05     # F_v / w^2
+    # the cage, pushed by no ball, slows under its viscous drag alone (eq. 35 with cage_drag)
+    p[sk.P_CDRAG] = 2e-6
+    y[11] = 90.0
+    f, dg, frc = _rhs(model, p, y, film, sc.shaft_speed)
+    np.testing.assert_array_equal(dg[:, [sk.D_QI, sk.D_QO, sk.D_FI, sk.D_FO]], 0.0)
+    np.testing.assert_array_equal(frc, 0.0)
+    assert f[10] == 90.0
+    assert f[11] == pytest.approx(-2e-6 * 90.0 / sk.cage_inertia(sc), rel=1e-12)
+    m, g = b_.ball_mass, G
+    for j in range(nb):
+        b = sk.NS0 + sk.NBV * j
+        th, r, w, v = y[b + sk.B_TH], y[b + sk.B_R], y[b + sk.B_W], y[b + sk.B_V]
+        drag = -np.sign(w) * c_v * (b_.pitch_diameter * abs(w)) ** 1.95
+        assert f[b + sk.B_W] == pytest.approx((drag / m - 2 * v * w - g * np.cos(th)) / r, rel=1e-9)
+        assert f[b + sk.B_V] == pytest.approx(r * w * w - g * np.sin(th), rel=1e-9)
+        assert f[b + sk.B_OM] == 0.0
+        assert f[b + sk.B_PSI] == w - y[b + sk.B_OM]
+
+
+@pytest.mark.parametrize("name", ["er16k_skidding", "er16k_inner_race"])
+def test_contact_forces_on_the_races_are_the_reactions_of_those_on_the_balls(name):
+    """Newton's third law at every contact (seed 000 eqs 20, 25, 33): the shaft gets -Q_i e_r -
+    f_i e_t from each ball, the pedestal +Q_o e_r - f_o e_t, where the ball gets +Q_i e_r + f_i e_t
+    at the inner race and -Q_o e_r + f_o e_t at the outer (e_r, e_t: radial and tangential unit
+    vectors at the ball's angle); so the races' forces, normal and traction parts, are minus the
+    balls' recorded contact forces, summed in Cartesian coordinates.  On a running state with
+    loaded and unloaded balls, traction and (inner race) a ball in the pit."""
+    sc = make_scene(name)
+    w, load = sc.shaft_speed, np.array(sc.radial_load)
+    model = sk.SkiddingModel(sc, FS, 0, w, load)
+    for _ in range(3):
+        model.advance(4 * 150, w, w, load, load)
+        nb = model.nb
+        f = np.zeros_like(model.y)
+        aux, dg, scr, frc = np.zeros((nb, sk.NAUX)), np.zeros((nb, sk.NDG)), np.zeros((nb, 5)), np.zeros(4)
+        sk._rhs(model.y, f, w, model.shaft_angle, load[0], load[1], model.p, model.dtab, model.wti,
+                model.wto, model.film, aux, dg, scr, frc)
+        th = model.y[sk.NS0 + sk.B_TH::sk.NBV]
+        er = np.stack([np.cos(th), np.sin(th)], axis=1)
+        et = np.stack([-np.sin(th), np.cos(th)], axis=1)
+        qi, qo, fi, fo = (dg[:, k][:, None] for k in (sk.D_QI, sk.D_QO, sk.D_FI, sk.D_FO))
+        assert qi.max() > 10.0 and np.abs(fi).max() > 1e-3 and np.abs(fo).max() > 1e-3
+        on_ball_inner = (qi * er + fi * et).sum(axis=0)
+        on_ball_outer = (-qo * er + fo * et).sum(axis=0)
+        scale = 1e-12 * qi.sum()
+        np.testing.assert_allclose(frc[0:2], -on_ball_inner, rtol=0, atol=scale)
+        np.testing.assert_allclose(frc[2:4], -on_ball_outer, rtol=0, atol=scale)
+
+
+def test_the_drag_factor_is_harris_drag_over_the_speed_squared():
+    """The drag the kernel freezes over a step, F_v / theta'^2, is Harris' c_v pi xi d^2 D_m^1.95
+    theta'^-0.05 / 32 (seed 000 eq. 30 in SI), at slow and fast revolution and either sense."""
+    sc = make_scene()
+    p = sk.parameters(sc)
+    b, lub = sc.bearing, sc.lubrication
+    film = np.zeros((1, sk.NFILM))
+    for w in (2.0, 80.0, -80.0, 900.0):
+        film[:] = 0.0
+        sk._drag_factor(film, 0, p, w)
+        f_v = lub.drag_coefficient * np.pi * lub.fluid_density * b.ball_diameter ** 2 / 32 * (b.pitch_diameter * abs(w)) ** 1.95
+        assert film[0, sk.F_DRAG] * w * w == pytest.approx(f_v, rel=1e-12), w
+
+
 @pytest.mark.parametrize("profile", ["geometric", "rectangular", "half_sine", "piecewise"])
 def test_defect_depth_slopes_along_the_ball_angle(profile):
     """The skidding tier's W takes a race defect's loss slope along the ball angle from
