@@ -497,6 +497,29 @@ def test_the_drag_factor_is_harris_drag_over_the_speed_squared():
         assert film[0, sk.F_DRAG] * w * w == pytest.approx(f_v, rel=1e-12), w
 
 
+def test_the_ball_skid_is_eq_38_averaged_over_every_ball():
+    """ball_skid = 100 mean_j (w_bt - w_bj) / w_bt over ALL balls (module docstring, seed 000 eq.
+    38), w_bt = omega_s D_m / (2 d) (1 - gamma^2) the catalog's pure-rolling spin, w_bj = theta'_j
+    - Omega_j: recomputed from the state at the start of a one-sample call, the row recorded
+    there; cage_skid likewise from eq. 37.  The balls skid unequally (loaded and unloaded), so
+    a mean over fewer balls, or over a wrong count, shows."""
+    sc = make_scene()
+    w, load = sc.shaft_speed, np.array(sc.radial_load)
+    model = sk.SkiddingModel(sc, FS, 0, w, load)
+    nb = model.nb
+    model.advance(4 * 300, w, w, load, load)
+    wbt = sc.bearing.ball_spin_speed(w)
+    wct = sc.bearing.cage_speed(w)
+    # 29 internal samples: the last recorded row (sample 28) is the grid point the state ends at
+    out = model.advance(29, w, w, load, load)
+    assert model.counters[0] * model.hstep == pytest.approx((1200 + 28) * model.hs, rel=1e-12)
+    y = model.y
+    each = 100 * (wbt - (y[sk.NS0 + sk.B_W::sk.NBV] - y[sk.NS0 + sk.B_OM::sk.NBV])) / wbt
+    assert each.shape == (nb,) and np.ptp(each) > 0.1 * abs(each.mean())
+    assert out.extras["ball_skid"][-1] == pytest.approx(each.mean(), rel=1e-6)
+    assert out.extras["cage_skid"][-1] == pytest.approx(100 * (wct - y[11]) / wct, rel=1e-6)
+
+
 @pytest.mark.parametrize("profile", ["geometric", "rectangular", "half_sine", "piecewise"])
 def test_defect_depth_slopes_along_the_ball_angle(profile):
     """The skidding tier's W takes a race defect's loss slope along the ball angle from
