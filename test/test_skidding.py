@@ -483,6 +483,33 @@ def test_contact_forces_on_the_races_are_the_reactions_of_those_on_the_balls(nam
         np.testing.assert_allclose(frc[2:4], -on_ball_outer, rtol=0, atol=scale)
 
 
+def test_the_shaft_angle_is_the_integral_of_the_speed_ramp():
+    """The kernels' inputs over a chunk whose speed ramps linearly from w0 to w1 over T: the shaft
+    angle a0 + w0 tau + (w1 - w0) tau^2 / (2 T) inside the ramp, a0 + (w0 + w1) T / 2 + w1 (tau - T)
+    after it, a0 + w0 tau before it (the integral of the speed, continuous at both ends), the
+    speed and the load on the same ramp.  An inner-race defect and waviness sit at this angle."""
+    ramp = np.zeros(sk.NRAMP)
+    t0, tt, w0, w1, a0 = 0.25, 0.02, 150.0, 260.0, 1.3
+    ramp[sk.R_T0], ramp[sk.R_T], ramp[sk.R_S0], ramp[sk.R_S1], ramp[sk.R_A0] = t0, tt, w0, w1, a0
+    ramp[sk.R_L0X], ramp[sk.R_L0Y], ramp[sk.R_L1X], ramp[sk.R_L1Y] = 10.0, -200.0, 30.0, -400.0
+    for tau in np.linspace(-0.005, 0.03, 36):
+        ws, ang, fx, fy = sk._inputs(ramp, t0 + tau)
+        if tau <= 0:
+            want_ang, frac = a0 + w0 * tau, 0.0
+        elif tau >= tt:
+            want_ang, frac = a0 + 0.5 * (w0 + w1) * tt + w1 * (tau - tt), 1.0
+        else:
+            want_ang, frac = a0 + w0 * tau + (w1 - w0) * tau ** 2 / (2 * tt), tau / tt
+        assert ang == pytest.approx(want_ang, rel=1e-12, abs=1e-12), tau
+        assert ws == pytest.approx(w0 + (w1 - w0) * frac, rel=1e-12), tau
+        assert (fx, fy) == pytest.approx((10 + 20 * frac, -200 - 200 * frac), rel=1e-12), tau
+    # numerically: the angle's increments are the speed's trapezoids
+    taus = np.linspace(0.0, 0.03, 3001)
+    vals = np.array([sk._inputs(ramp, t0 + t) for t in taus])
+    np.testing.assert_allclose(np.diff(vals[:, 1]), 0.5 * (vals[1:, 0] + vals[:-1, 0]) * np.diff(taus),
+                               rtol=1e-6)
+
+
 def test_the_drag_factor_is_harris_drag_over_the_speed_squared():
     """The drag the kernel freezes over a step, F_v / theta'^2, is Harris' c_v pi xi d^2 D_m^1.95
     theta'^-0.05 / 32 (seed 000 eq. 30 in SI), at slow and fast revolution and either sense."""
