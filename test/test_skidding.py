@@ -320,6 +320,28 @@ def test_two_samples_per_step_pass_the_resonator_band():
     assert np.all(np.abs(rms(r.cat("accel")[150:]) / rms(ref.cat("accel")[150:]) - 1) < 0.003)
 
 
+def test_samples_inside_a_sub_stepped_step_are_as_accurate_as_those_on_the_grid():
+    """At two internal samples per step, the sample between two grid points comes from the
+    structure's exact response; in a step redone in event sub-steps (a ball in the pit, 12
+    sub-steps) it is the sub-steps' state at that sample, the 6th.  Against 8 steps per output
+    sample, the internal samples between grid points of the default are then as accurate as
+    those on the grid (measured: 0.25 % both on this scene), where the state of one sub-step
+    later (a sub-step's bookkeeping off by one) made them 10x worse (2.5 %) while the grid
+    points stayed as they were."""
+    sc = make_scene("er16k_outer_race")
+    w, load = sc.shaft_speed, np.array(sc.radial_load)
+    acc = {}
+    for ov in (2, 8):
+        model = sk.SkiddingModel(sc, FS, 0, w, load, oversample=ov)
+        model.advance(4 * 750, w, w, load, load)
+        acc[ov] = model.advance(4 * 1500, w, w, load, load).accel[:, 1]
+    ref = acc[8]
+    d = acc[2] - ref
+    on_grid = np.linalg.norm(d[0::2]) / np.linalg.norm(ref[0::2])
+    between = np.linalg.norm(d[1::2]) / np.linalg.norm(ref[1::2])
+    assert on_grid < 0.01 and between < 1.5 * on_grid, (on_grid, between)
+
+
 def test_default_within_one_percent_on_the_inner_race_bench_scene():
     """The bench's error (the largest of RMS, envelope line heights and mean cage speed, against
     the reference, on the bench's window) of the default on the ER-16K inner-race scene, where the
