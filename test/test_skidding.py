@@ -405,10 +405,10 @@ def test_traction_curve_is_eq_23_on_both_sides_of_its_series_switch():
 
 
 def _free_balls(sc):
-    """A model of ``sc``, its parameter vector without squeeze films and with a small pocket
-    clearance, and a state with shaft and
-    pedestal centred and every ball at the pitch radius in the middle of its pocket, no film:
-    every ball in free flight in the clearance (no race, no pocket contact)."""
+    """A model of ``sc``, its parameter vector without squeeze films and with a 1 um pocket
+    clearance, and a state with shaft and pedestal centred and every ball at the pitch radius in
+    the middle of its pocket: with no film (the caller's), every ball flies free in the clearance,
+    touching neither race nor pocket."""
     w, load = sc.shaft_speed, np.array(sc.radial_load)
     model = sk.SkiddingModel(sc, FS, 0, w, load)
     p = model.p.copy()
