@@ -230,7 +230,9 @@ def test_default_keeps_the_cage_phase_of_the_reference():
     50 and 800 ms.  Two steps of the default had each left the cage behind for good: the first
     step from the set-up state, done whole (0.77 mrad at 50 ms; now sub-stepped,
     ``skidding.START_STEPS``), and a plain step across a ball leaving its pocket face at 676 ms
-    (0.43 mrad at 800 ms; now an event, ``skidding._step_event``)."""
+    (0.43 mrad at 800 ms; now an event, ``skidding._step_event``).  Since the second fix the
+    first step here is a pocket event of its own, so ``START_STEPS = 0`` passes this test (the
+    same bits on four shipped scenes, a mutation check of 2026-11-28): it guards the pocket event."""
     from bearing_sim_ros.bench import SCENARIOS
 
     scene = SCENARIOS[1].build()
