@@ -38,7 +38,9 @@ The analysis runs on a thread of its own, and the callbacks only decode and queu
 subscription keeps a bounded number of tables (``waveform_qos``: 1 s of signal, 0.5 s when a
 recording plays at 2x), and an analysis on the executor thread (the first one imports scipy,
 about 1 s) would let it overflow and lose tables.  On exit the monitor prints how many tables
-it took and how many gaps it saw.
+it took and how many gaps it saw.  ``t=`` in its lines counts from the first table it took, whose
+stamp it prints (``monitor: first table stamped 1764392867.120000000 s, t=0 below``): the
+source's first table when the monitor was up before it and discovery lost none.
 """
 from __future__ import annotations
 
@@ -280,6 +282,10 @@ class MonitorNode(Node):
         self.tables += 1
         if self._t0 is None:
             self._t0 = stamp
+            # t= counts from here: the source's first table unless discovery or a late start
+            # lost some, which this stamp (against a recording's first) tells
+            print(f"monitor: first table stamped {stamp // NS}.{stamp % NS:09d} s, t=0 below",
+                  file=self.out, flush=True)
         if not self.window.add(stamp, channels, data):
             self.get_logger().warning("accel tables not contiguous (a table was lost or the source "
                                       "restarted): starting the window again", throttle_duration_sec=5.0)
@@ -320,13 +326,13 @@ def main(args, ros_args=()) -> int:
     exit 0 after ``count`` verdicts, on Ctrl-C or SIGTERM; 2 with one line for a bad scene or ROS
     argument.  ``ros_args``: from ``--ros-args`` on (a namespace, remaps)."""
     from rclpy._rclpy_pybind11 import RCLError, UnknownROSArgsError
-    from rclpy.executors import ExternalShutdownException
+    from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 
     from ..scene import load_scene
     from .bearing_sim_node import ros_arguments_error
 
     scene = load_scene(getattr(args, "scene", None) or DEFAULT_SCENE)   # UserError: exit 2
-    node = None
+    node = executor = None
     try:
         try:
             rclpy.init(args=["bearing-sim monitor", *ros_args])
@@ -338,9 +344,18 @@ def main(args, ros_args=()) -> int:
         print(f"monitor: {scene.bearing.name} ({scene.name}), envelope analysis every {args.window:g} s "
               f"of {node.resolve_topic_name(TOPIC_ACCEL)}, ground truth from /diagnostics "
               f"{node.truth_status!r}", flush=True)
+        # one executor for the run: rclpy.spin_once(node) adds and removes the node at every
+        # call, a wait set rebuilt per callback at 100 tables/s
+        try:
+            executor = SingleThreadedExecutor()
+        except RCLError:
+            if rclpy.ok():
+                raise
+            raise ExternalShutdownException() from None     # Ctrl-C before the first spin
+        executor.add_node(node)
         t_start = time.monotonic()
         while rclpy.ok() and not node.done:
-            rclpy.spin_once(node, timeout_sec=0.2)
+            executor.spin_once(timeout_sec=0.2)
             if not node.window.samples and not node.verdicts and time.monotonic() - t_start > 5.0 \
                     and not node._warned:
                 node._warned = True
@@ -350,6 +365,8 @@ def main(args, ros_args=()) -> int:
         pass
     finally:
         with teardown_watchdog():
+            if executor is not None:
+                executor.shutdown(timeout_sec=0)
             if node is not None:
                 node.destroy_node()
                 print(f"monitor: {len(node.verdicts)} verdicts from {node.tables} tables, "
