@@ -61,6 +61,8 @@ def ros_env(monkeypatch):
         "AMENT_PREFIX_PATH": env.get("AMENT_PREFIX_PATH") or str(VENV_BIN.parent),
         "RMW_IMPLEMENTATION": env.get("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp"),
         "PYTHONUNBUFFERED": "1",
+        # a subprocess that a test aborts (SIGABRT) because it hung prints every thread's stack
+        "PYTHONFAULTHANDLER": "1",
     })
     for key in ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE", "AMENT_PREFIX_PATH", "RMW_IMPLEMENTATION"):
         monkeypatch.setenv(key, env[key])

@@ -274,7 +274,15 @@ def signal_when(proc, ready, sig, settle_s: float, what: str, timeout_s: float =
         assert ready(), what
         time.sleep(settle_s)
         proc.send_signal(sig)
-        return proc.communicate(timeout=timeout_s)
+        try:
+            return proc.communicate(timeout=timeout_s)
+        except subprocess.TimeoutExpired:
+            # where it hung (rarely, in full-suite runs only): with PYTHONFAULTHANDLER (ros_env)
+            # SIGABRT prints every thread's stack
+            proc.send_signal(signal.SIGABRT)
+            stdout, stderr = proc.communicate(timeout=10)
+            raise AssertionError(f"no exit {timeout_s:g} s after signal {sig}; stacks on SIGABRT:\n"
+                                 f"{stdout}\n{stderr}") from None
     finally:
         if proc.poll() is None:
             proc.kill()
