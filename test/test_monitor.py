@@ -19,8 +19,8 @@ import pytest
 from test_node_support import NS, NodeProcess, assert_one_error_line, read_recording
 
 from bearing_sim_ros import ground_truth, load_scene
-from bearing_sim_ros.nodes.monitor_node import (TRUTH_GRACE_S, MonitorNode, Window, agrees, score_lines, truth_at,
-                                                 truth_text, verdict)
+from bearing_sim_ros.nodes.monitor_node import (TRUTH_GRACE_S, MonitorNode, Window, agrees, score_lines,
+                                                 source_start_line, truth_at, truth_text, verdict)
 from bearing_sim_ros.recording.render import render
 
 
@@ -133,6 +133,20 @@ def test_truth_with_onsets_is_exact_between_diagnostics_and_so_is_the_latency():
     assert score_lines(_printed(scored, reports[:2]), reports, t0)[:2] == [
         "monitor: score 4 of 8 verdicts agree with the truth, 0 truth=unknown",
         "monitor: latency 0.80s: outer appeared at t=1.70s, first called at t=2.50s"]
+
+
+def test_the_first_table_is_placed_on_the_sources_signal_time_line():
+    """The exit line that says how much of the source's signal came before the first table taken:
+    none when that table is at the source's signal time 0 (to the us of ``simulated_s``), the
+    seconds otherwise, and no line when the diagnostics' time line started after the table (a
+    later pass of a looped recording)."""
+    start = 1_764_392_867 * NS
+    assert source_start_line(start + 3_000, start) == (
+        "monitor: first table at 0.000 s of the source's signal (by its diagnostics): none lost")
+    assert source_start_line(start + 2_020_000_000, start) == (
+        "monitor: first table at 2.020 s of the source's signal (by its diagnostics): the 2.020 s before "
+        "it not received (the monitor started after the source, or discovery lost them)")
+    assert source_start_line(start, start + 5 * NS) is None
 
 
 def test_a_verdict_waits_for_the_diagnostics_stamped_at_its_window_end(ros_env):
@@ -261,6 +275,9 @@ def test_monitor_scores_itself_against_the_ground_truth_of_a_fault_that_appears(
     node_first = min(m.header.stamp.sec * NS + m.header.stamp.nanosec for _t, m in topics["/accel"])
     lost = (int(first[1]) * NS + int(first[2]) - node_first) / NS
     assert 0.0 <= lost < onset - 1.0, out
+    # which the monitor tells by itself from the diagnostics' simulated_s
+    said = re.search(r"^monitor: first table at ([\d.]+) s of the source's signal \(by its diagnostics\)", out, re.M)
+    assert said and float(said[1]) == pytest.approx(lost, abs=0.0011), (lost, out)
     assert last_none <= appeared < first_outer and appeared == pytest.approx(onset - lost, abs=0.006), (lost, out)
     assert called == min(t for t, v, truth in lines if v == "outer" and truth == "outer"), out
     assert delay == pytest.approx(called - appeared, abs=0.011) and 0.0 <= delay <= 2.0, out

@@ -40,7 +40,9 @@ recording plays at 2x), and an analysis on the executor thread (the first one im
 about 1 s) would let it overflow and lose tables.  On exit the monitor prints how many tables
 it took and how many gaps it saw.  ``t=`` in its lines counts from the first table it took, whose
 stamp it prints (``monitor: first table stamped 1764392867.120000000 s, t=0 below``): the
-source's first table when the monitor was up before it and discovery lost none.
+source's first table when the monitor was up before it and discovery lost none.  On exit, with
+a simulator's diagnostics (whose ``simulated_s`` ties stamps to its signal time), a line says
+where on the source's signal that table was, and so how much of it the monitor did not receive.
 """
 from __future__ import annotations
 
@@ -207,6 +209,23 @@ def score_lines(scored, reports, t0_ns: int) -> list:
     return lines
 
 
+def source_start_line(t0_ns: int, source_start_ns: int):
+    """The exit line that places the first table taken (stamp ``t0_ns``) on the source's signal
+    time line (its signal time 0 stamped ``source_start_ns``, by ``simulated_s`` of its
+    diagnostics, to the us): at 0 the monitor took the whole signal; later, the seconds before it
+    were not received (the monitor started after the source, or discovery lost the first
+    tables).  None when the two do not fit (a diagnostics message from a later pass of a looped
+    recording, its signal time started over)."""
+    into = (t0_ns - source_start_ns) / NS
+    if into < -1e-5:
+        return None
+    if into < 1e-5:
+        return "monitor: first table at 0.000 s of the source's signal (by its diagnostics): none lost"
+    return (f"monitor: first table at {into:.3f} s of the source's signal (by its diagnostics): the "
+            f"{into:.3f} s before it not received (the monitor started after the source, or "
+            f"discovery lost them)")
+
+
 class MonitorNode(Node):
     """Subscribes to ``accel``, ``state`` and ``/diagnostics``; prints a verdict every ``window``
     s of signal, with the ground truth the diagnostics of ``simulator`` give (its full name,
@@ -232,6 +251,7 @@ class MonitorNode(Node):
         self.ignored = set()        # names of other simulators' statuses, said once each
         self._speeds = []
         self._t0 = None
+        self._source_start = None   # stamp (ns) of the source's signal time 0, by its diagnostics
         self._warned = False
         # one worker: verdicts come out in signal order; the windows wait in its queue, so an
         # analysis slower than the signal would grow it (8 ms per 3 s window here, no danger)
@@ -253,7 +273,8 @@ class MonitorNode(Node):
     def _on_diagnostics(self, msg):
         stamp = msg.header.stamp.sec * NS + msg.header.stamp.nanosec
         for status in msg.status:           # a simulator's: a status with faults_present
-            truth = ground_truth.parse({kv.key: kv.value for kv in status.values}, stamp, NS)
+            values = {kv.key: kv.value for kv in status.values}
+            truth = ground_truth.parse(values, stamp, NS)
             if truth is None:
                 continue
             if status.name != self.truth_status:
@@ -265,6 +286,11 @@ class MonitorNode(Node):
                           f"{self.truth_status!r}'s (--simulator names another)", file=self.out, flush=True)
                 continue
             self.reports.append(truth)
+            if self._source_start is None and ground_truth.TIME_KEY in values:
+                try:
+                    self._source_start = stamp - round(float(values[ground_truth.TIME_KEY]) * NS)
+                except ValueError:
+                    pass
 
     def _on_accel(self, msg):
         if self.count and self.windows_queued >= self.count:
@@ -372,6 +398,10 @@ def main(args, ros_args=()) -> int:
                 print(f"monitor: {len(node.verdicts)} verdicts from {node.tables} tables, "
                       f"{node.window.gaps} gaps (lost tables or a restarted source), "
                       f"{node.rejected} rejected", flush=True)
+                if node._t0 is not None and node._source_start is not None:
+                    line = source_start_line(node._t0, node._source_start)
+                    if line:
+                        print(line, flush=True)
                 scored = [(r["end_ns"], r["verdict"], r["truth"]) for r in node.verdicts]
                 for line in score_lines(scored, node.reports, node._t0 or 0):
                     print(line, flush=True)
