@@ -13,6 +13,10 @@ import sys
 from .errors import UserError
 
 EXIT_OK, EXIT_INTERNAL, EXIT_USER = 0, 1, 2
+# play and report: what several files, or a split recording's name, mean
+SPLIT_FILES_HELP = ("a split recording (the node's record_max_duration / record_max_size) is read as one: "
+                    "give its pieces F_000.mcap F_001.mcap ... (in any order, e.g. F_*.mcap) or the name "
+                    "it was recorded to, F.mcap")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -136,7 +140,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "rate, else 2; skidding 2)")
 
     s = sub.add_parser("play", help="republish a recording on its topics")
-    s.add_argument("file", metavar="F.mcap", help="the recording to republish")
+    s.add_argument("file", metavar="F.mcap", nargs="+",
+                   help=f"the recording to republish; {SPLIT_FILES_HELP}")
     s.add_argument("--rate", type=_positive(float), default=1.0, metavar="X",
                    help="playback speed, a multiple of real time, > 0 (default: %(default)g)")
     s.add_argument("--loop", action="store_true",
@@ -148,7 +153,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "DDS discovery can take one 3 s announcement period)")
 
     s = sub.add_parser("report", help="PNG plots and a summary of a recording")
-    s.add_argument("file", metavar="F.mcap", help="the recording to analyse")
+    s.add_argument("file", metavar="F.mcap", nargs="+", help=f"the recording to analyse; {SPLIT_FILES_HELP}")
     s.add_argument("--out", required=True, metavar="DIR",
                    help="folder for the PNG plots, summary.md and summary.json, created if missing (required)")
     s.add_argument("--window", type=_in_range(*WINDOW_RANGE_S, "s"), default=DEFAULT_WINDOW_S, metavar="SECONDS",

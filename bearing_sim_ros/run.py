@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 import signal
 from collections import deque
+from pathlib import Path
 
 import numpy as np
 
@@ -105,9 +106,20 @@ def _verdict_lines(scene, res: dict) -> list:
             "has no defect, so the line is not a defect's"]
 
 
-def summarise(scene, tail: dict, node_figures: dict, path) -> str:
-    """The one-screen summary (text); ``path``: the file that ``report`` and ``play`` are shown
-    with (of a split recording, its last piece)."""
+def recording_argument(out: str, split: bool) -> str:
+    """How ``report`` and ``play`` are given the recording made to ``out``: the file itself, or
+    for a split recording (``split``: ``out``'s stem + ``_000.mcap``, ...) the name it was made
+    to, which reads every piece; a shell pattern of the pieces where a file of that name exists
+    (an earlier recording's: the name would read it instead)."""
+    if not split or not Path(out).exists():
+        return out
+    return str(Path(out).with_name(f"{Path(out).stem}_*{Path(out).suffix or '.mcap'}"))
+
+
+def summarise(scene, tail: dict, node_figures: dict, path, out: str | None = None) -> str:
+    """The one-screen summary (text); ``path``: how ``report`` and ``play`` are given the
+    recording (``recording_argument``); ``out``: the name it was made to (default ``path``),
+    whose stem names the report's folder."""
     from .analysis.envelope import DETECTION_THRESHOLD
     from .nodes.monitor_node import verdict
     from .recording.render import tier_summary
@@ -139,7 +151,8 @@ def summarise(scene, tail: dict, node_figures: dict, path) -> str:
     n_msgs = sum(tail["counts"].values())
     lines.append(f"recording: {f['files']} ({f['sizes']}, {n_msgs} messages on "
                  f"{len(tail['counts'])} topics, {f['dropped']} dropped)")
-    lines.append(f"  next: bearing-sim report {path} --out {str(path).rsplit('.', 1)[0]}_report"
+    folder = str(Path(out or path).with_suffix("")) + "_report"
+    lines.append(f"  next: bearing-sim report {path} --out {folder}"
                  f"   |   bearing-sim play {path}")
     return "\n".join(lines)
 
@@ -208,5 +221,5 @@ def run_command(args) -> int:
     # second) surfaced inside rclpy's deserialiser as a TypeError traceback: it waits instead
     with signal_handlers({signal.SIGINT: signal.SIG_IGN}):
         tail = _record_tail(figures["paths"], ANALYSIS_MAX_S)
-        print(summarise(scene, tail, figures, figures["path"]), flush=True)
+        print(summarise(scene, tail, figures, recording_argument(out, any(split)), out), flush=True)
     return 0

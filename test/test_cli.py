@@ -66,7 +66,7 @@ def test_monitor_help_says_where_ros_arguments_go(capsys):
 
 @pytest.mark.parametrize("argv", [
     ["monitor", "--bogus"],
-    ["play", "a.mcap", "b.mcap"],
+    ["play", "a.mcap", "b.mcap", "--bogus"],          # several files are a split recording's pieces
     ["report", "a.mcap", "--out", "r", "--bogus"],
     ["scenes", "extra"],
     ["validate", "--cwru", "c", "--out", "v", "--bogus"],

@@ -9,6 +9,8 @@ import pytest
 
 from test_node_support import NS, read_recording
 
+from bearing_sim_ros.analysis.report import build_report
+
 
 def _raw_message_bytes(path) -> int:
     from mcap.reader import make_reader
@@ -80,7 +82,8 @@ def test_run_on_a_healthy_skidding_scene_explains_the_ball_pass_line_and_shows_s
 def test_run_splits_its_recording_and_summarises_across_the_pieces(ros_env, bearing_sim_exe, tmp_path):
     """``--max-file-duration 0.5`` (the node's record_max_duration) for 2 s: r_000.mcap, ... each
     0.5 s or so, contiguous across the seams, and the summary analyses the last 2 s across them
-    (the last piece alone holds less than the 1 s it needs) and names them all."""
+    (the last piece alone holds less than the 1 s it needs) and names them all; the ``report``
+    it suggests reads them all."""
     out = tmp_path / "r.mcap"
     r = subprocess.run([bearing_sim_exe, "run", "--duration", "2", "--out", str(out), "--max-file-duration", "0.5"],
                        env=ros_env, capture_output=True, text=True, timeout=90)
@@ -94,7 +97,12 @@ def test_run_splits_its_recording_and_summarises_across_the_pieces(ros_env, bear
     assert len(stamps) == 200 and np.all(np.diff(stamps) == 10_000_000)
     assert "envelope analysis of the last 2.0 s" in r.stdout and "verdict: outer-race fault" in r.stdout, r.stdout
     assert f"recording: {pieces[0]} .. {pieces[-1]}, {len(pieces)} files (" in r.stdout, r.stdout
-    assert f"bearing-sim report {pieces[-1]} " in r.stdout
+    # what it says to run next reads the whole recording: the name it was made to
+    assert (f"  next: bearing-sim report {out} --out {tmp_path / 'r_report'}   |   bearing-sim play {out}"
+            in r.stdout), r.stdout
+    summary = build_report(out, tmp_path / "r_report")
+    assert summary["files"] == [str(p) for p in pieces]
+    assert summary["analysed_s"] == pytest.approx(2.0) and summary["waveform_gaps"] == 0
 
 
 @pytest.mark.parametrize("case", ["unknown scene", "missing output folder", "the scene's own file",

@@ -18,7 +18,9 @@ Writes to DIR:
   timeline scored against the ground truth (fault onset, first detection, latency).
 
 The bearing comes from the scene text in the ``bearing_sim`` metadata record, so a report needs
-nothing but the file.  Spectra use at most ``MAX_ANALYSIS_S`` seconds of signal (the start).
+nothing but the file.  A split recording (the node's ``record_max_duration`` /
+``record_max_size``) is reported as one: its pieces, or the name it was recorded to
+(``recording.reader.open_recording``); ``files`` in the summary lists them.  Spectra use at most ``MAX_ANALYSIS_S`` seconds of signal (the start).
 
 Time bases: signal time is seconds after the first waveform sample (``header.stamp`` of the
 first table).  A ``/diagnostics`` message is stamped with the end of the last batch published,
@@ -657,6 +659,7 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
         meta = dict(rec.metadata)
         duration = (rec.end_ns - rec.start_ns) / NS
         message_count = rec.message_count
+        shown, files, notes = str(rec.path), [str(f) for f in rec.paths], list(rec.notes)
     finally:
         rec.close()
     out = output_folder(out)
@@ -698,7 +701,9 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
     expected = sorted({df.kind for df in scene.defects}) if scene is not None else []
     speed_var = (float(np.ptp(d.cmd_speed) / abs(speed)) if d.cmd_speed.size and speed else 0.0)
     summary = {
-        "file": str(path),
+        "file": shown,
+        "files": files,                  # the pieces of a split recording, in order; else [file]
+        "files_left_out": notes,         # a split recording's unreadable last piece, and why
         "scene": meta.get("scene", ""),
         "description": meta.get("scene_description", ""),
         "package_version": meta.get("package_version", ""),
@@ -796,7 +801,10 @@ def _markdown(s: dict) -> str:
         lines += [f"**The faults present change during this recording ({_changes_text(s)}): one verdict does "
                   "not describe it; see \"Verdict over time\".**", ""]
     lines += ["| | |", "| --- | --- |",
-              f"| file | `{s['file']}` |",
+              (f"| file | `{s['file']}` |" if len(s["files"]) == 1 else
+               f"| files | `{s['files'][0]}` .. `{s['files'][-1]}`: {len(s['files'])} pieces of a split recording, "
+               "read as one |"),
+              *(f"| left out | {note} |" for note in s["files_left_out"]),
               (f"| made by | bearing_sim_ros {s['package_version']}, {_tiers_text(s)}, seed {s['seed']} |"
                if s["package_version"] else "| made by | unknown (no bearing_sim metadata) |"),
               f"| length | {s['duration_s']:.2f} s, {s['messages']} messages; analysed {s['analysed_s']:.2f} s |",
@@ -951,8 +959,12 @@ def _defects_text(s: dict) -> str:
 
 
 def report_command(args) -> int:
-    """CLI entry: ``bearing-sim report F.mcap --out DIR``."""
+    """CLI entry: ``bearing-sim report F.mcap [F_001.mcap ...] --out DIR``."""
+    import sys
+
     s = build_report(args.file, args.out, window_s=args.window)
+    for note in s["files_left_out"]:
+        print(f"report: {note}", file=sys.stderr)
     timing = "".join(f", {label} {s[key]:.2f} s" for key, label in (
         ("fault_onset_s", "fault onset"), ("first_detection_s", "first detection"),
         ("detection_latency_s", "latency")) if s[key] is not None)

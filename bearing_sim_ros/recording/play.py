@@ -13,6 +13,9 @@ recording that spans no time (every message at one log time, no table with a sam
 no length to move on by: ``--loop`` refuses it rather than repeat it without a pause.  Play
 refuses, looped or not, a recording with nothing on the topics it plays (all on ``/clock``, with
 ``--clock``).
+A split recording (the node's ``record_max_duration`` / ``record_max_size``) plays as one: its
+pieces one after the other (their tables continue each other to the nanosecond), given as files
+or by the name it was recorded to (``reader.open_recording``); ``--loop`` repeats them all.
 ``--clock`` publishes ``/clock`` with the recording's time (log time, shifted like the stamps)
 before each new instant, for nodes running with ``use_sim_time``.  A recorded ``/clock`` topic
 is replaced by the generated one then.
@@ -96,8 +99,9 @@ class _Span:
 
 def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
          wait_for_subscribers: float = WAIT_FOR_SUBSCRIBERS, log=None, stop=None) -> int:
-    """Republish ``path``; returns the number of messages published.  ``stop``: a
-    ``threading.Event`` that ends playback between two messages (set by the signal handlers)."""
+    """Republish ``path`` (one file, or the pieces of a split recording: ``open_recording``);
+    returns the number of messages published.  ``stop``: a ``threading.Event`` that ends
+    playback between two messages (set by the signal handlers)."""
     import rclpy
     from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
     from rclpy.serialization import deserialize_message
@@ -110,7 +114,10 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
     stop = stop or threading.Event()
     running = lambda: rclpy.ok() and not stop.is_set()  # noqa: E731
     rec = open_recording(path)
+    path = rec.path                      # what messages call it: one file, or a split recording's pieces
     try:
+        for note in rec.notes:
+            log(f"play {path}: {note}")
         topics = rec.topics()
         if not topics or rec.message_count == 0:
             raise UserError(f"{path}: the recording holds no messages")
@@ -150,7 +157,8 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
                     Clock, "/clock", QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
                                                 reliability=ReliabilityPolicy.RELIABLE,
                                                 durability=DurabilityPolicy.VOLATILE))
-            log(f"play {path}: {rec.message_count} messages on {len(pubs)} topics, "
+            pieces = f" in {len(rec.paths)} files" if len(rec.paths) > 1 else ""
+            log(f"play {path}: {rec.message_count} messages{pieces} on {len(pubs)} topics, "
                 f"{(rec.end_ns - rec.start_ns) / NS:.2f} s at {rate:g}x"
                 + (", looping" if loop else "") + (", publishing /clock" if clock else ""))
             _wait_for_subscribers(pubs, wait_for_subscribers, running, lambda text: log(f"play {path}: {text}"))
@@ -263,7 +271,7 @@ def _sleep_until(target: float, running) -> None:
 
 
 def play_command(args) -> int:
-    """CLI entry: ``bearing-sim play F.mcap [--rate X] [--loop] [--clock] [--wait S]``.  Ctrl-C and SIGTERM
+    """CLI entry: ``bearing-sim play F.mcap [F_001.mcap ...] [--rate X] [--loop] [--clock] [--wait S]``.  Ctrl-C and SIGTERM
     stop playback cleanly (exit status 0); on success the process ends here (``os._exit(0)``)."""
     import signal
 

@@ -1,9 +1,13 @@
 """Reading recordings back (``play`` and ``report``): a checked MCAP file, its channels, the
-``bearing_sim`` metadata and its messages in log-time order.
+``bearing_sim`` metadata and its messages in log-time order; or the pieces of a split recording
+(``run_000.mcap``, ``run_001.mcap``, ...: the node's ``record_max_duration`` /
+``record_max_size``) read as one (:class:`SplitRecording`).
 
 Every problem with the file is a :class:`~bearing_sim_ros.errors.UserError` of one line: no such
 file, an empty file, not an MCAP file, a truncated file (no footer: the writer never finished,
-e.g. the process was killed hard), a corrupt chunk, a file that is not a ROS 2 recording.
+e.g. the process was killed hard), a corrupt chunk, a file that is not a ROS 2 recording; and of
+several files, one that is not a piece of a split recording, pieces of different recordings, a
+piece missing between two given, a piece given twice.
 """
 from __future__ import annotations
 
@@ -13,6 +17,7 @@ from dataclasses import dataclass
 
 from ..errors import UserError
 from ..paths import input_file
+from .recorder import FILE_INDEX, existing_pieces
 
 MAGIC = b"\x89MCAP0\r\n"
 
@@ -48,6 +53,8 @@ class Recording:
 
         name = str(path)
         self.path = input_file(path, name, "expected an .mcap recording")
+        self.paths = [self.path]           # as SplitRecording's: the files read
+        self.notes: list = []              # as SplitRecording's: none left out
         size = self.path.stat().st_size
         try:
             self._stream = open(self.path, "rb")  # noqa: SIM115 - closed in close()
@@ -157,6 +164,137 @@ class Recording:
         self.close()
 
 
-def open_recording(path) -> Recording:
-    """Open and check ``path`` (see :class:`Recording`)."""
-    return Recording(os.fspath(path))
+class SplitRecording:
+    """The pieces of one split recording, checked and read as one recording: the same interface
+    as :class:`Recording` (``path``, ``metadata``, ``attachments``, ``topics()``,
+    ``messages()``, ``message_count``, ``start_ns``, ``end_ns``, ``parameters()``, ``close()``),
+    the pieces in the order of their ``file_index``, their messages one piece after the other.
+
+    ``paths``: the pieces, in any order; a run of consecutive pieces (``run_002.mcap`` ..
+    ``run_004.mcap``) is a recording too.  ``named``: the path the split recording was made to
+    (``run.mcap``), when the pieces were found from it: then a last piece that cannot be read
+    (empty or without its footer: what a hard kill leaves of the file being written) is left out
+    and said in ``notes`` instead of failing the whole recording.
+
+    The pieces' ``bearing_sim`` metadata must be the same but for ``file_index`` (it holds no
+    wall clock, so two runs of one command have the same: such pieces mixed show as gaps in
+    the waveform tables, which ``report`` counts)."""
+
+    def __init__(self, paths, named=None):
+        self.notes: list = []
+        given = [os.fspath(p) for p in paths]
+        seen: dict = {}
+        for p in given:
+            key = os.path.realpath(p)
+            if key in seen:
+                raise UserError(f"{p}: given twice (as {seen[key]!r} too); give each piece of a split "
+                                "recording once")
+            seen[key] = p
+        self._pieces: list = []
+        try:
+            for k, p in enumerate(given):
+                try:
+                    self._pieces.append(Recording(p))
+                except UserError as exc:
+                    if named is None or k != len(given) - 1 or k == 0:
+                        raise
+                    self.notes.append(f"{p} left out: {str(exc).split(': ', 1)[-1]}")
+            self._check_and_order()
+        except BaseException:
+            self.close()
+            raise
+        first, last = self._pieces[0], self._pieces[-1]
+        self.paths = [r.path for r in self._pieces]
+        self.path = (f"{first.path} .. {last.path}" if named is None
+                     else f"{named} ({first.path.name} .. {last.path.name})")
+        self.metadata = {k: v for k, v in first.metadata.items() if k != FILE_INDEX}
+        self.attachments = first.attachments
+        self.message_count = sum(r.message_count for r in self._pieces)
+        starts = [r.start_ns for r in self._pieces if r.message_count]
+        ends = [r.end_ns for r in self._pieces if r.message_count]
+        self.start_ns, self.end_ns = (starts[0], ends[-1]) if starts else (0, 0)
+
+    def _check_and_order(self) -> None:
+        """Pieces of one recording (metadata alike but for the index), ordered by index, none
+        missing between the first and the last, consecutive in log time."""
+        indexed = []
+        for r in self._pieces:
+            index = r.metadata.get(FILE_INDEX, "")
+            if not index.isdigit():
+                raise UserError(f"{r.path}: not a piece of a split recording (its bearing_sim metadata has no "
+                                f"{FILE_INDEX}); several files are read together only when they are the pieces "
+                                "of one split recording (the node's record_max_duration / record_max_size)")
+            indexed.append((int(index), r))
+        indexed.sort(key=lambda item: item[0])
+        ref = indexed[0][1]
+        common = {k: v for k, v in ref.metadata.items() if k != FILE_INDEX}
+        for (i_prev, prev), (i, r) in zip(indexed, indexed[1:]):
+            if i == i_prev:
+                raise UserError(f"{prev.path} and {r.path}: both are piece {i} ({FILE_INDEX}); "
+                                "give the pieces of one split recording")
+            if i != i_prev + 1:
+                missing = ", ".join(str(k) for k in range(i_prev + 1, i))
+                raise UserError(f"{prev.path} .. {r.path}: the pieces between them are missing "
+                                f"({FILE_INDEX} {missing}); give consecutive pieces of the recording")
+        for _i, r in indexed[1:]:
+            mine = {k: v for k, v in r.metadata.items() if k != FILE_INDEX}
+            differ = sorted(k for k in set(common) | set(mine) if common.get(k) != mine.get(k))
+            if differ:
+                raise UserError(f"{ref.path} and {r.path} are pieces of different recordings (their "
+                                f"bearing_sim metadata differ in {', '.join(differ)}); give the pieces of "
+                                "one split recording")
+        timed = [(i, r) for i, r in indexed if r.message_count]
+        for (_ip, prev), (_i, r) in zip(timed, timed[1:]):
+            if r.start_ns < prev.end_ns:
+                raise UserError(f"{prev.path} and {r.path}: the later piece starts before the earlier one "
+                                "ends (log times); not consecutive pieces of one recording")
+        self._pieces = [r for _i, r in indexed]
+
+    def topics(self) -> dict:
+        """topic -> ChannelInfo, its messages counted over every piece."""
+        merged: dict = {}
+        for r in self._pieces:
+            for topic, info in r.topics().items():
+                have = merged.get(topic)
+                if have is not None and have.msg_type != info.msg_type:
+                    raise UserError(f"{r.path}: {topic} is {info.msg_type}, an earlier piece has it as "
+                                    f"{have.msg_type}; not pieces of one recording")
+                merged[topic] = info if have is None else ChannelInfo(
+                    topic, have.msg_type, have.qos_yaml, have.count + info.count)
+        return merged
+
+    def messages(self, topics=None):
+        """(topic, msg_type, log_time_ns, CDR bytes), piece after piece, each in log-time order."""
+        for r in self._pieces:
+            yield from r.messages(topics)
+
+    def parameters(self) -> dict:
+        return self._pieces[0].parameters()
+
+    def close(self) -> None:
+        for r in self._pieces:
+            r.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+def open_recording(path) -> Recording | SplitRecording:
+    """Open and check a recording (see :class:`Recording`): ``path`` one file, or several (a
+    list: the pieces of one split recording, in any order, :class:`SplitRecording`), or the path
+    a split recording was made to (``run.mcap``, which does not exist, for ``run_000.mcap``,
+    ``run_001.mcap``, ...)."""
+    paths = [path] if isinstance(path, (str, os.PathLike)) else list(path)
+    if not paths:
+        raise UserError("no recording given: expected an .mcap file")
+    if len(paths) > 1:
+        return SplitRecording(paths)
+    one = os.fspath(paths[0])
+    if not os.path.lexists(one):
+        pieces = existing_pieces(one)
+        if pieces:
+            return SplitRecording(pieces, named=one)
+    return Recording(one)

@@ -63,6 +63,7 @@ from .schemas import message_definition, qos_to_yaml
 
 PROFILE = "ros2"
 METADATA_NAME = "bearing_sim"
+FILE_INDEX = "file_index"       # metadata key: the piece's number in a split recording (rotated_path)
 MAX_QUEUE_BYTES = 512 * 1024 * 1024   # beyond this the disk is not keeping up: drop or wait
 WHEN_FULL = ("drop", "wait")          # what ``write`` does when the queue holds max_queue_bytes
 CHUNK_BYTES = 1024 * 1024             # MCAP chunk size (uncompressed)
@@ -351,7 +352,7 @@ class Recorder:
             writer.start(profile=PROFILE, library=f"bearing_sim_ros {self._metadata.get('package_version', '')}".strip())
             meta = dict(self._metadata)
             if self._rotate:
-                meta["file_index"] = str(self._file_index)
+                meta[FILE_INDEX] = str(self._file_index)
             writer.add_metadata(METADATA_NAME, meta)
             for name, data in sorted(self._attachments.items()):
                 media = "application/yaml" if name.endswith((".yaml", ".yml")) else "application/octet-stream"
