@@ -19,7 +19,8 @@ status named by :func:`status_name` (every rig publishes on the one ``/diagnosti
 Defects only appear and grow, never vanish, so the faults present at any time up to a message's
 stamp follow from its ``fault_onsets_s``: exactly those with an onset before that time.  (A
 recording played with ``--loop`` starts over at each seam, stamps moved on; each message's onsets
-are relative to its own stamp, so the truth between messages stays right.)
+are relative to its own stamp, so the truth between messages stays right, and
+:func:`appearances` gives each pass's appearance.)
 
 :func:`parse` reads one message's values into a :class:`Truth` on the consumer's own time line
 (ns of stamps for a live subscriber, s of signal for a recording's report); :func:`faults_at`,
@@ -148,18 +149,39 @@ class Appearance(NamedTuple):
 
 def appearances(truths, t0, slack=0) -> list:
     """The fault kinds that appeared after ``t0`` (the first sample a consumer has), in order of
-    appearance: :class:`Appearance` each.  From the onsets of the last message that has them;
-    without them, from where consecutive messages first show a kind (the bracket between the
-    two stamps)."""
-    exact = next((r for r in reversed(truths) if r.onsets is not None), None)
-    if exact is not None:
-        found = [Appearance(k, on, on) for k, on in exact.onsets.items() if on > t0 + slack]
+    appearance: :class:`Appearance` each.  From the onsets of the last message of each run of
+    messages that has the kind; without onsets, from where a message first shows a kind that
+    the one before it did not (the bracket between the two stamps).
+
+    Defects do not vanish, so a kind that leaves the messages means the signal started over (a
+    recording played with ``--loop``, each pass's stamps moved on): its next appearance counts
+    again.  A kind that stays while its onset moves past a message that already had it was
+    there on both sides of such a seam (from the recording's first sample): no new appearance;
+    its first stays.  Within one time line the onsets the messages give agree to their rounding
+    (1 us of ``simulated_s``), far less than the time between two messages."""
+    found = []
+    if any(r.onsets is not None for r in truths):
+        # kind -> [its onset, the stamp of the last message with it, still on the onset's time line]
+        current: dict = {}
+        for r in (r for r in truths if r.onsets is not None):
+            for kind in [k for k in current if k not in r.onsets]:
+                found.append((kind, current.pop(kind)[0]))          # gone: its time line ended
+            for kind, on in r.onsets.items():
+                have = current.get(kind)
+                if have is None:
+                    current[kind] = [on, r.t, True]
+                    continue
+                if on > have[1] + slack:
+                    have[2] = False             # a seam with the fault on both sides: not new
+                elif have[2]:
+                    have[0] = on                # the latest message's, as it was
+                have[1] = r.t
+        found += [(kind, have[0]) for kind, have in current.items()]
+        found = [Appearance(kind, on, on) for kind, on in found if on > t0 + slack]
     else:
-        found, seen = [], set(truths[0].faults) if truths else set()
         for before, after in zip(truths, truths[1:]):
-            for kind in sorted(set(after.faults) - seen):
+            for kind in sorted(set(after.faults) - set(before.faults)):
                 found.append(Appearance(kind, before.t, after.t))
-                seen.add(kind)
     return sorted(found, key=lambda a: (a.latest, a.kind))
 
 

@@ -19,7 +19,7 @@ import pytest
 from test_node_support import NS, NodeProcess, assert_one_error_line, read_recording
 
 from bearing_sim_ros import ground_truth, load_scene
-from bearing_sim_ros.nodes.monitor_node import (TRUTH_GRACE_S, MonitorNode, Window, agrees, score_lines,
+from bearing_sim_ros.nodes.monitor_node import (SLACK_NS, TRUTH_GRACE_S, MonitorNode, Window, agrees, score_lines,
                                                  source_start_line, truth_at, truth_text, verdict)
 from bearing_sim_ros.recording.render import render
 
@@ -133,6 +133,54 @@ def test_truth_with_onsets_is_exact_between_diagnostics_and_so_is_the_latency():
     assert score_lines(_printed(scored, reports[:2]), reports, t0)[:2] == [
         "monitor: score 4 of 8 verdicts agree with the truth, 0 truth=unknown",
         "monitor: latency 0.80s: outer appeared at t=1.70s, first called at t=2.50s"]
+
+
+def _looped(passes, length, items, onsets=None):
+    """``_reports`` of a recording played with ``--loop``: ``items`` and ``onsets`` (stamps s of
+    the first pass) again in each of ``passes`` passes, stamps moved on by ``length`` s each pass,
+    the signal time (``simulated_s``) starting over."""
+    out = []
+    for k in range(passes):
+        shift = k * length
+        for t, faults in items:
+            values = {"faults_present": faults, "defect_sizes": "none", "simulated_s": f"{t - 0.5:.6f}"}
+            if onsets is not None:
+                values["fault_onsets_s"] = ", ".join(f"{kind}={on - 0.5:.6f}" for kind, on in onsets.items()
+                                                     if on < t) or "none"
+            out.append(ground_truth.parse(values, (t + shift) * NS, NS))
+    return out
+
+
+def test_each_pass_of_a_looped_recording_scores_the_fault_that_appears_in_it():
+    """A recording of 5 s (diagnostics at 1 .. 5 s, outer from 2.2 s) played three times with
+    ``--loop``: outer appears in each pass, at 2.2, 7.2 and 12.2 s (stamps), exactly and without a
+    bracket alike, each with its own latency line; a fault there from the recording's first sample
+    does not appear at the seams; onsets that differ by the 1 us of ``simulated_s``'s rounding
+    are one appearance."""
+    items = ((1, "none"), (2, "none"), (3, "outer"), (4, "outer"), (5, "outer"))
+    exact = _looped(3, 5, items, onsets={"outer": 2.2})
+    assert [(a.kind, a.latest) for a in ground_truth.appearances(exact, NS // 2, SLACK_NS)] == \
+        [("outer", 2_200_000_000), ("outer", 7_200_000_000), ("outer", 12_200_000_000)]
+    bracket = _looped(3, 5, items)
+    assert [tuple(a) for a in ground_truth.appearances(bracket, NS // 2, SLACK_NS)] == \
+        [("outer", 2 * NS, 3 * NS), ("outer", 7 * NS, 8 * NS), ("outer", 12 * NS, 13 * NS)]
+    # windows of 1 s from the first table at 0.5 s, ending at t=1.00 .. 15.00s: outer called in
+    # the fourth and fifth window of the first two passes, never in the third
+    t0 = NS // 2
+    verdicts = ["healthy", "healthy", "healthy", "outer", "outer"] * 2 + ["healthy"] * 5
+    scored = [(t0 + (k + 1) * NS, v) for k, v in enumerate(verdicts)]
+    assert score_lines(_printed(scored, exact), exact, t0)[1:] == [
+        "monitor: latency 2.30s: outer appeared at t=1.70s, first called at t=4.00s",
+        "monitor: latency 2.30s: outer appeared at t=6.70s, first called at t=9.00s",
+        "monitor: latency none: outer appeared at t=11.70s, not called in 4 verdicts since"]
+    # there from the first sample (onset at signal time 0): on both sides of every seam, never new
+    always = _looped(3, 5, [(t, "outer") for t in range(1, 6)], onsets={"outer": 0.5})
+    assert ground_truth.appearances(always, NS // 2, SLACK_NS) == []
+    assert ground_truth.appearances(always, NS // 2 - 2 * SLACK_NS, SLACK_NS) == [("outer", t0, t0)]
+    # within one time line the messages' onsets agree to their rounding: one appearance, the last's
+    jitter = [ground_truth.Truth(t * NS, ("outer",), (), {"outer": 2_200_000_000 + d})
+              for t, d in ((3, 0), (4, 700), (5, -400))]
+    assert ground_truth.appearances(jitter, t0, SLACK_NS) == [("outer", 2_199_999_600, 2_199_999_600)]
 
 
 def test_the_first_table_is_placed_on_the_sources_signal_time_line():
