@@ -214,6 +214,26 @@ def test_report_timeline_scores_detection_against_the_recorded_onset(tmp_path, f
     assert "may already hold the fault" not in (tmp_path / "short" / "summary.md").read_text()
 
 
+def test_the_timeline_covers_a_recording_longer_than_the_report_holds(tmp_path, monkeypatch):
+    """The waveform, the spectra and the one verdict use the first ``MAX_ANALYSIS_S`` seconds; the
+    verdict over time reads the rest of the recording again, one window at a time, and comes out
+    window for window as that of the whole recording held in memory.  Here the limit is 1.5 s of
+    a 5 s recording whose pit appears at 2.5 s, after it, in windows of 0.7 s (one of them
+    across the limit)."""
+    rec = tmp_path / "late.mcap"
+    render(str(_with_onset(tmp_path, 2.5)), 5.0, rec, fidelity="kinematic", seed=1, progress=False)
+    whole = build_report(rec, tmp_path / "whole", window_s=0.7)
+    monkeypatch.setattr(report, "MAX_ANALYSIS_S", 1.5)
+    short = build_report(rec, tmp_path / "short", window_s=0.7)
+    assert whole["analysed_s"] == pytest.approx(5.0) and short["analysed_s"] == pytest.approx(1.5)
+    assert whole["verdict"] == "outer" and short["verdict"] == "healthy"       # the pit is not in 0-1.5 s
+    assert len(short["timeline"]) == 7 and short["timeline"] == whole["timeline"]
+    for key in ("fault_onset_s", "first_detection_s", "detection_latency_s", "fault_detections",
+                "timeline_unscored_s", "ground_truth_changes"):
+        assert short[key] == whole[key], key
+    assert short["first_detection_s"] == pytest.approx(3.5) or short["first_detection_s"] == pytest.approx(2.8)
+
+
 def test_report_timeline_without_a_fault_change_has_no_latency(outer, tmp_path):
     """er16k_outer_race has its defect from the start: every window has the outer fault present,
     so there is no onset and no latency, only a first detection; one verdict describes the

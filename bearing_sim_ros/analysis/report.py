@@ -20,7 +20,10 @@ Writes to DIR:
 The bearing comes from the scene text in the ``bearing_sim`` metadata record, so a report needs
 nothing but the file.  A split recording (the node's ``record_max_duration`` /
 ``record_max_size``) is reported as one: its pieces, or the name it was recorded to
-(``recording.reader.open_recording``); ``files`` in the summary lists them.  Spectra use at most ``MAX_ANALYSIS_S`` seconds of signal (the start).
+(``recording.reader.open_recording``); ``files`` in the summary lists them.  The waveform,
+spectra and the whole-recording verdict use at most ``MAX_ANALYSIS_S`` seconds of signal (the
+start); the verdict timeline covers the whole recording (a longer one is read again for it, one
+window at a time).
 
 Time bases: signal time is seconds after the first waveform sample (``header.stamp`` of the
 first table).  A ``/diagnostics`` message is stamped with the end of the last batch published,
@@ -130,6 +133,7 @@ class _Data:
         self.accel = np.concatenate(chunks, axis=0).astype(float)
         self.stamps = np.array(stamps, dtype=np.int64)
         self.widths = np.array(widths, dtype=np.int64)
+        self.samples = int(self.widths.sum())     # in every table; self.accel holds the first ones
         self.sample_rate = fs_meta or self._rate_from_stamps()
         self.t0_ns = int(self.stamps[0])
         self.gaps = self._gaps()
@@ -359,11 +363,11 @@ def truth_changes(truth: list) -> list:
     return changes
 
 
-def score_windows(x, sample_rate_hz: float, bounds: list, times_s: list, frequencies: list,
+def score_windows(windows, sample_rate_hz: float, times_s: list, frequencies: list,
                   truth: list, speeds_rad_s: list) -> list:
     """The envelope detector (``envelope.diagnose``, as for the whole recording) in each window:
-    ``x[first:end]`` for each (first, end) of ``bounds``, spanning ``times_s`` (start s, end s)
-    of signal, looking at ``frequencies`` ({"ftf", "bpfo", "bpfi", "bsf": Hz} per window, {}
+    the samples of each of ``windows`` (an iterable of arrays), spanning ``times_s`` (start s,
+    end s) of signal, looking at ``frequencies`` ({"ftf", "bpfo", "bpfi", "bsf": Hz} per window, {}
     when unknown) at the window's shaft speed (``speeds_rad_s``); verdict "unknown" without
     frequencies or in less than 0.2 s of signal.  One dict per window: start_s,
     end_s, shaft_speed_rpm, verdict, prominences ({fault: line height over local median}), and
@@ -373,9 +377,9 @@ def score_windows(x, sample_rate_hz: float, bounds: list, times_s: list, frequen
     with those faults (else the first after it) and that message's time (None each without
     ground truth)."""
     rows = []
-    for (i0, i1), (t0, t1), freqs, speed in zip(bounds, times_s, frequencies, speeds_rad_s):
-        usable = freqs and freqs["bpfo"] > 0 and i1 - i0 > 0.2 * sample_rate_hz   # as for the whole
-        verdict = diagnose(x[i0:i1], sample_rate_hz, freqs) if usable else None
+    for xw, (t0, t1), freqs, speed in zip(windows, times_s, frequencies, speeds_rad_s):
+        usable = freqs and freqs["bpfo"] > 0 and xw.size > 0.2 * sample_rate_hz   # as for the whole
+        verdict = diagnose(xw, sample_rate_hz, freqs) if usable else None
         faults = ground_truth.faults_at(truth, t1, SLACK_S)
         sizes = ground_truth.truth_before(truth, t1, SLACK_S)
         if sizes is not None and faults is not None and sizes.faults != faults:
@@ -397,15 +401,17 @@ def first_detection(timeline: list):
                 None)
 
 
-def verdict_timeline(d: "_Data", x, scene, window_s: float, mean_speed_rad_s: float) -> list:
-    """``score_windows`` over the analysed signal ``x`` of ``d`` in windows of ``window_s`` s,
-    each at its own speed (the ``shaft_speed`` commands in the window, else ``state``, else
-    ``mean_speed_rad_s``) and fault frequencies (pure rolling at that speed, with the cage,
-    BPFO and BPFI of the recorded ``/diagnostics`` over the window where present)."""
+def verdict_timeline(d: "_Data", x, scene, window_s: float, mean_speed_rad_s: float, reread=None) -> list:
+    """``score_windows`` over the whole recording's channel ``x`` of ``d`` in windows of
+    ``window_s`` s, each at its own speed (the ``shaft_speed`` commands in the window, else
+    ``state``, else ``mean_speed_rad_s``) and fault frequencies (pure rolling at that speed, with
+    the cage, BPFO and BPFI of the recorded ``/diagnostics`` over the window where present).
+    ``x`` holds the first samples (``MAX_ANALYSIS_S``); where the recording has more,
+    ``reread(bounds)`` gives each window's samples (``_windows_read_again``)."""
     if scene is None:
         return []
     fs = d.sample_rate
-    bounds = window_bounds(x.size, fs, window_s)
+    bounds = window_bounds(d.samples, fs, window_s)
     edges = sample_times_s([i for b in bounds for i in b], d.stamps, d.widths, fs, d.t0_ns)
     times = [(float(edges[2 * k]), float(edges[2 * k + 1])) for k in range(len(bounds))]
     cmd_t, state_t = d.cmd_t - d.t0_ns / NS, d.state_t - d.t0_ns / NS
@@ -418,7 +424,39 @@ def verdict_timeline(d: "_Data", x, scene, window_s: float, mean_speed_rad_s: fl
         speeds.append(speed)
         freqs.append({**scene.bearing.fault_frequencies(speed / (2 * math.pi)),
                       **recorded_frequencies(d.signal_frequency_periods, t0, t1)})
-    return score_windows(x, fs, bounds, times, freqs, d.truth, speeds)
+    windows = (x[i0:i1] for i0, i1 in bounds) if d.samples <= x.size else reread(bounds)
+    return score_windows(windows, fs, times, freqs, d.truth, speeds)
+
+
+def _windows_read_again(path, topic: str, channel: str, bounds: list):
+    """The samples of ``channel`` in each window (first, end) of ``bounds`` (sample indices over
+    the waveform tables on ``topic`` in order), read from the recording ``path`` again, one table
+    at a time: a recording longer than the report holds in memory (``MAX_ANALYSIS_S``) gets its
+    verdict timeline to the end, in the memory of one window."""
+    from rclpy.serialization import deserialize_message
+
+    from ..recording.reader import get_message
+
+    rec = open_recording(path)
+    try:
+        cls = get_message(rec.topics()[topic].msg_type)
+        held, start, k = [], 0, 0          # held: the samples from index ``start`` on
+        count = 0
+        for _topic, _type, _log_ns, data in rec.messages([topic]):
+            _stamp, names, table = from_pointcloud2(deserialize_message(data, cls))
+            held.append(table[:, names.index(channel)].astype(float))
+            count += table.shape[0]
+            while k < len(bounds) and start + count >= bounds[k][1]:
+                samples = np.concatenate(held)
+                i0, i1 = bounds[k]
+                yield samples[i0 - start:i1 - start]
+                k += 1
+                keep = bounds[k][0] if k < len(bounds) else i1      # what the next window needs
+                held, count, start = [samples[keep - start:]], start + count - keep, keep
+            if k == len(bounds):
+                return
+    finally:
+        rec.close()
 
 
 # ---- plots -------------------------------------------------------------------------------------
@@ -690,7 +728,9 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
         cage = plot_cage(d, scene, out, meta)
         if cage:
             plots.append(cage)
-        timeline = verdict_timeline(d, x, scene, window_s, speed) if verdict is not None else []
+        timeline = (verdict_timeline(d, x, scene, window_s, speed,
+                                     lambda bounds: _windows_read_again(path, d.accel_topic, ch, bounds))
+                    if verdict is not None else [])
         onset = fault_onset(d.truth)
         detected = first_detection(timeline)
         if timeline:
@@ -737,7 +777,7 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
         "verdict_describes_recording": (not changes) if d.truth else None,
         "ground_truth_to_the_sample": any(r.onsets is not None for r in d.truth) if d.truth else None,
         "timeline_window_s": (timeline[0]["end_s"] - timeline[0]["start_s"]) if timeline else None,
-        "timeline_unscored_s": ((x.size - window_bounds(x.size, fs, window_s)[-1][1]) / fs) if timeline else None,
+        "timeline_unscored_s": ((d.samples - window_bounds(d.samples, fs, window_s)[-1][1]) / fs) if timeline else None,
         "timeline": timeline,
         "ground_truth_changes": changes,
         "fault_onset_s": onset[0] if onset else None,
