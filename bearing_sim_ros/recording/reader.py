@@ -205,8 +205,8 @@ class SplitRecording:
             raise
         first, last = self._pieces[0], self._pieces[-1]
         self.paths = [r.path for r in self._pieces]
-        self.path = (f"{first.path} .. {last.path}" if named is None
-                     else f"{named} ({first.path.name} .. {last.path.name})")
+        names = first.path.name if first is last else f"{first.path.name} .. {last.path.name}"
+        self.path = f"{first.path} .. {last.path}" if named is None else f"{named} ({names})"
         self.metadata = {k: v for k, v in first.metadata.items() if k != FILE_INDEX}
         self.attachments = first.attachments
         self.message_count = sum(r.message_count for r in self._pieces)
