@@ -271,8 +271,9 @@ def _sleep_until(target: float, running) -> None:
 
 
 def play_command(args) -> int:
-    """CLI entry: ``bearing-sim play F.mcap [F_001.mcap ...] [--rate X] [--loop] [--clock] [--wait S]``.  Ctrl-C and SIGTERM
-    stop playback cleanly (exit status 0); on success the process ends here (``os._exit(0)``)."""
+    """CLI entry: ``bearing-sim play F.mcap [F_001.mcap ...] [--rate X] [--loop] [--clock] [--wait S]``.
+    Ctrl-C and SIGTERM stop playback cleanly (exit status 0); on success the process ends here
+    (``os._exit(0)``)."""
     import signal
 
     stop = threading.Event()
