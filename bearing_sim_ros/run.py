@@ -28,9 +28,10 @@ ANALYSIS_MAX_S = 30.0       # s of signal (the end of the recording) that the su
 
 
 def _record_tail(paths, max_s: float) -> dict:
-    """The last ``max_s`` seconds of ``accel`` from a recording (its files in order: the pieces
-    of a split one, whose tables continue across the seams), the shaft speed in use, and the
-    skid ratios of the whole recording (percent; the skidding tier's ``/diagnostics``)."""
+    """The last ``max_s`` seconds of ``accel`` from a recording (its files ``paths``: the pieces
+    of a split one, read as one, whose tables continue across the seams), the shaft speed in
+    use, and the skid ratios of the whole recording (percent; the skidding tier's
+    ``/diagnostics``)."""
     from rclpy.serialization import deserialize_message
 
     from .analysis.report import skid_ratios
@@ -43,40 +44,37 @@ def _record_tail(paths, max_s: float) -> dict:
     skids: dict = {}
     channels, rate = None, None
     prev = None
-    meta, counts = None, {}
-    for path in paths:
-        with open_recording(path) as rec:
-            topics = rec.topics()
-            accel_topic = next((t for t in topics if t.rsplit("/", 1)[-1] == "accel"), None)
-            speed_topic = next((t for t in topics if t.rsplit("/", 1)[-1] == "shaft_speed"), None)
-            diag_topic = next((t for t in topics if t.rsplit("/", 1)[-1] == "diagnostics"), None)
-            if accel_topic is None:
-                raise UserError(f"{path}: no accel topic in the recording")
-            wanted = [t for t in (accel_topic, speed_topic, diag_topic) if t]
-            types = {t: get_message(topics[t].msg_type) for t in wanted}
-            for topic, _type, _log_ns, data in rec.messages(topics=wanted):
-                msg = deserialize_message(data, types[topic])
-                if topic == speed_topic:
-                    speeds.append(float(msg.data))
-                    continue
-                if topic == diag_topic:
-                    for key, percent in skid_ratios(msg).items():
-                        skids.setdefault(key, []).append(percent)
-                    continue
-                stamp, channels, arr = from_pointcloud2(msg)
-                if prev is not None and rate is None:
-                    rate = prev[1] * NS / (stamp - prev[0])
-                prev = (stamp, arr.shape[0])
-                parts.append(arr)
-                held += arr.shape[0]
-                if rate:
-                    while held - parts[0].shape[0] >= max_s * rate:
-                        held -= parts.popleft().shape[0]
-                    while len(speeds) > len(parts):       # one speed record per batch
-                        speeds.popleft()
-            meta = dict(rec.metadata) if meta is None else meta
-            for t, c in topics.items():
-                counts[t] = counts.get(t, 0) + c.count
+    with open_recording(paths) as rec:          # a split recording's pieces in order, as one
+        topics = rec.topics()
+        accel_topic = next((t for t in topics if t.rsplit("/", 1)[-1] == "accel"), None)
+        speed_topic = next((t for t in topics if t.rsplit("/", 1)[-1] == "shaft_speed"), None)
+        diag_topic = next((t for t in topics if t.rsplit("/", 1)[-1] == "diagnostics"), None)
+        if accel_topic is None:
+            raise UserError(f"{rec.path}: no accel topic in the recording")
+        wanted = [t for t in (accel_topic, speed_topic, diag_topic) if t]
+        types = {t: get_message(topics[t].msg_type) for t in wanted}
+        for topic, _type, _log_ns, data in rec.messages(topics=wanted):
+            msg = deserialize_message(data, types[topic])
+            if topic == speed_topic:
+                speeds.append(float(msg.data))
+                continue
+            if topic == diag_topic:
+                for key, percent in skid_ratios(msg).items():
+                    skids.setdefault(key, []).append(percent)
+                continue
+            stamp, channels, arr = from_pointcloud2(msg)
+            if prev is not None and rate is None:
+                rate = prev[1] * NS / (stamp - prev[0])
+            prev = (stamp, arr.shape[0])
+            parts.append(arr)
+            held += arr.shape[0]
+            if rate:
+                while held - parts[0].shape[0] >= max_s * rate:
+                    held -= parts.popleft().shape[0]
+                while len(speeds) > len(parts):       # one speed record per batch
+                    speeds.popleft()
+        meta = dict(rec.metadata)
+        counts = {t: c.count for t, c in topics.items()}
     data = np.concatenate(list(parts)) if parts else np.zeros((0, 0), np.float32)
     return {"accel": data, "channels": channels, "sample_rate": rate,
             "shaft_speed": float(np.mean(speeds)) if speeds else None, "metadata": meta,

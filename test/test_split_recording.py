@@ -85,7 +85,10 @@ def test_a_split_recording_reads_as_the_recording_it_was_split_from(whole):
             assert list(rec.messages(["/accel"])) == accel and len(accel) == 200
     with open_recording(pieces[1:3]) as rec:               # consecutive pieces are a recording too
         assert rec.path == f"{pieces[1]} .. {pieces[2]}"
-        n = sum(open_recording(p).message_count for p in pieces[1:3])
+        n = 0
+        for p in pieces[1:3]:
+            with open_recording(p) as piece:
+                n += piece.message_count
         assert rec.message_count == sum(1 for _ in rec.messages()) == n
         assert list(rec.messages()) == [m for m in messages if pieces_span(pieces[1:3], m[2])]
 

@@ -35,6 +35,7 @@ of the ground truth.
 """
 from __future__ import annotations
 
+import itertools
 import json
 import math
 import numbers
@@ -406,8 +407,8 @@ def verdict_timeline(d: "_Data", x, scene, window_s: float, mean_speed_rad_s: fl
     ``window_s`` s, each at its own speed (the ``shaft_speed`` commands in the window, else
     ``state``, else ``mean_speed_rad_s``) and fault frequencies (pure rolling at that speed, with
     the cage, BPFO and BPFI of the recorded ``/diagnostics`` over the window where present).
-    ``x`` holds the first samples (``MAX_ANALYSIS_S``); where the recording has more,
-    ``reread(bounds)`` gives each window's samples (``_windows_read_again``)."""
+    ``x`` holds the first samples (``MAX_ANALYSIS_S``); the windows beyond it come from
+    ``reread(bounds)`` (``_windows_read_again``)."""
     if scene is None:
         return []
     fs = d.sample_rate
@@ -424,25 +425,32 @@ def verdict_timeline(d: "_Data", x, scene, window_s: float, mean_speed_rad_s: fl
         speeds.append(speed)
         freqs.append({**scene.bearing.fault_frequencies(speed / (2 * math.pi)),
                       **recorded_frequencies(d.signal_frequency_periods, t0, t1)})
-    windows = (x[i0:i1] for i0, i1 in bounds) if d.samples <= x.size else reread(bounds)
+    held = [b for b in bounds if b[1] <= x.size]          # the windows in memory; the rest read again
+    rest = bounds[len(held):]
+    windows = itertools.chain((x[i0:i1] for i0, i1 in held), reread(rest) if rest else ())
     return score_windows(windows, fs, times, freqs, d.truth, speeds)
 
 
-def _windows_read_again(path, topic: str, channel: str, bounds: list):
+def _windows_read_again(path, topic: str, channel: str, widths, bounds: list):
     """The samples of ``channel`` in each window (first, end) of ``bounds`` (sample indices over
-    the waveform tables on ``topic`` in order), read from the recording ``path`` again, one table
-    at a time: a recording longer than the report holds in memory (``MAX_ANALYSIS_S``) gets its
-    verdict timeline to the end, in the memory of one window."""
+    the waveform tables on ``topic`` in order, ``widths`` samples each), read from the recording
+    ``path`` again, one table at a time, the tables before the first window only counted: a
+    recording longer than the report holds in memory (``MAX_ANALYSIS_S``) gets its verdict
+    timeline to the end, in the memory of one window."""
     from rclpy.serialization import deserialize_message
 
     from ..recording.reader import get_message
 
+    first = np.concatenate(([0], np.cumsum(widths)[:-1]))       # each table's first sample
+    skip = int(np.searchsorted(first, bounds[0][0], side="right")) - 1 if bounds else 0
     rec = open_recording(path)
     try:
         cls = get_message(rec.topics()[topic].msg_type)
-        held, start, k = [], 0, 0          # held: the samples from index ``start`` on
+        held, start, k = [], int(first[skip]), 0          # held: the samples from index ``start`` on
         count = 0
-        for _topic, _type, _log_ns, data in rec.messages([topic]):
+        for n, (_topic, _type, _log_ns, data) in enumerate(rec.messages([topic])):
+            if n < skip:
+                continue
             _stamp, names, table = from_pointcloud2(deserialize_message(data, cls))
             held.append(table[:, names.index(channel)].astype(float))
             count += table.shape[0]
@@ -729,7 +737,7 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
         if cage:
             plots.append(cage)
         timeline = (verdict_timeline(d, x, scene, window_s, speed,
-                                     lambda bounds: _windows_read_again(path, d.accel_topic, ch, bounds))
+                                     lambda bounds: _windows_read_again(path, d.accel_topic, ch, d.widths, bounds))
                     if verdict is not None else [])
         onset = fault_onset(d.truth)
         detected = first_detection(timeline)

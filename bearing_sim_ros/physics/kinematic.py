@@ -859,10 +859,10 @@ class KinematicModel:
         wc = geo[P_CAGE] * speed
 
         def at_start(d):
-            rx, ry = _residual(geo[P_K], self.kbx, self.kby, geom[0], geom[1], geom[2], d[0], d[1], 0.0, 0.0,
-                               wc, geo[P_CDW], geo[P_AI], geo[P_AO], geo[P_SQI], geo[P_SQO], geo[P_SQIO],
-                               law, geo[P_ROUGH])
-            return np.array([rx + self.kbx * d[0], ry + self.kby * d[1]])
+            # the kernel's residual with no linearised part taken off: the balls' whole force
+            return np.array(_residual(geo[P_K], 0.0, 0.0, geom[0], geom[1], geom[2], d[0], d[1], 0.0, 0.0,
+                                      wc, geo[P_CDW], geo[P_AI], geo[P_AO], geo[P_SQI], geo[P_SQO],
+                                      geo[P_SQIO], law, geo[P_ROUGH]))
 
         z, found = self._static_balance(load, at_start, self.x[:4].copy())
         if found:

@@ -207,7 +207,7 @@ class SplitRecording:
         self.paths = [r.path for r in self._pieces]
         names = first.path.name if first is last else f"{first.path.name} .. {last.path.name}"
         self.path = f"{first.path} .. {last.path}" if named is None else f"{named} ({names})"
-        self.metadata = {k: v for k, v in first.metadata.items() if k != FILE_INDEX}
+        self.metadata = _without_index(first.metadata)
         self.attachments = first.attachments
         self.message_count = sum(r.message_count for r in self._pieces)
         starts = [r.start_ns for r in self._pieces if r.message_count]
@@ -227,7 +227,7 @@ class SplitRecording:
             indexed.append((int(index), r))
         indexed.sort(key=lambda item: item[0])
         ref = indexed[0][1]
-        common = {k: v for k, v in ref.metadata.items() if k != FILE_INDEX}
+        common = _without_index(ref.metadata)
         for (i_prev, prev), (i, r) in zip(indexed, indexed[1:]):
             if i == i_prev:
                 raise UserError(f"{prev.path} and {r.path}: both are piece {i} ({FILE_INDEX}); "
@@ -237,14 +237,14 @@ class SplitRecording:
                 raise UserError(f"{prev.path} .. {r.path}: the pieces between them are missing "
                                 f"({FILE_INDEX} {missing}); give consecutive pieces of the recording")
         for _i, r in indexed[1:]:
-            mine = {k: v for k, v in r.metadata.items() if k != FILE_INDEX}
+            mine = _without_index(r.metadata)
             differ = sorted(k for k in set(common) | set(mine) if common.get(k) != mine.get(k))
             if differ:
                 raise UserError(f"{ref.path} and {r.path} are pieces of different recordings (their "
                                 f"bearing_sim metadata differ in {', '.join(differ)}); give the pieces of "
                                 "one split recording")
-        timed = [(i, r) for i, r in indexed if r.message_count]
-        for (_ip, prev), (_i, r) in zip(timed, timed[1:]):
+        timed = [r for _i, r in indexed if r.message_count]
+        for prev, r in zip(timed, timed[1:]):
             if r.start_ns < prev.end_ns:
                 raise UserError(f"{prev.path} and {r.path}: the later piece starts before the earlier one "
                                 "ends (log times); not consecutive pieces of one recording")
@@ -280,6 +280,11 @@ class SplitRecording:
 
     def __exit__(self, *exc):
         self.close()
+
+
+def _without_index(metadata: dict) -> dict:
+    """A piece's ``bearing_sim`` metadata without its ``file_index``: the recording's."""
+    return {k: v for k, v in metadata.items() if k != FILE_INDEX}
 
 
 def open_recording(path) -> Recording | SplitRecording:
