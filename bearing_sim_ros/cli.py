@@ -134,9 +134,11 @@ def build_parser() -> argparse.ArgumentParser:
                         f"(default: {RK4_DEFAULT_STEP:g}, seed 000's, which diverges on this model; "
                         f"6e-06 survives every bench scene)")
     s.add_argument("--oversample", type=_oversample, default=None, metavar="M",
-                   help=f"integration steps per output sample: {OVERSAMPLE_ALLOWED} (at most "
+                   help=f"integration steps per output sample (below a 15 kHz output, per physics "
+                        f"sample: the physics runs at the smallest whole multiple of the sample rate "
+                        f"that reaches 15 kHz): {OVERSAMPLE_ALLOWED} (at most "
                         f"{AUTO_OVERSAMPLE_MAX} where --fidelity auto chooses the tier) (default: each "
-                        "tier's own: kinematic 1 while its bearing mode is below a tenth of the sample "
+                        "tier's own: kinematic 1 while its bearing mode is below a tenth of that "
                         "rate, else 2; skidding 2)")
 
     s = sub.add_parser("play", help="republish a recording on its topics")

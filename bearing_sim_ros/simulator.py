@@ -32,6 +32,19 @@ FIDELITIES = ("auto", "kinematic", "skidding")
 # output sample rates (Hz) that the API, the node's ``sample_rate`` parameter and
 # ``bearing-sim render --sample-rate`` accept: one range, so that what renders offline also runs live
 SAMPLE_RATE_RANGE = (1000.0, 200000.0)
+# the slowest rate the physics runs at (Hz): the tiers' steps and the sensor chain's anti-aliasing
+# were made and measured at 15 kHz.  Below it the tiers run at the smallest whole multiple of the
+# output rate that reaches it (``physics_rate_factor``) and the chain decimates to the output: a
+# step as long as a 1 kHz sample missed the defect impacts, and a chain at 4 kHz folded the 3.8
+# kHz pedestal resonance down into the band (0-400 Hz at 1 kHz: the skidding tier 25x and the
+# kinematic one 3.5x the 15 kHz run's vertical level)
+PHYSICS_RATE_MIN = 15000.0
+
+
+def physics_rate_factor(sample_rate: float) -> int:
+    """Physics samples per output sample: 1 at ``PHYSICS_RATE_MIN`` and above, else the smallest
+    whole number that takes ``sample_rate`` (Hz) to it."""
+    return max(1, math.ceil(PHYSICS_RATE_MIN / float(sample_rate) - 1e-9))
 # seeds that the API, ``bearing-sim render --seed`` and the node's ``seed`` parameter (an int64,
 # kept to 31 bits) accept: one range, so that a render's seed also runs live
 SEED_RANGE = (0, 2 ** 31 - 1)
@@ -143,12 +156,17 @@ class Simulator:
     scene: a :class:`~bearing_sim_ros.scene.Scene` or a shipped name / YAML path.
     sample_rate: output rate (Hz).  fidelity: "auto" | "kinematic" | "skidding".
     seed: random slip and sensor noise.  solver: "default" | "rk4" | "reference" (skidding tier).
-    rk4_step: step of the "rk4" solver (s).  oversample: integration steps per output sample
+    rk4_step: step of the "rk4" solver (s).  oversample: integration steps per physics sample
     (the accuracy knob: 1, 2 or a multiple of 4 up to 64; by default each tier's own: the
-    kinematic tier takes 1 while its bearing mode stays below a tenth of ``sample_rate``, else
+    kinematic tier takes 1 while its bearing mode stays below a tenth of ``physics_rate``, else
     ``physics.kinematic.DEFAULT_OVERSAMPLE`` = 2, chosen again when the load moves it; the skidding
     tier's "default" solver ``physics.skidding.DEFAULT_OVERSAMPLE`` = 2; "rk4" and "reference"
     keep their steps).
+
+    ``physics_rate`` (Hz) is the output rate from ``PHYSICS_RATE_MIN`` = 15 kHz on; below it, the
+    smallest whole multiple of the output rate that reaches 15 kHz (``physics_per_sample`` physics
+    samples per output sample), so that a lower output rate gets the same physics, decimated by
+    the sensor chain, not a coarser one.
     """
 
     def __init__(self, scene, sample_rate: float = 15000.0, fidelity: str = "auto", seed: int = 0,
@@ -178,6 +196,9 @@ class Simulator:
         self.scene = scene
         self.bearing = scene.bearing
         self.sample_rate = float(sample_rate)
+        # the tiers run at the physics rate and the sensor chain decimates from it to the output
+        self.physics_per_sample = physics_rate_factor(self.sample_rate)
+        self.physics_rate = self.sample_rate * self.physics_per_sample
         self.seed = int(seed)
         self.solver = solver
         self.rk4_step = rk4_step
@@ -224,12 +245,12 @@ class Simulator:
         if tier == "kinematic":
             from .physics.kinematic import KinematicModel
 
-            return KinematicModel(self.scene, self.sample_rate, self._oversample, self.seed,
+            return KinematicModel(self.scene, self.physics_rate, self._oversample, self.seed,
                                   self._shaft_speed, self._radial_load, defect_sizes=defect_sizes,
                                   ellipse_ball_load=ellipse_ball_load)
         from .physics.skidding import SkiddingModel
 
-        return SkiddingModel(self.scene, self.sample_rate, self.seed, self._shaft_speed,
+        return SkiddingModel(self.scene, self.physics_rate, self.seed, self._shaft_speed,
                              self._radial_load, solver=self.solver, rk4_step=self.rk4_step,
                              oversample=self._oversample, defect_sizes=defect_sizes,
                              ellipse_ball_load=ellipse_ball_load)
@@ -238,7 +259,7 @@ class Simulator:
         from .physics.sensor import AccelerometerChain
 
         # internal samples per output sample: the sensor chain's rate, which both tiers share (at
-        # least 4, whatever ``oversample``, the integration steps, is)
+        # least 4 per physics sample, whatever ``oversample``, the integration steps, is)
         self.chain_oversample = int(round(self._model.internal_rate / self.sample_rate))
         self.chain = AccelerometerChain(self.scene.sensor, self.sample_rate, self.chain_oversample,
                                         self.seed)
@@ -265,7 +286,8 @@ class Simulator:
 
     @property
     def oversample(self) -> int | None:
-        """Integration steps per output sample of the running tier (the constructor's
+        """Integration steps per physics sample (an output sample from 15 kHz on,
+        ``physics_rate``) of the running tier (the constructor's
         ``oversample``, else the tier's default, which for the kinematic tier follows the bearing
         mode at the load); None for the skidding tier's "rk4" and
         "reference" solvers, whose steps are set in seconds.  The sensor chain's rate is
@@ -319,18 +341,27 @@ class Simulator:
                 sa, la = self._on_ramp(done, n, s0, s1, l0x, l0y, l1x, l1y)
                 sb, lb = self._on_ramp(end, n, s0, s1, l0x, l0y, l1x, l1y)
                 rows, seg_acc = slice(p + done, p + end), acc[done * m:end * m]
+            # the tier gives one row per physics sample; an output sample is every k-th
+            k = self.physics_per_sample
             if hasattr(self._model, "advance_into"):       # writes into the buffers: no copies
-                self._model.advance_into((end - done) * m, sa, sb, la, lb, seg_acc,
-                                         series["forces"][rows], series["cage_speed"][rows])
+                if k == 1:
+                    self._model.advance_into((end - done) * m, sa, sb, la, lb, seg_acc,
+                                             series["forces"][rows], series["cage_speed"][rows])
+                else:
+                    forces = np.empty(((end - done) * k, series["forces"].shape[1]))
+                    cage = np.empty((end - done) * k)
+                    self._model.advance_into((end - done) * m, sa, sb, la, lb, seg_acc, forces, cage)
+                    series["forces"][rows] = forces[::k]
+                    series["cage_speed"][rows] = cage[::k]
             else:
                 out = self._model.advance((end - done) * m, sa, sb, np.array(la), np.array(lb))
                 seg_acc[:] = out.accel
                 nb = self.bearing.balls
-                series["forces"][rows, :nb] = out.inner_force
-                series["forces"][rows, nb:] = out.outer_force
-                series["cage_speed"][rows] = out.cage_speed
+                series["forces"][rows, :nb] = out.inner_force[::k]
+                series["forces"][rows, nb:] = out.outer_force[::k]
+                series["cage_speed"][rows] = out.cage_speed[::k]
                 for key, val in out.extras.items():
-                    extras.setdefault(key, []).append(val)
+                    extras.setdefault(key, []).append(val[::k])
             done = end
         for key, parts in extras.items():
             old = pend.get("x_" + key)

@@ -113,7 +113,7 @@ def test_oversample_description_names_each_tiers_default():
     text = _descriptors()["oversample"][1].description
     soft = load_scene("er16k_healthy")                                     # bearing mode 1.0 kHz
     stiff = replace(load_scene("er16k_skidding"), radial_load=(0.0, -2000.0))     # 2.1 kHz
-    rule = re.search(r"kinematic (\d+) while its bearing mode is below ([\d.]+) x sample_rate, "
+    rule = re.search(r"kinematic (\d+) while its bearing mode is below ([\d.]+) x that rate, "
                      r"else (\d+); skidding (\d+)", text)
     assert rule, text
     below, fraction, above, skidding = rule.groups()

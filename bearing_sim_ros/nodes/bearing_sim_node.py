@@ -140,9 +140,11 @@ def _descriptors():
                                  0, SPLIT_MAX_BYTES, f"0, or at least {SPLIT_MIN_BYTES}")),
         "fidelity": ("auto", d(T.PARAMETER_STRING, "model tier", True, constraints="auto | kinematic | skidding")),
         "seed": (0, d(T.PARAMETER_INTEGER, "seed of random slip and sensor noise", True, *SEED_RANGE)),
-        "oversample": (0, d(T.PARAMETER_INTEGER, "integration steps per output sample (speed against "
+        "oversample": (0, d(T.PARAMETER_INTEGER, "integration steps per output sample, or per physics "
+                            "sample below a 15 kHz sample_rate, where the physics runs at the smallest "
+                            "whole multiple of sample_rate that reaches 15 kHz (speed against "
                             f"accuracy); 0 = each tier's own: kinematic 1 while its bearing mode "
-                            f"is below {SOFT_MODE_FRACTION:g} x sample_rate, else {KINEMATIC_OVERSAMPLE}; "
+                            f"is below {SOFT_MODE_FRACTION:g} x that rate, else {KINEMATIC_OVERSAMPLE}; "
                             f"skidding {SKIDDING_OVERSAMPLE}", True, 0, 64,
                             f"0, {OVERSAMPLE_ALLOWED}; at most {AUTO_OVERSAMPLE_MAX} where the tier is "
                             f"chosen automatically")),

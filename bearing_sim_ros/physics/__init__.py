@@ -71,7 +71,9 @@ class TierModel:
     """Interface of a bearing model tier (documentation; tiers duck-type it).
 
     Attributes: ``name`` ("kinematic" or "skidding"), ``internal_rate`` (Hz, an integer multiple
-    of the output rate chosen by the simulator).
+    of the output rate chosen by the simulator).  A tier's "output rate" is the simulator's
+    ``physics_rate``: the output rate, or a whole multiple of it below 15 kHz, decimated by the
+    simulator (every k-th row of the per-sample series; the chain filters the acceleration).
     """
 
     name = "abstract"
