@@ -184,6 +184,12 @@ def bearing_from_mapping(name: str, data: dict, where: str = "bearing") -> Beari
     balls = int(num("balls", None, 3, 40, integer=True))
     d = num("ball_diameter_mm", None, 0.5, 200.0) * _MM
     dm = num("pitch_diameter_mm", None, 1.0, 2000.0) * _MM
+    if d >= dm * math.sin(math.pi / 3):
+        # not even the fewest balls (3) fit: the ball, not the count, is what is wrong
+        raise SceneError(
+            f"{where}.ball_diameter_mm = {d / _MM:g}: not even 3 balls of {d / _MM:g} mm fit on a "
+            f"pitch circle of {dm / _MM:g} mm (a ball must be under sin(60 deg) x the pitch "
+            f"diameter, {dm * math.sin(math.pi / 3) / _MM:.4g} mm)")
     if d >= dm * math.sin(math.pi / balls):
         raise SceneError(
             f"{where}.balls = {balls}: {balls} balls of {d / _MM:g} mm do not fit on a pitch "

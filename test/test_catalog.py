@@ -124,6 +124,9 @@ def test_custom_bearing_contact_angle_mass_and_inertia():
 @pytest.mark.parametrize("change, words", [
     ({"balls": 20}, ["balls = 20", "do not fit", "at most 15"]),
     ({"balls": 2}, ["balls = 2", "[3, 40]"]),
+    # a ball as large as the pitch circle: no count fits (was a traceback: asin of d / dm > 1)
+    ({"ball_diameter_mm": 40.0}, ["ball_diameter_mm = 40", "not even 3 balls", "33.34 mm"]),
+    ({"ball_diameter_mm": 34.0, "balls": 3}, ["ball_diameter_mm = 34", "not even 3 balls"]),
     ({"ball_diameter_mm": -1.0}, ["ball_diameter_mm = -1.0", "allowed range"]),
     ({"poisson_ratio": 0.6}, ["poisson_ratio = 0.6", "[0.0, 0.49]"]),
     # races 20 mm apart radially hold no 7.94 mm ball: D_o - D_i must be close to 2 d
