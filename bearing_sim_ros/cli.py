@@ -35,7 +35,8 @@ def _number(kind, allow_zero: bool, hi: float = math.inf):
             raise argparse.ArgumentTypeError(
                 f"{text!r} is not a {'whole number' if kind is int else 'number'}") from None
         if not (math.isfinite(value) and (value >= 0 if allow_zero else value > 0) and value <= hi):
-            upper = f" and <= {hi}" if hi < math.inf else ""
+            upper = f" and <= {hi:g}" if isinstance(hi, float) and hi < math.inf else (
+                f" and <= {hi}" if hi < math.inf else "")
             raise argparse.ArgumentTypeError(
                 f"{text!r} must be a finite number {'>=' if allow_zero else '>'} 0{upper}")
         return value
@@ -78,7 +79,7 @@ def _oversample(text):
 
 def build_parser() -> argparse.ArgumentParser:
     from .physics.integrators import RK4_DEFAULT_STEP, RK4_STEP_RANGE
-    from .simulator import AUTO_OVERSAMPLE_MAX, OVERSAMPLE_ALLOWED, SAMPLE_RATE_RANGE, SEED_RANGE
+    from .simulator import AUTO_OVERSAMPLE_MAX, DURATION_MAX_S, OVERSAMPLE_ALLOWED, SAMPLE_RATE_RANGE, SEED_RANGE
     from .analysis.report import DEFAULT_WINDOW_S, WINDOW_RANGE_S
     from .recording.recorder import SPLIT_MAX_BYTES, SPLIT_MIN_BYTES
 
@@ -100,10 +101,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     s = sub.add_parser("run", help="what `make run` does: the node on a scene for a while, recorded, then a summary")
     s.add_argument("--scene", default="er16k_outer_race", metavar="S", help=f"{scene_help} (default: %(default)s)")
-    s.add_argument("--duration", type=_nonnegative(float), default=10.0, metavar="SECONDS",
+    s.add_argument("--duration", type=_nonnegative(float, hi=DURATION_MAX_S), default=10.0, metavar="SECONDS",
                    help="seconds of signal in real time; 0 = until Ctrl-C (default: %(default)g)")
     s.add_argument("--out", required=True, metavar="F.mcap", help="MCAP file to record to (required)")
-    s.add_argument("--max-file-duration", type=_nonnegative(float, hi=1e9), default=0.0, metavar="SECONDS",
+    s.add_argument("--max-file-duration", type=_nonnegative(float, hi=DURATION_MAX_S), default=0.0, metavar="SECONDS",
                    help="split the recording into complete files of this many seconds, F_000.mcap, "
                         "F_001.mcap, ... (the node's record_max_duration); 0 = one file (default: %(default)g)")
     s.add_argument("--max-file-size", type=_nonnegative(int, hi=SPLIT_MAX_BYTES), default=0, metavar="BYTES",
@@ -113,8 +114,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     s = sub.add_parser("render", help="offline, as fast as possible, to MCAP")
     s.add_argument("scene", metavar="S", help=scene_help)
-    s.add_argument("--duration", type=_positive(float), required=True, metavar="SECONDS",
-                   help="seconds of signal, at least one sample (required)")
+    s.add_argument("--duration", type=_number(float, allow_zero=False, hi=DURATION_MAX_S), required=True,
+                   metavar="SECONDS", help=f"seconds of signal, at least one sample, at most {DURATION_MAX_S:g} "
+                                       "(required)")
     s.add_argument("--out", required=True, metavar="F.mcap", help="MCAP file to write (required)")
     s.add_argument("--fidelity", default="auto", choices=["auto", "kinematic", "skidding"],
                    help="model tier; auto: the cheapest within the scene's error tolerance "

@@ -32,6 +32,10 @@ FIDELITIES = ("auto", "kinematic", "skidding")
 # output sample rates (Hz) that the API, the node's ``sample_rate`` parameter and
 # ``bearing-sim render --sample-rate`` accept: one range, so that what renders offline also runs live
 SAMPLE_RATE_RANGE = (1000.0, 200000.0)
+# the longest signal (s) that the node's duration and record_max_duration, `bearing-sim render
+# --duration` and `run --duration` accept: 31 years, a guard against a typo (1e12) that would
+# otherwise run until the disk is full
+DURATION_MAX_S = 1.0e9
 # the slowest rate the physics runs at (Hz): the tiers' steps and the sensor chain's anti-aliasing
 # were made and measured at 15 kHz.  Below it the tiers run at the smallest whole multiple of the
 # output rate that reaches it (``physics_rate_factor``) and the chain decimates to the output: a
@@ -237,23 +241,29 @@ class Simulator:
         self._build_chain()
 
     # ---- construction ---------------------------------------------------------------------
-    def _build_model(self, tier: str, defect_sizes: tuple, ellipse_ball_load: float | None = None):
+    def _build_model(self, tier: str, defect_sizes: tuple, ellipse_ball_load: float | None = None,
+                     takes_over_from=None):
         """The ``tier``'s model at the present operating point with the defects at
         ``defect_sizes``; ``ellipse_ball_load`` (N) from the tier it takes over from, so that a
         wandering ball defect meets the races as often after a switch as before (None: the new
-        model's own most loaded ball)."""
+        model's own most loaded ball); ``takes_over_from``: that tier's model, whose state the
+        new one continues from (``adopt_state``)."""
         if tier == "kinematic":
             from .physics.kinematic import KinematicModel
 
-            return KinematicModel(self.scene, self.physics_rate, self._oversample, self.seed,
-                                  self._shaft_speed, self._radial_load, defect_sizes=defect_sizes,
-                                  ellipse_ball_load=ellipse_ball_load)
+            model = KinematicModel(self.scene, self.physics_rate, self._oversample, self.seed,
+                                   self._shaft_speed, self._radial_load, defect_sizes=defect_sizes,
+                                   ellipse_ball_load=ellipse_ball_load)
+            if takes_over_from is not None:
+                model.adopt_state(takes_over_from)
+            return model
         from .physics.skidding import SkiddingModel
 
+        # the skidding tier takes the state over as it is built: it then needs no equilibrium
         return SkiddingModel(self.scene, self.physics_rate, self.seed, self._shaft_speed,
                              self._radial_load, solver=self.solver, rk4_step=self.rk4_step,
                              oversample=self._oversample, defect_sizes=defect_sizes,
-                             ellipse_ball_load=ellipse_ball_load)
+                             ellipse_ball_load=ellipse_ball_load, takes_over_from=takes_over_from)
 
     def _build_chain(self):
         from .physics.sensor import AccelerometerChain
@@ -474,15 +484,21 @@ class Simulator:
         old, old_tier = self._model, self.tier
         self.tier = sel.tier
         self.selection = sel
-        new = self._build_model(sel.tier, old.defect_sizes, old.ellipse_ball_load)
-        if hasattr(new, "adopt_state"):
-            new.adopt_state(old)
+        new = self._build_model(sel.tier, old.defect_sizes, old.ellipse_ball_load, takes_over_from=old)
         if int(round(new.internal_rate / self.sample_rate)) != self.chain_oversample:
             raise RuntimeError("tiers must share the internal rate to switch without a seam")
         self._model = new
         self.tier_switches += 1
         self.last_tier_switch = (self.time, old_tier, sel.tier)
         return True
+
+    def switch_ahead(self, shaft_speed: float, radial_load) -> bool:
+        """Whether advancing to this operating point (rad/s; (x, y) N) switches the tier: the
+        live node then starts the batch where it has the most time before the next publication
+        (a switch costs a few batches' computation)."""
+        sel = reselect_tier(self.scene, self.requested_fidelity, self.selection,
+                            (self._shaft_speed, self._radial_load), (float(shaft_speed), tuple(radial_load)))
+        return sel is not None and sel.tier != self.tier
 
     @property
     def can_switch_tiers(self) -> bool:
@@ -495,8 +511,8 @@ class Simulator:
     def prepare_switches(self) -> None:
         """Load (on a cold cache: compile) the other tier's kernels now, by handing a copy of the
         running tier's state to a throwaway model of the other one and running it for a few
-        samples, so that a switch at run time costs only that tier's set-up (about 30 ms, inside
-        the live node's compute_ahead) instead of also loading its kernels (25 ms more when
+        samples, so that a switch at run time costs only that tier's set-up (about 8 ms to the
+        skidding tier, 2 ms back) instead of also loading its kernels (25 ms more when
         cached, 10-15 s on a cold cache).  Nothing of this simulator changes.  A no-op where the
         tier cannot switch."""
         if not self.can_switch_tiers:
@@ -504,14 +520,35 @@ class Simulator:
         import copy
 
         other = "skidding" if self.tier == "kinematic" else "kinematic"
-        model = self._build_model(other, self._model.defect_sizes, self._model.ellipse_ball_load)
-        if hasattr(model, "adopt_state"):
-            # the hand-over too (it reads the old tier's films); from a copy, which it may update
-            model.adopt_state(copy.deepcopy(self._model))
+        # the hand-over too (it reads the old tier's films); from a copy, which it may update
+        model = self._build_model(other, self._model.defect_sizes, self._model.ellipse_ball_load,
+                                  takes_over_from=copy.deepcopy(self._model))
         w, load = self._shaft_speed, self._radial_load.copy()
         model.advance(8 * self.chain_oversample, w, w, load, load)     # 8 output samples
 
     # ---- state for the JointState topic ----------------------------------------------------
     def snapshot(self):
-        """Angles and speeds of shaft, cage and balls (see ``physics.KinematicSnapshot``)."""
-        return self._model.snapshot()
+        """Angles and speeds of shaft, cage and balls (see ``physics.KinematicSnapshot``) at the
+        time of the next output sample (``time``, the end of the latest batch: the stamp of the
+        ``state`` message), not where the physics is: it runs ahead by the sensor chain's
+        lookahead (19 samples, 1.3 ms at 15 kHz, a 12 degree turn of the shaft at 1600 rpm).  The
+        shaft's and the cage's angles are taken back by the integral of their speeds over those
+        samples (trapezoids over the per-sample series the simulator holds for them; exact at a
+        steady speed); each ball is taken back with the cage (a ball moves against its pocket by
+        far less than a sample's turn) and its speed moved by the cage's change."""
+        snap = self._model.snapshot()
+        ahead = self._pending["shaft_speed"]
+        if ahead.size == 0:
+            return snap
+        cage_ahead = self._pending["cage_speed"]
+        dt = 1.0 / self.sample_rate
+
+        def back(series, now):
+            # integral over [time, time + ahead.size * dt] of the speed, trapezoids per sample
+            return dt * (series.sum() - 0.5 * series[0] + 0.5 * now)
+
+        cage_back = back(cage_ahead, snap.cage_speed)
+        cage_change = cage_ahead[0] - snap.cage_speed
+        return type(snap)(snap.shaft_angle - back(ahead, snap.shaft_speed), float(ahead[0]),
+                          snap.cage_angle - cage_back, float(cage_ahead[0]),
+                          snap.ball_angles - cage_back, snap.ball_speeds + cage_change)

@@ -124,19 +124,21 @@ def test_the_shaft_and_cage_angles_are_the_integral_of_the_speed_ramp(oversample
     """Over a speed ramp w0 -> 2 w0 in one advance of T the shaft turns by 1.5 w0 T (the mean
     speed), then by 2 w0 T at the held speed, and the cage of the kinematic tier by the cage ratio
     of each (pure rolling): the angles that place the balls, an inner-race defect and the
-    published joint states.  The physics runs ahead of the output by the chain's lookahead, which
-    shifts both ramps' starts alike."""
+    published joint states.  The snapshots are at the next output sample and the physics runs
+    ahead of it by the chain's lookahead: the ramp starts that many samples after the first."""
     sim = Simulator("er16k_inner_race", fidelity="kinematic", oversample=oversample)
     sim.advance(300)
     s0 = sim.snapshot()
     w0 = sim.shaft_speed
     t = 150 / sim.sample_rate
+    ahead = sim.chain.lookahead_samples / sim.sample_rate      # s
     sim.advance(150, shaft_speed=2 * w0)
     sim.advance(150)
     s1 = sim.snapshot()
     ratio = sim.bearing.cage_speed(1.0)
-    assert s1.shaft_angle - s0.shaft_angle == pytest.approx(1.5 * w0 * t + 2 * w0 * t, rel=1e-9)
-    assert s1.cage_angle - s0.cage_angle == pytest.approx(ratio * (3.5 * w0 * t), rel=1e-9)
+    turned = w0 * ahead + 1.5 * w0 * t + 2 * w0 * (t - ahead)
+    assert s1.shaft_angle - s0.shaft_angle == pytest.approx(turned, rel=1e-9)
+    assert s1.cage_angle - s0.cage_angle == pytest.approx(ratio * turned, rel=1e-9)
 
 
 @pytest.mark.parametrize("scene, oversample", [("er16k_outer_race", None), ("b6205_ball_inner", None),

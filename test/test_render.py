@@ -56,6 +56,28 @@ def test_every_message_reads_back_with_rosbags(rendered):
     assert np.all(np.abs(np.diff(stamps) - widths[:-1] * NS / FS) <= 1)
 
 
+def test_state_angles_are_those_at_the_stamp(rendered):
+    """Read back independently, each ``/state`` gives the shaft and the cage where they are at
+    its stamp (steady 1600 rpm from angle 0, the kinematic tier's pure-rolling cage), not 19
+    samples later, where the physics is (0.21 rad of the shaft before 2026-11-29)."""
+    from rosbags.highlevel import AnyReader
+
+    path, _ = rendered
+    scene = load_scene("er16k_outer_race")
+    w = scene.shaft_speed
+    cage = scene.bearing.cage_speed(w)
+    n = 0
+    with AnyReader([path]) as reader:
+        for conn, _t, raw in reader.messages([c for c in reader.connections if c.topic == "/state"]):
+            msg = reader.deserialize(raw, conn.msgtype)
+            t = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+            assert msg.position[0] == pytest.approx(w * t, abs=1e-6)
+            assert msg.position[1] == pytest.approx(cage * t, abs=1e-6)
+            assert msg.velocity[:2] == pytest.approx([w, cage], rel=1e-12)
+            n += 1
+    assert n == 100
+
+
 def test_every_message_reads_back_with_mcap_and_rclpy(rendered):
     from rclpy.serialization import deserialize_message
 
@@ -260,6 +282,8 @@ def test_solver_kept_when_a_profile_takes_auto_to_the_skidding_tier(tmp_path, ca
     (["--solver", "rk4", "--rk4-step=-1e-6"], ["--rk4-step", "-1e-6 s", "[1e-09, 0.001] s"]),
     (["--sample-rate", "500"], ["--sample-rate", "500 Hz", "[1000, 200000] Hz"]),
     (["--sample-rate", "250000"], ["--sample-rate", "250000 Hz", "[1000, 200000] Hz"]),
+    # a typo that would render until the disk is full: the node's bound on duration
+    (["--duration", "1e12"], ["--duration", "'1e12'", "<= 1e+09"]),
 ])
 def test_rk4_step_and_sample_rate_mistakes_are_one_line(tmp_path, capsys, extra, words):
     out = tmp_path / "x.mcap"

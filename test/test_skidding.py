@@ -171,13 +171,20 @@ def test_inner_race_defect_chunked_equals_continuous_bit_for_bit(solver, kwargs)
     parts = [sim.advance(97) for _ in range(8)]
     np.testing.assert_array_equal(np.concatenate([p.contact_forces for p in parts]), one.contact_forces)
     np.testing.assert_array_equal(np.concatenate([p.accel for p in parts]), one.accel)
-    # a speed command still moves the angle as the ramp says: half-way speed over the ramp
+    # a speed command still moves the angle as the ramp says: half-way speed over the ramp.  The
+    # snapshot is at the next output sample, and the physics runs `ahead` samples later, so the
+    # 150-sample ramp starts `ahead` samples after the first snapshot
+    ahead, dt = sim.chain.lookahead_samples, 1.0 / sim.sample_rate
     a0 = sim.snapshot().shaft_angle
     w0 = sim.shaft_speed
     sim.advance(150, shaft_speed=2 * w0)
-    assert sim.snapshot().shaft_angle - a0 == pytest.approx(1.5 * w0 * 0.01, rel=1e-12)
+    inside = 150 - ahead                            # ramp samples before the second snapshot
+    w_there = w0 + w0 * inside / 150
+    assert sim.snapshot().shaft_angle - a0 == pytest.approx(
+        w0 * ahead * dt + 0.5 * (w0 + w_there) * inside * dt, rel=1e-12)
     sim.advance(150)
-    assert sim.snapshot().shaft_angle - a0 == pytest.approx(1.5 * w0 * 0.01 + 2 * w0 * 0.01, rel=1e-12)
+    assert sim.snapshot().shaft_angle - a0 == pytest.approx(
+        w0 * ahead * dt + 1.5 * w0 * 0.01 + 2 * w0 * inside * dt, rel=1e-12)
 
 
 def test_oversample_sets_the_default_solvers_step():

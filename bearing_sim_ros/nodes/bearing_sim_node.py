@@ -54,6 +54,8 @@ REJECT_LOG_PERIOD = 2.0        # s: at most one log line per rejection reason th
 TIME_LINE_JUMP = 1.0           # s: a load stamp further back than this behind the last accepted one
                                # starts a new time line (a recording played again, a publisher
                                # restarted with other stamps); closer, it is out of order
+SWITCH_COST_GUESS_S = 0.02     # s: a tier switch's batch before the first is measured (8 ms for
+                               # kinematic -> skidding on the AMD host; more on a loaded machine)
 
 
 def check_speed(value: float, limits: InputLimits):
@@ -110,7 +112,7 @@ def _descriptors():
     from ..physics.skidding import DEFAULT_OVERSAMPLE as SKIDDING_OVERSAMPLE
     from ..messages import BATCH_DURATION, BATCH_DURATION_RANGE, STATE_RATE, STATE_RATE_RANGE
     from ..recording.recorder import SPLIT_MAX_BYTES, SPLIT_MIN_BYTES
-    from ..simulator import AUTO_OVERSAMPLE_MAX, OVERSAMPLE_ALLOWED, SAMPLE_RATE_RANGE, SEED_RANGE
+    from ..simulator import AUTO_OVERSAMPLE_MAX, DURATION_MAX_S, OVERSAMPLE_ALLOWED, SAMPLE_RATE_RANGE, SEED_RANGE
 
     def d(kind, text, read_only=False, lo=None, hi=None, constraints=""):
         desc = ParameterDescriptor(type=kind, description=text, read_only=read_only,
@@ -129,11 +131,11 @@ def _descriptors():
                                              *BATCH_DURATION_RANGE,
                                    "batch_duration x sample_rate must be a whole number of samples")),
         "real_time": (True, d(T.PARAMETER_BOOL, "pace on the steady clock; false = as fast as possible")),
-        "duration": (0.0, d(T.PARAMETER_DOUBLE, "seconds of signal, then exit; 0 = forever", False, 0.0, 1.0e9)),
+        "duration": (0.0, d(T.PARAMETER_DOUBLE, "seconds of signal, then exit; 0 = forever", False, 0.0, DURATION_MAX_S)),
         "record": ("", d(T.PARAMETER_STRING, "MCAP file to record to; empty = no recording", True)),
         "record_max_duration": (0.0, d(T.PARAMETER_DOUBLE, "split the recording: seconds of it per file "
                                        "(record:=run.mcap writes run_000.mcap, run_001.mcap, ..., each "
-                                       "complete); 0 = one file", True, 0.0, 1.0e9,
+                                       "complete); 0 = one file", True, 0.0, DURATION_MAX_S,
                                        "0, or at least batch_duration")),
         "record_max_size": (0, d(T.PARAMETER_INTEGER, "split the recording: bytes on disk per file "
                                  "(run_000.mcap, run_001.mcap, ..., each complete); 0 = one file", True,
@@ -450,6 +452,9 @@ class BearingSimNode(Node):
         next_diag = None                      # steady-clock time of the next /diagnostics
         next_diag_index = sr                  # real_time:=false: once per second of signal, like render
         est = 0.0
+        # the computation of a batch that switches the tier (the new tier's set-up: about 8 ms
+        # for kinematic -> skidding), a decaying maximum like est, measured at each switch
+        switch_est = SWITCH_COST_GUESS_S
         published_index = 0
         rec_failed = False
         stats.period_start(time.monotonic(), 0)
@@ -515,11 +520,20 @@ class BearingSimNode(Node):
             start_at = (anchor_t + (sim.index - anchor_i) / sr - cfg["compute_ahead"]
                         if real_time and anchor_t is not None else now)
             may = start_at <= now
-            if may and (not queue or now + est <= queue[0].due):
+            cost = est
+            switching = sim.can_switch_tiers and sim.switch_ahead(self._cmd_speed, self._cmd_load)
+            if switching:
+                # a switch costs more than a batch: start it right after a publication, where the
+                # next one is a whole batch away (waiting longer cannot help: no gap is wider)
+                cost = max(est, min(switch_est, 0.9 * n / sr))
+            if may and (not queue or now + cost <= queue[0].due):
                 item = self._compute(n, cfg, Clock)
                 done = time.monotonic()
                 stats.compute(done - now)
-                est = max(0.9 * est, done - now)
+                if switching:
+                    switch_est = max(0.9 * switch_est, done - now)
+                else:
+                    est = max(0.9 * est, done - now)
                 if anchor_t is None:
                     # the schedule starts with the first batch: it is due now
                     anchor_t, anchor_i = done - n / sr, 0
