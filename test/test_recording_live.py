@@ -72,6 +72,10 @@ def test_a_remapped_and_namespaced_node_records_its_topics_under_their_names(bea
     assert (status.name, status.hardware_id) == ("rig1/bearing_sim: simulator", "rig1/bearing_sim")
     summary = build_report(out, tmp_path / "report")
     assert summary["analysed_s"] == pytest.approx(2.0) and summary["verdict"] == "outer"
+    # the length is the signal's (was the log times' span, 1.99 s: the first table is logged when
+    # its 10 ms batch is complete)
+    assert summary["duration_s"] == pytest.approx(2.0, abs=1e-6)
+    assert summary["log_time_span_s"] == pytest.approx(1.99, abs=0.005)
 
 
 def test_a_recording_that_fails_on_the_way_is_logged_then_and_ends_with_status_2(bearing_sim_exe, ros_env, tmp_path):
