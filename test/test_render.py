@@ -83,6 +83,27 @@ def test_every_message_reads_back_with_mcap_and_rclpy(rendered):
     assert params["oversample"] == 0 and "--oversample" not in params["command"]   # each tier's own
 
 
+def test_the_metadata_names_each_topics_role_and_recorded_channel(rendered):
+    """``topics`` in the metadata maps each role to the channel it is recorded on: a render
+    recorded ``{"accel": "accel", "/diagnostics": "/diagnostics", ...}``, names that are no
+    channel of the file (``/accel``) and a role with a slash.  Read with the mcap library and
+    rosbags, not the project's reader."""
+    import json
+
+    from mcap.reader import make_reader
+    from rosbags.highlevel import AnyReader
+
+    path, _ = rendered
+    with open(path, "rb") as f:
+        meta = next(m.metadata for m in make_reader(f).iter_metadata() if m.name == "bearing_sim")
+    with AnyReader([path]) as reader:
+        channels = {c.topic: c.msgtype for c in reader.connections}
+    roles = json.loads(meta["topics"])
+    assert roles == {"accel": "/accel", "contact_forces": "/contact_forces", "state": "/state",
+                     "diagnostics": "/diagnostics", "shaft_speed": "/shaft_speed", "load": "/load"}
+    assert set(roles.values()) == set(channels)
+
+
 def test_oversample_reaches_the_simulator_and_the_metadata(rendered, tmp_path):
     """``--oversample`` changes the integration (another signal) and says so in the file."""
     path, _ = rendered

@@ -353,6 +353,7 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
                           + (f" --rk4-step {float(rk4_step)!r}" if rk4_step is not None else "")
                           + (f" --oversample {oversample}" if oversample else ""))}
     topics = [TOPIC_SHAFT_SPEED, TOPIC_LOAD, TOPIC_ACCEL, TOPIC_CONTACT, TOPIC_STATE, TOPIC_DIAGNOSTICS]
+    # each role recorded under its own name (in the root namespace: /accel, /diagnostics, ...)
     meta = recording_metadata(scene, params, seed, sim.selection, topics={t: t for t in topics})
     attachments = {f"{scene.name}.yaml": scene.source_text.encode("utf-8")} if scene.source_text else {}
     # written as <out>.<pid>.partial and moved onto out when finalised: out only ever holds a
