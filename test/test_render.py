@@ -244,7 +244,12 @@ def test_solver_with_the_kinematic_tier_asked_for_is_one_line(tmp_path, capsys):
 def test_solver_unused_by_auto_is_said_and_not_recorded(tmp_path, capsys):
     """Auto keeps er16k_outer_race on the kinematic tier: ``--solver reference`` changes nothing,
     the printed line says so, and the file is the default's to the byte (its command names no
-    solver)."""
+    solver).  Its parameters name no solver either (they said ``"solver": "default"``, which did
+    not run: the kinematic tier has none).  Read with the mcap library."""
+    import json
+
+    from mcap.reader import make_reader
+
     plain, asked = tmp_path / "plain.mcap", tmp_path / "asked.mcap"
     assert cli.main(["render", "er16k_outer_race", "--duration", "0.2", "--out", str(plain)]) == 0
     capsys.readouterr()
@@ -254,6 +259,10 @@ def test_solver_unused_by_auto_is_said_and_not_recorded(tmp_path, capsys):
     assert "kinematic tier; --solver applies to the skidding tier only" in line
     assert "--solver" not in " ".join(_recorded_command(asked))
     assert asked.read_bytes() == plain.read_bytes()
+    with open(asked, "rb") as f:
+        meta = next(m.metadata for m in make_reader(f).iter_metadata() if m.name == "bearing_sim")
+    params = json.loads(meta["parameters"])
+    assert params["solver"] is None and params["rk4_step"] is None and meta["tier"] == "kinematic"
 
 
 def test_solver_kept_when_a_profile_takes_auto_to_the_skidding_tier(tmp_path, capsys):
@@ -270,7 +279,7 @@ def test_solver_kept_when_a_profile_takes_auto_to_the_skidding_tier(tmp_path, ca
     argv = _recorded_command(out)
     assert " ".join(argv).endswith("--solver rk4 --rk4-step 2e-06")
     with open_recording(out) as rec:
-        assert rec.parameters()["rk4_step"] == 2e-6
+        assert rec.parameters()["rk4_step"] == 2e-6 and rec.parameters()["solver"] == "rk4"
     assert cli.main(argv + ["--out", str(tmp_path / "again.mcap")]) == 0
     assert (tmp_path / "again.mcap").read_bytes() == out.read_bytes()
 
