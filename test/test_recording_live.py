@@ -64,7 +64,9 @@ def test_a_remapped_and_namespaced_node_records_its_topics_under_their_names(bea
                      "/rig1/shaft_speed": "std_msgs/msg/Float64", "/rig1/load": "geometry_msgs/msg/WrenchStamped"}
     assert counts["/rig1/vibration"] == 200
     with open_recording(out) as rec:
-        assert json.loads(rec.metadata["topics"])["accel"] == "/rig1/vibration"
+        roles = json.loads(rec.metadata["topics"])     # each role -> the channel it is recorded on
+    assert roles == {"accel": "/rig1/vibration", "contact_forces": "/rig1/contact_forces", "state": "/rig1/state",
+                     "diagnostics": "/diagnostics", "shaft_speed": "/rig1/shaft_speed", "load": "/rig1/load"}
     # its status says which node it is: nodes in several namespaces share the one /diagnostics
     with AnyReader([out]) as reader:
         conn = next(c for c in reader.connections if c.topic == "/diagnostics")
@@ -72,6 +74,10 @@ def test_a_remapped_and_namespaced_node_records_its_topics_under_their_names(bea
     assert (status.name, status.hardware_id) == ("rig1/bearing_sim: simulator", "rig1/bearing_sim")
     summary = build_report(out, tmp_path / "report")
     assert summary["analysed_s"] == pytest.approx(2.0) and summary["verdict"] == "outer"
+    # the length is the signal's (was the log times' span, 1.99 s: the first table is logged when
+    # its 10 ms batch is complete)
+    assert summary["duration_s"] == pytest.approx(2.0, abs=1e-6)
+    assert summary["log_time_span_s"] == pytest.approx(1.99, abs=0.005)
 
 
 def test_a_recording_that_fails_on_the_way_is_logged_then_and_ends_with_status_2(bearing_sim_exe, ros_env, tmp_path):

@@ -105,6 +105,27 @@ def test_every_message_reads_back_with_mcap_and_rclpy(rendered):
     assert params["oversample"] == 0 and "--oversample" not in params["command"]   # each tier's own
 
 
+def test_the_metadata_names_each_topics_role_and_recorded_channel(rendered):
+    """``topics`` in the metadata maps each role to the channel it is recorded on: a render
+    recorded ``{"accel": "accel", "/diagnostics": "/diagnostics", ...}``, names that are no
+    channel of the file (``/accel``) and a role with a slash.  Read with the mcap library and
+    rosbags, not the project's reader."""
+    import json
+
+    from mcap.reader import make_reader
+    from rosbags.highlevel import AnyReader
+
+    path, _ = rendered
+    with open(path, "rb") as f:
+        meta = next(m.metadata for m in make_reader(f).iter_metadata() if m.name == "bearing_sim")
+    with AnyReader([path]) as reader:
+        channels = {c.topic: c.msgtype for c in reader.connections}
+    roles = json.loads(meta["topics"])
+    assert roles == {"accel": "/accel", "contact_forces": "/contact_forces", "state": "/state",
+                     "diagnostics": "/diagnostics", "shaft_speed": "/shaft_speed", "load": "/load"}
+    assert set(roles.values()) == set(channels)
+
+
 def test_oversample_reaches_the_simulator_and_the_metadata(rendered, tmp_path):
     """``--oversample`` changes the integration (another signal) and says so in the file."""
     path, _ = rendered
@@ -245,7 +266,12 @@ def test_solver_with_the_kinematic_tier_asked_for_is_one_line(tmp_path, capsys):
 def test_solver_unused_by_auto_is_said_and_not_recorded(tmp_path, capsys):
     """Auto keeps er16k_outer_race on the kinematic tier: ``--solver reference`` changes nothing,
     the printed line says so, and the file is the default's to the byte (its command names no
-    solver)."""
+    solver).  Its parameters name no solver either (they said ``"solver": "default"``, which did
+    not run: the kinematic tier has none).  Read with the mcap library."""
+    import json
+
+    from mcap.reader import make_reader
+
     plain, asked = tmp_path / "plain.mcap", tmp_path / "asked.mcap"
     assert cli.main(["render", "er16k_outer_race", "--duration", "0.2", "--out", str(plain)]) == 0
     capsys.readouterr()
@@ -255,6 +281,10 @@ def test_solver_unused_by_auto_is_said_and_not_recorded(tmp_path, capsys):
     assert "kinematic tier; --solver applies to the skidding tier only" in line
     assert "--solver" not in " ".join(_recorded_command(asked))
     assert asked.read_bytes() == plain.read_bytes()
+    with open(asked, "rb") as f:
+        meta = next(m.metadata for m in make_reader(f).iter_metadata() if m.name == "bearing_sim")
+    params = json.loads(meta["parameters"])
+    assert params["solver"] is None and params["rk4_step"] is None and meta["tier"] == "kinematic"
 
 
 def test_solver_kept_when_a_profile_takes_auto_to_the_skidding_tier(tmp_path, capsys):
@@ -271,7 +301,7 @@ def test_solver_kept_when_a_profile_takes_auto_to_the_skidding_tier(tmp_path, ca
     argv = _recorded_command(out)
     assert " ".join(argv).endswith("--solver rk4 --rk4-step 2e-06")
     with open_recording(out) as rec:
-        assert rec.parameters()["rk4_step"] == 2e-6
+        assert rec.parameters()["rk4_step"] == 2e-6 and rec.parameters()["solver"] == "rk4"
     assert cli.main(argv + ["--out", str(tmp_path / "again.mcap")]) == 0
     assert (tmp_path / "again.mcap").read_bytes() == out.read_bytes()
 

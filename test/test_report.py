@@ -146,6 +146,68 @@ def _with_onset(tmp_path, onset_s: float):
     return path
 
 
+def test_a_defect_the_recording_ends_before_is_not_expected_of_the_verdict(tmp_path, capsys):
+    """A 2 s render of a scene whose outer-race pit appears at 3 s: its /diagnostics have no fault
+    throughout, and the healthy verdict is right.  The report checked it against every defect of
+    the scene ("the scene's defects: outer (the verdict differs from the scene)"); now against the
+    faults the ground truth has in the analysed stretch, none, and it says when the scene's
+    defect comes.  The same file without its /diagnostics (no ground truth) is checked against
+    the scene's defects, as before."""
+    from rosbags.highlevel import AnyReader
+
+    rec = tmp_path / "before.mcap"
+    render(str(_with_onset(tmp_path, 3.0)), 2.0, rec, fidelity="kinematic", seed=1, progress=False)
+    with AnyReader([rec]) as reader:           # the file's own ground truth, read independently
+        conns = [c for c in reader.connections if c.topic == "/diagnostics"]
+        faults = {kv.value for _, _, raw in reader.messages(conns)
+                  for st in reader.deserialize(raw, conns[0].msgtype).status
+                  for kv in st.values if kv.key == "faults_present"}
+    assert faults == {"none"}
+    out = tmp_path / "out"
+    assert cli.main(["report", str(rec), "--out", str(out)]) == 0
+    s = json.loads((out / "summary.json").read_text())
+    assert s["verdict"] == "healthy" and s["verdict_describes_recording"] is True
+    assert s["expected_defects"] == [] and s["expected_defects_from"] == "ground truth"
+    assert s["scene_defects"] == [{"kind": "outer", "onset_s": 3.0, "present": "not in this recording"}]
+    md = (out / "summary.md").read_text()
+    assert ("the scene's defects: outer (from 3 s, after this recording ends); present in the analysed "
+            "2.00 s (by `/diagnostics`): none (the verdict agrees with the faults present).") in md
+    assert "differs" not in md
+    assert "(scene defects: outer (from 3 s, after this recording ends); present: none)" in capsys.readouterr().out
+    # without ground truth: the scene's defects, the only expectation there is
+    bare = tmp_path / "bare.mcap"
+    assert _copy_without(rec, bare, lambda topic, k: topic == "/diagnostics") == 2
+    s = build_report(bare, tmp_path / "bare_out")
+    assert s["expected_defects"] == ["outer"] and s["expected_defects_from"] == "scene"
+    assert s["scene_defects"] == [{"kind": "outer", "onset_s": 3.0, "present": None}]
+    assert s["verdict_describes_recording"] is None
+    assert "the scene's defects: outer (the verdict differs from the scene)." in (
+        tmp_path / "bare_out" / "summary.md").read_text()
+
+
+def test_the_length_is_the_recorded_signals_not_the_log_times_span(outer, tmp_path):
+    """As in a live node's recording, the first message logged at the end of the first 10 ms
+    batch (the render's /shaft_speed and /load, logged at a batch's start, left out): the report
+    gave the log times' span, 1.99 s, as the length of a 2 s recording.  The length is the
+    signal's, from the tables (read here with rosbags): the first stamp to the last + its width
+    / sample rate; the log span stays, under its own name."""
+    from rosbags.highlevel import AnyReader
+
+    live_like = tmp_path / "live_like.mcap"
+    _copy_without(outer[0], live_like, lambda topic, k: topic in ("/shaft_speed", "/load"))
+    with AnyReader([live_like]) as reader:
+        conns = [c for c in reader.connections if c.topic == "/accel"]
+        tables = [reader.deserialize(raw, conns[0].msgtype) for _, _, raw in reader.messages(conns)]
+        log_span = (reader.end_time - 1 - reader.start_time) / NS
+    stamps = [t.header.stamp.sec * NS + t.header.stamp.nanosec for t in tables]
+    length = (stamps[-1] - stamps[0]) / NS + tables[-1].width / 15000.0
+    assert length == pytest.approx(2.0, abs=1e-9) and log_span == pytest.approx(1.99, abs=1e-9)
+    s = build_report(live_like, tmp_path / "out")
+    assert s["duration_s"] == pytest.approx(length, abs=1e-9)
+    assert s["log_time_span_s"] == pytest.approx(log_span, abs=1e-9)
+    assert "| length | 2.00 s, " in (tmp_path / "out" / "summary.md").read_text()
+
+
 def test_report_timeline_scores_detection_against_the_recorded_onset(tmp_path, figures):
     """An outer-race pit that appears 2.5 s into a 5 s recording: in 1 s windows (the default)
     the verdict is healthy, with no fault present by /diagnostics, before the onset and outer
@@ -185,7 +247,12 @@ def test_report_timeline_scores_detection_against_the_recorded_onset(tmp_path, f
                                       "latency_s": s["detection_latency_s"], "windows_since": 3}]
     # the whole recording's verdict as before, said not to describe it
     assert s["verdict"] == "outer" and s["verdict_describes_recording"] is False
+    # checked against the faults present in the analysed stretch: the pit, for part of it
+    assert s["expected_defects"] == ["outer"] and s["expected_defects_from"] == "ground truth"
+    assert s["scene_defects"] == [{"kind": "outer", "onset_s": 2.5, "present": "in part of the analysed stretch"}]
     md = (out / "summary.md").read_text()
+    assert ("the scene's defects: outer (from 2.5 s); present in the analysed 5.00 s (by `/diagnostics`): "
+            "outer (the verdict agrees with the faults present).") in md
     assert "one verdict does not describe it" in md and "## Verdict over time" in md
     assert "| 0.00-2.00 | 2 | healthy | none | 0 |" in md          # a run of windows, not each window
     assert "(none, then outer from 2.50 s)" in md and "- fault onset: 2.5000 s (the first sample" in md
@@ -227,6 +294,10 @@ def test_the_timeline_covers_a_recording_longer_than_the_report_holds(tmp_path, 
     short = build_report(rec, tmp_path / "short", window_s=0.7)
     assert whole["analysed_s"] == pytest.approx(5.0) and short["analysed_s"] == pytest.approx(1.5)
     assert whole["verdict"] == "outer" and short["verdict"] == "healthy"       # the pit is not in 0-1.5 s
+    assert whole["expected_defects"] == ["outer"] and short["expected_defects"] == []    # ... by /diagnostics
+    assert short["scene_defects"][0]["present"] == "after the analysed stretch"
+    assert "outer (from 2.5 s, after the analysed 1.50 s); present in the analysed 1.50 s (by `/diagnostics`): " \
+           "none (the verdict agrees with the faults present)" in (tmp_path / "short" / "summary.md").read_text()
     assert len(short["timeline"]) == 7 and short["timeline"] == whole["timeline"]
     for key in ("fault_onset_s", "first_detection_s", "detection_latency_s", "fault_detections",
                 "timeline_unscored_s", "ground_truth_changes"):

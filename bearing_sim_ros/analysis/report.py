@@ -13,8 +13,10 @@ Writes to DIR:
 - ``timeline.png``: the verdict over time: the same detector in consecutive windows
   (``--window``), each window's prominences against the threshold, the faults present by the
   recorded ``/diagnostics`` (the ground truth) and the defect sizes;
-- ``summary.md`` and ``summary.json``: how the recording was made, waveform statistics, fault
-  lines against theory, the verdict, whether the waveform tables are contiguous, and the
+- ``summary.md`` and ``summary.json``: how the recording was made, its length (the recorded
+  signal's: ``duration_s``), waveform statistics, fault lines against theory, the verdict
+  against the faults expected (``expected_defects``: those the recorded ground truth has in the
+  analysed stretch, else the scene's), whether the waveform tables are contiguous, and the
   timeline scored against the ground truth (fault onset, first detection, latency).
 
 The bearing comes from the scene text in the ``bearing_sim`` metadata record, so a report needs
@@ -137,6 +139,12 @@ class _Data:
         self.samples = int(self.widths.sum())     # in every table; self.accel holds the first ones
         self.sample_rate = fs_meta or self._rate_from_stamps()
         self.t0_ns = int(self.stamps[0])
+        # the recorded signal's length (s): first stamp to the end of the last table, not the log
+        # times' span (the live node logs a table when its batch is complete, a batch after its stamp)
+        self.signal_s = (int(self.stamps[-1]) - self.t0_ns) / NS + int(self.widths[-1]) / self.sample_rate
+        # signal time (s) of the end of the first samples, those held in self.accel (the analysed stretch)
+        self.analysed_end_s = float(sample_times_s([self.accel.shape[0] - 1], self.stamps, self.widths,
+                                                   self.sample_rate, self.t0_ns)[0]) + 1.0 / self.sample_rate
         self.gaps = self._gaps()
         self.state_t = np.array(state_t, dtype=float) / NS
         self.shaft_w = np.array(shaft_w, dtype=float)
@@ -330,6 +338,52 @@ def faults_at_start(truth: list) -> tuple:
     ``fault_onsets_s`` whose first message has a fault), those of the first message."""
     at_start = ground_truth.faults_at(truth, 2 * SLACK_S, SLACK_S)
     return at_start if at_start is not None else (truth[0].faults if truth else ())
+
+
+THROUGHOUT, IN_PART, AFTER_ANALYSED, NOT_RECORDED = (
+    "throughout the analysed stretch", "in part of the analysed stretch", "after the analysed stretch",
+    "not in this recording")
+
+
+def scene_defects(scene, truth: list, analysed_end_s: float, end_s: float) -> list:
+    """Each kind of the scene's defects (sorted), with the earliest ``onset_s`` the scene gives
+    its defects of that kind and where the recorded ground truth ``truth`` has it
+    (``present``): ``THROUGHOUT`` the analysed stretch (the signal up to ``analysed_end_s``, from
+    its first sample), ``IN_PART`` of it (it appeared within), ``AFTER_ANALYSED`` (it appeared
+    before the recording's end ``end_s``, after the analysed stretch) or ``NOT_RECORDED``; None
+    without ground truth.  [] without a scene."""
+    if scene is None:
+        return []
+    onsets: dict = {}
+    for df in scene.defects:
+        onsets[df.kind] = min(df.onset, onsets.get(df.kind, df.onset))
+    at_start = faults_at_start(truth) if truth else None
+    analysed = ground_truth.faults_at(truth, analysed_end_s, SLACK_S) if truth else None
+    recorded = ground_truth.faults_at(truth, end_s, SLACK_S) if truth else None
+    rows = []
+    for kind in sorted(onsets):
+        if analysed is None:
+            present = None
+        elif kind in analysed:
+            present = THROUGHOUT if kind in at_start else IN_PART
+        else:
+            present = AFTER_ANALYSED if recorded and kind in recorded else NOT_RECORDED
+        rows.append({"kind": kind, "onset_s": onsets[kind], "present": present})
+    return rows
+
+
+def expected_defects(scene, truth: list, analysed_end_s: float):
+    """(the faults the one verdict is checked against, sorted, and where they come from): where
+    the recording carries ground truth, those its ``/diagnostics`` have in the analysed stretch
+    (the signal up to ``analysed_end_s``: defects do not vanish, so those of its last sample),
+    "ground truth"; without it, every defect kind of the scene, "scene"; (None, None) without a
+    scene (no verdict then)."""
+    if scene is None:
+        return None, None
+    analysed = ground_truth.faults_at(truth, analysed_end_s, SLACK_S) if truth else None
+    if analysed is not None:
+        return sorted(analysed), "ground truth"
+    return sorted({df.kind for df in scene.defects}), "scene"
 
 
 def fault_detections(timeline: list, truth: list) -> list:
@@ -703,7 +757,7 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
     try:
         d = _Data(rec)
         meta = dict(rec.metadata)
-        duration = (rec.end_ns - rec.start_ns) / NS
+        log_span = (rec.end_ns - rec.start_ns) / NS
         message_count = rec.message_count
         shown, files, notes = str(rec.path), [str(f) for f in rec.paths], list(rec.notes)
     finally:
@@ -746,7 +800,7 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
                                        out, meta))
     changes = truth_changes(d.truth)
 
-    expected = sorted({df.kind for df in scene.defects}) if scene is not None else []
+    expected, expected_from = expected_defects(scene, d.truth, d.analysed_end_s)
     speed_var = (float(np.ptp(d.cmd_speed) / abs(speed)) if d.cmd_speed.size and speed else 0.0)
     summary = {
         "file": shown,
@@ -760,7 +814,8 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
         "tier_reason": meta.get("tier_reason", ""),
         **tier_history(meta, d.tiers),
         "parameters": _json_or_text(meta.get("parameters", "")),
-        "duration_s": duration,
+        "duration_s": d.signal_s,        # the recorded signal: first table's stamp to the last one's end
+        "log_time_span_s": log_span,     # first to last message's log time
         "messages": message_count,
         "topics": d.topics,
         "sample_rate_hz": fs,
@@ -779,7 +834,9 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
                              "prominence": v.prominence} for k, v in verdict["lines"].items()}
                         if verdict else {}),
         "verdict": verdict["verdict"] if verdict else "unknown",
-        "expected_defects": expected if scene is not None else None,
+        "expected_defects": expected,
+        "expected_defects_from": expected_from,
+        "scene_defects": scene_defects(scene, d.truth, d.analysed_end_s, d.signal_s),
         "scene_unknown": scene_problem or None,
         "skid_ratios_percent": {k: float(np.mean(v[:, 1])) for k, v in sorted(d.skid.items())},
         "verdict_describes_recording": (not changes) if d.truth else None,
@@ -839,12 +896,15 @@ def _markdown(s: dict) -> str:
         lines += [f"**Verdict (envelope analysis of {s['envelope_channel']}): {verdict}**; the scene's defects: "
                   f"unknown ({s['scene_unknown']}).", ""]
     else:
-        exp = ", ".join(s["expected_defects"]) or "none (healthy)"
         found = set() if s["verdict"] in ("healthy", "unknown") else {s["verdict"]}
-        agree = ("agrees with the scene" if found <= set(s["expected_defects"])
-                 and (found or not s["expected_defects"]) else "differs from the scene")
+        agree = ("agrees with" if found <= set(s["expected_defects"])
+                 and (found or not s["expected_defects"]) else "differs from")
+        scene_part, present = _expected_texts(s)
+        against = (f"; present in the analysed {s['analysed_s']:.2f} s (by `/diagnostics`): {present} "
+                   f"(the verdict {agree} the faults present)" if present is not None
+                   else f" (the verdict {agree} the scene)")
         lines += [f"**Verdict (envelope analysis of {s['envelope_channel']}): {verdict}**; the scene's defects: "
-                  f"{exp} (the verdict {agree}).", ""]
+                  f"{scene_part or 'none (healthy)'}{against}.", ""]
     if s["verdict_describes_recording"] is False:
         lines += [f"**The faults present change during this recording ({_changes_text(s)}): one verdict does "
                   "not describe it; see \"Verdict over time\".**", ""]
@@ -1000,10 +1060,32 @@ def _timeline_markdown(s: dict) -> list:
     return lines + [""]
 
 
+def _expected_texts(s: dict) -> tuple:
+    """(the scene's defects, each with its onset and where the recording has it where that is not
+    throughout the analysed stretch; the faults present in the analysed stretch, or None where
+    they are the scene's, from its first sample, or there is no ground truth to tell)."""
+    analysed = f"{s['analysed_s']:.2f} s"
+    where = {IN_PART: "", AFTER_ANALYSED: f", after the analysed {analysed}",
+             NOT_RECORDED: ", after this recording ends"}
+    parts = []
+    for d in s["scene_defects"]:
+        if d["present"] in (None, THROUGHOUT):
+            parts.append(d["kind"])
+        elif d["onset_s"] > 0:
+            parts.append(f"{d['kind']} (from {d['onset_s']:g} s{where[d['present']]})")
+        else:
+            parts.append(f"{d['kind']} ({d['present']})")
+    same = all(d["present"] in (None, THROUGHOUT) for d in s["scene_defects"])
+    present = None if s["expected_defects_from"] != "ground truth" or same else (
+        ", ".join(s["expected_defects"]) or "none")
+    return ", ".join(parts), present
+
+
 def _defects_text(s: dict) -> str:
     if s["expected_defects"] is None:
         return f"unknown, {s['scene_unknown']}"
-    return ", ".join(s["expected_defects"]) or "none"
+    scene_part, present = _expected_texts(s)
+    return (scene_part or "none") + ("" if present is None else f"; present: {present}")
 
 
 def report_command(args) -> int:

@@ -540,11 +540,13 @@ def recording_metadata(scene, params: dict, seed: int, selection, topics: dict |
     scene: the :class:`~bearing_sim_ros.scene.Scene`; params: the node parameters or render
     arguments (JSON-encoded, sorted); seed; selection: ``Simulator.selection`` (tier, reason,
     estimated error, tolerance); topics: each topic's role (``messages.TOPIC_*``) -> the name it
-    is recorded under (JSON, key ``topics``), which a namespace or a remap changes.  Only
-    deterministic content (no wall clock)."""
+    is recorded under, which a namespace or a remap changes (JSON, key ``topics``: the role
+    without a leading slash -> the channel's fully qualified name, ``{"accel": "/rig1/vibration",
+    "diagnostics": "/diagnostics", ...}``).  Only deterministic content (no wall clock)."""
     from .. import __version__
 
-    extra = {"topics": json.dumps(topics, sort_keys=True)} if topics else {}
+    roles = {str(role).strip("/"): _normalise_topic(str(name)) for role, name in (topics or {}).items()}
+    extra = {"topics": json.dumps(roles, sort_keys=True)} if roles else {}
     return {**extra,
         "scene": scene.name,
         "scene_description": scene.description,

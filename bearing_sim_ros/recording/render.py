@@ -271,6 +271,8 @@ def _runs_skidding(scene, sim, duration: float, sample_rate: float, n_batch: int
     from ..simulator import reselect_tier
 
     selection = sim.selection
+    if not scene.profile:
+        return selection.tier == "skidding"      # one operating point: the tier chosen at the start
     point = (sim.shaft_speed, sim.radial_load)
     total = int(round(duration * sample_rate))
     done = 0
@@ -293,7 +295,9 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
     :class:`~bearing_sim_ros.Simulator`).  ``solver`` and ``rk4_step`` (s, ``solver="rk4"``
     only) are the skidding tier's: when the kinematic tier was asked for, they are an error;
     when ``fidelity="auto"`` keeps to the kinematic tier for the whole render, they are not used,
-    not recorded, and the summary's ``solver_unused`` says so.  ``batch_duration`` (s) and
+    not recorded, and the summary's ``solver_unused`` says so.  The metadata's parameters name
+    the solver only where the skidding tier runs (``"solver": null`` for a render that keeps to
+    the kinematic tier, which has none).  ``batch_duration`` (s) and
     ``state_rate`` (Hz) are the node's parameters of the same names, with the same ranges and
     rule (``messages.batching_error``).  Returns a summary: messages,
     bytes, wall time (s), real-time factor, tier (at the end), tier_values (``tier_values``: the
@@ -331,16 +335,19 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
         raise UserError(f"--duration = {duration!r} s: shorter than one sample at {sample_rate:g} Hz; "
                         f"expected at least {1.0 / sample_rate:.6g} s")
     n_batch = int(round(sample_rate * batch_duration))
-    solver_unused = solver != "default" and not _runs_skidding(scene, sim, duration, sample_rate, n_batch)
+    runs_skidding = _runs_skidding(scene, sim, duration, sample_rate, n_batch)
+    solver_unused = solver != "default" and not runs_skidding
     if solver_unused:
-        # auto keeps to the kinematic tier: the file is the default solver's, and says so
+        # auto keeps to the kinematic tier: the file is that of a render without --solver
         solver, rk4_step = "default", None
         sim = Simulator(scene, sample_rate=sample_rate, fidelity=fidelity, seed=seed, oversample=oversample)
     from ..messages import BatchMessages
 
     msgs = BatchMessages(sim, start_ns=0)
     params = {"mode": "render", "duration": float(duration), "fidelity": fidelity, "seed": int(seed),
-              "sample_rate": float(sample_rate), "solver": solver, "batch_duration": float(batch_duration),
+              "sample_rate": float(sample_rate),
+              # what ran: the skidding tier's solver, none where only the kinematic tier runs
+              "solver": solver if runs_skidding else None, "batch_duration": float(batch_duration),
               "state_rate": float(state_rate), "start_time_ns": 0, "oversample": int(oversample or 0),
               "rk4_step": rk4_step,
               # solver, step and oversample only when not the default: a kinematic render must
@@ -353,6 +360,7 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
                           + (f" --rk4-step {float(rk4_step)!r}" if rk4_step is not None else "")
                           + (f" --oversample {oversample}" if oversample else ""))}
     topics = [TOPIC_SHAFT_SPEED, TOPIC_LOAD, TOPIC_ACCEL, TOPIC_CONTACT, TOPIC_STATE, TOPIC_DIAGNOSTICS]
+    # each role recorded under its own name (in the root namespace: /accel, /diagnostics, ...)
     meta = recording_metadata(scene, params, seed, sim.selection, topics={t: t for t in topics})
     attachments = {f"{scene.name}.yaml": scene.source_text.encode("utf-8")} if scene.source_text else {}
     # written as <out>.<pid>.partial and moved onto out when finalised: out only ever holds a
