@@ -3,6 +3,7 @@ with complete schemas, QoS, metadata and attachments; off-thread writing that su
 disk; rotation; CDR padding zeroed without changing any value."""
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import numpy as np
@@ -778,3 +779,112 @@ def test_a_writer_that_falls_behind_costs_counted_messages_or_holds_the_producer
     else:
         assert st["dropped"] == 100 - len(kept) > 0, st
         assert kept == sorted(set(kept)) and set(kept) <= set(range(100))
+
+
+def _until(predicate, timeout: float = 10.0):
+    end = time.monotonic() + timeout
+    while not predicate() and time.monotonic() < end:
+        time.sleep(0.01)
+    return predicate()
+
+
+def _write_batches(rec, sim, msgs, batches: int) -> None:
+    for _ in range(batches):
+        b = sim.advance(150)
+        rec.write("accel", msgs.accel(b), msgs.stamp_ns(b.index0 + b.n))
+
+
+def test_a_file_deleted_while_it_is_written_stops_the_recording_while_it_runs(tmp_path, sim_msgs, monkeypatch):
+    """Writing into a file that was deleted fails no write: the recording went on into a file
+    nobody would find, and ``status`` said ok to the end.  The writer thread compares the open
+    file with its path every ``CHECK_PATH_S``: the recording stops with one line naming the path
+    while it runs, as on a full disk, and later messages are counted as dropped."""
+    from bearing_sim_ros.recording import recorder
+
+    monkeypatch.setattr(recorder, "CHECK_PATH_S", 0.02)
+    scene, sim, msgs = sim_msgs
+    path = tmp_path / "run.mcap"
+    rec = Recorder(path, {"a": "b"})
+    rec.add_topic("accel", TYPES["accel"], waveform_qos(0.01))
+    _write_batches(rec, sim, msgs, 20)
+    path.unlink()
+    assert _until(lambda: rec.error), rec.status                  # noticed before close
+    assert rec.error == f"recording to {path} stopped: the file was deleted while it was written"
+    _write_batches(rec, sim, msgs, 5)
+    rec.close()
+    st = rec.status
+    assert not st["ok"] and st["dropped"] >= 5 and st["messages"] + st["dropped"] == 25, st
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("how", ["file", "folder", "replaced"])
+def test_a_file_no_longer_at_its_path_when_finalised_is_an_error(tmp_path, sim_msgs, monkeypatch, how):
+    """Deleted, its folder deleted, or replaced by another file just before ``close`` (no check
+    on the way): finalising says so instead of success, and leaves the other file alone."""
+    from bearing_sim_ros.recording import recorder
+
+    monkeypatch.setattr(recorder, "CHECK_PATH_S", 1e9)
+    scene, sim, msgs = sim_msgs
+    folder = tmp_path / "runs"
+    folder.mkdir()
+    path = folder / "run.mcap"
+    rec = Recorder(path, {"a": "b"})
+    rec.add_topic("accel", TYPES["accel"], waveform_qos(0.01))
+    _write_batches(rec, sim, msgs, 20)
+    if how == "folder":
+        import shutil
+
+        shutil.rmtree(folder)
+    else:
+        path.unlink()
+        if how == "replaced":
+            path.write_text("someone else's file\n")
+    rec.close()
+    why = {"file": "the file was deleted", "folder": f"its folder {folder} was deleted",
+           "replaced": "the file was replaced by another file"}[how]
+    assert rec.status["error"] == f"recording to {path} stopped: {why} while it was written"
+    if how == "replaced":
+        assert path.read_text() == "someone else's file\n"
+
+
+def test_a_partial_file_replaced_while_it_is_written_is_not_moved_onto_the_name(tmp_path, sim_msgs, monkeypatch):
+    """``replace_when_done`` (render's): the partial file replaced by another (same name, another
+    file) was moved onto the name as if it were the recording.  Now the recording fails, the name
+    keeps the earlier recording, and the other file is left where it is."""
+    from bearing_sim_ros.recording import recorder
+
+    monkeypatch.setattr(recorder, "CHECK_PATH_S", 1e9)
+    scene, sim, msgs = sim_msgs
+    path = tmp_path / "run.mcap"
+    Recorder(path, {"a": "b"}).close()
+    earlier = path.read_bytes()
+    rec = Recorder(path, {"a": "b"}, replace_when_done=True)
+    rec.add_topic("accel", TYPES["accel"], waveform_qos(0.01))
+    _write_batches(rec, sim, msgs, 20)
+    (partial,) = tmp_path.glob("run.mcap.*.partial")
+    partial.unlink()
+    partial.write_text("someone else's file\n")
+    rec.close()
+    assert rec.status["error"] == (f"recording to {path} stopped: its temporary file {partial.name} was "
+                                   "replaced by another file while it was written")
+    assert path.read_bytes() == earlier and partial.read_text() == "someone else's file\n"
+
+
+def test_a_file_moved_away_while_it_is_written_is_finished_where_it_went(tmp_path, sim_msgs, monkeypatch):
+    """Moved (or its folder moved) is not lost: the recording goes on in it and finalises it
+    there, as before (a split recording's next piece then fails to open: test_node.py)."""
+    from bearing_sim_ros.recording import recorder
+
+    monkeypatch.setattr(recorder, "CHECK_PATH_S", 0.02)
+    scene, sim, msgs = sim_msgs
+    path, moved = tmp_path / "run.mcap", tmp_path / "kept.mcap"
+    rec = Recorder(path, {"a": "b"})
+    rec.add_topic("accel", TYPES["accel"], waveform_qos(0.01))
+    _write_batches(rec, sim, msgs, 10)
+    path.rename(moved)
+    _write_batches(rec, sim, msgs, 10)
+    time.sleep(0.1)                       # a few checks on the way
+    rec.close()
+    assert rec.status["ok"], rec.status
+    with open_recording(moved) as r:
+        assert sum(1 for _ in r.messages(["/accel"])) == 20

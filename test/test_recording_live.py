@@ -8,7 +8,7 @@ import subprocess
 
 import numpy as np
 import pytest
-from test_node_support import Listener, read_recording, signal_when
+from test_node_support import FIRST_TABLE_S, Listener, read_recording, signal_when
 
 from bearing_sim_ros.recording.reader import open_recording
 from bearing_sim_ros.waveform import NS, from_pointcloud2
@@ -113,6 +113,61 @@ def test_a_recording_that_fails_on_the_way_is_logged_then_and_ends_with_status_2
     assert len(at_exit) == 1 and failed[0] < at_exit[0], log     # said when it happened, then at exit
     assert lines[-1] == f"error: recording to {out} stopped: OSError: [Errno 27] File too large", log
     assert 100_000 < out.stat().st_size <= 300_000
+
+
+@pytest.mark.parametrize("gone, sig", [("file", signal.SIGTERM), ("folder", signal.SIGINT)])
+def test_a_recording_whose_file_is_deleted_while_the_node_runs_is_an_error(gone, sig, bearing_sim_exe, ros_env,
+                                                                          tmp_path):
+    """``record:=only.mcap`` (in the working folder) with the file deleted, or ``record:=runs/run.mcap``
+    with the folder deleted, while the node runs: writes into a deleted file all succeed, and the
+    node said ``recording ...: 2660 messages, ... 0.0 MB on disk (zstd), 0 dropped`` and exited 0
+    with no file anywhere.  It is the failure a full disk is: ``/diagnostics`` says ``recording:
+    error`` (level ERROR) while the node runs, the log says so once when it happens and again at
+    exit (no line of success), and after the signal the node exits with status 2 and one error
+    line naming the path and what happened."""
+    import shutil
+    import time
+
+    if gone == "file":
+        record, out = "only.mcap", tmp_path / "only.mcap"
+        why = "the file was deleted"
+    else:
+        (tmp_path / "runs").mkdir()
+        record = out = tmp_path / "runs" / "run.mcap"
+        why = f"its folder {out.parent} was deleted"
+    error = f"recording to {record} stopped: {why} while it was written"
+    listener = Listener()
+    removed = []
+
+    def deleted_and_said():
+        if not removed:
+            if out.exists() and out.stat().st_size > 200_000:
+                removed.append(time.monotonic())
+                if gone == "file":
+                    out.unlink()
+                else:
+                    shutil.rmtree(out.parent)
+            return False
+        return [d for d in list(listener.diagnostics) if d[0] > removed[0] and d[3]["recording"] == "error"]
+
+    try:
+        proc = subprocess.Popen([bearing_sim_exe, "node", "--ros-args", "-p", "scene:=er16k_outer_race",
+                                 "-p", "fidelity:=kinematic", "-p", f"record:={record}"], cwd=tmp_path,
+                                env=ros_env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        log, _ = signal_when(proc, deleted_and_said, sig, 0.0,
+                             "the node never recorded, or /diagnostics never said the recording failed",
+                             timeout_s=FIRST_TABLE_S)
+        said = deleted_and_said()
+    finally:
+        listener.close()
+    _t, level, message, values, _stamp = said[0]
+    assert level == 2 and message == f"recording failed: {error}" and values["recording_error"] == error, said[0]
+    assert proc.returncode == 2, log
+    lines = log.splitlines()
+    assert [line.split("]: ", 1)[1] for line in lines if "] [bearing_sim]: recording" in line] == [
+        f"recording failed, publishing goes on: {error}", f"recording: {error}"], log
+    assert lines[-1] == f"error: {error}", log
+    assert not out.exists()
 
 
 def test_messages_the_live_node_drops_are_counted_in_diagnostics_and_at_exit(ros_env, tmp_path):

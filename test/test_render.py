@@ -610,6 +610,46 @@ def test_a_render_that_fails_keeps_the_earlier_recording_at_out(tmp_path, monkey
     assert [p.name for p in tmp_path.iterdir()] == ["a.mcap"]
 
 
+@pytest.mark.parametrize("how", ["deleted", "replaced"])
+def test_a_render_whose_partial_file_goes_away_fails_in_one_line_and_stops(tmp_path, capsys, monkeypatch, how):
+    """The ``.partial`` file a render writes, deleted (or replaced by another file) on the way:
+    deleted, the render ran to its end and failed on the rename with a FileNotFoundError;
+    replaced, it moved the other file onto ``--out`` and said it had rendered.  Now the recorder
+    notices (within ``CHECK_PATH_S``) and the render stops there, exit status 2 and one line
+    naming ``--out`` and what happened; ``--out`` keeps the earlier recording, and the other
+    file is left alone."""
+    from bearing_sim_ros.recording import recorder
+
+    out = tmp_path / "a.mcap"
+    render("er16k_healthy", 0.2, out, fidelity="kinematic", progress=False)
+    before = out.read_bytes()
+    monkeypatch.setattr(recorder, "CHECK_PATH_S", 0.01)
+    calls, taken = [], []
+    advance = Simulator.advance
+
+    def advance_and_take_the_partial_away(self, *a, **kw):
+        calls.append(1)
+        if len(calls) == 30:
+            (partial,) = tmp_path.glob("a.mcap.*.partial")
+            taken.append(partial.name)
+            partial.unlink()
+            if how == "replaced":
+                partial.write_text("someone else's file\n")
+        return advance(self, *a, **kw)
+
+    monkeypatch.setattr(Simulator, "advance", advance_and_take_the_partial_away)
+    code, err = _one_line_error(capsys, ["render", "er16k_healthy", "--duration", "40", "--fidelity", "kinematic",
+                                         "--out", str(out)])
+    (name,) = taken
+    why = "deleted" if how == "deleted" else "replaced by another file"
+    assert code == 2 and err == (f"error: --out = '{out}': recording to {out} stopped: its temporary file {name} "
+                                 f"was {why} while it was written"), err
+    assert len(calls) < 2000            # stopped on the way, not after all 4000 batches
+    assert out.read_bytes() == before
+    others = sorted(p.name for p in tmp_path.iterdir())
+    assert others == (["a.mcap"] if how == "deleted" else sorted(["a.mcap", name]))
+
+
 def test_a_writer_that_falls_behind_holds_the_render_up_and_loses_nothing(tmp_path, monkeypatch):
     """render has no deadline, so a disk slower than the simulator must cost time, not messages.
     With a queue limit of 0 bytes every write finds the writer thread behind (it sleeps 20 ms

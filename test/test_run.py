@@ -105,6 +105,35 @@ def test_run_splits_its_recording_and_summarises_across_the_pieces(ros_env, bear
     assert summary["analysed_s"] == pytest.approx(2.0) and summary["waveform_gaps"] == 0
 
 
+def test_run_whose_recording_is_deleted_says_so_and_ends_with_status_2(ros_env, bearing_sim_exe, tmp_path):
+    """``--out`` deleted while ``run`` records: the node in the process notices (as ``bearing-sim
+    node`` does: ``test_recording_live.py``), says it in its log when it happens and at exit, and
+    ``run`` ends with status 2 and one error line naming ``--out`` and what happened, no summary."""
+    import time
+
+    from test_node_support import FIRST_TABLE_S
+
+    out = tmp_path / "r.mcap"
+    proc = subprocess.Popen([bearing_sim_exe, "run", "--duration", "5", "--out", str(out)], env=ros_env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        end = time.monotonic() + FIRST_TABLE_S
+        while not (out.exists() and out.stat().st_size > 200_000) and time.monotonic() < end:
+            assert proc.poll() is None, proc.communicate()
+            time.sleep(0.05)
+        out.unlink()
+        stdout, stderr = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    error = f"recording to {out} stopped: the file was deleted while it was written"
+    assert proc.returncode == 2, stdout + stderr
+    assert f"]: recording failed, publishing goes on: {error}" in stderr, stderr
+    assert stderr.splitlines()[-1] == f"error: --out = '{out}': {error}", stderr
+    assert "verdict" not in stdout and not out.exists(), stdout
+
+
 @pytest.mark.parametrize("case", ["unknown scene", "missing output folder", "the scene's own file",
                                   "files too small"])
 def test_run_user_mistakes_are_one_line(ros_env, bearing_sim_exe, tmp_path, case):

@@ -16,7 +16,11 @@ Threading: ``write`` serialises in the caller's thread and appends to a deque (a
 no lock), so publishing never waits for the disk and a signal handler that interrupts ``write``
 can still call ``close``.  A background thread drains the deque into the MCAP writer.  A write
 error (full disk, path gone) stops recording: the error goes into ``status``, queued messages
-are counted as dropped, and nothing is raised into the publisher.
+are counted as dropped, and nothing is raised into the publisher.  So does a file deleted while
+it is written (itself or its folder, or replaced by another file: writing into it fails no
+write): the writer thread looks at it (``os.fstat``: no link left; and at its path) every
+``CHECK_PATH_S`` and before it finalises the file (``_check_in_place``).  A file moved away is
+finished where it went.
 
 A disk slower than the producer: once ``max_queue_bytes`` (default ``MAX_QUEUE_BYTES``) of
 serialised messages wait for it, ``when_full`` decides.  ``"drop"`` (the live node, which must
@@ -69,6 +73,7 @@ WHEN_FULL = ("drop", "wait")          # what ``write`` does when the queue holds
 CHUNK_BYTES = 1024 * 1024             # MCAP chunk size (uncompressed)
 _POLL_S = 0.02                        # writer thread wake-up period (s)
 _WAIT_POLL_S = 0.002                  # a waiting producer's wake-up period (when_full="wait", s)
+CHECK_PATH_S = 1.0                    # how often the writer thread looks whether its file was deleted (s)
 # a split recording's files (the node's record_max_size, run's --max-file-size; bytes on disk):
 # below this one would hold little more than the metadata and the attached scene (a scene with a
 # long profile takes hundreds of kB), and a file would start at every batch
@@ -78,6 +83,11 @@ SPLIT_MAX_BYTES = 10**15
 
 def _one_line(exc: BaseException) -> str:
     return f"{exc.__class__.__name__}: {exc}".replace("\n", " ")
+
+
+class _NotAtItsPath(Exception):
+    """The file being written was deleted (itself, its folder, or replaced by another file), or
+    a partial file is not at its name; the message says which (``Recorder._check_in_place``)."""
 
 
 def _normalise_topic(topic: str) -> str:
@@ -347,6 +357,7 @@ class Recorder:
         if not stream.seekable():
             stream = _Counted(stream)     # a pipe: the MCAP writer asks where each record starts
         self._writing = (written, path)
+        self._written_at = written.absolute()    # the name checked against the open file (a chdir moves no file)
         try:
             writer = Writer(stream, chunk_size=self._chunk_bytes(), compression=CompressionType.ZSTD)
             writer.start(profile=PROFILE, library=f"bearing_sim_ros {self._metadata.get('package_version', '')}".strip())
@@ -407,6 +418,9 @@ class Recorder:
                 # a pipe or a device (/dev/null), written directly, has nothing to sync and
                 # refuses fsync (EINVAL): that failed every recording to one
                 os.fsync(stream.fileno())
+            # finalised in a file that was deleted meanwhile is lost all the same; and a partial
+            # file replaced by another must not be moved onto the name
+            self._check_in_place(stream)
         finally:
             stream.close()
         written, path = self._writing
@@ -421,6 +435,47 @@ class Recorder:
                     os.close(fd)
             except OSError:
                 pass
+
+    def _check_in_place(self, stream) -> None:
+        """Raise ``_NotAtItsPath`` if the open regular file ``stream`` is lost: deleted (no link
+        left, ``st_nlink`` 0; its folder deleted, or another file put at its name), where every
+        write still succeeds into a file nobody will find.  A file moved away (or its folder) is
+        not lost and is finished where it went, unless it is ``replace_when_done``'s partial
+        file, which must be at its name (same device and inode) to be moved onto the final one.
+        A path that cannot be looked at (permissions) is not taken for gone."""
+        mine = os.fstat(stream.fileno())
+        if not stat.S_ISREG(mine.st_mode):
+            return                        # a pipe or a device, written directly
+        partial = self._writing is not None and self._writing[0] != self._writing[1]
+        if mine.st_nlink and not partial:
+            return
+        written = self._written_at
+        what = f"its temporary file {written.name}" if partial else "the file"
+        try:
+            there = os.stat(written)
+        except OSError as exc:
+            if mine.st_nlink and not isinstance(exc, (FileNotFoundError, NotADirectoryError)):
+                return
+            there = None
+        if there is not None and (there.st_dev, there.st_ino) == (mine.st_dev, mine.st_ino):
+            return
+        if there is not None:
+            raise _NotAtItsPath(f"{what} was replaced by another file while it was written")
+        if mine.st_nlink:
+            raise _NotAtItsPath(f"{what} was moved away while it was written")
+        if not os.path.isdir(written.parent):
+            raise _NotAtItsPath(f"its folder {written.parent} was deleted while it was written")
+        raise _NotAtItsPath(f"{what} was deleted while it was written")
+
+    def _fail(self, exc: Exception, doing: str = "stopped") -> None:
+        """Stop recording on ``exc`` (a write error, a file deleted): the error in ``status``,
+        the open file closed, a partial file removed (not what is at its name instead)."""
+        if isinstance(exc, _NotAtItsPath):
+            self._set_error(f"recording to {self._current_path()} stopped: {exc}")
+            self._writing = None          # what is at the name now is not this recording's: left alone
+        else:
+            self._set_error(f"recording to {self._current_path()} {doing}: {_one_line(exc)}")
+        self._abandon_file()
 
     def _remove_partial(self) -> None:
         """Remove the temporary file of ``replace_when_done`` (never a file under its own name)."""
@@ -477,7 +532,14 @@ class Recorder:
 
     def _run(self) -> None:
         queue = self._queue
+        next_check = time.monotonic() + CHECK_PATH_S
         while True:
+            if self._stream is not None and not self._discard and time.monotonic() >= next_check:
+                next_check = time.monotonic() + CHECK_PATH_S
+                try:
+                    self._check_in_place(self._stream)
+                except Exception as exc:  # noqa: BLE001 - as a write error: record, stop, never raise
+                    self._fail(exc)
             if not queue:
                 time.sleep(_POLL_S)
                 continue
@@ -493,16 +555,14 @@ class Recorder:
             try:
                 self._handle(kind, name, data, log_time_ns)
             except Exception as exc:  # noqa: BLE001 - full disk, path gone: record, stop, never raise
-                self._set_error(f"recording to {self._current_path()} stopped: {_one_line(exc)}")
                 if kind == "msg":
                     self._dropped_writer += 1
-                self._abandon_file()
+                self._fail(exc)
         if not self._error and not self._discard:
             try:
                 self._close_file()
             except Exception as exc:  # noqa: BLE001
-                self._set_error(f"recording to {self._current_path()} could not be finalised: {_one_line(exc)}")
-                self._abandon_file()
+                self._fail(exc, "could not be finalised")
         else:
             self._abandon_file()
 

@@ -381,6 +381,8 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
             while done < total:
                 if stop.signum is not None:         # a whole batch each, so done is exact
                     raise Terminated() if stop.signum == signal.SIGTERM else KeyboardInterrupt()
+                if rec.error:
+                    break       # the recording stopped (disk full, its file deleted): said below
                 n = min(n_batch, total - done)
                 t0_ns = msgs.stamp_ns(done)
                 end_t = (done + n) / sample_rate
