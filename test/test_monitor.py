@@ -326,7 +326,15 @@ def test_monitor_scores_itself_against_the_ground_truth_of_a_fault_that_appears(
     # which the monitor tells by itself from the diagnostics' simulated_s
     said = re.search(r"^monitor: first table at ([\d.]+) s of the source's signal \(by its diagnostics\)", out, re.M)
     assert said and float(said[1]) == pytest.approx(lost, abs=0.0011), (lost, out)
-    assert last_none <= appeared < first_outer and appeared == pytest.approx(onset - lost, abs=0.006), (lost, out)
+    # a window's truth is that of the diagnostics stamped at or after its end if they come within
+    # the monitor's grace (TRUTH_GRACE_S), else the latest before it.  The node's come once per
+    # second of its signal: at the windows' ends unless discovery lost tables and the windows are
+    # shifted (1.48 and 1.63 s on a machine running three test suites), and then the window in
+    # which the pit appeared may still be printed with the earlier truth, none
+    shift = lost % 1.0
+    late = 0.0 if min(shift, 1.0 - shift) < 0.2 else 1.0
+    assert last_none <= appeared + late and appeared < first_outer, (lost, out)
+    assert appeared == pytest.approx(onset - lost, abs=0.006), (lost, out)
     assert called == min(t for t, v, truth in lines if v == "outer" and truth == "outer"), out
     assert delay == pytest.approx(called - appeared, abs=0.011) and 0.0 <= delay <= 2.0, out
     assert all(v == "outer" for t, v, _truth in lines if t >= appeared + 1.0), out
