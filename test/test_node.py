@@ -130,8 +130,10 @@ def test_oversample_description_names_each_tiers_default():
     ({"batch_duration": 0.00333}, ["batch_duration", "whole number"]),
     ({"sample_rate": 15000}, ["sample_rate", "floating-point"]),
     ({"fidelity": "fast"}, ["fidelity", "kinematic"]),
-    ({"oversample": 3}, ["oversample = 3", "multiple of 4"]),
-    ({"oversample": 8}, ["oversample = 8", "fidelity auto"]),
+    # 0, the default (each tier's own), is allowed too, though the Simulator it passes to takes None
+    ({"oversample": 3}, ["oversample = 3: allowed values are 0 (each tier's own), 1, 2 or a multiple of 4 up to 64"]),
+    ({"oversample": 8}, ["oversample = 8: with fidelity auto allowed values are 0 (each tier's own), 1, 2 or 4 "
+                         "(or choose fidelity kinematic or skidding)"]),
     ({"record": "/no/such/dir/x.mcap"}, ["record", "/no/such/dir/x.mcap"]),
     # a split recording (a node without these parameters would run 0.05 s and exit 0)
     ({"record_max_duration": -1.0, "real_time": False, "duration": 0.05},

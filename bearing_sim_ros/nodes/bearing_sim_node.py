@@ -44,6 +44,7 @@ from ..limits import LOAD_MULTIPLE_C0, NDM_LIMIT, STATIC_F0, InputLimits  # noqa
 from ..teardown import EXIT_INTERRUPTED, signals_noted, teardown_watchdog
 
 NODE_NAME = "bearing_sim"
+OVERSAMPLE_ZERO = "each tier's own"       # what the parameter oversample's default 0 means
 DEFAULT_SCENE = "er16k_outer_race"
 FIDELITIES = ("auto", "kinematic", "skidding")
 
@@ -143,7 +144,7 @@ def _descriptors():
         "oversample": (0, d(T.PARAMETER_INTEGER, "integration steps per output sample, or per physics "
                             "sample below a 15 kHz sample_rate, where the physics runs at the smallest "
                             "whole multiple of sample_rate that reaches 15 kHz (speed against "
-                            f"accuracy); 0 = each tier's own: kinematic 1 while its bearing mode "
+                            f"accuracy); 0 = {OVERSAMPLE_ZERO}: kinematic 1 while its bearing mode "
                             f"is below {SOFT_MODE_FRACTION:g} x that rate, else {KINEMATIC_OVERSAMPLE}; "
                             f"skidding {SKIDDING_OVERSAMPLE}", True, 0, 64,
                             f"0, {OVERSAMPLE_ALLOWED}; at most {AUTO_OVERSAMPLE_MAX} where the tier is "
@@ -166,6 +167,11 @@ def check_config(cfg: dict):
         return f"fidelity = {cfg['fidelity']!r}: allowed values are {', '.join(FIDELITIES)}"
     from ..messages import batching_error
     from ..recording.recorder import split_error
+    from ..simulator import OVERSAMPLE_ALLOWED, oversample_allowed
+
+    if cfg["oversample"] != 0 and not oversample_allowed(cfg["oversample"]):
+        # said here, not by the Simulator, which does not take 0
+        return f"oversample = {cfg['oversample']!r}: allowed values are 0 ({OVERSAMPLE_ZERO}), {OVERSAMPLE_ALLOWED}"
 
     return (batching_error(cfg["sample_rate"], cfg["batch_duration"], cfg["state_rate"])
             or split_error(cfg["record_max_duration"], cfg["record_max_size"], cfg["batch_duration"]))
@@ -237,6 +243,7 @@ class BearingSimNode(Node):
         from rclpy.qos import QoSProfile
 
         from .. import Simulator
+        from ..simulator import OversampleForAuto
         from ..messages import (TOPIC_ACCEL, TOPIC_CONTACT, TOPIC_DIAGNOSTICS, TOPIC_LOAD,
                                 TOPIC_SHAFT_SPEED, TOPIC_STATE, BatchMessages, waveform_qos)
         from ..scene import load_scene
@@ -246,9 +253,12 @@ class BearingSimNode(Node):
         from std_msgs.msg import Float64
 
         self.scene = load_scene(cfg["scene"])
-        self.sim = Simulator(self.scene, sample_rate=float(cfg["sample_rate"]),
-                             fidelity=cfg["fidelity"], seed=int(cfg["seed"]),
-                             oversample=int(cfg["oversample"]) or None)
+        try:
+            self.sim = Simulator(self.scene, sample_rate=float(cfg["sample_rate"]),
+                                 fidelity=cfg["fidelity"], seed=int(cfg["seed"]),
+                                 oversample=int(cfg["oversample"]) or None)
+        except OversampleForAuto as exc:
+            raise UserError(exc.worded("oversample", "fidelity", zero=OVERSAMPLE_ZERO)) from None
         self.limits = InputLimits(self.scene.bearing)
         self.n_batch = int(round(cfg["sample_rate"] * cfg["batch_duration"]))
         self.batch_duration = self.n_batch / self.sim.sample_rate
