@@ -392,6 +392,26 @@ def test_bad_inputs_are_rejected_and_a_speed_change_moves_bpfo(started, listener
     assert line_at(freqs, spec, f_old).prominence < DETECTION_THRESHOLD     # the old line is gone
 
 
+def test_a_burst_of_inputs_is_taken_whole_and_its_last_command_holds(started, listener):
+    """300 NaN speeds published back to back (in a few ms), then a good one: the inputs' keep-last
+    depth (1000) holds the burst until the executor takes it, so every NaN is counted, and the last
+    command is the one in use.  Subscribed keep-last 10, the node saw 27-31 of 500."""
+    started({"scene": "er16k_outer_race", "fidelity": "kinematic"})
+    listener.wait_matched()
+    listener.wait_for(lambda: len(listener.accel) > 0, FIRST_TABLE_S, "the first accel table")
+    new = 2000 * 2 * math.pi / 60
+    for _ in range(300):
+        listener.publish_speed(float("nan"))
+    listener.publish_speed(new)
+
+    def settled():
+        return next((v for _t, _lvl, _m, v, _stamp in reversed(listener.diagnostics)
+                     if float(v["shaft_speed_rad_s"]) == pytest.approx(new, rel=1e-5)), None)
+
+    v = listener.wait_for(settled, 5, "diagnostics at the last command's speed")
+    assert int(v["rejected_not_finite"]) == 300, v
+
+
 def test_diagnostics_give_the_operating_point_at_their_stamp_not_of_what_is_computed_ahead(
         started, listener, tmp_path):
     """With ``compute_ahead`` 0.5 s the simulator runs up to half a second ahead of what it has

@@ -52,6 +52,9 @@ FIDELITIES = ("auto", "kinematic", "skidding")
 # The bearing's limits (n d_m, 2 x C0) live in ..limits, ROS-free: the scene loader applies them too.
 CLOCK_SKEW_ALLOWED = 1.0       # s: a load stamp further in the future than this is rejected
 REJECT_LOG_PERIOD = 2.0        # s: at most one log line per rejection reason this often
+INPUT_DEPTH = 1000             # keep-last depth of shaft_speed and load: a burst a publisher sends
+                               # back to back waits for the executor, each message checked and counted
+                               # (at 10, 27-31 of 500 NaNs sent at once were counted)
 TIME_LINE_JUMP = 1.0           # s: a load stamp further back than this behind the last accepted one
                                # starts a new time line (a recording played again, a publisher
                                # restarted with other stamps); closer, it is out of order
@@ -264,14 +267,15 @@ class BearingSimNode(Node):
         self.batch_duration = self.n_batch / self.sim.sample_rate
         self.wave_qos = waveform_qos(self.batch_duration)
         self.small_qos = QoSProfile(depth=10)     # reliable, volatile, keep-last 10
+        self.input_qos = QoSProfile(depth=INPUT_DEPTH)      # reliable, volatile, keep-last INPUT_DEPTH
         self.pub_accel = self.create_publisher(PointCloud2, TOPIC_ACCEL, self.wave_qos)
         self.pub_contact = self.create_publisher(PointCloud2, TOPIC_CONTACT, self.wave_qos)
         self.pub_state = self.create_publisher(JointState, TOPIC_STATE, self.small_qos)
         self.pub_diag = self.create_publisher(DiagnosticArray, TOPIC_DIAGNOSTICS, self.small_qos)
         self.pub_clock = None                     # created when publish_clock is first true
         self._tier_cache = None                   # (key, tier keys) of the last batch: _tier_keys
-        self.sub_speed = self.create_subscription(Float64, TOPIC_SHAFT_SPEED, self._on_speed, self.small_qos)
-        self.sub_load = self.create_subscription(WrenchStamped, TOPIC_LOAD, self._on_load, self.small_qos)
+        self.sub_speed = self.create_subscription(Float64, TOPIC_SHAFT_SPEED, self._on_speed, self.input_qos)
+        self.sub_load = self.create_subscription(WrenchStamped, TOPIC_LOAD, self._on_load, self.input_qos)
 
         # commands (written by the executor thread, read by the sim thread: plain rebinding)
         self._cmd_speed = float(self.sim.shaft_speed)
@@ -301,6 +305,8 @@ class BearingSimNode(Node):
 
         # each topic under its resolved name (namespace and remaps applied), its type from its
         # role: a remapped name (-r accel:=vibration) says nothing about the type
+        # the operating point is recorded once per batch, as render records it (keep-last 10, not
+        # the inputs' depth: what is recorded there is not what came in)
         topics = ((TOPIC_SHAFT_SPEED, self.sub_speed, self.small_qos), (TOPIC_LOAD, self.sub_load, self.small_qos),
                   (TOPIC_ACCEL, self.pub_accel, self.wave_qos), (TOPIC_CONTACT, self.pub_contact, self.wave_qos),
                   (TOPIC_STATE, self.pub_state, self.small_qos), (TOPIC_DIAGNOSTICS, self.pub_diag, self.small_qos))
