@@ -677,6 +677,50 @@ def test_publish_clock_gives_the_end_of_each_table(started, listener):
     assert len(shared) > 50 and set(shared.tolist()) <= ends
 
 
+def test_sim_time_with_its_own_clock_starts_the_signal_at_0(started, tmp_path):
+    """use_sim_time:=true with publish_clock:=true: the node is its own clock, 0 until its first
+    /clock.  Sample 0 was stamped one batch before that, -10 ms (sec -1, nanosec 990000000, which
+    rclpy's Time.from_msg refuses); now the signal starts at 0 and the tables follow from there."""
+    out = tmp_path / "sim.mcap"
+    node = started({"scene": "er16k_outer_race", "fidelity": "kinematic", "use_sim_time": True,
+                    "publish_clock": True, "real_time": False, "duration": 0.5, "record": str(out)})
+    assert node.wait(FIRST_TABLE_S) == 0, node.output()
+    topics, _meta = read_recording(out)
+    stamps = [(m.header.stamp.sec, m.header.stamp.nanosec) for _t, m in topics["/accel"]]
+    assert stamps == [divmod(k * BATCH_NS, NS) for k in range(50)], stamps[:3]
+
+
+def test_sim_time_from_another_clock_waits_for_it(started, listener, tmp_path):
+    """use_sim_time:=true, /clock from another node (a simulator, `ros2 bag play --clock`) that
+    starts after this one: the node waits for it, says so, and then stamps its tables on it (the
+    first one batch before the clock's time), where they were stamped from -10 ms on before."""
+    from rosgraph_msgs.msg import Clock
+
+    out = tmp_path / "sim.mcap"
+    node = started({"scene": "er16k_outer_race", "fidelity": "kinematic", "use_sim_time": True,
+                    "record": str(out)})
+    listener.wait_for(lambda: "waiting for /clock" in node.output() or listener.accel, FIRST_TABLE_S,
+                      "the node waiting for /clock")
+    time.sleep(0.3)
+    assert not listener.accel, "tables before any /clock"
+    clock = listener.node.create_publisher(Clock, "/clock", 10)
+    listener.wait_for(lambda: clock.get_subscription_count() > 0, 10, "the node's /clock subscription")
+    t0 = now = 1000 * NS
+    start = time.monotonic()
+    while not listener.accel and time.monotonic() < start + 5:      # 1000 s on, in real time
+        now = t0 + int((time.monotonic() - start) * NS)
+        msg = Clock()
+        msg.clock.sec, msg.clock.nanosec = divmod(now, NS)
+        clock.publish(msg)
+        time.sleep(0.02)
+    assert listener.accel, "no tables 5 s after /clock began"
+    node.send(signal.SIGINT)
+    assert node.wait(20) == 0, node.output()
+    topics, _meta = read_recording(out)
+    first = topics["/accel"][0][1].header.stamp
+    assert t0 - BATCH_NS <= first.sec * NS + first.nanosec <= now, (first, now)
+
+
 def test_a_node_slower_than_real_time_counts_its_overruns_and_stays_contiguous(ros_env, tmp_path):
     """Every batch takes 15 ms to compute (a patched ``Simulator.advance``) against 10 ms of
     signal: /diagnostics counts the overruns and warns, the real-time factor falls below 1, and

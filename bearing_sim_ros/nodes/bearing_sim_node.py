@@ -396,11 +396,30 @@ class BearingSimNode(Node):
             # before the first batch, which starts the clock: a tier switch at run time must not
             # stall the stream while the other tier's kernels load (or compile, on a cold cache)
             self.sim.prepare_switches()
-            self._loop()
+            if self._wait_for_clock():
+                self._loop()
         except BaseException as exc:  # noqa: BLE001 - reported by main() as an internal error
             self.error = exc
         finally:
             self.finished.set()
+
+    def _wait_for_clock(self) -> bool:
+        """With ``use_sim_time`` the node's clock is the last ``/clock`` received, and 0 before the
+        first.  Where another node publishes it, the first batch waits for it: its time becomes
+        sample 0's stamp (one batch before it), as without sim time the wall clock's does.  Where
+        this node is the clock (``publish_clock``), there is nothing to wait for: the signal starts
+        at 0.  False if the node stops while it waits."""
+        clock = self.get_clock()
+        said = False
+        while clock.ros_time_is_active and not self._cfg["publish_clock"] and clock.now().nanoseconds == 0:
+            if self._stop.is_set() or not self.context.ok():
+                return False
+            if not said:
+                said = True
+                self.get_logger().info("use_sim_time: waiting for /clock before the first batch "
+                                       "(publish_clock:=true makes this node the clock)")
+            self._stop.wait(0.02)
+        return True
 
     def _compute(self, n, cfg, Clock):
         """Advance one batch and build its messages (no waiting, no publishing)."""
@@ -414,8 +433,11 @@ class BearingSimNode(Node):
                                    f"({sim.selection.reason})")
         if batch.index0 == 0:
             # ROS time of sample 0: one batch before now, when the first batch is ready (its
-            # computation may include loading compiled kernels: that must not be an overrun)
-            self.start_ns = msgs.start_ns = self.get_clock().now().nanoseconds - int(round(n / sim.sample_rate * 1e9))
+            # computation may include loading compiled kernels: that must not be an overrun); never
+            # before 0, where a sim time starts (publish_clock with use_sim_time: this node's own
+            # clock, 0 until its first /clock; a negative stamp is no ROS time)
+            before = self.get_clock().now().nanoseconds - int(round(n / sim.sample_rate * 1e9))
+            self.start_ns = msgs.start_ns = max(0, before)
         end_index = sim.index
         start_stamp, end_stamp = msgs.stamp_ns(batch.index0), msgs.stamp_ns(end_index)
         out = [(self.pub_accel, msgs.accel(batch)), (self.pub_contact, msgs.contact_forces(batch))]
