@@ -579,6 +579,47 @@ def test_a_signal_while_the_node_is_being_built_ends_it_quietly_with_status_0(st
     assert "error:" not in node.output() and "Traceback" not in node.output(), node.output()
 
 
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+@pytest.mark.parametrize("command", [["bearing-sim", "node"], ["bearing_sim_node"]], ids=["bearing-sim", "bearing_sim_node"])
+def test_a_signal_in_the_first_moments_ends_the_node_quietly_with_status_0(ros_env, bearing_sim_exe, tmp_path,
+                                                                             command, sig):
+    """0.1 and 0.3 s after launch, while Python imports numpy, numba and rclpy: SIGTERM killed the
+    node (143) and SIGINT printed a KeyboardInterrupt traceback (130), before any handler of
+    the node's was there.  Its handlers now come before those imports: exit 0, nothing said."""
+    from pathlib import Path
+
+    exe = str(Path(bearing_sim_exe).parent / command[0])
+    for delay in (0.1, 0.3):
+        node = NodeProcess(exe, ros_env, {"fidelity": "kinematic"}, tmp_path / f"{delay}.log", command=command[1:])
+        try:
+            time.sleep(delay)
+            node.send(sig)
+            assert node.wait(30) == 0 and node.output() == "", (delay, node.output())
+        finally:
+            node.close()
+
+
+def test_a_second_ctrl_c_while_the_process_still_exits_is_not_lost(started, tmp_path):
+    """A second Ctrl-C 0.15-0.3 s after the node's last line (`recording ...: N messages`) came
+    while the process still exited (0.4 s of the middleware's and numba's teardown, after the
+    shutdown's handlers were put back) and was lost: exit 0 (or killed by it), nothing said.  Now
+    the node's handler stays to the end and the process ends as soon as its work is done: a
+    Ctrl-C that finds it still running gives 130 and says so."""
+    out = tmp_path / "live.mcap"
+    node = started({"scene": "er16k_outer_race", "fidelity": "kinematic", "record": str(out)})
+    node.wait_for_output("recording " + str(out), FIRST_TABLE_S)
+    time.sleep(0.5)
+    node.send(signal.SIGINT)
+    node.wait_for_output(" messages, ", 10)
+    time.sleep(0.15)
+    running = node.proc.poll() is None
+    if running:
+        node.send(signal.SIGINT)
+    assert node.wait(20) == (130 if running else 0), (running, node.output())
+    assert ("Ctrl-C during shutdown" in node.output()) == running, node.output()
+    assert "Traceback" not in node.output()
+
+
 def test_a_recording_stopped_by_a_signal_ends_where_the_published_stream_ends(started, listener, tmp_path):
     """With ``compute_ahead`` 0.5 s, up to 50 batches are computed and not yet due when SIGINT
     comes.  They were recorded all the same (their log times after the file was closed), so the

@@ -41,7 +41,7 @@ from rclpy.node import Node
 
 from ..errors import UserError
 from ..limits import LOAD_MULTIPLE_C0, NDM_LIMIT, STATIC_F0, InputLimits  # noqa: F401 (names kept here)
-from ..teardown import EXIT_INTERRUPTED, signals_noted, teardown_watchdog
+from ..teardown import EXIT_INTERRUPTED, command_signals, teardown_watchdog
 
 NODE_NAME = "bearing_sim"
 OVERSAMPLE_ZERO = "each tier's own"       # what the parameter oversample's default 0 means
@@ -189,20 +189,30 @@ class BearingSimNode(Node):
     def __init__(self, record_argument: str = "record", **kwargs):
         super().__init__(NODE_NAME, **kwargs)
         self._record_argument = record_argument
-        self._declare_all()
-        # a misspelt `-p name:=value` is otherwise ignored without a word (not an error: a
-        # parameters file for several nodes may hold other nodes' parameters)
-        for name in sorted(set(getattr(self, "_parameter_overrides", {})) - set(self._cfg)):
-            if not self.has_parameter(name):
-                self.get_logger().warning(f"parameter {name}: not a {NODE_NAME} parameter, ignored; "
-                                          f"its parameters are {', '.join(self._cfg)}")
-        cfg = self._cfg
-        reason = check_config(cfg)
-        if reason:
-            raise UserError(reason)
-        self._build(cfg)
-        self.add_on_set_parameters_callback(self._on_set_parameters)
-        self.add_post_set_parameters_callback(self._after_set_parameters)
+        self.recorder = None
+        try:
+            self._declare_all()
+            # a misspelt `-p name:=value` is otherwise ignored without a word (not an error: a
+            # parameters file for several nodes may hold other nodes' parameters)
+            for name in sorted(set(getattr(self, "_parameter_overrides", {})) - set(self._cfg)):
+                if not self.has_parameter(name):
+                    self.get_logger().warning(f"parameter {name}: not a {NODE_NAME} parameter, ignored; "
+                                              f"its parameters are {', '.join(self._cfg)}")
+            cfg = self._cfg
+            reason = check_config(cfg)
+            if reason:
+                raise UserError(reason)
+            self._build(cfg)
+            self.add_on_set_parameters_callback(self._on_set_parameters)
+            self.add_post_set_parameters_callback(self._after_set_parameters)
+        except BaseException:
+            # a bad parameter (or in `bearing-sim run` a Ctrl-C while the kernels load): no caller
+            # gets the node to close and destroy, and main ends the process without Python's
+            # finalisation, which did it before (the middleware's participant and its shared memory)
+            if self.recorder is not None:
+                self.recorder.close()
+            self.destroy_node()
+            raise
 
     # ---- parameters ----------------------------------------------------------------------
     def _declare_all(self):
@@ -771,32 +781,36 @@ def log_recording(node) -> None:
         log.info(text)
 
 
-def signals_held_in_shutdown(node):
-    """``teardown.signals_noted`` for the node's shutdown, said once in its log: a second Ctrl-C
-    (or SIGTERM) there raised KeyboardInterrupt into the wait for the recording's writer, and the
-    file was lost (no footer; the interrupted join let the exit skip the writer too).  The caller
-    finishes the shutdown, then exits with ``EXIT_INTERRUPTED`` of the first signal noted."""
+def say_held(node):
+    """``CommandSignals.on_held`` for the node (``node()``, None before it is built): a Ctrl-C
+    (or SIGTERM) while it shuts down, said once in its log.  Such a signal once raised
+    KeyboardInterrupt into the wait for the recording's writer, and the file was lost (no footer);
+    the node finishes instead, then exits 130 (143)."""
     said = []
 
-    def say(signum):
+    def say(signum, done):
         if said:
             return                  # once: a user who presses Ctrl-C again reads it once
         said.append(signum)
         how = "Ctrl-C" if signum == signal.SIGINT else "SIGTERM"
-        what = "finalises its recording and " if node is not None and node.recorder is not None else ""
-        # a child of the node's logger: the node's own still has its /rosout publisher, whose
-        # context the first Ctrl-C ended (rcl would add "Failed to publish log message to rosout")
-        name = node.get_logger().name if node is not None else NODE_NAME
+        if done:
+            what = "has shut down and exits"
+        else:
+            what = ("finalises its recording and " if node() is not None and node().recorder is not None
+                    else "") + "shuts down first, then exits"
+        # a child of the node's logger: the node's own may have lost its /rosout publisher with
+        # the node (rcl would add "Failed to publish log message to rosout")
+        name = node().get_logger().name if node() is not None else NODE_NAME
         rclpy.logging.get_logger(f"{name}.shutdown").warning(
-            f"{how} during shutdown: the node {what}shuts down first, then exits with status "
-            f"{EXIT_INTERRUPTED[signum]}")
+            f"{how} during shutdown: the node {what} with status {EXIT_INTERRUPTED[signum]}")
 
-    return signals_noted(say)
+    return say
 
 
-def spin_node(node) -> None:
+def spin_node(node, signals=None) -> None:
     """Serve ``node`` until its simulation ends, rclpy shuts down (SIGTERM) or Ctrl-C
-    (KeyboardInterrupt, raised to the caller).  The caller then calls ``node.stop()``."""
+    (KeyboardInterrupt, raised to the caller); with ``signals`` (teardown.CommandSignals), until
+    the first signal.  The caller then calls ``node.stop()``."""
     from rclpy._rclpy_pybind11 import RCLError
     from rclpy.executors import SingleThreadedExecutor
 
@@ -809,8 +823,9 @@ def spin_node(node) -> None:
     executor.add_node(node)
     node.start()
     try:
-        # a short timeout: the end of ``duration`` (set by the sim thread) is noticed at once
-        while node.context.ok() and not node.finished.is_set():
+        # a short timeout: the end of ``duration`` (set by the sim thread), or a signal, is
+        # noticed at once
+        while node.context.ok() and not node.finished.is_set() and (signals is None or signals.first is None):
             executor.spin_once(timeout_sec=0.1)
     finally:
         executor.remove_node(node)
@@ -857,18 +872,28 @@ def stray_arguments_error(program: str, stray: list) -> UserError:
 
 def main(argv=None) -> int:
     """``bearing_sim_node`` / ``bearing-sim node``: run the node until ``duration``, Ctrl-C or
-    SIGTERM; exit status 0, or 2 with one line for a bad parameter, scene or ROS argument or a
-    recording that failed on the way (disk full: the node published on)."""
+    SIGTERM, and end the process (``teardown.CommandSignals.exit``): exit status 0, or 2 with one
+    line for a bad parameter, scene or ROS argument or a recording that failed on the way (disk
+    full: the node published on), or 130 / 143 for a signal while it shut down.  An internal
+    error is raised."""
     from rclpy._rclpy_pybind11 import RCLError, UnknownROSArgsError
     from rclpy.executors import ExternalShutdownException
+    from rclpy.signals import SignalHandlerOptions
     from rclpy.utilities import remove_ros_args
 
+    # those the command installed before its imports, or now
+    signals = command_signals()
     args = list(sys.argv) if argv is None else ["bearing_sim_node", *argv]
     node = None
     status = 0
+    error = None
+    signals.on_held = say_held(lambda: node)
     try:
         try:
-            rclpy.init(args=args)
+            signals.check()             # a signal while Python imported numpy, numba, rclpy
+            # the signals are CommandSignals' alone: rclpy's would shut its context down under the
+            # running node at the first one, and raise KeyboardInterrupt wherever Python is
+            rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
             stray = remove_ros_args(args)[1:]
             if stray:           # `ros2 run ... bearing_sim_node --bogus` ran the node regardless
                 raise stray_arguments_error(Path(args[0]).name, stray)
@@ -877,34 +902,32 @@ def main(argv=None) -> int:
             if isinstance(exc, RCLError) and rclpy.ok():
                 raise                   # not the arguments: rclpy.init went through
             raise ros_arguments_error(exc) from None
-        spin_node(node)
+        signals.check()                 # ... or while the node was built (its kernels loading)
+        spin_node(node, signals)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except UserError as exc:
         print(f"error: {exc}", file=sys.stderr)
         status = 2
     finally:
-        error = None
-        with signals_held_in_shutdown(node) as held:
+        signals.shutting_down()         # a signal from here on is held, said, and exits 130 / 143
+        if node is not None:
+            node.stop()                 # the recording is closed here, before anything can hang
+            error = node.error
+        with teardown_watchdog():
             if node is not None:
-                node.stop()             # the recording is closed here, before anything can hang
-                error = node.error
-            with teardown_watchdog():
-                if node is not None:
-                    node.destroy_node()
-                    log_recording(node)
-                rclpy.try_shutdown()
+                node.destroy_node()
+                log_recording(node)
+            rclpy.try_shutdown()
     if error is not None:
         raise error
     if status == 0 and node is not None and node.recorder is not None and node.recorder.error:
         # published in full, but the file is not: a script that checks the status must know
         print(f"error: {node.recorder.error}", file=sys.stderr)
         status = 2
-    if status == 0 and held:
-        # the user insisted (a second Ctrl-C): say so to a script, as the shell does; the
-        # recording is complete all the same
-        status = EXIT_INTERRUPTED[held[0]]
-    return status
+    # where the user insisted (a second Ctrl-C), 130 as the shell says; the recording is complete
+    # all the same.  Ends the process: a signal until its very end is not lost
+    signals.exit(status)
 
 
 if __name__ == "__main__":
