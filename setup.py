@@ -36,7 +36,7 @@ setup(
     entry_points={
         "console_scripts": [
             "bearing-sim = bearing_sim_ros.cli:main",
-            "bearing_sim_node = bearing_sim_ros.nodes.bearing_sim_node:main",
+            "bearing_sim_node = bearing_sim_ros.cli:node_main",
         ],
     },
 )

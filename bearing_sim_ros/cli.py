@@ -263,6 +263,37 @@ def _dispatch(args, rest) -> int:
 
 def main(argv=None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
+    if argv[:1] == ["node"]:
+        return _node_command(lambda: _main(argv))
+    return _main(argv)
+
+
+def node_main() -> int:
+    """``bearing_sim_node`` (``ros2 run bearing_sim_ros bearing_sim_node``): the node, as
+    ``bearing-sim node`` runs it."""
+    def run():
+        from .nodes.bearing_sim_node import main as run_node
+
+        return run_node()
+
+    return _node_command(run)
+
+
+def _node_command(run) -> int:
+    """``run()``, a command that runs the node, with Ctrl-C and SIGTERM handled from here on,
+    before the imports of the parser and the node (teardown.CommandSignals; README "Shutdown and
+    recording").  The node's main ends the process; where it was not reached (a signal before it
+    took it as an exit 0), this does."""
+    from .teardown import node_signals
+
+    with node_signals() as signals:
+        code = run()
+        if signals.first is not None:
+            signals.exit(code)
+    return code
+
+
+def _main(argv: list) -> int:
     try:
         parser = build_parser()
         # `node` passes everything after it to ROS (--ros-args ...)

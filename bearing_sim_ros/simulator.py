@@ -86,8 +86,10 @@ class OversampleForAuto(UserError):
         self.value = value
         super().__init__(self.worded("oversample", "fidelity"))
 
-    def worded(self, oversample_name: str, fidelity_name: str) -> str:
-        return (f"{oversample_name} = {self.value!r}: with {fidelity_name} auto allowed values are 1, 2 "
+    def worded(self, oversample_name: str, fidelity_name: str, zero: str = "") -> str:
+        """``zero``: what 0 means where the caller takes it (the node's "each tier's own")."""
+        also = f"0 ({zero}), " if zero else ""
+        return (f"{oversample_name} = {self.value!r}: with {fidelity_name} auto allowed values are {also}1, 2 "
                 f"or {AUTO_OVERSAMPLE_MAX} (or choose {fidelity_name} kinematic or skidding)")
 
 

@@ -10,12 +10,14 @@ holds the GIL.
 
 And ``signal_handlers``: handlers for a block of a command's shutdown (``render`` finishing at a
 batch's end, ``render`` and ``run`` holding Ctrl-C while a recording is finalised or read);
-``signals_noted``: Ctrl-C and SIGTERM noted, not raised, while the node shuts down.
+``CommandSignals``: Ctrl-C and SIGTERM of the node's command from its first line to its exit.
 """
 from __future__ import annotations
 
 import faulthandler
+import os
 import signal
+import sys
 import threading
 from contextlib import contextmanager
 
@@ -50,18 +52,103 @@ def signal_handlers(handlers: dict):
             signal.signal(sig, handler)
 
 
+class CommandSignals:
+    """Ctrl-C and SIGTERM of a command that runs the node (``bearing-sim node``,
+    ``bearing_sim_node``), from its first line to the end of the process, in the main thread.
+
+    The node's shutdown must run to its end (a KeyboardInterrupt in the middle of finalising a
+    recording lost the file), and a signal must not be lost on the way: before, one in the first
+    half second (while numpy and numba were imported) killed the process (143) or printed a
+    KeyboardInterrupt traceback, and a second Ctrl-C after the shutdown's handlers were put back,
+    while the process exited (0.4 s: the middleware's and numba's teardown), was swallowed (exit
+    0).  So one handler serves the whole life of the process, and it never raises (a
+    KeyboardInterrupt raised into an import came out of numpy as an ImportError):
+
+    * the first signal is noted (``first``): the start-up ends at its next step (``check()``,
+      between imports, ``rclpy.init`` and the node's construction), the command's loop ends on it;
+    * after the first signal, or from ``shutting_down()`` on (``duration`` ended): every signal is
+      noted in ``held`` and said (``on_held(signum, done)``);
+    * ``exit(status)``: the process ends there (``os._exit``, once the command has closed and
+      destroyed what it opened), with ``status``, or where it is 0 and a signal was held, that
+      signal's 130 or 143, as the shell reports an interrupted command.  A signal that comes while
+      it exits ends it at once with that status too: after ``exit`` nothing is left to run."""
+
+    def __init__(self):
+        self.first = None           # the signal that ended the run
+        self.held = []              # signals during the shutdown
+        self.on_held = None         # on_held(signum, done): say it; done = the process is exiting
+        self._stopping = False
+        self._status = None         # set by exit()
+
+    def handle(self, signum, _frame):
+        if self.first is None and not self._stopping:
+            self.first = signum
+            self._stopping = True
+            return
+        self.held.append(signum)
+        if self.on_held is not None:
+            self.on_held(signum, self._status is not None)
+        if self._status is not None:
+            self._exit_now()
+
+    def check(self) -> None:
+        """KeyboardInterrupt if a signal came: between two steps of the start-up, where it ends
+        nothing half done."""
+        if self.first is not None:
+            raise KeyboardInterrupt
+
+    def shutting_down(self) -> None:
+        self._stopping = True
+
+    def code(self, status: int) -> int:
+        """``status``, or where it is 0 the 130 / 143 of the first signal held."""
+        return EXIT_INTERRUPTED[self.held[0]] if status == 0 and self.held else status
+
+    def exit(self, status: int):
+        """End the process with ``code(status)``: Python's streams and C's (rcutils' log lines)
+        flushed, its finalisation skipped (nothing of it is the command's any more)."""
+        self._status = status
+        self._exit_now()
+
+    def _exit_now(self):
+        import ctypes
+
+        for stream in (sys.stdout, sys.stderr):
+            try:
+                stream.flush()
+            except (OSError, ValueError):
+                pass
+        ctypes.CDLL(None).fflush(None)
+        os._exit(self.code(self._status))
+
+
+_COMMAND_SIGNALS = None
+
+
+def command_signals() -> CommandSignals:
+    """The process's ``CommandSignals``: the one ``node_signals`` installed, else one installed now
+    (in the main thread; elsewhere signals stay as they are)."""
+    global _COMMAND_SIGNALS
+    if _COMMAND_SIGNALS is None:
+        _COMMAND_SIGNALS = CommandSignals()
+        if threading.current_thread() is threading.main_thread():
+            for sig in EXIT_INTERRUPTED:
+                signal.signal(sig, _COMMAND_SIGNALS.handle)
+    return _COMMAND_SIGNALS
+
+
 @contextmanager
-def signals_noted(on_signal=None):
-    """Ctrl-C and SIGTERM noted, not raised, for the block: a shutdown that must run to its end (a
-    KeyboardInterrupt in the middle of finalising a recording lost the file).  Yields the list of
-    the signals that came (numbers, in order); ``on_signal(signum)`` is called at each, in the main
-    thread between two steps of the block.  In the main thread only, like ``signal_handlers``."""
-    noted = []
-
-    def note(signum, _frame):
-        noted.append(signum)
-        if on_signal is not None:
-            on_signal(signum)
-
-    with signal_handlers({signal.SIGINT: note, signal.SIGTERM: note}):
-        yield noted
+def node_signals():
+    """``command_signals()`` for the block, the first thing a node command does; the handlers
+    before it are put back after it, which only a command that did not run the node reaches
+    (``--help``, a mistake in its arguments): the node's ``main`` ends the process itself."""
+    global _COMMAND_SIGNALS
+    saved = {sig: signal.getsignal(sig) for sig in EXIT_INTERRUPTED}
+    try:
+        yield command_signals()
+    finally:
+        if threading.current_thread() is threading.main_thread():
+            for sig, handler in saved.items():
+                if handler is not None:          # None: not one set from Python
+                    signal.signal(sig, handler)
+        _COMMAND_SIGNALS = None

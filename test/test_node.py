@@ -130,8 +130,10 @@ def test_oversample_description_names_each_tiers_default():
     ({"batch_duration": 0.00333}, ["batch_duration", "whole number"]),
     ({"sample_rate": 15000}, ["sample_rate", "floating-point"]),
     ({"fidelity": "fast"}, ["fidelity", "kinematic"]),
-    ({"oversample": 3}, ["oversample = 3", "multiple of 4"]),
-    ({"oversample": 8}, ["oversample = 8", "fidelity auto"]),
+    # 0, the default (each tier's own), is allowed too, though the Simulator it passes to takes None
+    ({"oversample": 3}, ["oversample = 3: allowed values are 0 (each tier's own), 1, 2 or a multiple of 4 up to 64"]),
+    ({"oversample": 8}, ["oversample = 8: with fidelity auto allowed values are 0 (each tier's own), 1, 2 or 4 "
+                         "(or choose fidelity kinematic or skidding)"]),
     ({"record": "/no/such/dir/x.mcap"}, ["record", "/no/such/dir/x.mcap"]),
     # a split recording (a node without these parameters would run 0.05 s and exit 0)
     ({"record_max_duration": -1.0, "real_time": False, "duration": 0.05},
@@ -390,6 +392,26 @@ def test_bad_inputs_are_rejected_and_a_speed_change_moves_bpfo(started, listener
     assert line_at(freqs, spec, f_old).prominence < DETECTION_THRESHOLD     # the old line is gone
 
 
+def test_a_burst_of_inputs_is_taken_whole_and_its_last_command_holds(started, listener):
+    """300 NaN speeds published back to back (in a few ms), then a good one: the inputs' keep-last
+    depth (1000) holds the burst until the executor takes it, so every NaN is counted, and the last
+    command is the one in use.  Subscribed keep-last 10, the node saw 27-31 of 500."""
+    started({"scene": "er16k_outer_race", "fidelity": "kinematic"})
+    listener.wait_matched()
+    listener.wait_for(lambda: len(listener.accel) > 0, FIRST_TABLE_S, "the first accel table")
+    new = 2000 * 2 * math.pi / 60
+    for _ in range(300):
+        listener.publish_speed(float("nan"))
+    listener.publish_speed(new)
+
+    def settled():
+        return next((v for _t, _lvl, _m, v, _stamp in reversed(listener.diagnostics)
+                     if float(v["shaft_speed_rad_s"]) == pytest.approx(new, rel=1e-5)), None)
+
+    v = listener.wait_for(settled, 5, "diagnostics at the last command's speed")
+    assert int(v["rejected_not_finite"]) == 300, v
+
+
 def test_diagnostics_give_the_operating_point_at_their_stamp_not_of_what_is_computed_ahead(
         started, listener, tmp_path):
     """With ``compute_ahead`` 0.5 s the simulator runs up to half a second ahead of what it has
@@ -557,6 +579,47 @@ def test_a_signal_while_the_node_is_being_built_ends_it_quietly_with_status_0(st
     assert "error:" not in node.output() and "Traceback" not in node.output(), node.output()
 
 
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+@pytest.mark.parametrize("command", [["bearing-sim", "node"], ["bearing_sim_node"]], ids=["bearing-sim", "bearing_sim_node"])
+def test_a_signal_in_the_first_moments_ends_the_node_quietly_with_status_0(ros_env, bearing_sim_exe, tmp_path,
+                                                                             command, sig):
+    """0.1 and 0.3 s after launch, while Python imports numpy, numba and rclpy: SIGTERM killed the
+    node (143) and SIGINT printed a KeyboardInterrupt traceback (130), before any handler of
+    the node's was there.  Its handlers now come before those imports: exit 0, nothing said."""
+    from pathlib import Path
+
+    exe = str(Path(bearing_sim_exe).parent / command[0])
+    for delay in (0.1, 0.3):
+        node = NodeProcess(exe, ros_env, {"fidelity": "kinematic"}, tmp_path / f"{delay}.log", command=command[1:])
+        try:
+            time.sleep(delay)
+            node.send(sig)
+            assert node.wait(30) == 0 and node.output() == "", (delay, node.output())
+        finally:
+            node.close()
+
+
+def test_a_second_ctrl_c_while_the_process_still_exits_is_not_lost(started, tmp_path):
+    """A second Ctrl-C 0.15-0.3 s after the node's last line (`recording ...: N messages`) came
+    while the process still exited (0.4 s of the middleware's and numba's teardown, after the
+    shutdown's handlers were put back) and was lost: exit 0 (or killed by it), nothing said.  Now
+    the node's handler stays to the end and the process ends as soon as its work is done: a
+    Ctrl-C that finds it still running gives 130 and says so."""
+    out = tmp_path / "live.mcap"
+    node = started({"scene": "er16k_outer_race", "fidelity": "kinematic", "record": str(out)})
+    node.wait_for_output("recording " + str(out), FIRST_TABLE_S)
+    time.sleep(0.5)
+    node.send(signal.SIGINT)
+    node.wait_for_output(" messages, ", 10)
+    time.sleep(0.15)
+    running = node.proc.poll() is None
+    if running:
+        node.send(signal.SIGINT)
+    assert node.wait(20) == (130 if running else 0), (running, node.output())
+    assert ("Ctrl-C during shutdown" in node.output()) == running, node.output()
+    assert "Traceback" not in node.output()
+
+
 def test_a_recording_stopped_by_a_signal_ends_where_the_published_stream_ends(started, listener, tmp_path):
     """With ``compute_ahead`` 0.5 s, up to 50 batches are computed and not yet due when SIGINT
     comes.  They were recorded all the same (their log times after the file was closed), so the
@@ -653,6 +716,50 @@ def test_publish_clock_gives_the_end_of_each_table(started, listener):
     assert np.all(np.diff(clock) == BATCH_NS)
     shared = clock[(clock >= min(ends)) & (clock <= max(ends))]
     assert len(shared) > 50 and set(shared.tolist()) <= ends
+
+
+def test_sim_time_with_its_own_clock_starts_the_signal_at_0(started, tmp_path):
+    """use_sim_time:=true with publish_clock:=true: the node is its own clock, 0 until its first
+    /clock.  Sample 0 was stamped one batch before that, -10 ms (sec -1, nanosec 990000000, which
+    rclpy's Time.from_msg refuses); now the signal starts at 0 and the tables follow from there."""
+    out = tmp_path / "sim.mcap"
+    node = started({"scene": "er16k_outer_race", "fidelity": "kinematic", "use_sim_time": True,
+                    "publish_clock": True, "real_time": False, "duration": 0.5, "record": str(out)})
+    assert node.wait(FIRST_TABLE_S) == 0, node.output()
+    topics, _meta = read_recording(out)
+    stamps = [(m.header.stamp.sec, m.header.stamp.nanosec) for _t, m in topics["/accel"]]
+    assert stamps == [divmod(k * BATCH_NS, NS) for k in range(50)], stamps[:3]
+
+
+def test_sim_time_from_another_clock_waits_for_it(started, listener, tmp_path):
+    """use_sim_time:=true, /clock from another node (a simulator, `ros2 bag play --clock`) that
+    starts after this one: the node waits for it, says so, and then stamps its tables on it (the
+    first one batch before the clock's time), where they were stamped from -10 ms on before."""
+    from rosgraph_msgs.msg import Clock
+
+    out = tmp_path / "sim.mcap"
+    node = started({"scene": "er16k_outer_race", "fidelity": "kinematic", "use_sim_time": True,
+                    "record": str(out)})
+    listener.wait_for(lambda: "waiting for /clock" in node.output() or listener.accel, FIRST_TABLE_S,
+                      "the node waiting for /clock")
+    time.sleep(0.3)
+    assert not listener.accel, "tables before any /clock"
+    clock = listener.node.create_publisher(Clock, "/clock", 10)
+    listener.wait_for(lambda: clock.get_subscription_count() > 0, 10, "the node's /clock subscription")
+    t0 = now = 1000 * NS
+    start = time.monotonic()
+    while not listener.accel and time.monotonic() < start + 5:      # 1000 s on, in real time
+        now = t0 + int((time.monotonic() - start) * NS)
+        msg = Clock()
+        msg.clock.sec, msg.clock.nanosec = divmod(now, NS)
+        clock.publish(msg)
+        time.sleep(0.02)
+    assert listener.accel, "no tables 5 s after /clock began"
+    node.send(signal.SIGINT)
+    assert node.wait(20) == 0, node.output()
+    topics, _meta = read_recording(out)
+    first = topics["/accel"][0][1].header.stamp
+    assert t0 - BATCH_NS <= first.sec * NS + first.nanosec <= now, (first, now)
 
 
 def test_a_node_slower_than_real_time_counts_its_overruns_and_stays_contiguous(ros_env, tmp_path):

@@ -41,9 +41,10 @@ from rclpy.node import Node
 
 from ..errors import UserError
 from ..limits import LOAD_MULTIPLE_C0, NDM_LIMIT, STATIC_F0, InputLimits  # noqa: F401 (names kept here)
-from ..teardown import EXIT_INTERRUPTED, signals_noted, teardown_watchdog
+from ..teardown import EXIT_INTERRUPTED, command_signals, teardown_watchdog
 
 NODE_NAME = "bearing_sim"
+OVERSAMPLE_ZERO = "each tier's own"       # what the parameter oversample's default 0 means
 DEFAULT_SCENE = "er16k_outer_race"
 FIDELITIES = ("auto", "kinematic", "skidding")
 
@@ -51,6 +52,9 @@ FIDELITIES = ("auto", "kinematic", "skidding")
 # The bearing's limits (n d_m, 2 x C0) live in ..limits, ROS-free: the scene loader applies them too.
 CLOCK_SKEW_ALLOWED = 1.0       # s: a load stamp further in the future than this is rejected
 REJECT_LOG_PERIOD = 2.0        # s: at most one log line per rejection reason this often
+INPUT_DEPTH = 1000             # keep-last depth of shaft_speed and load: a burst a publisher sends
+                               # back to back waits for the executor, each message checked and counted
+                               # (at 10, 27-31 of 500 NaNs sent at once were counted)
 TIME_LINE_JUMP = 1.0           # s: a load stamp further back than this behind the last accepted one
                                # starts a new time line (a recording played again, a publisher
                                # restarted with other stamps); closer, it is out of order
@@ -145,7 +149,7 @@ def _descriptors():
         "oversample": (0, d(T.PARAMETER_INTEGER, "integration steps per output sample, or per physics "
                             "sample below a 15 kHz sample_rate, where the physics runs at the smallest "
                             "whole multiple of sample_rate that reaches 15 kHz (speed against "
-                            f"accuracy); 0 = each tier's own: kinematic 1 while its bearing mode "
+                            f"accuracy); 0 = {OVERSAMPLE_ZERO}: kinematic 1 while its bearing mode "
                             f"is below {SOFT_MODE_FRACTION:g} x that rate, else {KINEMATIC_OVERSAMPLE}; "
                             f"skidding {SKIDDING_OVERSAMPLE}", True, 0, 64,
                             f"0, {OVERSAMPLE_ALLOWED}; at most {AUTO_OVERSAMPLE_MAX} where the tier is "
@@ -168,6 +172,11 @@ def check_config(cfg: dict):
         return f"fidelity = {cfg['fidelity']!r}: allowed values are {', '.join(FIDELITIES)}"
     from ..messages import batching_error
     from ..recording.recorder import split_error
+    from ..simulator import OVERSAMPLE_ALLOWED, oversample_allowed
+
+    if cfg["oversample"] != 0 and not oversample_allowed(cfg["oversample"]):
+        # said here, not by the Simulator, which does not take 0
+        return f"oversample = {cfg['oversample']!r}: allowed values are 0 ({OVERSAMPLE_ZERO}), {OVERSAMPLE_ALLOWED}"
 
     return (batching_error(cfg["sample_rate"], cfg["batch_duration"], cfg["state_rate"])
             or split_error(cfg["record_max_duration"], cfg["record_max_size"], cfg["batch_duration"]))
@@ -182,20 +191,30 @@ class BearingSimNode(Node):
     def __init__(self, record_argument: str = "record", **kwargs):
         super().__init__(NODE_NAME, **kwargs)
         self._record_argument = record_argument
-        self._declare_all()
-        # a misspelt `-p name:=value` is otherwise ignored without a word (not an error: a
-        # parameters file for several nodes may hold other nodes' parameters)
-        for name in sorted(set(getattr(self, "_parameter_overrides", {})) - set(self._cfg)):
-            if not self.has_parameter(name):
-                self.get_logger().warning(f"parameter {name}: not a {NODE_NAME} parameter, ignored; "
-                                          f"its parameters are {', '.join(self._cfg)}")
-        cfg = self._cfg
-        reason = check_config(cfg)
-        if reason:
-            raise UserError(reason)
-        self._build(cfg)
-        self.add_on_set_parameters_callback(self._on_set_parameters)
-        self.add_post_set_parameters_callback(self._after_set_parameters)
+        self.recorder = None
+        try:
+            self._declare_all()
+            # a misspelt `-p name:=value` is otherwise ignored without a word (not an error: a
+            # parameters file for several nodes may hold other nodes' parameters)
+            for name in sorted(set(getattr(self, "_parameter_overrides", {})) - set(self._cfg)):
+                if not self.has_parameter(name):
+                    self.get_logger().warning(f"parameter {name}: not a {NODE_NAME} parameter, ignored; "
+                                              f"its parameters are {', '.join(self._cfg)}")
+            cfg = self._cfg
+            reason = check_config(cfg)
+            if reason:
+                raise UserError(reason)
+            self._build(cfg)
+            self.add_on_set_parameters_callback(self._on_set_parameters)
+            self.add_post_set_parameters_callback(self._after_set_parameters)
+        except BaseException:
+            # a bad parameter (or in `bearing-sim run` a Ctrl-C while the kernels load): no caller
+            # gets the node to close and destroy, and main ends the process without Python's
+            # finalisation, which did it before (the middleware's participant and its shared memory)
+            if self.recorder is not None:
+                self.recorder.close()
+            self.destroy_node()
+            raise
 
     # ---- parameters ----------------------------------------------------------------------
     def _declare_all(self):
@@ -239,6 +258,7 @@ class BearingSimNode(Node):
         from rclpy.qos import QoSProfile
 
         from .. import Simulator
+        from ..simulator import OversampleForAuto
         from ..messages import (TOPIC_ACCEL, TOPIC_CONTACT, TOPIC_DIAGNOSTICS, TOPIC_LOAD,
                                 TOPIC_SHAFT_SPEED, TOPIC_STATE, BatchMessages, waveform_qos)
         from ..scene import load_scene
@@ -248,22 +268,26 @@ class BearingSimNode(Node):
         from std_msgs.msg import Float64
 
         self.scene = load_scene(cfg["scene"])
-        self.sim = Simulator(self.scene, sample_rate=float(cfg["sample_rate"]),
-                             fidelity=cfg["fidelity"], seed=int(cfg["seed"]),
-                             oversample=int(cfg["oversample"]) or None)
+        try:
+            self.sim = Simulator(self.scene, sample_rate=float(cfg["sample_rate"]),
+                                 fidelity=cfg["fidelity"], seed=int(cfg["seed"]),
+                                 oversample=int(cfg["oversample"]) or None)
+        except OversampleForAuto as exc:
+            raise UserError(exc.worded("oversample", "fidelity", zero=OVERSAMPLE_ZERO)) from None
         self.limits = InputLimits(self.scene.bearing)
         self.n_batch = int(round(cfg["sample_rate"] * cfg["batch_duration"]))
         self.batch_duration = self.n_batch / self.sim.sample_rate
         self.wave_qos = waveform_qos(self.batch_duration)
         self.small_qos = QoSProfile(depth=10)     # reliable, volatile, keep-last 10
+        self.input_qos = QoSProfile(depth=INPUT_DEPTH)      # reliable, volatile, keep-last INPUT_DEPTH
         self.pub_accel = self.create_publisher(PointCloud2, TOPIC_ACCEL, self.wave_qos)
         self.pub_contact = self.create_publisher(PointCloud2, TOPIC_CONTACT, self.wave_qos)
         self.pub_state = self.create_publisher(JointState, TOPIC_STATE, self.small_qos)
         self.pub_diag = self.create_publisher(DiagnosticArray, TOPIC_DIAGNOSTICS, self.small_qos)
         self.pub_clock = None                     # created when publish_clock is first true
         self._tier_cache = None                   # (key, tier keys) of the last batch: _tier_keys
-        self.sub_speed = self.create_subscription(Float64, TOPIC_SHAFT_SPEED, self._on_speed, self.small_qos)
-        self.sub_load = self.create_subscription(WrenchStamped, TOPIC_LOAD, self._on_load, self.small_qos)
+        self.sub_speed = self.create_subscription(Float64, TOPIC_SHAFT_SPEED, self._on_speed, self.input_qos)
+        self.sub_load = self.create_subscription(WrenchStamped, TOPIC_LOAD, self._on_load, self.input_qos)
 
         # commands (written by the executor thread, read by the sim thread: plain rebinding)
         self._cmd_speed = float(self.sim.shaft_speed)
@@ -293,6 +317,8 @@ class BearingSimNode(Node):
 
         # each topic under its resolved name (namespace and remaps applied), its type from its
         # role: a remapped name (-r accel:=vibration) says nothing about the type
+        # the operating point is recorded once per batch, as render records it (keep-last 10, not
+        # the inputs' depth: what is recorded there is not what came in)
         topics = ((TOPIC_SHAFT_SPEED, self.sub_speed, self.small_qos), (TOPIC_LOAD, self.sub_load, self.small_qos),
                   (TOPIC_ACCEL, self.pub_accel, self.wave_qos), (TOPIC_CONTACT, self.pub_contact, self.wave_qos),
                   (TOPIC_STATE, self.pub_state, self.small_qos), (TOPIC_DIAGNOSTICS, self.pub_diag, self.small_qos))
@@ -382,11 +408,30 @@ class BearingSimNode(Node):
             # before the first batch, which starts the clock: a tier switch at run time must not
             # stall the stream while the other tier's kernels load (or compile, on a cold cache)
             self.sim.prepare_switches()
-            self._loop()
+            if self._wait_for_clock():
+                self._loop()
         except BaseException as exc:  # noqa: BLE001 - reported by main() as an internal error
             self.error = exc
         finally:
             self.finished.set()
+
+    def _wait_for_clock(self) -> bool:
+        """With ``use_sim_time`` the node's clock is the last ``/clock`` received, and 0 before the
+        first.  Where another node publishes it, the first batch waits for it: its time becomes
+        sample 0's stamp (one batch before it), as without sim time the wall clock's does.  Where
+        this node is the clock (``publish_clock``), there is nothing to wait for: the signal starts
+        at 0.  False if the node stops while it waits."""
+        clock = self.get_clock()
+        said = False
+        while clock.ros_time_is_active and not self._cfg["publish_clock"] and clock.now().nanoseconds == 0:
+            if self._stop.is_set() or not self.context.ok():
+                return False
+            if not said:
+                said = True
+                self.get_logger().info("use_sim_time: waiting for /clock before the first batch "
+                                       "(publish_clock:=true makes this node the clock)")
+            self._stop.wait(0.02)
+        return True
 
     def _compute(self, n, cfg, Clock):
         """Advance one batch and build its messages (no waiting, no publishing)."""
@@ -400,8 +445,11 @@ class BearingSimNode(Node):
                                    f"({sim.selection.reason})")
         if batch.index0 == 0:
             # ROS time of sample 0: one batch before now, when the first batch is ready (its
-            # computation may include loading compiled kernels: that must not be an overrun)
-            self.start_ns = msgs.start_ns = self.get_clock().now().nanoseconds - int(round(n / sim.sample_rate * 1e9))
+            # computation may include loading compiled kernels: that must not be an overrun); never
+            # before 0, where a sim time starts (publish_clock with use_sim_time: this node's own
+            # clock, 0 until its first /clock; a negative stamp is no ROS time)
+            before = self.get_clock().now().nanoseconds - int(round(n / sim.sample_rate * 1e9))
+            self.start_ns = msgs.start_ns = max(0, before)
         end_index = sim.index
         start_stamp, end_stamp = msgs.stamp_ns(batch.index0), msgs.stamp_ns(end_index)
         out = [(self.pub_accel, msgs.accel(batch)), (self.pub_contact, msgs.contact_forces(batch))]
@@ -747,32 +795,36 @@ def log_recording(node) -> None:
         log.info(text)
 
 
-def signals_held_in_shutdown(node):
-    """``teardown.signals_noted`` for the node's shutdown, said once in its log: a second Ctrl-C
-    (or SIGTERM) there raised KeyboardInterrupt into the wait for the recording's writer, and the
-    file was lost (no footer; the interrupted join let the exit skip the writer too).  The caller
-    finishes the shutdown, then exits with ``EXIT_INTERRUPTED`` of the first signal noted."""
+def say_held(node):
+    """``CommandSignals.on_held`` for the node (``node()``, None before it is built): a Ctrl-C
+    (or SIGTERM) while it shuts down, said once in its log.  Such a signal once raised
+    KeyboardInterrupt into the wait for the recording's writer, and the file was lost (no footer);
+    the node finishes instead, then exits 130 (143)."""
     said = []
 
-    def say(signum):
+    def say(signum, done):
         if said:
             return                  # once: a user who presses Ctrl-C again reads it once
         said.append(signum)
         how = "Ctrl-C" if signum == signal.SIGINT else "SIGTERM"
-        what = "finalises its recording and " if node is not None and node.recorder is not None else ""
-        # a child of the node's logger: the node's own still has its /rosout publisher, whose
-        # context the first Ctrl-C ended (rcl would add "Failed to publish log message to rosout")
-        name = node.get_logger().name if node is not None else NODE_NAME
+        if done:
+            what = "has shut down and exits"
+        else:
+            what = ("finalises its recording and " if node() is not None and node().recorder is not None
+                    else "") + "shuts down first, then exits"
+        # a child of the node's logger: the node's own may have lost its /rosout publisher with
+        # the node (rcl would add "Failed to publish log message to rosout")
+        name = node().get_logger().name if node() is not None else NODE_NAME
         rclpy.logging.get_logger(f"{name}.shutdown").warning(
-            f"{how} during shutdown: the node {what}shuts down first, then exits with status "
-            f"{EXIT_INTERRUPTED[signum]}")
+            f"{how} during shutdown: the node {what} with status {EXIT_INTERRUPTED[signum]}")
 
-    return signals_noted(say)
+    return say
 
 
-def spin_node(node) -> None:
+def spin_node(node, signals=None) -> None:
     """Serve ``node`` until its simulation ends, rclpy shuts down (SIGTERM) or Ctrl-C
-    (KeyboardInterrupt, raised to the caller).  The caller then calls ``node.stop()``."""
+    (KeyboardInterrupt, raised to the caller); with ``signals`` (teardown.CommandSignals), until
+    the first signal.  The caller then calls ``node.stop()``."""
     from rclpy._rclpy_pybind11 import RCLError
     from rclpy.executors import SingleThreadedExecutor
 
@@ -785,8 +837,9 @@ def spin_node(node) -> None:
     executor.add_node(node)
     node.start()
     try:
-        # a short timeout: the end of ``duration`` (set by the sim thread) is noticed at once
-        while node.context.ok() and not node.finished.is_set():
+        # a short timeout: the end of ``duration`` (set by the sim thread), or a signal, is
+        # noticed at once
+        while node.context.ok() and not node.finished.is_set() and (signals is None or signals.first is None):
             executor.spin_once(timeout_sec=0.1)
     finally:
         executor.remove_node(node)
@@ -833,18 +886,28 @@ def stray_arguments_error(program: str, stray: list) -> UserError:
 
 def main(argv=None) -> int:
     """``bearing_sim_node`` / ``bearing-sim node``: run the node until ``duration``, Ctrl-C or
-    SIGTERM; exit status 0, or 2 with one line for a bad parameter, scene or ROS argument or a
-    recording that failed on the way (disk full: the node published on)."""
+    SIGTERM, and end the process (``teardown.CommandSignals.exit``): exit status 0, or 2 with one
+    line for a bad parameter, scene or ROS argument or a recording that failed on the way (disk
+    full: the node published on), or 130 / 143 for a signal while it shut down.  An internal
+    error is raised."""
     from rclpy._rclpy_pybind11 import RCLError, UnknownROSArgsError
     from rclpy.executors import ExternalShutdownException
+    from rclpy.signals import SignalHandlerOptions
     from rclpy.utilities import remove_ros_args
 
+    # those the command installed before its imports, or now
+    signals = command_signals()
     args = list(sys.argv) if argv is None else ["bearing_sim_node", *argv]
     node = None
     status = 0
+    error = None
+    signals.on_held = say_held(lambda: node)
     try:
         try:
-            rclpy.init(args=args)
+            signals.check()             # a signal while Python imported numpy, numba, rclpy
+            # the signals are CommandSignals' alone: rclpy's would shut its context down under the
+            # running node at the first one, and raise KeyboardInterrupt wherever Python is
+            rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
             stray = remove_ros_args(args)[1:]
             if stray:           # `ros2 run ... bearing_sim_node --bogus` ran the node regardless
                 raise stray_arguments_error(Path(args[0]).name, stray)
@@ -853,34 +916,32 @@ def main(argv=None) -> int:
             if isinstance(exc, RCLError) and rclpy.ok():
                 raise                   # not the arguments: rclpy.init went through
             raise ros_arguments_error(exc) from None
-        spin_node(node)
+        signals.check()                 # ... or while the node was built (its kernels loading)
+        spin_node(node, signals)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except UserError as exc:
         print(f"error: {exc}", file=sys.stderr)
         status = 2
     finally:
-        error = None
-        with signals_held_in_shutdown(node) as held:
+        signals.shutting_down()         # a signal from here on is held, said, and exits 130 / 143
+        if node is not None:
+            node.stop()                 # the recording is closed here, before anything can hang
+            error = node.error
+        with teardown_watchdog():
             if node is not None:
-                node.stop()             # the recording is closed here, before anything can hang
-                error = node.error
-            with teardown_watchdog():
-                if node is not None:
-                    node.destroy_node()
-                    log_recording(node)
-                rclpy.try_shutdown()
+                node.destroy_node()
+                log_recording(node)
+            rclpy.try_shutdown()
     if error is not None:
         raise error
     if status == 0 and node is not None and node.recorder is not None and node.recorder.error:
         # published in full, but the file is not: a script that checks the status must know
         print(f"error: {node.recorder.error}", file=sys.stderr)
         status = 2
-    if status == 0 and held:
-        # the user insisted (a second Ctrl-C): say so to a script, as the shell does; the
-        # recording is complete all the same
-        status = EXIT_INTERRUPTED[held[0]]
-    return status
+    # where the user insisted (a second Ctrl-C), 130 as the shell says; the recording is complete
+    # all the same.  Ends the process: a signal until its very end is not lost
+    signals.exit(status)
 
 
 if __name__ == "__main__":
