@@ -574,11 +574,19 @@ def test_a_pipe_or_a_device_at_out_gets_a_complete_recording(tmp_path):
     got = []
     reader = threading.Thread(target=lambda: got.append(fifo.read_bytes()), daemon=True)
     reader.start()
+    rendered = False
     try:
         assert cli.main(["render", "er16k_healthy", "--duration", "0.05", "--out", str(fifo)]) == 0
+        rendered = True
     finally:
-        if not got:
-            open(fifo, "wb").close()            # the reader ends (EOF) if the render never wrote
+        if not rendered:
+            # the reader ends (EOF) if the render never opened the pipe.  Not when it did: the
+            # reader may have read to the end and not yet kept it, and a blocking open would wait
+            # for a reader that never comes (the suite hung there once)
+            try:
+                os.close(os.open(fifo, os.O_WRONLY | os.O_NONBLOCK))
+            except OSError:
+                pass                            # no reader left: nothing to end
         reader.join(30)
     (tmp_path / "copy.mcap").write_bytes(got[0])
     with open(tmp_path / "copy.mcap", "rb") as f:
