@@ -497,7 +497,7 @@ class Simulator:
     def switch_ahead(self, shaft_speed: float, radial_load) -> bool:
         """Whether advancing to this operating point (rad/s; (x, y) N) switches the tier: the
         live node then starts the batch where it has the most time before the next publication
-        (a switch costs a few batches' computation)."""
+        (the new tier's set-up: about 8 ms to the skidding tier, several times a batch's work)."""
         sel = reselect_tier(self.scene, self.requested_fidelity, self.selection,
                             (self._shaft_speed, self._radial_load), (float(shaft_speed), tuple(radial_load)))
         return sel is not None and sel.tier != self.tier

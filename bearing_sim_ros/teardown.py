@@ -116,7 +116,7 @@ class CommandSignals:
         for stream in (sys.stdout, sys.stderr):
             try:
                 stream.flush()
-            except (OSError, ValueError):
+            except Exception:  # noqa: BLE001 - closed, full, or a flush this signal interrupted
                 pass
         ctypes.CDLL(None).fflush(None)
         os._exit(self.code(self._status))

@@ -615,8 +615,12 @@ def test_a_second_ctrl_c_while_the_process_still_exits_is_not_lost(started, tmp_
     running = node.proc.poll() is None
     if running:
         node.send(signal.SIGINT)
-    assert node.wait(20) == (130 if running else 0), (running, node.output())
-    assert ("Ctrl-C during shutdown" in node.output()) == running, node.output()
+    # the process may end between the poll and the signal (it then never sees it): either it got
+    # the second Ctrl-C and says so with 130, or it had ended with 0; never lost, killed by it (-2)
+    # or a traceback
+    status = node.wait(20)
+    assert status in ((130, 0) if running else (0,)), (running, node.output())
+    assert ("Ctrl-C during shutdown" in node.output()) == (status == 130), node.output()
     assert "Traceback" not in node.output()
 
 

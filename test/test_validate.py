@@ -253,11 +253,14 @@ def test_detector_on_the_recordings_alone(cwru_dir):
             assert env.diagnose(rec.accel[i:i + n], rec.sample_rate, ff)["verdict"] == expect[rec.scene], (rec.name, i)
 
 
+CWRU_FOLDER = Path(__file__).resolve().parent.parent.parent / "shared" / "validation" / "cwru"
+
+
 @pytest.fixture(scope="module")
 def compared(tmp_path_factory):
     """One comparison (first 4 s of each recording) shared by the tests below; ``cwru_dir``
     (conftest) is per test, so the same folder and skip reason are repeated here."""
-    folder = Path(__file__).resolve().parent.parent.parent / "shared" / "validation" / "cwru"
+    folder = CWRU_FOLDER
     if not folder.is_dir():
         pytest.skip(f"CWRU recordings not found at {folder} (a user checkout has no ../shared)")
     out = tmp_path_factory.mktemp("validation")
@@ -294,8 +297,7 @@ def test_ball_fault_is_reported_as_it_is(compared):
     r = rows["cwru_6205_b007"]
     assert r["real"]["lines"]["2bsf"]["prominence"] < 2.0 and r["real"]["verdict"] != "ball"
     assert r["sim"]["lines"]["2bsf"]["prominence"] < 10.0
-    folder = Path(__file__).resolve().parent.parent.parent / "shared" / "validation" / "cwru"
-    ball = next(rec for rec in map(read_recording, find_recordings(folder)) if rec.scene == "cwru_6205_b007")
+    ball = next(rec for rec in map(read_recording, find_recordings(CWRU_FOLDER)) if rec.scene == "cwru_6205_b007")
     whole = V.compare_recording(ball)
     assert whole["sim"]["lines"]["2bsf"]["prominence"] < 4.0
     assert whole["sim"]["verdict"] == whole["real"]["verdict"] == r["real"]["verdict"]

@@ -499,7 +499,7 @@ class BearingSimNode(Node):
         anchor_t = anchor_i = None            # sample anchor_i is due at steady time anchor_t
         next_diag = None                      # steady-clock time of the next /diagnostics
         next_diag_index = sr                  # real_time:=false: once per second of signal, like render
-        est = 0.0
+        est = {}                              # tier -> decaying maximum of its batches' computation (s)
         # the computation of a batch that switches the tier (the new tier's set-up: about 8 ms
         # for kinematic -> skidding), a decaying maximum like est, measured at each switch
         switch_est = SWITCH_COST_GUESS_S
@@ -568,20 +568,21 @@ class BearingSimNode(Node):
             start_at = (anchor_t + (sim.index - anchor_i) / sr - cfg["compute_ahead"]
                         if real_time and anchor_t is not None else now)
             may = start_at <= now
-            cost = est
+            cost = est.get(sim.tier, 0.0)
             switching = sim.can_switch_tiers and sim.switch_ahead(self._cmd_speed, self._cmd_load)
             if switching:
                 # a switch costs more than a batch: start it right after a publication, where the
                 # next one is a whole batch away (waiting longer cannot help: no gap is wider)
-                cost = max(est, min(switch_est, 0.9 * n / sr))
+                cost = max(cost, min(switch_est, 0.9 * n / sr))
             if may and (not queue or now + cost <= queue[0].due):
                 item = self._compute(n, cfg, Clock)
                 done = time.monotonic()
                 stats.compute(done - now)
                 if switching:
                     switch_est = max(0.9 * switch_est, done - now)
-                else:
-                    est = max(0.9 * est, done - now)
+                # a switching batch also stands for the new tier's first ones, whose cost is not
+                # known yet (as one estimate for both tiers took it in before there were two)
+                est[sim.tier] = max(0.9 * est.get(sim.tier, 0.0), done - now)
                 if anchor_t is None:
                     # the schedule starts with the first batch: it is due now
                     anchor_t, anchor_i = done - n / sr, 0

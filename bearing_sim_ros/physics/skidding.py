@@ -1743,8 +1743,11 @@ class SkiddingModel:
 
     @property
     def angles(self) -> np.ndarray:
-        """[shaft, cage, ball spin] angles (rad), the kinematic tier's layout (spin of ball 0)."""
-        return np.array([self.shaft_angle, self.y[10], self.y[NS0 + B_PSI]])
+        """[shaft, cage, ball spin] angles (rad), the kinematic tier's layout (spin of ball 0), at
+        the end of the latest chunk, as ``snapshot`` gives them (carried on from the step grid)."""
+        y, lag = self.y, self._state_lag()
+        return np.array([self.shaft_angle, y[10] + y[11] * lag,
+                         y[NS0 + B_PSI] + (y[NS0 + B_W] - y[NS0 + B_OM]) * lag])
 
     def _set_rolling(self, speed: float, cage_angle: float, spin_angle: float):
         """Balls in their pockets at the pure-rolling speeds of ``speed`` (rad/s)."""
@@ -1925,9 +1928,10 @@ class SkiddingModel:
 
     def snapshot(self) -> KinematicSnapshot:
         """Angles and speeds at the end of the latest chunk.  The state sits at the last point of
-        the step grid at or before it (up to a step less one internal sample earlier: 33 us at
-        two steps per output sample); the cage's and the balls' angles are carried on from
-        there at their speeds (the shaft's angle is kept at the chunk's end already)."""
+        the step grid before it (one internal sample up to a whole step earlier: 17-33 us at two
+        steps per output sample, 16.7 us per internal sample at 15 kHz); the cage's and the balls'
+        angles are carried on from there at their speeds (the shaft's angle is kept at the
+        chunk's end already)."""
         y = self.y
         lag = self._state_lag()
         th = y[NS0 + B_TH::NBV][: self.nb].copy()
