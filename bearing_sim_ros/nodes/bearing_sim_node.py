@@ -433,16 +433,21 @@ class BearingSimNode(Node):
             self._stop.wait(0.02)
         return True
 
+    def _log_switch(self, switches: int) -> None:
+        """Say a tier switch in the log, if the simulator made one since it had ``switches``."""
+        sim = self.sim
+        if sim.tier_switches != switches:
+            t, old, new = sim.last_tier_switch
+            self.get_logger().info(f"tier switch at {t:.3f} s of signal: {old} -> {new} "
+                                   f"({sim.selection.reason})")
+
     def _compute(self, n, cfg, Clock):
         """Advance one batch and build its messages (no waiting, no publishing)."""
         sim, msgs = self.sim, self.msgs
         speed, load = self._cmd_speed, self._cmd_load       # commands take effect here
         switches = sim.tier_switches
         batch = sim.advance(n, shaft_speed=speed, radial_load=load)
-        if sim.tier_switches != switches:
-            t, old, new = sim.last_tier_switch
-            self.get_logger().info(f"tier switch at {t:.3f} s of signal: {old} -> {new} "
-                                   f"({sim.selection.reason})")
+        self._log_switch(switches)
         if batch.index0 == 0:
             # ROS time of sample 0: one batch before now, when the first batch is ready (its
             # computation may include loading compiled kernels: that must not be an overrun); never
@@ -571,17 +576,25 @@ class BearingSimNode(Node):
             cost = est.get(sim.tier, 0.0)
             switching = sim.can_switch_tiers and sim.switch_ahead(self._cmd_speed, self._cmd_load)
             if switching:
-                # a switch costs more than a batch: start it right after a publication, where the
-                # next one is a whole batch away (waiting longer cannot help: no gap is wider)
+                # a switch (the new tier's set-up, several batches' work) is a step of its own,
+                # before the batch: started right after a publication, where the next one is a
+                # whole batch away (waiting longer cannot help: no gap is wider)
                 cost = max(cost, min(switch_est, 0.9 * n / sr))
+            if switching and may and (not queue or now + cost <= queue[0].due):
+                switches = sim.tier_switches
+                sim.maybe_switch_tier(self._cmd_speed, self._cmd_load)      # what advance does first
+                self._log_switch(switches)
+                done = time.monotonic()
+                stats.work(done - now)
+                switch_est = max(0.9 * switch_est, done - now)
+                # the new tier's first batches (its first steps sub-stepped), whose cost is not
+                # known yet: as long as a switch, at most (decaying as its batches are measured)
+                est[sim.tier] = max(est.get(sim.tier, 0.0), cost)
+                continue
             if may and (not queue or now + cost <= queue[0].due):
                 item = self._compute(n, cfg, Clock)
                 done = time.monotonic()
                 stats.compute(done - now)
-                if switching:
-                    switch_est = max(0.9 * switch_est, done - now)
-                # a switching batch also stands for the new tier's first ones, whose cost is not
-                # known yet (as one estimate for both tiers took it in before there were two)
                 est[sim.tier] = max(0.9 * est.get(sim.tier, 0.0), done - now)
                 if anchor_t is None:
                     # the schedule starts with the first batch: it is due now
