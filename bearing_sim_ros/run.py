@@ -81,16 +81,34 @@ def _record_tail(paths, max_s: float) -> dict:
             "counts": counts, "skid_percent": {k: float(np.mean(v)) for k, v in sorted(skids.items())}}
 
 
-def _verdict_lines(scene, res: dict) -> list:
+def _defect_texts(scene, end_s: float, analysed_s: float) -> str:
+    """The scene's defects, each that appears later (``onset_s``) with when, against the run's
+    signal (``end_s`` s long, of which the last ``analysed_s`` analysed): "outer (from 5 s, after
+    this run)", where the verdict cannot have seen it."""
+    texts = []
+    for d in scene.defects:
+        if d.onset <= 0:
+            texts.append(d.kind)
+        elif d.onset >= end_s:
+            texts.append(f"{d.kind} (from {d.onset:g} s, after this run)")
+        elif d.onset > end_s - analysed_s:
+            texts.append(f"{d.kind} (from {d.onset:g} s, inside the analysed stretch)")
+        else:
+            texts.append(f"{d.kind} (from {d.onset:g} s)")
+    return ", ".join(texts)
+
+
+def _verdict_lines(scene, res: dict, end_s: float = math.inf, analysed_s: float = 0.0) -> list:
     """The verdict, honest about what a line means on a scene without a defect: a healthy
     bearing with clearance shows a line at BPFO, the ball-pass (varying compliance) line, which
-    the detector cannot tell from an outer-race fault (README "Limitations")."""
+    the detector cannot tell from an outer-race fault (README "Limitations"); and about a defect
+    that appears later than the stretch analysed (``end_s``, ``analysed_s``: s of signal)."""
     from .analysis.envelope import DETECTION_THRESHOLD
     from .nodes.monitor_node import FAULT_NAMES
 
     threshold = f"threshold x{DETECTION_THRESHOLD:g} the local floor"
     if scene.defects:
-        defects = ", ".join(d.kind for d in scene.defects)
+        defects = _defect_texts(scene, end_s, analysed_s)
         return [f"verdict: {FAULT_NAMES[res['verdict']]} ({threshold}; the scene's defects: {defects})"]
     if res["verdict"] == "healthy":
         return [f"verdict: healthy ({threshold}; this scene has no defect)"]
@@ -142,7 +160,7 @@ def summarise(scene, tail: dict, node_figures: dict, path, out: str | None = Non
             ln = res["lines"][key]
             mark = "  <- detected" if key != "ftf" and ln.prominence >= DETECTION_THRESHOLD else ""
             lines.append(f"  {label:<6} {ln.expected_hz:>10.2f} {ln.found_hz:>9.2f} {ln.prominence:>8.1f}{mark}")
-        lines += _verdict_lines(scene, res)
+        lines += _verdict_lines(scene, res, f["signal_s"], x.shape[0] / fs)
     if tail["skid_percent"]:
         lines.append(f"skid ratios, mean of the recording's /diagnostics ({f['tier_values']['tier']} tier): "
                      + ", ".join(f"{k.replace('_ratio', '')} {v:.3g} %" for k, v in tail["skid_percent"].items()))

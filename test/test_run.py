@@ -164,3 +164,20 @@ def _shipped_scene_text() -> str:
     from bearing_sim_ros.scene import load_scene
 
     return load_scene("er16k_outer_race").source_text
+
+
+def test_the_verdict_line_says_when_a_scene_defect_appears():
+    """The growing CWRU scene's pit appears at 5 s: a 3 s run's healthy verdict is not set
+    against a defect it never held ("the scene's defects: outer" before), and one whose
+    analysed stretch holds the onset says so; a defect there from the start is named as before."""
+    from bearing_sim_ros import load_scene
+    from bearing_sim_ros.run import _verdict_lines
+
+    growing, fixed = load_scene("cwru_6205_or007_6_growing"), load_scene("cwru_6205_or007_6")
+    healthy = {"verdict": "healthy"}
+    assert _verdict_lines(growing, healthy, 3.0, 3.0) == [
+        "verdict: healthy (threshold x4 the local floor; the scene's defects: outer (from 5 s, after this run))"]
+    assert _verdict_lines(growing, healthy, 8.0, 5.0)[0].endswith("outer (from 5 s, inside the analysed stretch))")
+    assert _verdict_lines(growing, healthy, 60.0, 10.0)[0].endswith("outer (from 5 s))")
+    assert _verdict_lines(fixed, {"verdict": "outer"}, 3.0, 3.0) == [
+        "verdict: outer-race fault (threshold x4 the local floor; the scene's defects: outer)"]
