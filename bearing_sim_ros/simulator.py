@@ -49,6 +49,8 @@ def physics_rate_factor(sample_rate: float) -> int:
     """Physics samples per output sample: 1 at ``PHYSICS_RATE_MIN`` and above, else the smallest
     whole number that takes ``sample_rate`` (Hz) to it."""
     return max(1, math.ceil(PHYSICS_RATE_MIN / float(sample_rate) - 1e-9))
+
+
 # seeds that the API, ``bearing-sim render --seed`` and the node's ``seed`` parameter (an int64,
 # kept to 31 bits) accept: one range, so that a render's seed also runs live
 SEED_RANGE = (0, 2 ** 31 - 1)

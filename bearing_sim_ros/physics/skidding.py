@@ -1585,7 +1585,8 @@ class SkiddingModel:
         defect, None = all at full size (``set_defect_sizes``).  ``ellipse_ball_load`` (N): the
         ball load that sizes a wandering ball defect's contact ellipse; None = this tier's most
         loaded ball at the set-up (a tier switch passes the old tier's on).  ``takes_over_from``:
-        the model of the tier this one takes over from at a switch (``adopt_state``)."""
+        the model of the tier this one takes over from at a switch (``adopt_state``; its
+        ``ellipse_ball_load`` where none is given)."""
         self.scene = scene
         self.seed = int(seed)
         self.sample_rate = float(sample_rate)
@@ -1614,6 +1615,8 @@ class SkiddingModel:
         self.defect_sizes = None if defect_sizes is None else tuple(defect_sizes)
         # a wandering ball defect draws its latitudes from the run's seed, as in the kinematic tier;
         # its contact ellipse is sized below, once the static ball loads are known
+        if ellipse_ball_load is None and takes_over_from is not None:
+            ellipse_ball_load = takes_over_from.ellipse_ball_load
         self.ellipse_ball_load = None if ellipse_ball_load is None else float(ellipse_ball_load)
         self.dtab = active_defect_table(scene.defects, self.defect_sizes, b, seed=self.seed,
                                         ball_load=self.ellipse_ball_load)
@@ -1637,8 +1640,7 @@ class SkiddingModel:
         self._aux0 = np.zeros((self.nb, NAUX))
         self._dg0 = np.zeros((self.nb, NDG))
         load = np.asarray(radial_load, dtype=float)
-        taken_over = takes_over_from is not None and self.ellipse_ball_load is not None
-        if taken_over:
+        if takes_over_from is not None:
             # a tier switch: the state is the old tier's, so no static equilibrium is searched
             # for (two thirds of the set-up: 20-28 ms of a 150-sample switch batch, 7-8 ms
             # without, which the live node spends while batches are due) and the bearing is
@@ -1653,8 +1655,6 @@ class SkiddingModel:
                 self.dtab = active_defect_table(scene.defects, self.defect_sizes, b, seed=self.seed,
                                                 ball_load=self.ellipse_ball_load)
                 self._settle(float(shaft_speed))
-        if takes_over_from is not None and not taken_over:
-            self.adopt_state(takes_over_from)
         self._lin_load = None
         if self.method.kind == SPLIT:
             self._linearise(load)
