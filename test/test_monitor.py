@@ -335,7 +335,9 @@ def test_monitor_scores_itself_against_the_ground_truth_of_a_fault_that_appears(
     late = 0.0 if min(shift, 1.0 - shift) < 0.2 else 1.0
     assert last_none <= appeared + late and appeared < first_outer, (lost, out)
     assert appeared == pytest.approx(onset - lost, abs=0.006), (lost, out)
-    assert called == min(t for t, v, truth in lines if v == "outer" and truth == "outer"), out
+    # the first window that ends after the onset and calls it; its printed truth may still be
+    # none where the windows are shifted (above): 3.00 s with the onset at 2.60 s, 1.40 s lost
+    assert called == min(t for t, v, _truth in lines if v == "outer" and t > appeared), out
     assert delay == pytest.approx(called - appeared, abs=0.011) and 0.0 <= delay <= 2.0, out
     assert all(v == "outer" for t, v, _truth in lines if t >= appeared + 1.0), out
     # the node's own diagnostics: outer exactly when the published signal reaches past the onset
