@@ -13,6 +13,9 @@ import sys
 from .errors import UserError
 
 EXIT_OK, EXIT_INTERNAL, EXIT_USER = 0, 1, 2
+# the commands that run a node: their Ctrl-C and SIGTERM are handled from the first line
+# (teardown.CommandSignals), before the imports of numpy, numba and rclpy, where one was lost
+SIGNAL_COMMANDS = ("node", "run", "monitor", "play")
 # play and report: what several files, or a split recording's name, mean
 SPLIT_FILES_HELP = ("a split recording (the node's record_max_duration / record_max_size) is read as one: "
                     "give its pieces F_000.mcap F_001.mcap ... (in any order, e.g. F_*.mcap) or the name "
@@ -263,8 +266,8 @@ def _dispatch(args, rest) -> int:
 
 def main(argv=None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
-    if argv[:1] == ["node"]:
-        return _node_command(lambda: _main(argv))
+    if argv[:1] and argv[0] in SIGNAL_COMMANDS:
+        return _signal_command(lambda: _main(argv))
     return _main(argv)
 
 
@@ -276,19 +279,20 @@ def node_main() -> int:
 
         return run_node()
 
-    return _node_command(run)
+    return _signal_command(run)
 
 
-def _node_command(run) -> int:
-    """``run()``, a command that runs the node, with Ctrl-C and SIGTERM handled from here on,
+def _signal_command(run) -> int:
+    """``run()``, a command that runs a node, with Ctrl-C and SIGTERM handled from here on,
     before the imports of the parser and the node (teardown.CommandSignals; README "Shutdown and
-    recording").  The node's main ends the process; where it was not reached (a signal before it
-    took it as an exit 0), this does."""
+    recording").  The node's main ends the process; where a command returns (``run``, ``monitor``,
+    a signal before the node's main took it as an exit 0), this ends it: with a signal held
+    during the shutdown, 130 (143), as the shell reports an interrupted command."""
     from .teardown import node_signals
 
     with node_signals() as signals:
         code = run()
-        if signals.first is not None:
+        if signals.first is not None or signals.held:
             signals.exit(code)
     return code
 

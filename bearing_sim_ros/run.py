@@ -14,7 +14,6 @@ recording is.
 from __future__ import annotations
 
 import math
-import signal
 from collections import deque
 from pathlib import Path
 
@@ -22,7 +21,7 @@ import numpy as np
 
 from .errors import UserError
 from .paths import output_file
-from .teardown import signal_handlers, teardown_watchdog
+from .teardown import command_signals, teardown_watchdog
 
 ANALYSIS_MAX_S = 30.0       # s of signal (the end of the recording) that the summary analyses
 
@@ -142,12 +141,19 @@ def summarise(scene, tail: dict, node_figures: dict, path, out: str | None = Non
 
     lines = []
     f = node_figures
-    lines.append(f"bearing-sim run: {scene.name} ({scene.bearing.name}), {f['signal_s']:.2f} s of signal in "
-                 f"{f['wall_s']:.2f} s: real-time factor {f['rtf']:.3f}, {f['overruns']} overruns, "
-                 f"worst lag {1e3 * f['worst_lag']:.1f} ms, {tier_summary(f['tier_values'])}")
+    n_msgs = sum(tail["counts"].values())
+    if f["signal_s"] > 0:
+        lines.append(f"bearing-sim run: {scene.name} ({scene.bearing.name}), {f['signal_s']:.2f} s of signal in "
+                     f"{f['wall_s']:.2f} s: real-time factor {f['rtf']:.3f}, {f['overruns']} overruns, "
+                     f"worst lag {1e3 * f['worst_lag']:.1f} ms, {tier_summary(f['tier_values'])}")
+    else:       # a signal while the node started (a real-time factor of nan said nothing)
+        lines.append(f"bearing-sim run: {scene.name} ({scene.bearing.name}), stopped before the first batch, "
+                     f"{tier_summary(f['tier_values'])}")
     fs = tail["sample_rate"]
     x = tail["accel"]
-    if not fs or x.shape[0] < fs:
+    if not n_msgs:
+        pass
+    elif not fs or x.shape[0] < fs:
         lines.append("envelope analysis: less than 1 s of signal recorded, nothing to analyse")
     else:
         speed = tail["shaft_speed"] if tail["shaft_speed"] is not None else scene.shaft_speed
@@ -164,12 +170,12 @@ def summarise(scene, tail: dict, node_figures: dict, path, out: str | None = Non
     if tail["skid_percent"]:
         lines.append(f"skid ratios, mean of the recording's /diagnostics ({f['tier_values']['tier']} tier): "
                      + ", ".join(f"{k.replace('_ratio', '')} {v:.3g} %" for k, v in tail["skid_percent"].items()))
-    n_msgs = sum(tail["counts"].values())
     lines.append(f"recording: {f['files']} ({f['sizes']}, {n_msgs} messages on "
                  f"{len(tail['counts'])} topics, {f['dropped']} dropped)")
-    folder = str(Path(out or path).with_suffix("")) + "_report"
-    lines.append(f"  next: bearing-sim report {path} --out {folder}"
-                 f"   |   bearing-sim play {path}")
+    if n_msgs:                  # report and play refuse a recording without messages
+        folder = str(Path(out or path).with_suffix("")) + "_report"
+        lines.append(f"  next: bearing-sim report {path} --out {folder}"
+                     f"   |   bearing-sim play {path}")
     return "\n".join(lines)
 
 
@@ -179,8 +185,9 @@ def run_command(args) -> int:
     import rclpy
     from rclpy.executors import ExternalShutdownException
     from rclpy.parameter import Parameter
+    from rclpy.signals import SignalHandlerOptions
 
-    from .nodes.bearing_sim_node import BearingSimNode, build_node, log_recording, spin_node
+    from .nodes.bearing_sim_node import BearingSimNode, build_node, log_recording, say_held, spin_node
     from .messages import BATCH_DURATION
     from .recording.recorder import files_text, sizes_text, split_error
     from .recording.render import tier_values
@@ -200,15 +207,23 @@ def run_command(args) -> int:
                  Parameter("record_max_duration", value=split[0]), Parameter("record_max_size", value=split[1])]
     node = None
     error = None
+    # the command's handlers from its first line (cli.SIGNAL_COMMANDS), as the node's: never a
+    # KeyboardInterrupt in the middle of finalising or reading the recording, and a Ctrl-C while
+    # numpy, numba and rclpy were imported no longer went missing (a run until Ctrl-C ran on)
+    signals = command_signals()
+    signals.on_held = say_held(lambda: node)
     try:
-        rclpy.init(args=[])
+        signals.check()
+        rclpy.init(args=[], signal_handler_options=SignalHandlerOptions.NO)
         node = build_node(lambda: BearingSimNode(record_argument="--out", parameter_overrides=overrides))
+        signals.check()
         print(f"bearing-sim run: {scene.name} in real time "
               f"{'until Ctrl-C' if duration == 0 else f'for {duration:g} s'}, recording to {out}", flush=True)
-        spin_node(node)
+        spin_node(node, signals)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
+        signals.shutting_down()         # a signal from here on is held, said, and exits 130 / 143
         if node is not None:
             node.stop()
             error = node.error
@@ -234,8 +249,7 @@ def run_command(args) -> int:
     if not figures["ok"]:
         raise UserError(f"--out = {out!r}: {figures['error']}")
     # the recording is complete.  A second Ctrl-C while its tail is read for the summary (about a
-    # second) surfaced inside rclpy's deserialiser as a TypeError traceback: it waits instead
-    with signal_handlers({signal.SIGINT: signal.SIG_IGN}):
-        tail = _record_tail(figures["paths"], ANALYSIS_MAX_S)
-        print(summarise(scene, tail, figures, recording_argument(out, any(split)), out), flush=True)
+    # second) surfaced inside rclpy's deserialiser as a TypeError traceback: it is held (130)
+    tail = _record_tail(figures["paths"], ANALYSIS_MAX_S)
+    print(summarise(scene, tail, figures, recording_argument(out, any(split)), out), flush=True)
     return 0

@@ -10,7 +10,8 @@ holds the GIL.
 
 And ``signal_handlers``: handlers for a block of a command's shutdown (``render`` finishing at a
 batch's end, ``render`` and ``run`` holding Ctrl-C while a recording is finalised or read);
-``CommandSignals``: Ctrl-C and SIGTERM of the node's command from its first line to its exit.
+``CommandSignals``: Ctrl-C and SIGTERM of a command that runs a node (``node``, ``run``,
+``monitor``, ``play``) from its first line to its exit.
 """
 from __future__ import annotations
 
@@ -53,8 +54,9 @@ def signal_handlers(handlers: dict):
 
 
 class CommandSignals:
-    """Ctrl-C and SIGTERM of a command that runs the node (``bearing-sim node``,
-    ``bearing_sim_node``), from its first line to the end of the process, in the main thread.
+    """Ctrl-C and SIGTERM of a command that runs a node (``bearing-sim node``, ``bearing_sim_node``,
+    ``run``, ``monitor``, ``play``), from its first line to the end of the process, in the main
+    thread.
 
     The node's shutdown must run to its end (a KeyboardInterrupt in the middle of finalising a
     recording lost the file), and a signal must not be lost on the way: before, one in the first
@@ -64,8 +66,9 @@ class CommandSignals:
     0).  So one handler serves the whole life of the process, and it never raises (a
     KeyboardInterrupt raised into an import came out of numpy as an ImportError):
 
-    * the first signal is noted (``first``): the start-up ends at its next step (``check()``,
-      between imports, ``rclpy.init`` and the node's construction), the command's loop ends on it;
+    * the first signal is noted (``first``, and ``stopped`` set for a loop that waits on an
+      event): the start-up ends at its next step (``check()``, between imports, ``rclpy.init`` and
+      the node's construction), the command's loop ends on it;
     * after the first signal, or from ``shutting_down()`` on (``duration`` ended): every signal is
       noted in ``held`` and said (``on_held(signum, done)``);
     * ``exit(status)``: the process ends there (``os._exit``, once the command has closed and
@@ -75,6 +78,7 @@ class CommandSignals:
 
     def __init__(self):
         self.first = None           # the signal that ended the run
+        self.stopped = threading.Event()    # set with ``first``
         self.held = []              # signals during the shutdown
         self.on_held = None         # on_held(signum, done): say it; done = the process is exiting
         self._stopping = False
@@ -84,6 +88,7 @@ class CommandSignals:
         if self.first is None and not self._stopping:
             self.first = signum
             self._stopping = True
+            self.stopped.set()
             return
         self.held.append(signum)
         if self.on_held is not None:
@@ -139,9 +144,9 @@ def command_signals() -> CommandSignals:
 
 @contextmanager
 def node_signals():
-    """``command_signals()`` for the block, the first thing a node command does; the handlers
-    before it are put back after it, which only a command that did not run the node reaches
-    (``--help``, a mistake in its arguments): the node's ``main`` ends the process itself."""
+    """``command_signals()`` for the block, the first thing a command that runs a node does; the
+    handlers before it are put back after it, which only a command that did not run its node
+    reaches (``--help``, a mistake in its arguments)."""
     global _COMMAND_SIGNALS
     saved = {sig: signal.getsignal(sig) for sig in EXIT_INTERRUPTED}
     try:

@@ -599,6 +599,38 @@ def test_a_signal_in_the_first_moments_ends_the_node_quietly_with_status_0(ros_e
             node.close()
 
 
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_a_signal_in_the_first_moments_ends_run_monitor_and_play(ros_env, bearing_sim_exe, tmp_path, sig):
+    """The other commands that run a node, each in a form that runs on until stopped: ``run
+    --duration 0``, ``monitor`` without ``--count``, ``play --loop``.  0.1 or 0.3 s after launch,
+    while Python imported numpy, numba and rclpy, a SIGTERM killed them (143, ``run`` with its
+    recording about to be opened), and a Ctrl-C sent to one started in the background by a
+    script (SIGINT ignored until rclpy's handler) went missing: they ran on.  Now their handlers
+    come first, as the node's: status 0, no traceback, and ``run``'s recording, where it opened
+    one, is finalised."""
+    from bearing_sim_ros.recording.reader import open_recording
+
+    played = tmp_path / "played.mcap"
+    subprocess.run([bearing_sim_exe, "render", "er16k_healthy", "--duration", "0.5", "--out", str(played)],
+                   env=ros_env, check=True, capture_output=True, timeout=120)
+    commands = {"run": ("run", "--duration", "0", "--out", str(tmp_path / "run.mcap")),
+                "monitor": ("monitor",),
+                "play": ("play", "--loop", "--wait", "0", str(played))}
+    for name, command in commands.items():
+        for delay in (0.1, 0.3):
+            proc = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / f"{name}_{delay}.log", command=command)
+            try:
+                time.sleep(delay)
+                proc.send(sig)
+                status = proc.wait(30)
+                assert status == 0 and "Traceback" not in proc.output(), (name, delay, status, proc.output())
+            finally:
+                proc.close()
+            if name == "run" and (tmp_path / "run.mcap").exists():
+                open_recording(tmp_path / "run.mcap").close()     # UserError if the footer is missing
+                (tmp_path / "run.mcap").unlink()
+
+
 def test_a_second_ctrl_c_while_the_process_still_exits_is_not_lost(started, tmp_path):
     """A second Ctrl-C 0.15-0.3 s after the node's last line (`recording ...: N messages`) came
     while the process still exited (0.4 s of the middleware's and numba's teardown, after the

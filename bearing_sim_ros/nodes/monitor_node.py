@@ -57,7 +57,7 @@ from rclpy.node import Node
 from .. import ground_truth
 from ..analysis.envelope import DETECTION_THRESHOLD, FAULT_LINES, diagnose
 from ..messages import TOPIC_ACCEL, TOPIC_DIAGNOSTICS, TOPIC_STATE, waveform_qos
-from ..teardown import teardown_watchdog
+from ..teardown import command_signals, teardown_watchdog
 from .bearing_sim_node import NODE_NAME as SIMULATOR_NODE
 from ..waveform import NS, from_pointcloud2
 
@@ -353,20 +353,26 @@ def main(args, ros_args=()) -> int:
     argument.  ``ros_args``: from ``--ros-args`` on (a namespace, remaps)."""
     from rclpy._rclpy_pybind11 import RCLError, UnknownROSArgsError
     from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+    from rclpy.signals import SignalHandlerOptions
 
     from ..scene import load_scene
     from .bearing_sim_node import ros_arguments_error
 
     scene = load_scene(getattr(args, "scene", None) or DEFAULT_SCENE)   # UserError: exit 2
+    # the command's handlers from its first line (cli.SIGNAL_COMMANDS): a Ctrl-C while numpy and
+    # rclpy were imported went missing, and the monitor waited on for tables
+    signals = command_signals()
     node = executor = None
     try:
         try:
-            rclpy.init(args=["bearing-sim monitor", *ros_args])
+            signals.check()
+            rclpy.init(args=["bearing-sim monitor", *ros_args], signal_handler_options=SignalHandlerOptions.NO)
             node = MonitorNode(scene, args.window, args.count, simulator=getattr(args, "simulator", None))
         except (RCLError, UnknownROSArgsError) as exc:
             if isinstance(exc, RCLError) and rclpy.ok():
                 raise                   # not the arguments: rclpy.init went through
             raise ros_arguments_error(exc) from None
+        signals.check()
         print(f"monitor: {scene.bearing.name} ({scene.name}), envelope analysis every {args.window:g} s "
               f"of {node.resolve_topic_name(TOPIC_ACCEL)}, ground truth from /diagnostics "
               f"{node.truth_status!r}", flush=True)
@@ -380,7 +386,7 @@ def main(args, ros_args=()) -> int:
             raise ExternalShutdownException() from None     # Ctrl-C before the first spin
         executor.add_node(node)
         t_start = time.monotonic()
-        while rclpy.ok() and not node.done:
+        while rclpy.ok() and not node.done and signals.first is None:
             executor.spin_once(timeout_sec=0.2)
             if not node.window.samples and not node.verdicts and time.monotonic() - t_start > 5.0 \
                     and not node._warned:
@@ -390,6 +396,7 @@ def main(args, ros_args=()) -> int:
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
+        signals.shutting_down()         # a signal from here on is held: exit 130 / 143 after the lines
         with teardown_watchdog():
             if executor is not None:
                 executor.shutdown(timeout_sec=0)

@@ -35,7 +35,6 @@ A test or pipeline that needs every message even after two missed periods passes
 """
 from __future__ import annotations
 
-import os
 import sys
 import threading
 import time
@@ -272,25 +271,18 @@ def _sleep_until(target: float, running) -> None:
 
 def play_command(args) -> int:
     """CLI entry: ``bearing-sim play F.mcap [F_001.mcap ...] [--rate X] [--loop] [--clock] [--wait S]``.
-    Ctrl-C and SIGTERM stop playback cleanly (exit status 0); on success the process ends here
-    (``os._exit(0)``)."""
-    import signal
+    Ctrl-C and SIGTERM stop playback cleanly (exit status 0; 130 / 143 for one more while it
+    shuts down); on success the process ends here (``CommandSignals.exit``)."""
+    from ..teardown import command_signals
 
-    stop = threading.Event()
-
-    def _stop(signum, frame):
-        # a flag, not an exception: an exception raised inside rclpy's C calls comes out as a
-        # TypeError; the loop checks the flag between messages and ends cleanly
-        stop.set()
-
-    if threading.current_thread() is threading.main_thread():
-        signal.signal(signal.SIGINT, _stop)
-        signal.signal(signal.SIGTERM, _stop)
+    # the command's handlers from its first line (cli.SIGNAL_COMMANDS): a flag, not an
+    # exception (one raised inside rclpy's C calls comes out as a TypeError), which the loop
+    # checks between messages
+    signals = command_signals()
     play(args.file, rate=float(args.rate), loop=bool(args.loop), clock=bool(args.clock),
-         wait_for_subscribers=float(args.wait), stop=stop)
+         wait_for_subscribers=float(args.wait), stop=signals.stopped)
     # everything is published, the node destroyed and the recording closed: skip the
     # interpreter's finalisation, where the middleware's static objects and threads are torn
     # down, so that it cannot be where `play` hangs (see module ``teardown``)
-    sys.stdout.flush()
-    sys.stderr.flush()
-    os._exit(0)
+    signals.shutting_down()
+    signals.exit(0)
