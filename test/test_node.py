@@ -144,6 +144,8 @@ def test_oversample_description_names_each_tiers_default():
      ["record_max_size = 1000 bytes: 0 (one file) or at least 1000000 (1 MB)"]),
     ({"record_max_size": 0.5, "real_time": False, "duration": 0.05},
      ["record_max_size = 0.5: wrong type, expected a whole number"]),
+    # given, a state_rate beyond one per batch is refused as it is (not given: one per batch, below)
+    ({"batch_duration": 0.1, "state_rate": 50.0}, ["state_rate = 50.0 Hz: at most one state per batch"]),
 ])
 def test_bad_parameters_end_the_node_with_one_line(ros_env, bearing_sim_exe, params, words):
     args = [bearing_sim_exe, "node", "--ros-args"]
@@ -156,6 +158,20 @@ def test_bad_parameters_end_the_node_with_one_line(ros_env, bearing_sim_exe, par
     assert "Traceback" not in r.stderr + r.stdout
     for w in words:
         assert w in lines[0]
+
+
+def test_a_longer_batch_alone_runs_with_one_state_per_batch(ros_env, bearing_sim_exe, tmp_path):
+    """``-p batch_duration:=0.1`` without ``state_rate``: the default 50 Hz is more than one state
+    per batch, and the node ended with ``error: state_rate = 50.0 Hz: ...``, a parameter its user
+    never set.  It runs, with one state per batch, and says so in ``ros2 param get`` terms (the
+    recorded parameters)."""
+    r = subprocess.run([bearing_sim_exe, "node", "--ros-args", "-p", "batch_duration:=0.1", "-p", "real_time:=false",
+                        "-p", "duration:=1.0", "-p", "record:=live.mcap"],
+                       cwd=tmp_path, env=ros_env, capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    topics, meta = read_recording(tmp_path / "live.mcap")
+    assert json.loads(meta["bearing_sim"]["parameters"])["state_rate"] == 10.0
+    assert len(topics["/state"]) == 10 and len(topics["/accel"]) == 10
 
 
 def test_a_record_path_that_is_the_scene_file_or_not_a_recording_ends_the_node_with_one_line(

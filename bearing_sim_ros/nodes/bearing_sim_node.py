@@ -156,7 +156,8 @@ def _descriptors():
                             f"chosen automatically")),
         "publish_clock": (False, d(T.PARAMETER_BOOL, "publish /clock with the simulation time")),
         "frame_id": ("", d(T.PARAMETER_STRING, "frame of the waveform tables; empty = the scene's sensor frame", True)),
-        "state_rate": (STATE_RATE, d(T.PARAMETER_DOUBLE, "JointState rate, Hz; 0 = off", False, *STATE_RATE_RANGE,
+        "state_rate": (STATE_RATE, d(T.PARAMETER_DOUBLE, "JointState rate, Hz; 0 = off; not given, one per "
+                                     "batch where batches are longer than 20 ms", False, *STATE_RATE_RANGE,
                                      "at most one per batch: state_rate <= 1 / batch_duration")),
         "compute_ahead": (0.05, d(T.PARAMETER_DOUBLE, "compute batches up to this long before they are "
                                   "due, s: absorbs scheduling hiccups; a command takes effect this much "
@@ -201,6 +202,7 @@ class BearingSimNode(Node):
                     self.get_logger().warning(f"parameter {name}: not a {NODE_NAME} parameter, ignored; "
                                               f"its parameters are {', '.join(self._cfg)}")
             cfg = self._cfg
+            self._state_rate_within_batches()
             reason = check_config(cfg)
             if reason:
                 raise UserError(reason)
@@ -233,6 +235,21 @@ class BearingSimNode(Node):
                 allowed = _allowed(desc)
                 raise UserError(f"parameter {name} = {given!r}: allowed range is {allowed}") from None
             self._cfg[name] = value
+
+    def _state_rate_within_batches(self):
+        """``state_rate`` not given: its default (50 Hz) is more than one state per batch for
+        batches longer than 20 ms, and ``-p batch_duration:=0.1`` alone ended the node with an
+        error about a parameter its user never set.  Then one state per batch.  Given, it is
+        checked as it is."""
+        from rclpy.parameter import Parameter
+
+        cfg = self._cfg
+        given = getattr(self, "_parameter_overrides", {})
+        if "state_rate" in given or cfg["state_rate"] * cfg["batch_duration"] <= 1.0:
+            return
+        rate = 1.0 / cfg["batch_duration"]
+        self.set_parameters([Parameter("state_rate", value=rate)])
+        cfg["state_rate"] = rate
 
     def _on_set_parameters(self, params):
         """Validate a run-time change against the whole configuration (read-only parameters
