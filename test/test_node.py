@@ -258,6 +258,32 @@ def test_recorded_command_names_a_scene_file_by_its_absolute_path(ros_env, beari
     assert f"scene:={tmp_path / 'rig.yaml'}" in argv and "my_rig" not in " ".join(argv)
 
 
+@pytest.mark.parametrize("ros_args", [[]], ids=["plain"])
+def test_the_recorded_command_runs_and_reproduces_the_recording(ros_env, bearing_sim_exe, tmp_path, ros_args):
+    """The recording's command, split as a shell splits it and run in another folder, records the
+    same topics and tables.  It wrote ``-p frame_id:=''`` (the default, empty), which a shell
+    passes as ``frame_id:=`` and rcl refuses (exit 2); a record path with a space was not quoted."""
+    first, again = tmp_path / "first", tmp_path / "again"
+    first.mkdir()
+    again.mkdir()
+    r = subprocess.run([bearing_sim_exe, "node", "--ros-args", *ros_args, "-p", "real_time:=false",
+                        "-p", "duration:=1.0", "-p", "record:=my run.mcap"],
+                       cwd=first, env=ros_env, capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    topics, meta = read_recording(first / "my run.mcap")
+    argv = shlex.split(json.loads(meta["bearing_sim"]["parameters"])["command"])
+    assert argv[:2] == ["bearing-sim", "node"], argv
+    r = subprocess.run([bearing_sim_exe, *argv[1:]], cwd=again, env=ros_env, capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    topics_again, _meta = read_recording(again / "my run.mcap")
+    assert sorted(topics_again) == sorted(topics), (sorted(topics), sorted(topics_again))
+    status = {m.status[0].name for recorded in (topics, topics_again) for _t, m in recorded["/diagnostics"]}
+    assert len(status) == 1, status
+    tables = [[bytes(m.data) for _t, m in recorded[topic]]
+              for recorded in (topics, topics_again) for topic in recorded if topic.endswith("accel")]
+    assert len(tables) == 2 and len(tables[0]) == 100 and tables[0] == tables[1]
+
+
 # ---- the stream ---------------------------------------------------------------------------------
 def test_stream_is_15khz_contiguous_and_paced(started, listener):
     """10 s of live tables: 15 kHz from the stamps, every table continues the previous one to the

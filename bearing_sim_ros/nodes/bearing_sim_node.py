@@ -342,10 +342,10 @@ class BearingSimNode(Node):
         params = dict(cfg)
         # the scene as a shipped name or an absolute path: a relative path or the name inside a
         # scene file would not load from another directory
-        command_cfg = dict(cfg, scene=shlex.quote(scene_argument(self.scene)))
+        command_cfg = dict(cfg, scene=scene_argument(self.scene))
         params.update({"mode": "live",
                        "command": "bearing-sim node --ros-args " + " ".join(
-                           f"-p {k}:={_param_text(v)}" for k, v in sorted(command_cfg.items()))})
+                           f"-p {k}:={_command_text(v)}" for k, v in sorted(command_cfg.items()))})
         meta = recording_metadata(self.scene, params, int(cfg["seed"]), self.sim.selection,
                                   topics={role: ent.topic_name for role, ent, _qos in topics})
         text = self.scene.source_text
@@ -794,6 +794,16 @@ def _recording_text(cfg) -> str:
         return cfg["record"]
     first, second = (rotated_path(Path(cfg["record"]), k) for k in (0, 1))
     return f"{cfg['record']} in files of at most {' or '.join(limits)}: {first}, {second}, ..."
+
+
+def _command_text(value) -> str:
+    """``value`` as a shell command line gives it to ``-p name:=``: a string shell-quoted (a
+    path with a space), an empty one as ``"''"``: the shell makes ``frame_id:=''`` of it, which
+    rcl reads as an empty string (``frame_id:=''`` typed in a shell is ``frame_id:=``, which rcl
+    refuses: every recorded command, with its default frame_id, failed so)."""
+    if isinstance(value, str):
+        return shlex.quote(value) if value else "\"''\""
+    return _param_text(value)
 
 
 def _param_text(value) -> str:
