@@ -258,11 +258,14 @@ def test_recorded_command_names_a_scene_file_by_its_absolute_path(ros_env, beari
     assert f"scene:={tmp_path / 'rig.yaml'}" in argv and "my_rig" not in " ".join(argv)
 
 
-@pytest.mark.parametrize("ros_args", [[]], ids=["plain"])
+@pytest.mark.parametrize("ros_args", [[], ["-r", "__ns:=/rig1", "-r", "__node:=left", "-r", "accel:=vibration"]],
+                         ids=["plain", "namespace, name and a remap"])
 def test_the_recorded_command_runs_and_reproduces_the_recording(ros_env, bearing_sim_exe, tmp_path, ros_args):
     """The recording's command, split as a shell splits it and run in another folder, records the
     same topics and tables.  It wrote ``-p frame_id:=''`` (the default, empty), which a shell
-    passes as ``frame_id:=`` and rcl refuses (exit 2); a record path with a space was not quoted."""
+    passes as ``frame_id:=`` and rcl refuses (exit 2); a record path with a space was not quoted.
+    And it held the parameters alone: a node of rig1, renamed and remapped, recorded a command that
+    published /accel, /state, ... under the status ``bearing_sim: simulator``."""
     first, again = tmp_path / "first", tmp_path / "again"
     first.mkdir()
     again.mkdir()
@@ -278,10 +281,10 @@ def test_the_recorded_command_runs_and_reproduces_the_recording(ros_env, bearing
     topics_again, _meta = read_recording(again / "my run.mcap")
     assert sorted(topics_again) == sorted(topics), (sorted(topics), sorted(topics_again))
     status = {m.status[0].name for recorded in (topics, topics_again) for _t, m in recorded["/diagnostics"]}
-    assert len(status) == 1, status
-    tables = [[bytes(m.data) for _t, m in recorded[topic]]
-              for recorded in (topics, topics_again) for topic in recorded if topic.endswith("accel")]
-    assert len(tables) == 2 and len(tables[0]) == 100 and tables[0] == tables[1]
+    assert len(status) == 1 and ("/rig1/vibration" in topics) == bool(ros_args), (status, sorted(topics))
+    accel = json.loads(meta["bearing_sim"]["topics"])["accel"]
+    tables = [[bytes(m.data) for _t, m in recorded[accel]] for recorded in (topics, topics_again)]
+    assert len(tables[0]) == 100 and tables[0] == tables[1]
 
 
 # ---- the stream ---------------------------------------------------------------------------------

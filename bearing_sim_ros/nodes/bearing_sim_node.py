@@ -344,8 +344,8 @@ class BearingSimNode(Node):
         # scene file would not load from another directory
         command_cfg = dict(cfg, scene=scene_argument(self.scene))
         params.update({"mode": "live",
-                       "command": "bearing-sim node --ros-args " + " ".join(
-                           f"-p {k}:={_command_text(v)}" for k, v in sorted(command_cfg.items()))})
+                       "command": "bearing-sim node --ros-args " + " ".join(self._ros_arguments(topics) + [
+                           f"-p {k}:={_command_text(v)}" for k, v in sorted(command_cfg.items())])})
         meta = recording_metadata(self.scene, params, int(cfg["seed"]), self.sim.selection,
                                   topics={role: ent.topic_name for role, ent, _qos in topics})
         text = self.scene.source_text
@@ -361,6 +361,22 @@ class BearingSimNode(Node):
         except BaseException:
             self.recorder.close()        # not a file that looks like a recording and holds none
             raise
+
+    def _ros_arguments(self, topics) -> list:
+        """The ROS arguments besides the node's parameters that the recorded command needs to give
+        the same topics: namespace, node name (the diagnostics' status is named after both), each
+        remapped topic of ``topics`` ((role, entity, qos)), and ``use_sim_time``.  Without them a
+        node of rig1 (``-r __ns:=/rig1``) recorded a command that published on /accel."""
+        ns = self.get_namespace()
+        out = [] if ns == "/" else [f"-r __ns:={ns}"]
+        if self.get_name() != NODE_NAME:
+            out.append(f"-r __node:={self.get_name()}")
+        for role, ent, _qos in topics:
+            if ent.topic_name != (role if role.startswith("/") else f"{ns.rstrip('/')}/{role}"):
+                out.append(f"-r {role}:={ent.topic_name}")
+        if self.get_parameter("use_sim_time").value:
+            out.append("-p use_sim_time:=true")
+        return out
 
     # ---- inputs (executor thread) ------------------------------------------------------------
     def _reject(self, key, reason):
