@@ -566,6 +566,27 @@ def test_signal_exits_0_with_a_readable_recording(started, tmp_path, sig):
     assert '"record"' in meta["bearing_sim"]["parameters"]
 
 
+def test_a_second_node_given_the_same_record_path_ends_with_one_line_and_the_first_records_whole(
+        started, ros_env, bearing_sim_exe, tmp_path):
+    """Two rigs given one ``record`` path (``/**: record: run.mcap`` in a parameters file for both)
+    both wrote into the one file and both logged ``recording run.mcap: 1804 messages`` and exited
+    0: the file held one rig's recording, the other's was lost.  The second now ends at start with
+    one line, exit 2, and the first's file is whole."""
+    out = tmp_path / "run.mcap"
+    left = started({"record": str(out)}, name="left")
+    left.wait_for_output("recording " + str(out), 30)
+    r = subprocess.run([bearing_sim_exe, "node", "--ros-args", "-r", "__ns:=/right", "-p", f"record:={out}",
+                        "-p", "duration:=2.0"], env=ros_env, capture_output=True, text=True, timeout=60)
+    assert_one_error_line(r, [f"record = '{out}'", "another recording is being written to this file"])
+    time.sleep(1.0)
+    left.send(signal.SIGINT)
+    assert left.wait(20) == 0, left.output()
+    topics, _meta = read_recording(out)
+    assert set(topics) >= {"/accel", "/state"} and not any(t.startswith("/right") for t in topics), sorted(topics)
+    stamps = np.array([m.header.stamp.sec * NS + m.header.stamp.nanosec for _t, m in topics["/accel"]], dtype=np.int64)
+    assert len(stamps) >= 100 and np.all(np.diff(stamps) == BATCH_NS)
+
+
 def test_a_second_ctrl_c_while_the_recording_is_finalised_keeps_it_and_exits_130(started, tmp_path):
     """A second Ctrl-C while the node finalised its recording raised KeyboardInterrupt into the
     wait for the writer: the process ended at once (status 0 by ``bearing-sim node``, a traceback
