@@ -546,7 +546,9 @@ def test_a_command_across_the_tier_boundary_switches_tiers_and_says_so(started, 
 
 
 # ---- shutdown and recording ---------------------------------------------------------------------
-@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+# SIGHUP: the terminal closed or the SSH session dropped; it killed the node (129) and its
+# recording had no footer
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP], ids=["SIGINT", "SIGTERM", "SIGHUP"])
 def test_signal_exits_0_with_a_readable_recording(started, tmp_path, sig):
     out = tmp_path / "live.mcap"
     node = started({"scene": "er16k_outer_race", "record": str(out)})
@@ -585,6 +587,31 @@ def test_a_second_node_given_the_same_record_path_ends_with_one_line_and_the_fir
     assert set(topics) >= {"/accel", "/state"} and not any(t.startswith("/right") for t in topics), sorted(topics)
     stamps = np.array([m.header.stamp.sec * NS + m.header.stamp.nanosec for _t, m in topics["/accel"]], dtype=np.int64)
     assert len(stamps) >= 100 and np.all(np.diff(stamps) == BATCH_NS)
+
+
+def test_a_node_started_with_hangups_ignored_runs_on_through_one(ros_env, bearing_sim_exe, tmp_path):
+    """``nohup bearing-sim node ...``: a hangup ignored from the start stays ignored (the node
+    takes SIGHUP as SIGTERM otherwise): the node records its whole ``duration``."""
+    out = tmp_path / "live.mcap"
+    log = tmp_path / "node.log"
+    with open(log, "w") as f:
+        proc = subprocess.Popen([bearing_sim_exe, "node", "--ros-args", "-p", "duration:=3.0", "-p", f"record:={out}"],
+                                env=ros_env, stdout=f, stderr=subprocess.STDOUT, start_new_session=True,
+                                preexec_fn=lambda: signal.signal(signal.SIGHUP, signal.SIG_IGN))
+        try:
+            deadline = time.monotonic() + FIRST_TABLE_S
+            while "recording " + str(out) not in log.read_text() and time.monotonic() < deadline:
+                assert proc.poll() is None, log.read_text()
+                time.sleep(0.1)
+            time.sleep(0.5)
+            proc.send_signal(signal.SIGHUP)
+            assert proc.wait(30) == 0, log.read_text()
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+    topics, _meta = read_recording(out)
+    assert len(topics["/accel"]) == 300, (len(topics["/accel"]), log.read_text())
 
 
 def test_a_second_ctrl_c_while_the_recording_is_finalised_keeps_it_and_exits_130(started, tmp_path):

@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import math
 import shlex
-import signal
 import sys
 import threading
 import time
@@ -41,7 +40,7 @@ from rclpy.node import Node
 
 from ..errors import UserError
 from ..limits import LOAD_MULTIPLE_C0, NDM_LIMIT, STATIC_F0, InputLimits  # noqa: F401 (names kept here)
-from ..teardown import EXIT_INTERRUPTED, command_signals, teardown_watchdog
+from ..teardown import EXIT_INTERRUPTED, SIGNAL_NAMES, command_signals, teardown_watchdog
 
 NODE_NAME = "bearing_sim"
 OVERSAMPLE_ZERO = "each tier's own"       # what the parameter oversample's default 0 means
@@ -863,7 +862,7 @@ def say_held(node):
         if said:
             return                  # once: a user who presses Ctrl-C again reads it once
         said.append(signum)
-        how = "Ctrl-C" if signum == signal.SIGINT else "SIGTERM"
+        how = SIGNAL_NAMES[signum]
         if done:
             what = "has shut down and exits"
         else:
