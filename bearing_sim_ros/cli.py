@@ -95,7 +95,7 @@ def build_parser() -> argparse.ArgumentParser:
                        usage="%(prog)s [-h] [--scene S] [--ros-args ...]",
                        formatter_class=argparse.RawDescriptionHelpFormatter,
                        epilog="ROS arguments follow --ros-args, for example\n"
-                              "  bearing-sim node --scene er16k_healthy --ros-args -p duration:=10 "
+                              "  bearing-sim node --scene er16k_healthy --ros-args -p duration:=10.0 "
                               "-p record:=run.mcap\n"
                               "The node's parameters (sample_rate, duration, record, fidelity, seed, ...):\n"
                               "README.md, \"The live node\", or `ros2 param describe /bearing_sim <name>`.")

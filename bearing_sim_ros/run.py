@@ -14,6 +14,7 @@ recording is.
 from __future__ import annotations
 
 import math
+import shlex
 from collections import deque
 from pathlib import Path
 
@@ -173,7 +174,9 @@ def summarise(scene, tail: dict, node_figures: dict, path, out: str | None = Non
     lines.append(f"recording: {f['files']} ({f['sizes']}, {n_msgs} messages on "
                  f"{len(tail['counts'])} topics, {f['dropped']} dropped)")
     if n_msgs:                  # report and play refuse a recording without messages
-        folder = str(Path(out or path).with_suffix("")) + "_report"
+        # shell-quoted, to paste as they are: a path with a space split into two arguments
+        folder = shlex.quote(str(Path(out or path).with_suffix("")) + "_report")
+        path = shlex.quote(str(path))
         lines.append(f"  next: bearing-sim report {path} --out {folder}"
                      f"   |   bearing-sim play {path}")
     return "\n".join(lines)

@@ -23,7 +23,10 @@ import threading
 from contextlib import contextmanager
 
 TEARDOWN_TIMEOUT = 30.0      # s: the longest the teardown may take
-EXIT_INTERRUPTED = {signal.SIGINT: 130, signal.SIGTERM: 143}    # 128 + the signal, as the shell says
+# 128 + the signal, as the shell says.  SIGHUP: the terminal closed or the SSH session dropped under
+# a node that records; Python's default killed it there (129) and the file had no footer
+EXIT_INTERRUPTED = {signal.SIGINT: 130, signal.SIGTERM: 143, signal.SIGHUP: 129}
+SIGNAL_NAMES = {signal.SIGINT: "Ctrl-C", signal.SIGTERM: "SIGTERM", signal.SIGHUP: "SIGHUP"}
 
 
 @contextmanager
@@ -54,9 +57,9 @@ def signal_handlers(handlers: dict):
 
 
 class CommandSignals:
-    """Ctrl-C and SIGTERM of a command that runs a node (``bearing-sim node``, ``bearing_sim_node``,
-    ``run``, ``monitor``, ``play``), from its first line to the end of the process, in the main
-    thread.
+    """Ctrl-C, SIGTERM and SIGHUP of a command that runs a node (``bearing-sim node``,
+    ``bearing_sim_node``, ``run``, ``monitor``, ``play``), from its first line to the end of the
+    process, in the main thread.
 
     The node's shutdown must run to its end (a KeyboardInterrupt in the middle of finalising a
     recording lost the file), and a signal must not be lost on the way: before, one in the first
@@ -138,7 +141,9 @@ def command_signals() -> CommandSignals:
         _COMMAND_SIGNALS = CommandSignals()
         if threading.current_thread() is threading.main_thread():
             for sig in EXIT_INTERRUPTED:
-                signal.signal(sig, _COMMAND_SIGNALS.handle)
+                # a hangup ignored from the start (``nohup``) stays ignored: run to survive it
+                if sig != signal.SIGHUP or signal.getsignal(sig) != signal.SIG_IGN:
+                    signal.signal(sig, _COMMAND_SIGNALS.handle)
     return _COMMAND_SIGNALS
 
 

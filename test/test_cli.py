@@ -54,7 +54,22 @@ def test_node_help_says_where_ros_arguments_go(capsys):
     assert cli.main(["node", "--help"]) == 0
     out = capsys.readouterr().out
     assert "[--ros-args ...]" in out.splitlines()[0]
-    assert "--ros-args -p duration:=10" in out
+    assert "--ros-args -p duration:=10.0" in out
+
+
+def test_the_node_help_example_runs(ros_env, bearing_sim_exe, tmp_path, capsys):
+    """The example of ``bearing-sim node --help`` runs as printed (here as fast as possible).  It
+    gave ``-p duration:=10``, which ROS types as an integer, and the node refused it: ``error:
+    parameter duration = 10: wrong type, expected a floating-point number such as 1.0``."""
+    import shlex
+    import subprocess
+
+    assert cli.main(["node", "--help"]) == 0
+    example = next(ln for ln in capsys.readouterr().out.splitlines() if ln.strip().startswith("bearing-sim node "))
+    r = subprocess.run([bearing_sim_exe, *shlex.split(example)[1:], "-p", "real_time:=false"],
+                       cwd=tmp_path, env=ros_env, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert (tmp_path / "run.mcap").stat().st_size > 0
 
 
 def test_monitor_help_says_where_ros_arguments_go(capsys):

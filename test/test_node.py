@@ -144,6 +144,8 @@ def test_oversample_description_names_each_tiers_default():
      ["record_max_size = 1000 bytes: 0 (one file) or at least 1000000 (1 MB)"]),
     ({"record_max_size": 0.5, "real_time": False, "duration": 0.05},
      ["record_max_size = 0.5: wrong type, expected a whole number"]),
+    # given, a state_rate beyond one per batch is refused as it is (not given: one per batch, below)
+    ({"batch_duration": 0.1, "state_rate": 50.0}, ["state_rate = 50.0 Hz: at most one state per batch"]),
 ])
 def test_bad_parameters_end_the_node_with_one_line(ros_env, bearing_sim_exe, params, words):
     args = [bearing_sim_exe, "node", "--ros-args"]
@@ -156,6 +158,20 @@ def test_bad_parameters_end_the_node_with_one_line(ros_env, bearing_sim_exe, par
     assert "Traceback" not in r.stderr + r.stdout
     for w in words:
         assert w in lines[0]
+
+
+def test_a_longer_batch_alone_runs_with_one_state_per_batch(ros_env, bearing_sim_exe, tmp_path):
+    """``-p batch_duration:=0.1`` without ``state_rate``: the default 50 Hz is more than one state
+    per batch, and the node ended with ``error: state_rate = 50.0 Hz: ...``, a parameter its user
+    never set.  It runs, with one state per batch, and says so in ``ros2 param get`` terms (the
+    recorded parameters)."""
+    r = subprocess.run([bearing_sim_exe, "node", "--ros-args", "-p", "batch_duration:=0.1", "-p", "real_time:=false",
+                        "-p", "duration:=1.0", "-p", "record:=live.mcap"],
+                       cwd=tmp_path, env=ros_env, capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    topics, meta = read_recording(tmp_path / "live.mcap")
+    assert json.loads(meta["bearing_sim"]["parameters"])["state_rate"] == 10.0
+    assert len(topics["/state"]) == 10 and len(topics["/accel"]) == 10
 
 
 def test_a_record_path_that_is_the_scene_file_or_not_a_recording_ends_the_node_with_one_line(
@@ -240,6 +256,35 @@ def test_recorded_command_names_a_scene_file_by_its_absolute_path(ros_env, beari
     _topics, meta = read_recording(tmp_path / "live.mcap")
     argv = shlex.split(json.loads(meta["bearing_sim"]["parameters"])["command"])
     assert f"scene:={tmp_path / 'rig.yaml'}" in argv and "my_rig" not in " ".join(argv)
+
+
+@pytest.mark.parametrize("ros_args", [[], ["-r", "__ns:=/rig1", "-r", "__node:=left", "-r", "accel:=vibration"]],
+                         ids=["plain", "namespace, name and a remap"])
+def test_the_recorded_command_runs_and_reproduces_the_recording(ros_env, bearing_sim_exe, tmp_path, ros_args):
+    """The recording's command, split as a shell splits it and run in another folder, records the
+    same topics and tables.  It wrote ``-p frame_id:=''`` (the default, empty), which a shell
+    passes as ``frame_id:=`` and rcl refuses (exit 2); a record path with a space was not quoted.
+    And it held the parameters alone: a node of rig1, renamed and remapped, recorded a command that
+    published /accel, /state, ... under the status ``bearing_sim: simulator``."""
+    first, again = tmp_path / "first", tmp_path / "again"
+    first.mkdir()
+    again.mkdir()
+    r = subprocess.run([bearing_sim_exe, "node", "--ros-args", *ros_args, "-p", "real_time:=false",
+                        "-p", "duration:=1.0", "-p", "record:=my run.mcap"],
+                       cwd=first, env=ros_env, capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    topics, meta = read_recording(first / "my run.mcap")
+    argv = shlex.split(json.loads(meta["bearing_sim"]["parameters"])["command"])
+    assert argv[:2] == ["bearing-sim", "node"], argv
+    r = subprocess.run([bearing_sim_exe, *argv[1:]], cwd=again, env=ros_env, capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    topics_again, _meta = read_recording(again / "my run.mcap")
+    assert sorted(topics_again) == sorted(topics), (sorted(topics), sorted(topics_again))
+    status = {m.status[0].name for recorded in (topics, topics_again) for _t, m in recorded["/diagnostics"]}
+    assert len(status) == 1 and ("/rig1/vibration" in topics) == bool(ros_args), (status, sorted(topics))
+    accel = json.loads(meta["bearing_sim"]["topics"])["accel"]
+    tables = [[bytes(m.data) for _t, m in recorded[accel]] for recorded in (topics, topics_again)]
+    assert len(tables[0]) == 100 and tables[0] == tables[1]
 
 
 # ---- the stream ---------------------------------------------------------------------------------
@@ -501,7 +546,9 @@ def test_a_command_across_the_tier_boundary_switches_tiers_and_says_so(started, 
 
 
 # ---- shutdown and recording ---------------------------------------------------------------------
-@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+# SIGHUP: the terminal closed or the SSH session dropped; it killed the node (129) and its
+# recording had no footer
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP], ids=["SIGINT", "SIGTERM", "SIGHUP"])
 def test_signal_exits_0_with_a_readable_recording(started, tmp_path, sig):
     out = tmp_path / "live.mcap"
     node = started({"scene": "er16k_outer_race", "record": str(out)})
@@ -519,6 +566,52 @@ def test_signal_exits_0_with_a_readable_recording(started, tmp_path, sig):
     assert {"/shaft_speed", "/load", "/state", "/diagnostics"} <= set(topics)
     assert meta["bearing_sim"]["scene"] == "er16k_outer_race"
     assert '"record"' in meta["bearing_sim"]["parameters"]
+
+
+def test_a_second_node_given_the_same_record_path_ends_with_one_line_and_the_first_records_whole(
+        started, ros_env, bearing_sim_exe, tmp_path):
+    """Two rigs given one ``record`` path (``/**: record: run.mcap`` in a parameters file for both)
+    both wrote into the one file and both logged ``recording run.mcap: 1804 messages`` and exited
+    0: the file held one rig's recording, the other's was lost.  The second now ends at start with
+    one line, exit 2, and the first's file is whole."""
+    out = tmp_path / "run.mcap"
+    left = started({"record": str(out)}, name="left")
+    left.wait_for_output("recording " + str(out), 30)
+    r = subprocess.run([bearing_sim_exe, "node", "--ros-args", "-r", "__ns:=/right", "-p", f"record:={out}",
+                        "-p", "duration:=2.0"], env=ros_env, capture_output=True, text=True, timeout=60)
+    assert_one_error_line(r, [f"record = '{out}'", "another recording is being written to this file"])
+    time.sleep(1.0)
+    left.send(signal.SIGINT)
+    assert left.wait(20) == 0, left.output()
+    topics, _meta = read_recording(out)
+    assert set(topics) >= {"/accel", "/state"} and not any(t.startswith("/right") for t in topics), sorted(topics)
+    stamps = np.array([m.header.stamp.sec * NS + m.header.stamp.nanosec for _t, m in topics["/accel"]], dtype=np.int64)
+    assert len(stamps) >= 100 and np.all(np.diff(stamps) == BATCH_NS)
+
+
+def test_a_node_started_with_hangups_ignored_runs_on_through_one(ros_env, bearing_sim_exe, tmp_path):
+    """``nohup bearing-sim node ...``: a hangup ignored from the start stays ignored (the node
+    takes SIGHUP as SIGTERM otherwise): the node records its whole ``duration``."""
+    out = tmp_path / "live.mcap"
+    log = tmp_path / "node.log"
+    with open(log, "w") as f:
+        proc = subprocess.Popen([bearing_sim_exe, "node", "--ros-args", "-p", "duration:=3.0", "-p", f"record:={out}"],
+                                env=ros_env, stdout=f, stderr=subprocess.STDOUT, start_new_session=True,
+                                preexec_fn=lambda: signal.signal(signal.SIGHUP, signal.SIG_IGN))
+        try:
+            deadline = time.monotonic() + FIRST_TABLE_S
+            while "recording " + str(out) not in log.read_text() and time.monotonic() < deadline:
+                assert proc.poll() is None, log.read_text()
+                time.sleep(0.1)
+            time.sleep(0.5)
+            proc.send_signal(signal.SIGHUP)
+            assert proc.wait(30) == 0, log.read_text()
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+    topics, _meta = read_recording(out)
+    assert len(topics["/accel"]) == 300, (len(topics["/accel"]), log.read_text())
 
 
 def test_a_second_ctrl_c_while_the_recording_is_finalised_keeps_it_and_exits_130(started, tmp_path):

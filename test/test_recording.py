@@ -153,6 +153,26 @@ def test_unwritable_path_is_a_user_error(tmp_path):
         Recorder(tmp_path / "missing_dir" / "x.mcap", {"a": "b"})
 
 
+def test_a_file_being_recorded_is_not_recorded_to_again_until_it_is_closed(tmp_path, sim_msgs):
+    """Two recorders on one path (two nodes given one ``record``) wrote into the one file: the
+    second is a UserError, the first's file stays whole, and once it is closed the path may be
+    recorded to again (a new recording replaces an earlier one)."""
+    scene, sim, msgs = sim_msgs
+    path = tmp_path / "same.mcap"
+    first = Recorder(path, {"a": "b"})
+    first.add_topic("accel", TYPES["accel"], waveform_qos(0.01))
+    with pytest.raises(UserError, match=r"record = .*same.mcap.*another recording is being written to this file"):
+        Recorder(path, {"a": "b"})
+    for _ in range(5):
+        b = sim.advance(150)
+        first.write("accel", msgs.accel(b), msgs.stamp_ns(b.index0 + b.n))
+    first.close()
+    assert first.error == ""
+    with open_recording(path) as rec:
+        assert rec.message_count == 5
+    Recorder(path, {"a": "b"}).close()
+
+
 @pytest.mark.parametrize("rotation", [{"rotate_bytes": -1}, {"rotate_seconds": -0.5},
                                       {"rotate_seconds": float("nan")}, {"rotate_seconds": float("inf")}])
 def test_a_rotation_that_is_not_a_size_or_span_is_a_user_error(tmp_path, rotation):

@@ -105,6 +105,26 @@ def test_run_splits_its_recording_and_summarises_across_the_pieces(ros_env, bear
     assert summary["analysed_s"] == pytest.approx(2.0) and summary["waveform_gaps"] == 0
 
 
+def test_the_next_commands_of_the_summary_run_as_printed_with_a_space_in_the_path(ros_env, bearing_sim_exe, tmp_path):
+    """``next: bearing-sim report ... | bearing-sim play ...`` named a path with a space unquoted:
+    pasted, ``report`` took ``my`` and ``run.mcap`` as two arguments.  Split as a shell splits it,
+    the report command runs and writes its folder."""
+    import shlex
+
+    out = tmp_path / "my runs" / "my run.mcap"
+    out.parent.mkdir()
+    r = subprocess.run([bearing_sim_exe, "run", "--duration", "1", "--out", str(out)],
+                       env=ros_env, capture_output=True, text=True, timeout=90)
+    assert r.returncode == 0, r.stdout + r.stderr
+    line = next(ln for ln in r.stdout.splitlines() if ln.startswith("  next: "))
+    report, play = (shlex.split(part) for part in line.removeprefix("  next: ").split("   |   "))
+    assert play == ["bearing-sim", "play", str(out)], line
+    assert report[:3] == ["bearing-sim", "report", str(out)], line
+    r = subprocess.run([bearing_sim_exe, *report[1:]], env=ros_env, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert (tmp_path / "my runs" / "my run_report").is_dir()
+
+
 def test_run_whose_recording_is_deleted_says_so_and_ends_with_status_2(ros_env, bearing_sim_exe, tmp_path):
     """``--out`` deleted while ``run`` records: the node in the process notices (as ``bearing-sim
     node`` does: ``test_recording_live.py``), says it in its log when it happens and at exit, and

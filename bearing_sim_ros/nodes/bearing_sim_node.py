@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import math
 import shlex
-import signal
 import sys
 import threading
 import time
@@ -41,7 +40,7 @@ from rclpy.node import Node
 
 from ..errors import UserError
 from ..limits import LOAD_MULTIPLE_C0, NDM_LIMIT, STATIC_F0, InputLimits  # noqa: F401 (names kept here)
-from ..teardown import EXIT_INTERRUPTED, command_signals, teardown_watchdog
+from ..teardown import EXIT_INTERRUPTED, SIGNAL_NAMES, command_signals, teardown_watchdog
 
 NODE_NAME = "bearing_sim"
 OVERSAMPLE_ZERO = "each tier's own"       # what the parameter oversample's default 0 means
@@ -156,7 +155,8 @@ def _descriptors():
                             f"chosen automatically")),
         "publish_clock": (False, d(T.PARAMETER_BOOL, "publish /clock with the simulation time")),
         "frame_id": ("", d(T.PARAMETER_STRING, "frame of the waveform tables; empty = the scene's sensor frame", True)),
-        "state_rate": (STATE_RATE, d(T.PARAMETER_DOUBLE, "JointState rate, Hz; 0 = off", False, *STATE_RATE_RANGE,
+        "state_rate": (STATE_RATE, d(T.PARAMETER_DOUBLE, "JointState rate, Hz; 0 = off; not given, one per "
+                                     "batch where batches are longer than 20 ms", False, *STATE_RATE_RANGE,
                                      "at most one per batch: state_rate <= 1 / batch_duration")),
         "compute_ahead": (0.05, d(T.PARAMETER_DOUBLE, "compute batches up to this long before they are "
                                   "due, s: absorbs scheduling hiccups; a command takes effect this much "
@@ -201,6 +201,7 @@ class BearingSimNode(Node):
                     self.get_logger().warning(f"parameter {name}: not a {NODE_NAME} parameter, ignored; "
                                               f"its parameters are {', '.join(self._cfg)}")
             cfg = self._cfg
+            self._state_rate_within_batches()
             reason = check_config(cfg)
             if reason:
                 raise UserError(reason)
@@ -233,6 +234,21 @@ class BearingSimNode(Node):
                 allowed = _allowed(desc)
                 raise UserError(f"parameter {name} = {given!r}: allowed range is {allowed}") from None
             self._cfg[name] = value
+
+    def _state_rate_within_batches(self):
+        """``state_rate`` not given: its default (50 Hz) is more than one state per batch for
+        batches longer than 20 ms, and ``-p batch_duration:=0.1`` alone ended the node with an
+        error about a parameter its user never set.  Then one state per batch.  Given, it is
+        checked as it is."""
+        from rclpy.parameter import Parameter
+
+        cfg = self._cfg
+        given = getattr(self, "_parameter_overrides", {})
+        if "state_rate" in given or cfg["state_rate"] * cfg["batch_duration"] <= 1.0:
+            return
+        rate = 1.0 / cfg["batch_duration"]
+        self.set_parameters([Parameter("state_rate", value=rate)])
+        cfg["state_rate"] = rate
 
     def _on_set_parameters(self, params):
         """Validate a run-time change against the whole configuration (read-only parameters
@@ -325,10 +341,10 @@ class BearingSimNode(Node):
         params = dict(cfg)
         # the scene as a shipped name or an absolute path: a relative path or the name inside a
         # scene file would not load from another directory
-        command_cfg = dict(cfg, scene=shlex.quote(scene_argument(self.scene)))
+        command_cfg = dict(cfg, scene=scene_argument(self.scene))
         params.update({"mode": "live",
-                       "command": "bearing-sim node --ros-args " + " ".join(
-                           f"-p {k}:={_param_text(v)}" for k, v in sorted(command_cfg.items()))})
+                       "command": "bearing-sim node --ros-args " + " ".join(self._ros_arguments(topics) + [
+                           f"-p {k}:={_command_text(v)}" for k, v in sorted(command_cfg.items())])})
         meta = recording_metadata(self.scene, params, int(cfg["seed"]), self.sim.selection,
                                   topics={role: ent.topic_name for role, ent, _qos in topics})
         text = self.scene.source_text
@@ -344,6 +360,22 @@ class BearingSimNode(Node):
         except BaseException:
             self.recorder.close()        # not a file that looks like a recording and holds none
             raise
+
+    def _ros_arguments(self, topics) -> list:
+        """The ROS arguments besides the node's parameters that the recorded command needs to give
+        the same topics: namespace, node name (the diagnostics' status is named after both), each
+        remapped topic of ``topics`` ((role, entity, qos)), and ``use_sim_time``.  Without them a
+        node of rig1 (``-r __ns:=/rig1``) recorded a command that published on /accel."""
+        ns = self.get_namespace()
+        out = [] if ns == "/" else [f"-r __ns:={ns}"]
+        if self.get_name() != NODE_NAME:
+            out.append(f"-r __node:={self.get_name()}")
+        for role, ent, _qos in topics:
+            if ent.topic_name != (role if role.startswith("/") else f"{ns.rstrip('/')}/{role}"):
+                out.append(f"-r {role}:={ent.topic_name}")
+        if self.get_parameter("use_sim_time").value:
+            out.append("-p use_sim_time:=true")
+        return out
 
     # ---- inputs (executor thread) ------------------------------------------------------------
     def _reject(self, key, reason):
@@ -779,6 +811,16 @@ def _recording_text(cfg) -> str:
     return f"{cfg['record']} in files of at most {' or '.join(limits)}: {first}, {second}, ..."
 
 
+def _command_text(value) -> str:
+    """``value`` as a shell command line gives it to ``-p name:=``: a string shell-quoted (a
+    path with a space), an empty one as ``"''"``: the shell makes ``frame_id:=''`` of it, which
+    rcl reads as an empty string (``frame_id:=''`` typed in a shell is ``frame_id:=``, which rcl
+    refuses: every recorded command, with its default frame_id, failed so)."""
+    if isinstance(value, str):
+        return shlex.quote(value) if value else "\"''\""
+    return _param_text(value)
+
+
 def _param_text(value) -> str:
     if isinstance(value, bool):
         return str(value).lower()
@@ -820,7 +862,7 @@ def say_held(node):
         if said:
             return                  # once: a user who presses Ctrl-C again reads it once
         said.append(signum)
-        how = "Ctrl-C" if signum == signal.SIGINT else "SIGTERM"
+        how = SIGNAL_NAMES[signum]
         if done:
             what = "has shut down and exits"
         else:

@@ -157,6 +157,30 @@ def files_text(status: dict) -> str:
     return f"{files[0]} .. {files[-1]}, {len(files)} files"
 
 
+def _open_held(path: Path, where: str):
+    """``path`` opened for writing from its start, a regular file held with an exclusive lock
+    (``flock``, released as it is closed) and emptied only once it is held.  Two nodes given one
+    ``record`` path (a parameters file for several, ``/**: record: run.mcap``) both wrote into the
+    one file, and both said they had recorded it: the file held one, the other was lost.  The
+    second now gets a one-line UserError (``where``: ``record = 'run.mcap'``) and the first's file
+    is untouched.  A pipe or a device (/dev/null) is opened as it is."""
+    import fcntl
+
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT, 0o666)
+    try:
+        if stat.S_ISREG(os.fstat(fd).st_mode):
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                raise UserError(f"{where}: another recording is being written to this file (two nodes "
+                                "given one record path?); give each its own") from None
+            os.ftruncate(fd, 0)
+        return os.fdopen(fd, "wb")
+    except BaseException:
+        os.close(fd)
+        raise
+
+
 class Recorder:
     """Record ROS 2 messages to MCAP off the publishing path (see the module docstring).
 
@@ -353,7 +377,7 @@ class Recorder:
         written = path
         if self._replace_when_done and (not path.exists() or path.is_file()):
             written = path.with_name(f"{path.name}.{os.getpid()}.partial")
-        stream = open(written, "wb")    # noqa: SIM115 - closed in _close_file
+        stream = _open_held(written, self._where(path))
         if not stream.seekable():
             stream = _Counted(stream)     # a pipe: the MCAP writer asks where each record starts
         self._writing = (written, path)
