@@ -690,3 +690,37 @@ def test_a_writer_that_falls_behind_holds_the_render_up_and_loses_nothing(tmp_pa
     assert counts == {"/shaft_speed": 20, "/load": 20, "/accel": 20, "/contact_forces": 20, "/state": 10,
                       "/diagnostics": 0}, counts
     assert samples == 0.2 * FS and summary["messages"] == 90
+
+
+def test_a_saturated_sensor_is_counted_and_warned_in_the_diagnostics(tmp_path):
+    """The outer-race scene with the sensor's range lowered to +-20 m/s^2 (its impacts reach
+    beyond it): every second's ``/diagnostics`` counts the samples at the range
+    (``accel_clipped_samples``, as many as the recorded accel has at +-20 m/s^2) and warns
+    (level 1, ``accelerometer saturated: ...``); at the shipped +-50 g the count is 0 and the
+    level ok.  Before, a clipped signal was said nowhere."""
+    from rclpy.serialization import deserialize_message
+
+    source = load_scene("er16k_outer_race").source_text
+    assert "range: 490.3" in source
+    scene = tmp_path / "clipped.yaml"
+    scene.write_text(source.replace("range: 490.3", "range: 20.0"))
+    for path, limit in ((scene, 20.0), ("er16k_outer_race", None)):
+        out = tmp_path / "r.mcap"
+        render(path, 2.0, out, fidelity="kinematic", progress=False)
+        at_range, diag = 0, []
+        with open_recording(out) as rec:
+            for topic, msg_type, _t, data in rec.messages():
+                msg = deserialize_message(data, get_message(msg_type))
+                if topic == "/accel":
+                    x = from_pointcloud2(msg)[2]
+                    at_range += int(np.count_nonzero((np.abs(x) >= np.float32(limit or 1e9)).any(axis=1)))
+                elif topic == "/diagnostics":
+                    st = msg.status[0]
+                    diag.append((int(st.level[0]) if isinstance(st.level, bytes) else int(st.level), st.message,
+                                 int({kv.key: kv.value for kv in st.values}["accel_clipped_samples"])))
+        assert len(diag) == 2
+        if limit is None:
+            assert diag == [(0, "ok", 0)] * 2
+        else:
+            assert all(level == 1 and message.startswith("accelerometer saturated: ") for level, message, _n in diag)
+            assert all(n > 0 for _l, _m, n in diag) and sum(n for _l, _m, n in diag) == at_range

@@ -322,7 +322,7 @@ class BearingSimNode(Node):
         self._repace = False
         self.finished = threading.Event()
         self.error = None
-        self.stats = _Stats(self.sim.sample_rate, self.sim.bearing.balls)
+        self.stats = _Stats(self.sim.sample_rate, self.sim.bearing.balls, self.scene.sensor.range)
         self._thread = threading.Thread(target=self._run, name="bearing-sim", daemon=True)
 
     def _open_recorder(self, cfg):
@@ -681,6 +681,9 @@ class BearingSimNode(Node):
         level, message = 0, "ok"
         if period["overruns"]:
             level, message = 1, f"{period['overruns']} overruns in the last second"
+        if period["clipped"]:
+            message = period["clipped"] if level == 0 else f"{message}; {period['clipped']}"
+            level = 1
         rec = self.recorder
         if rec is None:
             values["recording"] = "off"
@@ -721,11 +724,11 @@ class _Pending:
 class _Stats:
     """Pacing and batch statistics.  Written by the sim thread only."""
 
-    def __init__(self, sample_rate: float, balls: int):
+    def __init__(self, sample_rate: float, balls: int, clip_limit: float):
         from ..recording.render import PeriodMeans
 
         self.sample_rate = sample_rate
-        self._means = PeriodMeans(balls)
+        self._means = PeriodMeans(balls, clip_limit)
         self.overruns = 0
         self.worst_lag = 0.0
         self.batches = 0
@@ -771,7 +774,7 @@ class _Stats:
                "overruns": self.overruns - self._p_over, "worst_lag": self._p_lag,
                "busy_mean": self._p_compute / max(self._p_batches, 1), "busy_worst": self._p_busy_worst,
                "busy_fraction": self._p_busy / (now - self._p_t) if now > self._p_t else 0.0,
-               "means": self._means.values()}
+               "means": self._means.values(), "clipped": self._means.clipped_text()}
         self.period_start(now, index)
         return out
 

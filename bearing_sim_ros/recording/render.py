@@ -148,14 +148,19 @@ class PeriodMeans:
     - the fault frequencies as they are in the signal, Hz: ``cage_hz`` from the cage's mean speed,
       ``bpfo_hz`` = Z x cage_hz, ``bpfi_hz`` = Z x the shaft's mean speed relative to the cage.
       Where the cage skids they differ from the catalog's pure-rolling ones
-      (``Bearing.fault_frequencies``), and they are where the signal's envelope lines are."""
+      (``Bearing.fault_frequencies``), and they are where the signal's envelope lines are;
+    - with ``clip_limit`` (the sensor's range, m/s^2): ``accel_clipped_samples``, the samples of
+      the period at which an axis sat at the range (a saturated sensor: under a 16 kN load the
+      vertical axis clipped at 50 g without a word)."""
 
-    def __init__(self, balls: int):
+    def __init__(self, balls: int, clip_limit: float | None = None):
         self.balls = int(balls)
+        self.clip_limit = clip_limit
         self.reset()
 
     def reset(self) -> None:
         self._sums, self._counts = {}, {}
+        self.clipped = 0
 
     def _add(self, key: str, total: float, n: int) -> None:
         self._sums[key] = self._sums.get(key, 0.0) + total
@@ -169,6 +174,8 @@ class PeriodMeans:
                 self._add(key, float(np.mean(np.abs(val) if absolute else val)) * n, n)
         self._add("cage", float(np.sum(batch.cage_speed)), n)
         self._add("shaft", float(np.sum(batch.shaft_speed)), n)
+        if self.clip_limit is not None:
+            self.clipped += int(np.count_nonzero((np.abs(batch.accel) >= self.clip_limit).any(axis=1)))
 
     def values(self) -> dict:
         """{key: text} of the period so far ({} before a batch)."""
@@ -180,7 +187,16 @@ class PeriodMeans:
         out["cage_hz"] = f"{abs(cage) / (2 * math.pi):.6g}"
         out["bpfo_hz"] = f"{self.balls * abs(cage) / (2 * math.pi):.6g}"
         out["bpfi_hz"] = f"{self.balls * abs(shaft - cage) / (2 * math.pi):.6g}"
+        if self.clip_limit is not None:
+            out["accel_clipped_samples"] = str(self.clipped)
         return out
+
+    def clipped_text(self) -> str:
+        """The warning for a period in which the sensor saturated, else ''."""
+        if not self.clipped:
+            return ""
+        return (f"accelerometer saturated: {self.clipped} samples at its range "
+                f"(+-{self.clip_limit:g} m/s^2) in the last second")
 
 
 # the keys ``tier_values`` writes, for readers of recorded diagnostics (``analysis.report``)
@@ -371,7 +387,7 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
     bar = _Progress(total / sample_rate, sys.stderr.isatty() if progress is None else progress)
     t_wall0 = time.perf_counter()
     frame = msgs.frame_id
-    means = PeriodMeans(scene.bearing.balls)
+    means = PeriodMeans(scene.bearing.balls, scene.sensor.range)
     next_diag_s = 1
     done = 0
     try:
@@ -408,8 +424,10 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
                               "simulated_s": f"{sim.time:.6f}", "rejected_inputs": 0,
                               "recording": "ok"}
                     values.update(means.values())
+                    clipped = means.clipped_text()         # a warning, as the live node gives it
                     means.reset()
-                    rec.write(TOPIC_DIAGNOSTICS, diagnostics_message(pub_ns, values, 0, "ok"), pub_ns)
+                    rec.write(TOPIC_DIAGNOSTICS, diagnostics_message(pub_ns, values, 1 if clipped else 0,
+                                                                     clipped or "ok"), pub_ns)
                     next_diag_s += 1
                 bar.update(done / sample_rate)
     except KeyboardInterrupt as exc:
