@@ -201,8 +201,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--scene", default=None, metavar="S",
                    help="scene giving the bearing geometry (default: er16k_outer_race)")
     s.add_argument("--simulator", default=None, metavar="NAME",
-                   help="full name of the simulator node whose /diagnostics give the ground truth, "
-                        "rig1/bearing_sim (default: bearing_sim in the namespace of the accel topic)")
+                   help="the simulator node whose /diagnostics give the ground truth: a node name, "
+                        "in the namespace of the accel topic (sim), or a full name (rig1/sim, "
+                        "/bearing_sim from the root) (default: bearing_sim)")
     return p
 
 

@@ -20,7 +20,7 @@ from test_node_support import NS, NodeProcess, assert_one_error_line, read_recor
 
 from bearing_sim_ros import ground_truth, load_scene
 from bearing_sim_ros.nodes.monitor_node import (SLACK_NS, TRUTH_GRACE_S, MonitorNode, Window, agrees, score_lines,
-                                                 source_start_line, truth_at, truth_text, verdict)
+                                                 simulator_name, source_start_line, truth_at, truth_text, verdict)
 from bearing_sim_ros.recording.render import render
 
 
@@ -507,3 +507,15 @@ def test_monitor_rejects_a_bad_table_and_keeps_going(ros_env, bearing_sim_exe, t
     verdicts = [ln for ln in out.splitlines() if "verdict=" in ln]
     assert len(verdicts) == 1 and "verdict=outer" in verdicts[0], out
     assert ", 3 rejected" in out, out
+
+
+@pytest.mark.parametrize("accel, given, full", [
+    ("/accel", None, "bearing_sim"), ("/rig1/accel", None, "rig1/bearing_sim"),
+    ("/rig1/accel", "sim", "rig1/sim"), ("/a/b/accel", "sim", "a/b/sim"),
+    ("/rig1/accel", "rig2/sim", "rig2/sim"), ("/rig1/accel", "/bearing_sim", "bearing_sim"),
+    ("/accel", "sim", "sim")])
+def test_the_simulator_is_named_as_ros_resolves_a_node_name(accel, given, full):
+    """``--simulator sim`` beside ``-r __ns:=/left`` looked for the status of ``sim`` in the
+    root and ignored ``left/sim``'s: a bare name now resolves in the namespace of the accel
+    topic, a full name is taken as given, a leading ``/`` from the root."""
+    assert simulator_name(accel, given) == full

@@ -163,12 +163,18 @@ def truth_text(truth) -> str:
     return "unknown" if truth is None else ",".join(sorted(truth)) or "none"
 
 
-def default_simulator(accel_topic: str) -> str:
+def simulator_name(accel_topic: str, name: str | None = None) -> str:
     """The full name of the simulator whose ground truth goes with the waveform on ``accel_topic``
-    (resolved: ``/rig1/accel``): ``bearing_sim`` in that topic's namespace (``rig1/bearing_sim``),
-    since the node publishes ``accel`` relative to its own."""
+    (resolved: ``/rig1/accel``), as ROS resolves a node's name: ``name`` (default ``bearing_sim``)
+    in that topic's namespace where it is a bare node name (``sim`` -> ``rig1/sim``; the node
+    publishes ``accel`` relative to its own namespace), as given where it holds a namespace
+    (``rig1/sim``), and from the root where it starts with ``/`` (``/bearing_sim``).  A bare name
+    was taken from the root: ``--simulator sim`` beside ``-r __ns:=/left`` matched nothing."""
+    name = name or SIMULATOR_NODE
+    if "/" in name:
+        return name.strip("/")
     namespace = accel_topic.rsplit("/", 1)[0].strip("/")
-    return f"{namespace}/{SIMULATOR_NODE}" if namespace else SIMULATOR_NODE
+    return f"{namespace}/{name}" if namespace else name
 
 
 def agrees(verdict: str, truth):
@@ -229,7 +235,7 @@ def source_start_line(t0_ns: int, source_start_ns: int):
 class MonitorNode(Node):
     """Subscribes to ``accel``, ``state`` and ``/diagnostics``; prints a verdict every ``window``
     s of signal, with the ground truth the diagnostics of ``simulator`` give (its full name,
-    ``rig1/bearing_sim``; default: :func:`default_simulator` of the resolved ``accel``)."""
+    ``rig1/bearing_sim``, or a node name in the namespace of ``accel``: :func:`simulator_name`)."""
 
     def __init__(self, scene, window: float, count: int = 0, out=None, simulator: str | None = None, **kwargs):
         from diagnostic_msgs.msg import DiagnosticArray
@@ -246,7 +252,7 @@ class MonitorNode(Node):
         self.windows_queued = 0
         self.verdicts = []
         self.reports = []           # ground_truth.Truth of each /diagnostics (stamps in ns)
-        self.simulator = (simulator or default_simulator(self.resolve_topic_name(TOPIC_ACCEL))).strip("/")
+        self.simulator = simulator_name(self.resolve_topic_name(TOPIC_ACCEL), simulator)
         self.truth_status = ground_truth.status_name(self.simulator)
         self.ignored = set()        # names of other simulators' statuses, said once each
         self._speeds = []
