@@ -230,6 +230,11 @@ def _dispatch(args, rest) -> int:
             raise stray_arguments_error("bearing-sim node", stray)
         argv = []
         if args.scene:
+            # rcl takes the last of two: --scene A -p scene:=B ran B without a word
+            given = [b for a, b in zip(rest, rest[1:]) if a in ("-p", "--param")
+                     and b.split(":=", 1)[0].rsplit(":", 1)[-1] == "scene" and ":=" in b]
+            if given:
+                raise UserError(f"bearing-sim node: --scene {args.scene} and -p {given[0]} name two scenes; give one")
             argv += ["--ros-args", "-p", f"scene:={args.scene}"]
         return node_main(argv + rest) or EXIT_OK
     if cmd == "monitor":

@@ -94,6 +94,15 @@ def test_a_stray_argument_is_named_with_its_command(capsys, argv):
     assert len(err) == 1 and err[0].startswith(f"error: bearing-sim {argv[0]}: unrecognized arguments: "), err
 
 
+@pytest.mark.parametrize("param", ["scene:=er16k_outer_race", "bearing_sim:scene:=er16k_outer_race"])
+def test_node_refuses_two_scenes(capsys, param):
+    """``bearing-sim node --scene A --ros-args -p scene:=B`` ran B without a word (rcl takes the
+    last override): one line naming both, exit 2, before the node starts."""
+    assert cli.main(["node", "--scene", "er16k_healthy", "--ros-args", "-p", param]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"error: bearing-sim node: --scene er16k_healthy and -p {param} name two scenes; give one"]
+
+
 def test_non_finite_inputs_are_named_with_plain_numbers():
     sim = Simulator("er16k_outer_race", fidelity="kinematic")
     with pytest.raises(UserError) as speed:
