@@ -258,6 +258,23 @@ def test_recorded_command_names_a_scene_file_by_its_absolute_path(ros_env, beari
     assert f"scene:={tmp_path / 'rig.yaml'}" in argv and "my_rig" not in " ".join(argv)
 
 
+def test_a_tilde_in_scene_and_record_is_the_home_folder(ros_env, bearing_sim_exe, tmp_path):
+    """``-p record:=~/live.mcap``: no shell expands a ``~`` after ``:=``, and the node ended with
+    "cannot write there (No such file or directory: '~/live.mcap')"; the scene's path alike.  Both
+    are now taken from the home folder, and the recording's command names the expanded paths."""
+    home = tmp_path / "home"
+    home.mkdir()
+    (home / "rig.yaml").write_text(load_scene("er16k_healthy").source_text)
+    r = subprocess.run([bearing_sim_exe, "node", "--ros-args", "-p", "scene:=~/rig.yaml", "-p", "real_time:=false",
+                        "-p", "duration:=0.1", "-p", "record:=~/live.mcap"],
+                       cwd=tmp_path, env=dict(ros_env, HOME=str(home)), capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    topics, meta = read_recording(home / "live.mcap")
+    assert len(topics["/accel"]) == 10
+    argv = shlex.split(json.loads(meta["bearing_sim"]["parameters"])["command"])
+    assert f"scene:={home / 'rig.yaml'}" in argv and f"record:={home / 'live.mcap'}" in argv
+
+
 @pytest.mark.parametrize("ros_args", [[], ["-r", "__ns:=/rig1", "-r", "__node:=left", "-r", "accel:=vibration"]],
                          ids=["plain", "namespace, name and a remap"])
 def test_the_recorded_command_runs_and_reproduces_the_recording(ros_env, bearing_sim_exe, tmp_path, ros_args):

@@ -28,6 +28,7 @@ recording and diagnostics happen in the simulation thread, which owns the simula
 from __future__ import annotations
 
 import math
+import os
 import shlex
 import sys
 import threading
@@ -201,6 +202,11 @@ class BearingSimNode(Node):
                     self.get_logger().warning(f"parameter {name}: not a {NODE_NAME} parameter, ignored; "
                                               f"its parameters are {', '.join(self._cfg)}")
             cfg = self._cfg
+            for key in ("scene", "record"):
+                # `-p record:=~/run.mcap`: no shell expands a ~ after :=, and the node said it
+                # could not write '~/run.mcap'
+                if cfg[key].startswith("~"):
+                    cfg[key] = os.path.expanduser(cfg[key])
             self._state_rate_within_batches()
             reason = check_config(cfg)
             if reason:
