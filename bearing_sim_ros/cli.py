@@ -67,6 +67,23 @@ def _in_range(lo: float, hi: float, unit: str):
     return parse
 
 
+def _sample_rate(lo: float, hi: float):
+    """argparse type of ``render --sample-rate``: within [lo, hi] Hz, and a whole number of samples
+    in a render's tables of ``messages.BATCH_DURATION`` (the node's ``batching_error`` rule)."""
+    from .messages import BATCH_DURATION, STATE_RATE, batching_error
+
+    in_range = _in_range(lo, hi, "Hz")
+
+    def parse(text):
+        value = in_range(text)
+        if batching_error(value, BATCH_DURATION, STATE_RATE):
+            raise argparse.ArgumentTypeError(
+                f"{text} Hz: a render's tables are {BATCH_DURATION * 1e3:g} ms, a whole number of samples each, "
+                f"so allowed rates are multiples of {1.0 / BATCH_DURATION:g} Hz in [{lo:g}, {hi:g}] Hz")
+        return value
+    return parse
+
+
 def _oversample(text):
     """argparse type: integration steps per output sample, the API's allowed values."""
     from .simulator import OVERSAMPLE_ALLOWED, oversample_allowed
@@ -83,6 +100,7 @@ def _oversample(text):
 def build_parser() -> argparse.ArgumentParser:
     from .physics.integrators import RK4_DEFAULT_STEP, RK4_STEP_RANGE
     from .simulator import AUTO_OVERSAMPLE_MAX, DURATION_MAX_S, OVERSAMPLE_ALLOWED, SAMPLE_RATE_RANGE, SEED_RANGE
+    from .messages import BATCH_DURATION
     from .analysis.report import DEFAULT_WINDOW_S, WINDOW_RANGE_S
     from .recording.recorder import SPLIT_MAX_BYTES, SPLIT_MIN_BYTES
 
@@ -127,8 +145,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--seed", type=_nonnegative(int, hi=SEED_RANGE[1]), default=0, metavar="N",
                    help=f"seed of the random slip and the sensor noise, a whole number {SEED_RANGE[0]} to "
                         f"{SEED_RANGE[1]} (default: %(default)s)")
-    s.add_argument("--sample-rate", type=_in_range(*SAMPLE_RATE_RANGE, "Hz"), default=15000.0, metavar="HZ",
-                   help=f"output sample rate, Hz, {SAMPLE_RATE_RANGE[0]:g} to {SAMPLE_RATE_RANGE[1]:g} "
+    s.add_argument("--sample-rate", type=_sample_rate(*SAMPLE_RATE_RANGE), default=15000.0, metavar="HZ",
+                   help=f"output sample rate, Hz, {SAMPLE_RATE_RANGE[0]:g} to {SAMPLE_RATE_RANGE[1]:g}, "
+                        f"a multiple of {1.0 / BATCH_DURATION:g} (10 ms tables of whole samples) "
                         f"(default: %(default)g)")
     s.add_argument("--solver", default="default", choices=["default", "rk4", "reference"],
                    help="integrator of the skidding tier (the kinematic tier has none): default, rk4 "

@@ -313,6 +313,9 @@ def test_solver_kept_when_a_profile_takes_auto_to_the_skidding_tier(tmp_path, ca
     (["--solver", "rk4", "--rk4-step=-1e-6"], ["--rk4-step", "-1e-6 s", "[1e-09, 0.001] s"]),
     (["--sample-rate", "500"], ["--sample-rate", "500 Hz", "[1000, 200000] Hz"]),
     (["--sample-rate", "250000"], ["--sample-rate", "250000 Hz", "[1000, 200000] Hz"]),
+    # 11025 Hz (CD audio's quarter) is in range, but a 10 ms table would be 110.25 samples: the
+    # error named batch_duration, which render has no option for, and not what --sample-rate takes
+    (["--sample-rate", "11025"], ["--sample-rate", "11025 Hz", "multiples of 100 Hz", "10 ms"]),
     # a typo that would render until the disk is full: the node's bound on duration
     (["--duration", "1e12"], ["--duration", "'1e12'", "<= 1e+09"]),
 ])
