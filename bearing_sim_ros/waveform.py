@@ -63,12 +63,14 @@ def from_pointcloud2(msg) -> tuple:
     names = [f.name for f in msg.fields]
     c = len(names)
     width = int(msg.width)
-    if msg.point_step != 4 * c or msg.is_bigendian or msg.height != 1:
-        raise ValueError(f"not a waveform table: point_step {msg.point_step}, channels {c}, "
-                         f"height {msg.height}, big-endian {msg.is_bigendian}")
+    # the fields' type first: a FLOAT64 table's point_step is not 4 x channels either, and that
+    # was all its reason said
     bad = [f.name for f in msg.fields if f.datatype != FLOAT32 or f.count != 1]
     if bad:
         raise ValueError(f"not a waveform table: field(s) {', '.join(bad)} not one FLOAT32 each")
+    if msg.point_step != 4 * c or msg.is_bigendian or msg.height != 1:
+        raise ValueError(f"not a waveform table: point_step {msg.point_step}, channels {c}, "
+                         f"height {msg.height}, big-endian {msg.is_bigendian}")
     offsets = [int(f.offset) for f in msg.fields]
     if sorted(offsets) != list(range(0, 4 * c, 4)):
         raise ValueError(f"not a waveform table: field offsets {offsets}, expected 0, 4, .. {4 * c - 4} "

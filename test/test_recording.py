@@ -551,6 +551,14 @@ def test_from_pointcloud2_refuses_what_is_not_a_waveform_table(sim_msgs):
         with pytest.raises(ValueError, match="not a waveform table") as exc:
             from_pointcloud2(m)
         assert "\n" not in str(exc.value)
+    # a FLOAT64 table, laid out consistently (8 bytes per channel): the reason is its type; it said
+    # "point_step 16, channels 2, height 1, big-endian False", which did not say what was wrong
+    m = to_pointcloud2(b.accel, ["accel_x", "accel_y"], stamp, "f")
+    for k, f in enumerate(m.fields):
+        f.datatype, f.offset = PointField.FLOAT64, 8 * k
+    m.point_step, m.row_step, m.data = 16, 16 * m.width, b.accel.astype("<f8").tobytes()
+    with pytest.raises(ValueError, match="not a waveform table: field.s. accel_x, accel_y not one FLOAT32 each"):
+        from_pointcloud2(m)
 
 
 def test_from_pointcloud2_reads_each_column_at_its_own_offset(sim_msgs):
