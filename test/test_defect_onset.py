@@ -221,7 +221,7 @@ def test_recorded_diagnostics_say_when_the_fault_is_there(tmp_path):
     """``bearing-sim render`` of the CWRU outer race with its pit appearing at 1.5 s and growing
     over 1 s: the recorded ``/diagnostics`` (read with rosbags) give ``faults_present`` none at
     1 s, outer from 2 s, and ``defect_sizes`` 0, then the size at each second (0.5 at 2 s, full
-    at 3 s), as the node's do."""
+    at 3 s), as the node's do, and at the end of the signal (3.5 s)."""
     from rosbags.highlevel import AnyReader
 
     from bearing_sim_ros.recording.render import render
@@ -240,7 +240,7 @@ def test_recorded_diagnostics_say_when_the_fault_is_there(tmp_path):
             values = {kv.key: kv.value for kv in msg.status[0].values}
             seen[round(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9, 3)] = (
                 values["faults_present"], values["defect_sizes"])
-    assert seen == {1.0: ("none", "0"), 2.0: ("outer", "0.5"), 3.0: ("outer", "1")}
+    assert seen == {1.0: ("none", "0"), 2.0: ("outer", "0.5"), 3.0: ("outer", "1"), 3.5: ("outer", "1")}
 
 
 def test_both_tiers_draw_a_wandering_ball_defects_latitudes_from_the_runs_seed():

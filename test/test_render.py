@@ -678,7 +678,7 @@ def test_a_writer_that_falls_behind_holds_the_render_up_and_loses_nothing(tmp_pa
     With a queue limit of 0 bytes every write finds the writer thread behind (it sleeps 20 ms
     whenever it finds the queue empty), where the node's recorder would drop: every message of
     the 0.2 s render reads back with rosbags all the same (20 batches: speed, load, accel and
-    contact forces each; state at 50 Hz)."""
+    contact forces each; state at 50 Hz; the diagnostics at the end of the signal)."""
     from rosbags.highlevel import AnyReader
 
     from bearing_sim_ros.recording import recorder
@@ -691,8 +691,8 @@ def test_a_writer_that_falls_behind_holds_the_render_up_and_loses_nothing(tmp_pa
         samples = sum(reader.deserialize(raw, c.msgtype).width
                       for c, _t, raw in reader.messages([c for c in reader.connections if c.topic == "/accel"]))
     assert counts == {"/shaft_speed": 20, "/load": 20, "/accel": 20, "/contact_forces": 20, "/state": 10,
-                      "/diagnostics": 0}, counts
-    assert samples == 0.2 * FS and summary["messages"] == 90
+                      "/diagnostics": 1}, counts
+    assert samples == 0.2 * FS and summary["messages"] == 91
 
 
 def test_a_saturated_sensor_is_counted_and_warned_in_the_diagnostics(tmp_path):

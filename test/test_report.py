@@ -185,6 +185,21 @@ def test_a_defect_the_recording_ends_before_is_not_expected_of_the_verdict(tmp_p
         tmp_path / "bare_out" / "summary.md").read_text()
 
 
+def test_a_defect_that_appears_in_the_last_part_second_is_in_the_recording(tmp_path, capsys):
+    """A 2.5 s render of a scene whose outer-race pit appears at 2.2 s holds 0.3 s of the pit, but
+    its last /diagnostics were those at 2 s: the report said the pit came "after this recording
+    ends" and that the one verdict described the recording.  The render now ends with the ground
+    truth of its last sample."""
+    rec = tmp_path / "tail.mcap"
+    render(str(_with_onset(tmp_path, 2.2)), 2.5, rec, fidelity="kinematic", progress=False)
+    out = tmp_path / "out"
+    assert cli.main(["report", str(rec), "--out", str(out)]) == 0
+    s = json.loads((out / "summary.json").read_text())
+    assert s["scene_defects"] == [{"kind": "outer", "onset_s": 2.2, "present": "in part of the analysed stretch"}]
+    assert s["expected_defects"] == ["outer"] and s["verdict_describes_recording"] is False
+    assert s["fault_onset_s"] == pytest.approx(2.2) and "after this recording ends" not in capsys.readouterr().out
+
+
 def test_the_length_is_the_recorded_signals_not_the_log_times_span(outer, tmp_path):
     """As in a live node's recording, the first message logged at the end of the first 10 ms
     batch (the render's /shaft_speed and /load, logged at a batch's start, left out): the report

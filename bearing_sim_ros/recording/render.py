@@ -413,7 +413,10 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
                 if math.floor(done * state_rate / sample_rate) > math.floor((done - n) * state_rate / sample_rate):
                     rec.write(TOPIC_STATE, msgs.state(pub_ns), pub_ns)
                 means.add(batch)
-                while done >= next_diag_s * sample_rate:
+                # once per second of signal, and at its end when that is within a second: a pit that
+                # appears in the last part-second has ground truth too (the report said it came
+                # "after this recording ends")
+                while done >= next_diag_s * sample_rate or (done == total and done > (next_diag_s - 1) * sample_rate):
                     # the live node's keys (nodes/bearing_sim_node.py); what depends on the wall clock
                     # or the output path is left out so that the file stays byte-identical
                     values = {"real_time_factor": "nan", "real_time": "false", "mode": "render",
