@@ -196,6 +196,9 @@ def test_scene_error_and_bad_output_exit_2_with_one_line(tmp_path, capsys):
     code, err = _one_line_error(capsys, ["render", "er16k_healthy", "--duration", "1",
                                          "--out", str(tmp_path / "nodir" / "x.mcap")])
     assert code == 2 and len(err.splitlines()) == 1 and "cannot write there" in err
+    # it named render's temporary file ('.../nodir/x.mcap.<pid>.partial: No such file or
+    # directory'), not the folder to create
+    assert f"its folder '{tmp_path / 'nodir'}' does not exist; create it first)" in err and ".partial" not in err, err
     assert not (tmp_path / "x.mcap").exists()
 
 
