@@ -244,16 +244,36 @@ def test_a_misspelt_parameter_is_named_in_a_warning(ros_env, bearing_sim_exe):
             in r.stderr + r.stdout), r.stderr
 
 
+def _record_a_scene_file(ros_env, bearing_sim_exe, scene, text, duration):
+    """Write ``text`` to ``scene``, run the node on it by its name in its folder without pacing
+    for ``duration`` s, recorded to live.mcap there: (topics, metadata) of the recording."""
+    scene.write_text(text)
+    r = subprocess.run([bearing_sim_exe, "node", "--scene", scene.name, "--ros-args", "-p", "real_time:=false",
+                        "-p", f"duration:={float(duration)!r}", "-p", "record:=live.mcap"],
+                       cwd=scene.parent, env=ros_env, capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    return read_recording(scene.parent / "live.mcap")
+
+
+def test_a_run_ends_with_the_ground_truth_of_its_last_sample(ros_env, bearing_sim_exe, tmp_path):
+    """``duration:=2.5`` on a scene whose pit appears at 2.2 s: the recording held 0.3 s of the
+    pit, but its last /diagnostics were those of 2 s (none), and ``report`` said the pit came
+    "after this recording ends".  The node now ends with the diagnostics of its last published
+    sample, as ``render`` does."""
+    text = load_scene("cwru_6205_or007_6").source_text
+    late = text.replace("clock: 6, profile: geometric}", "clock: 6, profile: geometric, onset_s: 2.2}")
+    assert late != text, "cwru_6205_or007_6.yaml's defect line moved: update this test"
+    topics, _meta = _record_a_scene_file(ros_env, bearing_sim_exe, tmp_path / "late.yaml", late, 2.5)
+    truth = [({kv.key: kv.value for kv in msg.status[0].values}) for _t, msg in topics["/diagnostics"]]
+    assert [(v["simulated_s"], v["faults_present"], v["fault_onsets_s"]) for v in truth] == [
+        ("1.000000", "none", "none"), ("2.000000", "none", "none"), ("2.500000", "outer", "outer=2.200000")]
+
+
 def test_recorded_command_names_a_scene_file_by_its_absolute_path(ros_env, bearing_sim_exe, tmp_path):
     """``--scene rig.yaml`` (relative) is recorded as the file's absolute path, so that the
     recording's command loads the same scene from any folder."""
     text = load_scene("er16k_healthy").source_text.replace("name: er16k_healthy", "name: my_rig")
-    (tmp_path / "rig.yaml").write_text(text)
-    r = subprocess.run([bearing_sim_exe, "node", "--scene", "rig.yaml", "--ros-args", "-p", "real_time:=false",
-                        "-p", "duration:=0.1", "-p", "record:=live.mcap"],
-                       cwd=tmp_path, env=ros_env, capture_output=True, text=True, timeout=60)
-    assert r.returncode == 0, r.stderr
-    _topics, meta = read_recording(tmp_path / "live.mcap")
+    _topics, meta = _record_a_scene_file(ros_env, bearing_sim_exe, tmp_path / "rig.yaml", text, 0.1)
     argv = shlex.split(json.loads(meta["bearing_sim"]["parameters"])["command"])
     assert f"scene:={tmp_path / 'rig.yaml'}" in argv and "my_rig" not in " ".join(argv)
 
@@ -499,7 +519,9 @@ def test_diagnostics_give_the_operating_point_at_their_stamp_not_of_what_is_comp
     for t, v in diag:
         assert v["shaft_speed_rad_s"] == f"{speed_at[t]:.6g}", (t, v["shaft_speed_rad_s"], speed_at[t])
         assert v["radial_load_n"] == " ".join(f"{f:.6g}" for f in load_at[t])
-        assert float(v["computed_ahead_s"]) > 0.3
+        # but the last, at the end of the run (4.5 s), when there is nothing left to compute ahead
+        assert float(v["computed_ahead_s"]) > 0.3 or v["simulated_s"] == "4.500000", v
+    assert diag[-1][1]["simulated_s"] == "4.500000"
     # the test can fail: the operating point half a second later is another one
     times = sorted(speed_at)
     later = [speed_at[next(u for u in times if u >= t + NS // 2)] for t, _v in diag if t + NS // 2 <= times[-1]]

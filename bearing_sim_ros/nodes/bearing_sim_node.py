@@ -547,6 +547,8 @@ class BearingSimNode(Node):
         # for kinematic -> skidding), a decaying maximum like est, measured at each switch
         switch_est = SWITCH_COST_GUESS_S
         published_index = 0
+        last_published = None                 # (item, its log time) of the latest batch published
+        diag_end_index = 0                    # end index of the batch the latest /diagnostics came with
         rec_failed = False
         stats.period_start(time.monotonic(), 0)
         while True:
@@ -571,18 +573,14 @@ class BearingSimNode(Node):
                     next_diag = max(next_diag + 1.0, now - 0.5) if real_time else now + 1.0
                     next_diag_index = (math.floor(item.end_index / sr) + 1) * sr
                     out = out + [(self.pub_diag, self._diagnostics(item, now))]
-                if context.ok():
-                    try:
-                        for pub, msg in out:
-                            pub.publish(msg)
-                    except Exception:  # noqa: BLE001 - the context went away between ok() and publish
-                        if context.ok():
-                            raise
+                    diag_end_index = item.end_index
+                self._publish(out)
+                # real time: when it was published = end stamp + lateness; otherwise the end
+                # stamp, like `render`, so the file replays at the signal's pace
+                log_ns = item.end_stamp + int(lag * 1e9)
+                last_published = (item, log_ns)
                 rec = self.recorder
                 if rec is not None:          # after publishing: serialising is off the critical path
-                    # real time: when it was published = end stamp + lateness; otherwise the end
-                    # stamp, like `render`, so the file replays at the signal's pace
-                    log_ns = item.end_stamp + int(lag * 1e9)
                     rec.write(self.sub_speed.topic_name, speed_message(item.speed), log_ns)
                     rec.write(self.sub_load.topic_name,
                               load_message(item.load, item.start_stamp, msgs.frame_id), log_ns)
@@ -652,6 +650,26 @@ class BearingSimNode(Node):
             if not may:
                 wake = min(wake, start_at)
             self._stop.wait(max(0.0, wake - now))
+        # the ground truth of the last sample published, as `render` ends: a run that ends between
+        # two /diagnostics (duration 5.5 s, Ctrl-C) had none for its last part-second, and a pit
+        # that appeared there was "after this recording ends" to `report`
+        if last_published is not None and last_published[0].end_index > diag_end_index:
+            item, log_ns = last_published
+            msg = self._diagnostics(item, time.monotonic())
+            self._publish([(self.pub_diag, msg)])
+            if self.recorder is not None:
+                self.recorder.write(self.pub_diag.topic_name, msg, log_ns)
+
+    def _publish(self, out):
+        """Publish each (publisher, message) of ``out`` while the context lives (a signal may end
+        it at any moment: then nothing more goes out)."""
+        if self.context.ok():
+            try:
+                for pub, msg in out:
+                    pub.publish(msg)
+            except Exception:  # noqa: BLE001 - the context went away between ok() and publish
+                if self.context.ok():
+                    raise
 
     def _diagnostics(self, item, now):
         """The ``/diagnostics`` message published with ``item``, the batch whose end it is
