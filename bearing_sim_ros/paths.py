@@ -129,6 +129,9 @@ def input_file(text, where: str, expected: str, error=None) -> Path:
     which sends the user looking for a typo in a path that exists."""
     from .errors import UserError
 
+    if not str(text).strip():
+        # Path("") is the current folder: an empty argument (an unset $VAR) was "is a folder"
+        raise (error or UserError)(f"{where or repr(str(text))}: an empty path; {expected}")
     path = Path(text)
     try:
         mode = path.stat().st_mode

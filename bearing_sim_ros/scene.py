@@ -552,7 +552,7 @@ def resolve_scene_path(name_or_path: str | Path) -> Path:
     text = str(name_or_path)
     path = Path(text)
     if path.suffix in (".yaml", ".yml") or path.exists() or "/" in text:
-        return input_file(path, f"scene = {text!r}", f"give a YAML path or one of {', '.join(shipped_scenes())}",
+        return input_file(text, f"scene = {text!r}", f"give a YAML path or one of {', '.join(shipped_scenes())}",
                           error=SceneError)
     shipped = scenes_dir() / f"{text}.yaml"
     if not shipped.is_file():

@@ -103,6 +103,22 @@ def test_node_refuses_two_scenes(capsys, param):
     assert err == [f"error: bearing-sim node: --scene er16k_healthy and -p {param} name two scenes; give one"]
 
 
+@pytest.mark.parametrize("argv, line", [
+    # Path("") is the current folder: an empty argument (an unset $VAR) was "'': is a folder, not a
+    # file" for a scene, ": is a folder, not a file" for a recording, and validate read the
+    # current folder
+    (["render", "", "--duration", "1", "--out", "x.mcap"], "error: scene = '': an empty path; give a YAML path or one of "),
+    (["report", "", "--out", "r"], "error: '': an empty path; expected an .mcap recording"),
+    (["play", ""], "error: '': an empty path; expected an .mcap recording"),
+    (["validate", "--cwru", "", "--out", "v"], "error: --cwru '': an empty path; give a folder of CWRU .mat files"),
+])
+def test_an_empty_path_is_named_empty_not_a_folder(tmp_path, monkeypatch, capsys, argv, line):
+    monkeypatch.chdir(tmp_path)
+    code, err = _user_mistake(capsys, argv)
+    assert code == 2 and err.startswith(line), err
+    assert not any(tmp_path.iterdir())
+
+
 def test_non_finite_inputs_are_named_with_plain_numbers():
     sim = Simulator("er16k_outer_race", fidelity="kinematic")
     with pytest.raises(UserError) as speed:

@@ -197,6 +197,8 @@ def read_recording(path: str | Path, sample_rate: float | None = None) -> Record
 
 def find_recordings(folder: str | Path) -> list:
     """The ``.mat`` files in ``folder`` (sorted by name), or the one file given."""
+    if not str(folder).strip():       # Path("") is the current folder
+        raise UserError(f"--cwru {str(folder)!r}: an empty path; give a folder of CWRU .mat files")
     folder = Path(folder)
     if folder.is_file():
         return [folder]
