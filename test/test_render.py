@@ -4,6 +4,7 @@ mistakes end with exit status 2 and one line."""
 from __future__ import annotations
 
 import math
+import os
 import re
 import subprocess
 import threading
@@ -657,9 +658,12 @@ def test_a_render_whose_partial_file_goes_away_fails_in_one_line_and_stops(tmp_p
         if len(calls) == 30:
             (partial,) = tmp_path.glob("a.mcap.*.partial")
             taken.append(partial.name)
-            partial.unlink()
-            if how == "replaced":
-                partial.write_text("someone else's file\n")
+            if how == "replaced":         # at once, as mv does: unlinked first, it may be seen deleted
+                other = tmp_path / "other"
+                other.write_text("someone else's file\n")
+                os.replace(other, partial)
+            else:
+                partial.unlink()
             assert noticed.wait(30.0)
         return advance(self, *a, **kw)
 

@@ -489,6 +489,8 @@ class Recorder:
             return
         if there is not None:
             raise _NotAtItsPath(f"{what} was replaced by another file while it was written")
+        # its links again: deleted between the fstat above and the stat, it would read as moved
+        mine = os.fstat(stream.fileno())
         if mine.st_nlink:
             raise _NotAtItsPath(f"{what} was moved away while it was written")
         if not os.path.isdir(written.parent):
