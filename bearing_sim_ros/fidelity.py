@@ -47,6 +47,7 @@ from .paths import config_dir
 from .physics.skidding import drag_coefficient
 
 HYSTERESIS = 0.7
+NO_SKID_RATIOS = "kinematic requested: no skid ratios"   # the reason's start where a scene asks for them
 
 
 @dataclass(frozen=True)
@@ -118,6 +119,11 @@ def select_tier(scene, request: str, shaft_speed: float, radial_load, tolerance:
     """Choose the tier for ``scene`` at an operating point; ``current`` (the tier in use at run
     time) enables the hysteresis."""
     est, chi = kinematic_error_estimate(scene, shaft_speed, radial_load)
+    if request == "kinematic" and needs_skidding(scene):
+        # said where the tier is (the node's log, diagnostics, the render's line, the metadata):
+        # the skid ratios the scene asks for were dropped without a word
+        return Selection(request, f"{NO_SKID_RATIOS} (the scene asks for them; the skidding tier "
+                                  "computes them)", est, tolerance, chi)
     if request in ("kinematic", "skidding"):
         return Selection(request, f"{request} requested", est, tolerance, chi)
     if needs_skidding(scene):

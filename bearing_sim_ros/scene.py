@@ -263,7 +263,7 @@ class _Section:
             raise SceneError(f"{self.key(name)} = {short_repr(value)}: expected a string")
         return value
 
-    def vector(self, name, length, default=None, lo=-math.inf, hi=math.inf) -> tuple:
+    def vector(self, name, length, default=None, lo=-math.inf, hi=math.inf, unit="") -> tuple:
         value = self.data.get(name, default)
         where = self.key(name)
         if (not isinstance(value, (list, tuple)) or len(value) != length
@@ -271,7 +271,8 @@ class _Section:
             raise SceneError(f"{where} = {short_repr(value)}: expected a list of {length} numbers")
         for v in value:
             if v != v or not lo <= v <= hi:
-                raise SceneError(f"{where} = {short_repr(value)}: each entry must be in [{lo:g}, {hi:g}]")
+                raise SceneError(f"{where} = {short_repr(value)}: each entry must be in [{lo:g}, {hi:g}]"
+                                 + (f" {unit}" if unit else ""))
         return tuple(float(v) for v in value)
 
     def section(self, name, allowed, required=()) -> "_Section":
@@ -478,7 +479,7 @@ def _profile(top: _Section, speed: float, load: tuple, bearing: Bearing) -> tupl
             raise SceneError(f"profile[{i}].t = {t:g}: times must increase (previous {last_t:g})")
         last_t = t
         rpm = p.number("shaft_speed_rpm", speed / RPM, lo=-MAX_SPEED_RPM, hi=MAX_SPEED_RPM)
-        load = p.vector("radial_load", 2, list(load), lo=-MAX_LOAD, hi=MAX_LOAD)
+        load = p.vector("radial_load", 2, list(load), lo=-MAX_LOAD, hi=MAX_LOAD, unit="N")
         _check_operating_point(p, rpm, load, bearing)
         speed = rpm * RPM
         points.append(ProfilePoint(t, speed, load))
@@ -496,7 +497,7 @@ def scene_from_dict(data: Any, name: str = "scene", source_text: str = "", sourc
     bearing = _bearing(top)
     op = top.section("operating_point", ("shaft_speed_rpm", "radial_load"), required=("shaft_speed_rpm",))
     rpm = op.number("shaft_speed_rpm", lo=-MAX_SPEED_RPM, hi=MAX_SPEED_RPM)
-    load = op.vector("radial_load", 2, [0.0, 0.0], lo=-MAX_LOAD, hi=MAX_LOAD)
+    load = op.vector("radial_load", 2, [0.0, 0.0], lo=-MAX_LOAD, hi=MAX_LOAD, unit="N")
     _check_operating_point(op, rpm, load, bearing)
     speed = rpm * RPM
     fid = top.section("fidelity", ("tier", "tolerance", "outputs"))

@@ -268,6 +268,23 @@ def test_solver_with_the_kinematic_tier_asked_for_is_one_line(tmp_path, capsys):
     assert not out.exists()
 
 
+def test_the_kinematic_tier_on_a_scene_that_asks_for_skid_ratios_says_they_are_missing(tmp_path, capsys):
+    """``er16k_skidding`` asks for skid ratios; ``--fidelity kinematic`` dropped them without a
+    word.  The printed line and the recorded tier reason now say so; a scene that does not ask
+    for them reads as before."""
+    from bearing_sim_ros.recording.reader import open_recording as read
+
+    for scene, said in (("er16k_skidding", True), ("er16k_healthy", False)):
+        out = tmp_path / f"{scene}.mcap"
+        assert cli.main(["render", scene, "--duration", "0.1", "--fidelity", "kinematic", "--out", str(out)]) == 0
+        line = capsys.readouterr().out
+        assert ("(kinematic tier; no skid ratios: the scene asks for them, the skidding tier computes them)"
+                in line) == said, line
+        with read(out) as rec:
+            reason = rec.metadata["tier_reason"]
+        assert reason.startswith("kinematic requested: no skid ratios") == said, reason
+
+
 def test_solver_unused_by_auto_is_said_and_not_recorded(tmp_path, capsys):
     """Auto keeps er16k_outer_race on the kinematic tier: ``--solver reference`` changes nothing,
     the printed line says so, and the file is the default's to the byte (its command names no

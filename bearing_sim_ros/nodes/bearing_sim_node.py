@@ -76,7 +76,7 @@ def check_load(fx: float, fy: float, fz: float, limits: InputLimits):
     """None if the force (N) is usable, else ``(reason_key, one-line reason)``.  ``fz`` (axial)
     is not modelled but must be sane too; the magnitude of the whole force is limited."""
     if not (math.isfinite(fx) and math.isfinite(fy) and math.isfinite(fz)):
-        return "not_finite", f"load = ({fx!r}, {fy!r}, {fz!r}) N: not finite"
+        return "not_finite", f"load = ({fx:.6g}, {fy:.6g}, {fz:.6g}) N: not finite"
     mag = math.sqrt(fx * fx + fy * fy + fz * fz)
     if mag > limits.max_load:
         return "out_of_range", (f"load = ({fx:.6g}, {fy:.6g}, {fz:.6g}) N: |F| = {mag:.6g} N beyond "

@@ -514,6 +514,10 @@ def render_command(args) -> int:
     tier = tier_summary(summary["tier_values"])
     if summary["solver_unused"]:
         tier += "; --solver applies to the skidding tier only, not used"
+    from ..fidelity import NO_SKID_RATIOS
+
+    if summary["tier_values"]["tier_reason"].startswith(NO_SKID_RATIOS):
+        tier += "; no skid ratios: the scene asks for them, the skidding tier computes them"
     print(f"{summary['path']}: {summary['signal_s']:g} s of {scene.name} ({tier}), "
           f"{summary['messages']} messages, {summary['bytes'] / 1e6:.1f} MB of messages, "
           f"rendered in {summary['wall_s']:.2f} s = {summary['real_time_factor']:.1f}x real time")
