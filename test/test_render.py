@@ -467,6 +467,21 @@ def test_tier_keys_name_what_tier_values_writes():
     assert tuple(tier_values(Simulator("er16k_healthy", fidelity="kinematic"))) == TIER_KEYS
 
 
+def _accel_y_and_diagnostics(out):
+    """The recording ``out``'s accel_y tables ([array]) and /diagnostics ([{key: value}])."""
+    from rclpy.serialization import deserialize_message
+
+    accel, diag = [], []
+    with open_recording(out) as rec:
+        for topic, msg_type, _t, data in rec.messages():
+            msg = deserialize_message(data, get_message(msg_type))
+            if topic == "/accel":
+                accel.append(from_pointcloud2(msg)[2][:, 1])
+            elif topic == "/diagnostics":
+                diag.append({kv.key: kv.value for kv in msg.status[0].values})
+    return accel, diag
+
+
 def test_diagnostics_give_the_fault_frequencies_where_the_signal_has_them(skidding_outer_race):
     """At 10000 rpm / 10 N the cage skids 7 %: the outer-race line of the recorded signal is
     7 % below the catalog's pure-rolling BPFO, and ``bpfo_hz`` in the recorded ``/diagnostics``
@@ -477,16 +492,7 @@ def test_diagnostics_give_the_fault_frequencies_where_the_signal_has_them(skiddi
 
     scene_path, out = skidding_outer_race
     scene = load_scene(scene_path)
-    accel, diag = [], []
-    with open_recording(out) as rec:
-        from rclpy.serialization import deserialize_message
-
-        for topic, msg_type, _t, data in rec.messages():
-            msg = deserialize_message(data, get_message(msg_type))
-            if topic == "/accel":
-                accel.append(from_pointcloud2(msg)[2][:, 1])
-            elif topic == "/diagnostics":
-                diag.append({kv.key: kv.value for kv in msg.status[0].values})
+    accel, diag = _accel_y_and_diagnostics(out)
     last = diag[-1]
     bpfo, cage = float(last["bpfo_hz"]), float(last["cage_hz"])
     theory = scene.bearing.fault_frequencies(scene.shaft_hz)
@@ -751,3 +757,37 @@ def test_a_saturated_sensor_is_counted_and_warned_in_the_diagnostics(tmp_path):
         else:
             assert all(level == 1 and message.startswith("accelerometer saturated: ") for level, message, _n in diag)
             assert all(n > 0 for _l, _m, n in diag) and sum(n for _l, _m, n in diag) == at_range
+
+
+def test_bsf_hz_is_where_a_skidding_balls_defect_line_is(tmp_path):
+    """A ball defect on the ER-16K at 10000 rpm / 10 N, skidding tier: the balls spin about 7 %
+    slower than pure rolling, and the 2xBSF envelope line of the ball's pit sits there (720 Hz
+    against the catalog's 774).  ``bsf_hz`` in the recorded ``/diagnostics`` is that spin (the
+    pure-rolling value slowed by ``ball_skid_ratio``) and is where the line is, within 0.5 Hz
+    (the report placed it at pure rolling); on the kinematic tier it is the catalog's."""
+    from bearing_sim_ros.analysis.envelope import envelope_spectrum, line_at
+
+    text = load_scene("er16k_outer_race").source_text
+    ball = (text.replace("{shaft_speed_rpm: 1600, radial_load: [0.0, -50.0]}",
+                         "{shaft_speed_rpm: 10000, radial_load: [0.0, -10.0]}")
+            .replace("{kind: outer, width_mm: 0.6, depth_mm: 0.25, length_mm: 0.6, clock: 6, profile: geometric}",
+                     "{kind: ball, width_mm: 0.6, depth_mm: 0.25, length_mm: 0.6, angle_deg: 0, ball: 0}"))
+    assert "kind: ball" in ball and "10000" in ball, "er16k_outer_race.yaml moved: update this test"
+    path = tmp_path / "fast_ball.yaml"
+    path.write_text(ball)
+    scene = load_scene(path)
+    rolling = scene.bearing.fault_frequencies(scene.shaft_hz)["bsf"]
+    for tier in ("skidding", "kinematic"):
+        out = tmp_path / f"{tier}.mcap"
+        render(path, 2.0, out, fidelity=tier, progress=False)
+        accel, diag = _accel_y_and_diagnostics(out)
+        last = diag[-1]
+        bsf = float(last["bsf_hz"])
+        if tier == "kinematic":
+            assert bsf == pytest.approx(rolling, rel=1e-5)
+            continue
+        assert bsf == pytest.approx(rolling * (1 - float(last["ball_skid_ratio"]) / 100), rel=1e-4)
+        assert bsf < 0.95 * rolling
+        x = np.concatenate(accel)[int(FS) // 5:].astype(float)
+        freqs, spec = envelope_spectrum(x, FS, max_freq=2000.0)
+        assert abs(line_at(freqs, spec, 2 * rolling, search_rel=0.1).found_hz - 2 * bsf) < 0.5

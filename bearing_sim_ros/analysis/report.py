@@ -155,8 +155,8 @@ class _Data:
         self.load_xy = np.array(load_xy, dtype=float).reshape(-1, 2)
         self.skid = {k: np.array(v, dtype=float) for k, v in diag.items()}
         # the fault frequencies the recording's /diagnostics gave, mean over the recording
-        self.signal_frequencies = ({k: float(np.mean([f[k] for _, f in in_signal])) for k in in_signal[0][1]}
-                                   if in_signal else {})
+        common = set.intersection(*(set(f) for _, f in in_signal)) if in_signal else set()
+        self.signal_frequencies = {k: float(np.mean([f[k] for _, f in in_signal])) for k in sorted(common)}
         # ... and each /diagnostics period's, in signal time: (from s, to s, {ftf, bpfo, bpfi: Hz})
         ends = [(ns - self.t0_ns) / NS for ns, _ in in_signal]
         self.signal_frequency_periods = [(0.0 if k == 0 else ends[k - 1], ends[k], f)
@@ -217,15 +217,17 @@ def skid_ratios(diagnostics) -> dict:
 
 
 def signal_frequencies(diagnostics) -> dict:
-    """{"ftf", "bpfo", "bpfi": Hz} as the signal has them in one ``/diagnostics`` message
-    (``cage_hz``, ``bpfo_hz``, ``bpfi_hz``: ``recording.render.PeriodMeans``); {} in a recording
-    made before these keys."""
-    keys = {"cage_hz": "ftf", "bpfo_hz": "bpfo", "bpfi_hz": "bpfi"}
+    """{"ftf", "bpfo", "bpfi"[, "bsf"]: Hz} as the signal has them in one ``/diagnostics``
+    message (``cage_hz``, ``bpfo_hz``, ``bpfi_hz``, ``bsf_hz``: ``recording.render.PeriodMeans``);
+    {} in a recording made before the first three, without "bsf" in one made before ``bsf_hz``
+    (then the ball's line is placed at pure rolling)."""
+    keys = {"cage_hz": "ftf", "bpfo_hz": "bpfo", "bpfi_hz": "bpfi", "bsf_hz": "bsf"}
     found = {keys[kv.key]: kv.value for status in diagnostics.status for kv in status.values if kv.key in keys}
     try:
-        return {k: float(v) for k, v in found.items()} if len(found) == len(keys) else {}
+        found = {k: float(v) for k, v in found.items()}
     except ValueError:
         return {}
+    return found if {"ftf", "bpfo", "bpfi"} <= set(found) else {}
 
 
 def tier_keys(diagnostics) -> dict:
@@ -303,7 +305,7 @@ def mean_in_window(t_s, values, start_s: float, end_s: float):
 
 
 def recorded_frequencies(periods: list, start_s: float, end_s: float) -> dict:
-    """{"ftf", "bpfo", "bpfi": Hz} as the recording's ``/diagnostics`` give them over
+    """{"ftf", "bpfo", "bpfi"[, "bsf"]: Hz} as the recording's ``/diagnostics`` give them over
     [start_s, end_s): the mean of the periods' values weighted by their overlap with the window
     (each period runs from the previous ``/diagnostics`` to its own, s); a window outside every
     period takes the nearest; {} without periods (a recording made before these keys)."""
@@ -315,7 +317,8 @@ def recorded_frequencies(periods: list, start_s: float, end_s: float) -> dict:
         overlap = np.zeros(len(periods))
         overlap[int(np.argmin([min(abs(mid - p0), abs(mid - p1)) for p0, p1, _ in periods]))] = 1.0
     w = overlap / overlap.sum()
-    return {k: float(sum(wi * f[k] for wi, (_, _, f) in zip(w, periods))) for k in periods[0][2]}
+    common = set.intersection(*(set(f) for _, _, f in periods))
+    return {k: float(sum(wi * f[k] for wi, (_, _, f) in zip(w, periods))) for k in sorted(common)}
 
 
 SLACK_S = 1e-6      # s: times this close count as equal (stamps rounded to the ns)
@@ -827,7 +830,9 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
         "shaft_speed_variation": speed_var,
         "fault_frequencies_hz": freqs,
         "fault_frequencies_pure_rolling_hz": rolling,
-        "fault_frequencies_from": ("the recording's /diagnostics (cage_hz, bpfo_hz, bpfi_hz; bsf: pure rolling)"
+        "fault_frequencies_from": (("the recording's /diagnostics (cage_hz, bpfo_hz, bpfi_hz, bsf_hz)"
+                                    if "bsf" in d.signal_frequencies else
+                                    "the recording's /diagnostics (cage_hz, bpfo_hz, bpfi_hz; bsf: pure rolling)")
                                    if d.signal_frequencies and rolling else "pure rolling at the mean shaft speed"),
         "envelope_channel": ch,
         "fault_lines": ({k: {"expected_hz": v.expected_hz, "found_hz": v.found_hz, "height": v.height,

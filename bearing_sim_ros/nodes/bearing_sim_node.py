@@ -328,7 +328,7 @@ class BearingSimNode(Node):
         self._repace = False
         self.finished = threading.Event()
         self.error = None
-        self.stats = _Stats(self.sim.sample_rate, self.sim.bearing.balls, self.scene.sensor.range)
+        self.stats = _Stats(self.sim.sample_rate, self.sim.bearing, self.scene.sensor.range)
         self._thread = threading.Thread(target=self._run, name="bearing-sim", daemon=True)
 
     def _open_recorder(self, cfg):
@@ -748,11 +748,11 @@ class _Pending:
 class _Stats:
     """Pacing and batch statistics.  Written by the sim thread only."""
 
-    def __init__(self, sample_rate: float, balls: int, clip_limit: float):
+    def __init__(self, sample_rate: float, bearing, clip_limit: float):
         from ..recording.render import PeriodMeans
 
         self.sample_rate = sample_rate
-        self._means = PeriodMeans(balls, clip_limit)
+        self._means = PeriodMeans(bearing.balls, clip_limit, bearing.ball_spin_speed(1.0))
         self.overruns = 0
         self.worst_lag = 0.0
         self.batches = 0

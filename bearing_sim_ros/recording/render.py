@@ -149,13 +149,18 @@ class PeriodMeans:
       ``bpfo_hz`` = Z x cage_hz, ``bpfi_hz`` = Z x the shaft's mean speed relative to the cage.
       Where the cage skids they differ from the catalog's pure-rolling ones
       (``Bearing.fault_frequencies``), and they are where the signal's envelope lines are;
+    - with ``spin_per_shaft`` (the bearing's pure-rolling ball spin per unit shaft speed,
+      ``Bearing.ball_spin_speed(1.0)``): ``bsf_hz``, the balls' mean spin frequency, from the
+      shaft's mean speed and, on the skidding tier, the balls' mean skid (which slows their spin
+      by that share: the 2xBSF line of a ball defect moves with it);
     - with ``clip_limit`` (the sensor's range, m/s^2): ``accel_clipped_samples``, the samples of
       the period at which an axis sat at the range (a saturated sensor: under a 16 kN load the
       vertical axis clipped at 50 g without a word)."""
 
-    def __init__(self, balls: int, clip_limit: float | None = None):
+    def __init__(self, balls: int, clip_limit: float | None = None, spin_per_shaft: float | None = None):
         self.balls = int(balls)
         self.clip_limit = clip_limit
+        self.spin_per_shaft = spin_per_shaft
         self.reset()
 
     def reset(self) -> None:
@@ -187,6 +192,10 @@ class PeriodMeans:
         out["cage_hz"] = f"{abs(cage) / (2 * math.pi):.6g}"
         out["bpfo_hz"] = f"{self.balls * abs(cage) / (2 * math.pi):.6g}"
         out["bpfi_hz"] = f"{self.balls * abs(shaft - cage) / (2 * math.pi):.6g}"
+        if self.spin_per_shaft is not None:
+            # ball_skid = 100 (w_rolling - w_ball) / w_rolling per ball: linear, so its mean gives theirs
+            slowed = 1.0 - mean.get("ball_skid_ratio", 0.0) / 100.0
+            out["bsf_hz"] = f"{self.spin_per_shaft * abs(shaft) * slowed / (2 * math.pi):.6g}"
         if self.clip_limit is not None:
             out["accel_clipped_samples"] = str(self.clipped)
         return out
@@ -387,7 +396,7 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
     bar = _Progress(total / sample_rate, sys.stderr.isatty() if progress is None else progress)
     t_wall0 = time.perf_counter()
     frame = msgs.frame_id
-    means = PeriodMeans(scene.bearing.balls, scene.sensor.range)
+    means = PeriodMeans(scene.bearing.balls, scene.sensor.range, scene.bearing.ball_spin_speed(1.0))
     next_diag_s = 1
     done = 0
     try:
