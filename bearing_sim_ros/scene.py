@@ -190,6 +190,12 @@ class Scene:
                                                f"{speed:g} rad/s ({speed / RPM:g} rpm)", f"{prefix}radial_load")
             if error:
                 raise SceneError(f"scene {self.name}: {error}")
+        # and its defects (dataclasses.replace(scene.defects[0], width=...) ran a negative or NaN
+        # width as a healthy bearing and a width in mm as a pit of metres)
+        for i, defect in enumerate(self.defects):
+            error = _defect_error(self.bearing, defect, f"defects[{i}]")
+            if error:
+                raise SceneError(f"scene {self.name}: {error}")
 
     @property
     def shaft_hz(self) -> float:
@@ -323,6 +329,44 @@ def _operating_point_error(bearing: Bearing, speed: float, load, speed_key: str,
     return ""
 
 
+def _defect_bounds(bearing: Bearing) -> tuple:
+    """Largest width, depth and length (m) of a defect on ``bearing``: a local defect is at most
+    half the ball spacing (and a ball diameter) wide, so one ball meets it at a time; at most half
+    a ball diameter deep and a raceway wide."""
+    spacing = math.pi * bearing.pitch_diameter / bearing.balls
+    return min(0.5 * spacing, bearing.ball_diameter), 0.5 * bearing.ball_diameter, bearing.width
+
+
+def _defect_error(bearing: Bearing, defect, key: str) -> str:
+    """"" when ``defect`` (a :class:`Defect` made in Python) keeps to the bounds its YAML keys
+    have (``_defects``), else the line naming the field (``key.field``), its value and unit."""
+    if not isinstance(defect, Defect):
+        return f"{key} = {short_repr(defect)}: expected a bearing_sim_ros.scene.Defect"
+    for name, options in (("kind", DEFECT_KINDS), ("profile", DEPTH_PROFILES)):
+        value = getattr(defect, name)
+        if not (isinstance(value, str) and value in options):
+            return f"{key}.{name} = {short_repr(value)}: allowed values are {', '.join(options)}"
+    width, depth, length = _defect_bounds(bearing)
+    for name, lo, hi, unit in (("width", 0.0, width, "m"), ("depth", 0.0, depth, "m"),
+                               ("length", 0.0, length, "m"), ("angle", -2 * math.pi, 2 * math.pi, "rad"),
+                               ("wander_turns", 0.0, 1e4, ""), ("onset", 0.0, MAX_DEFECT_TIME, "s"),
+                               ("growth", 0.0, MAX_DEFECT_TIME, "s")):
+        value = getattr(defect, name)
+        opened = name in ("width", "depth", "length")
+        rng = f"{'(' if opened else '['}{lo:g}, {hi:g}]{' ' + unit if unit else ''}"
+        if isinstance(value, bool) or not isinstance(value, numbers.Real):
+            return f"{key}.{name} = {short_repr(value)}: expected a number in {rng}"
+        if not (math.isfinite(value) and (lo < value if opened else lo <= value) and value <= hi):
+            return f"{key}.{name} = {value:g}{' ' + unit if unit else ''}: allowed range is {rng}"
+    if defect.wander_turns and defect.kind != "ball":
+        return (f"{key}.wander_turns = {short_repr(defect.wander_turns)}: only a ball defect has a spin axis "
+                f"to wander (this one is kind {defect.kind})")
+    ball = defect.ball
+    if isinstance(ball, bool) or not isinstance(ball, numbers.Integral) or not 0 <= ball < bearing.balls:
+        return f"{key}.ball = {short_repr(ball)}: expected a whole number in [0, {bearing.balls - 1}]"
+    return ""
+
+
 def _operating_point_type_error(speed, load, speed_key: str, load_key: str) -> str:
     """"" when ``speed`` is a finite number and ``load`` two (a bool is neither), else the line
     naming the key: a scene made in Python has not been through the YAML's readers."""
@@ -382,12 +426,10 @@ def _defects(top: _Section, bearing: Bearing) -> tuple:
                       "wander_turns", "onset_s", "growth_s"),
                      required=("kind", "width_mm", "depth_mm"))
         kind = d.choice("kind", DEFECT_KINDS)
-        # a local defect: at most half the ball spacing (and a ball diameter) wide, so one ball meets it at a time
-        spacing = math.pi * bearing.pitch_diameter / bearing.balls
-        max_width = min(0.5 * spacing, bearing.ball_diameter) / 1e-3
+        max_width, max_depth, max_length = (v / 1e-3 for v in _defect_bounds(bearing))
         width = d.number("width_mm", lo=0.0, hi=max_width, lo_open=True) * 1e-3
-        depth = d.number("depth_mm", lo=0.0, hi=0.5 * bearing.ball_diameter / 1e-3, lo_open=True) * 1e-3
-        length = d.number("length_mm", width / 1e-3, lo=0.0, hi=bearing.width / 1e-3, lo_open=True) * 1e-3
+        depth = d.number("depth_mm", lo=0.0, hi=max_depth, lo_open=True) * 1e-3
+        length = d.number("length_mm", width / 1e-3, lo=0.0, hi=max_length, lo_open=True) * 1e-3
         if d.has("clock") and d.has("angle_deg"):
             raise SceneError(f"defects[{i}]: give either clock or angle_deg, not both")
         if d.has("clock"):
