@@ -183,7 +183,7 @@ class Simulator:
         if not isinstance(scene, Scene):
             scene = load_scene(scene)
         lo, hi = SAMPLE_RATE_RANGE
-        if not (isinstance(sample_rate, (int, float)) and lo <= sample_rate <= hi):
+        if not (_real_number(sample_rate) and lo <= sample_rate <= hi):
             raise UserError(f"sample_rate = {sample_rate!r}: allowed range is [{lo:g}, {hi:g}] Hz")
         if fidelity not in FIDELITIES:
             raise UserError(f"fidelity = {fidelity!r}: allowed values are {', '.join(FIDELITIES)}")
@@ -197,8 +197,7 @@ class Simulator:
             from .scene import TOLERANCE_RANGE
 
             lo, hi = TOLERANCE_RANGE
-            if not (isinstance(tolerance, (int, float)) and not isinstance(tolerance, bool)
-                    and lo <= tolerance <= hi):
+            if not (_real_number(tolerance) and lo <= tolerance <= hi):
                 raise UserError(f"tolerance = {tolerance!r}: allowed range is [{lo:g}, {hi:g}] "
                                 f"(a relative error, as the scene's fidelity.tolerance)")
         self.scene = scene
@@ -231,7 +230,7 @@ class Simulator:
                                else f"scene {scene.name}'s fidelity.tier: kinematic")
                             + " runs the kinematic tier")
         self.selection = select_tier(scene, request, self._shaft_speed, self._radial_load,
-                                     tolerance if tolerance is not None else scene.fidelity_tolerance)
+                                     float(tolerance) if tolerance is not None else scene.fidelity_tolerance)
         self.tier = self.selection.tier
         self._oversample = None if oversample is None else int(oversample)
         from .physics.defects import DefectSchedule

@@ -294,3 +294,29 @@ def test_the_recorder_names_a_folder_by_the_callers_argument(tmp_path):
     with pytest.raises(UserError) as exc:
         Recorder(tmp_path, {}, argument="record")
     assert str(exc.value) == f"record = {str(tmp_path)!r}: is a folder; expected the path of an .mcap file"
+
+
+def test_numpy_real_numbers_are_numbers():
+    """``sample_rate``, ``tolerance`` and ``rk4_step`` took only Python ints and floats: a rate
+    read from a numpy array (``np.float32(15000)``, ``np.int64(12000)``) was refused as "allowed
+    range is [1000, 200000] Hz", a value inside that range, while ``seed``, ``n`` and
+    ``shaft_speed`` took numpy numbers.  Now they take any real number (a bool still is none)."""
+    plain = Simulator("er16k_healthy", fidelity="kinematic", sample_rate=12000.0, tolerance=0.05).advance(40)
+    for rate, tol in ((np.float32(12000), np.float32(0.05)), (np.int64(12000), np.float64(0.05))):
+        sim = Simulator("er16k_healthy", fidelity="kinematic", sample_rate=rate, tolerance=tol)
+        assert sim.sample_rate == 12000.0 and type(sim.sample_rate) is float
+        assert np.array_equal(sim.advance(40).accel, plain.accel)
+    step = np.float32(5e-6)
+    rk4 = [Simulator("er16k_healthy", fidelity="skidding", solver="rk4", rk4_step=h).advance(3).accel
+           for h in (step, float(step))]
+    assert np.array_equal(*rk4)
+    for call, message in (
+            (lambda: Simulator("er16k_healthy", sample_rate=np.True_),
+             "sample_rate = np.True_: allowed range is [1000, 200000] Hz"),
+            (lambda: Simulator("er16k_healthy", sample_rate=np.float32("nan")),
+             "sample_rate = np.float32(nan): allowed range is [1000, 200000] Hz"),
+            (lambda: Simulator("er16k_healthy", fidelity="skidding", solver="rk4", rk4_step=np.int64(1)),
+             "rk4_step = np.int64(1): allowed range is [1e-09, 0.001] s")):
+        with pytest.raises(UserError) as exc:
+            call()
+        assert str(exc.value) == message
