@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from bearing_sim_ros import Simulator, UserError, cli
+from bearing_sim_ros.limits import RPM
 
 
 def _subcommands():
@@ -147,18 +148,30 @@ def test_seed_range_is_the_nodes():
     (lambda s: s.advance(10, shaft_speed=True), "shaft_speed = True: expected a number, rad/s"),
     (lambda s: s.advance(10, radial_load=("0", "-50")), "radial_load = ('0', '-50'): expected two numbers (x, y), N"),
     (lambda s: s.advance(10, radial_load="05"), "radial_load = '05': expected two numbers (x, y), N"),
-    # beyond a scene's bounds the kinematic tier returned NaN without a word
+    # beyond a scene's bounds the kinematic tier returned NaN without a word; beyond the bearing's
+    # own (a scene's, the node's) advance ran on: 900 kN put 444 kN on one ball of an ER-16K
     (lambda s: s.advance(10, shaft_speed=1e9),
-     "shaft_speed = 1e+09 rad/s: allowed range is [-6283.19, 6283.19] rad/s (+-60000 rpm, as in a scene)"),
+     "shaft_speed = 1e+09 rad/s (9.5493e+09 rpm): beyond what bearing ER-16K takes (|speed| <= 25974 rpm, "
+     "n*dm <= 1e+06 rpm mm)"),
+    (lambda s: s.advance(10, shaft_speed=-30000 * RPM),
+     "shaft_speed = -3141.59 rad/s (-30000 rpm): beyond what bearing ER-16K takes (|speed| <= 25974 rpm, "
+     "n*dm <= 1e+06 rpm mm)"),
     (lambda s: s.advance(10, radial_load=(0.0, -1e12)),
-     "radial_load = (0, -1e+12) N: each entry must be in [-1e+06, 1e+06] N, as in a scene"),
+     "radial_load = [0, -1e+12] N: |F| = 1e+12 N beyond 2 x C0 = 16681 N of bearing ER-16K"),
+    (lambda s: s.advance(10, radial_load=(0.0, -900000.0)),
+     "radial_load = [0, -900000] N: |F| = 900000 N beyond 2 x C0 = 16681 N of bearing ER-16K"),
+    (lambda s: s.advance(10, radial_load=(12000.0, -12000.0)),
+     "radial_load = [12000, -12000] N: |F| = 16970.6 N beyond 2 x C0 = 16681 N of bearing ER-16K"),
 ])
 def test_advance_names_a_bad_speed_or_load_and_what_is_allowed(call, message):
+    """``advance`` holds a speed and load to the bearing's limits, as a scene and the node do."""
     sim = Simulator("er16k_healthy", fidelity="kinematic")
     with pytest.raises(UserError) as exc:
         call(sim)
     assert str(exc.value) == message
     assert sim.index == 0                     # nothing advanced
+    inside = sim.advance(10, shaft_speed=25970 * RPM, radial_load=np.array([11790.0, -11790.0]))
+    assert np.isfinite(inside.accel).all() and sim.index == 10
 
 
 @pytest.mark.parametrize("call, message", [
