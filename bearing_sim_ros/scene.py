@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .catalog import Bearing, bearing_from_mapping, get_bearing
+from .catalog import RADIAL_CLEARANCE_RANGE_UM, Bearing, bearing_from_mapping, get_bearing
 from .errors import SceneError, short_repr
 from .limits import LOAD_MULTIPLE_C0, MAX_LOAD, MAX_SPEED_RPM, NDM_LIMIT, RPM, InputLimits
 from .paths import MCAP_MAGIC, input_file, scenes_dir
@@ -196,6 +196,16 @@ class Scene:
             error = _defect_error(self.bearing, defect, f"defects[{i}]")
             if error:
                 raise SceneError(f"scene {self.name}: {error}")
+        # and the knobs of a sweep that the YAML bounds (a NaN clearance ran to NaN samples)
+        lo, hi = RADIAL_CLEARANCE_RANGE_UM
+        tier = ("" if isinstance(self.fidelity, str) and self.fidelity in TIERS
+                else f"fidelity = {short_repr(self.fidelity)}: allowed values are {', '.join(TIERS)}")
+        for error in (_number_error("bearing.radial_clearance", self.bearing.radial_clearance, lo * 1e-6,
+                                    hi * 1e-6, "m"),
+                      _number_error("random_slip", self.random_slip, 0.0, RANDOM_SLIP_MAX),
+                      tier, _number_error("fidelity_tolerance", self.fidelity_tolerance, *TOLERANCE_RANGE)):
+            if error:
+                raise SceneError(f"scene {self.name}: {error}")
 
     @property
     def shaft_hz(self) -> float:
@@ -298,6 +308,7 @@ def clock_to_angle(clock: float) -> float:
 
 
 TOLERANCE_RANGE = (1e-4, 1.0)   # relative error allowed to the fidelity choice (fidelity.tolerance)
+RANDOM_SLIP_MAX = 0.05          # random_slip: a fraction of the ball spacing (seed 001: 1-2 %)
 # MAX_LOAD (N) and MAX_SPEED_RPM (limits.py) bound every scene's speeds and loads whatever the
 # bearing; then the bearing's own limits (InputLimits, the live node's) apply: _check_operating_point
 MAX_DEFECT_TIME = 1.0e6   # s (11.6 days of signal): a defect's onset_s and growth_s
@@ -337,6 +348,18 @@ def _defect_bounds(bearing: Bearing) -> tuple:
     return min(0.5 * spacing, bearing.ball_diameter), 0.5 * bearing.ball_diameter, bearing.width
 
 
+def _number_error(key: str, value, lo: float, hi: float, unit: str = "", lo_open: bool = False) -> str:
+    """"" when ``value`` (a field of a scene made in Python) is a finite number in [lo, hi] (or
+    (lo, hi]), else the line naming ``key``, the value, the range and ``unit``."""
+    unit = f" {unit}" if unit else ""
+    rng = f"{'(' if lo_open else '['}{lo:g}, {hi:g}]{unit}"
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        return f"{key} = {short_repr(value)}: expected a number in {rng}"
+    if not (math.isfinite(value) and (lo < value if lo_open else lo <= value) and value <= hi):
+        return f"{key} = {value:g}{unit}: allowed range is {rng}"
+    return ""
+
+
 def _defect_error(bearing: Bearing, defect, key: str) -> str:
     """"" when ``defect`` (a :class:`Defect` made in Python) keeps to the bounds its YAML keys
     have (``_defects``), else the line naming the field (``key.field``), its value and unit."""
@@ -351,13 +374,10 @@ def _defect_error(bearing: Bearing, defect, key: str) -> str:
                                ("length", 0.0, length, "m"), ("angle", -2 * math.pi, 2 * math.pi, "rad"),
                                ("wander_turns", 0.0, 1e4, ""), ("onset", 0.0, MAX_DEFECT_TIME, "s"),
                                ("growth", 0.0, MAX_DEFECT_TIME, "s")):
-        value = getattr(defect, name)
-        opened = name in ("width", "depth", "length")
-        rng = f"{'(' if opened else '['}{lo:g}, {hi:g}]{' ' + unit if unit else ''}"
-        if isinstance(value, bool) or not isinstance(value, numbers.Real):
-            return f"{key}.{name} = {short_repr(value)}: expected a number in {rng}"
-        if not (math.isfinite(value) and (lo < value if opened else lo <= value) and value <= hi):
-            return f"{key}.{name} = {value:g}{' ' + unit if unit else ''}: allowed range is {rng}"
+        error = _number_error(f"{key}.{name}", getattr(defect, name), lo, hi, unit,
+                              lo_open=name in ("width", "depth", "length"))
+        if error:
+            return error
     if defect.wander_turns and defect.kind != "ball":
         return (f"{key}.wander_turns = {short_repr(defect.wander_turns)}: only a ball defect has a spin axis "
                 f"to wander (this one is kind {defect.kind})")
@@ -394,7 +414,8 @@ def _bearing(top: _Section) -> Bearing:
     else:
         raise SceneError(f"bearing = {short_repr(value)}: expected a catalog name or a mapping of geometry")
     if top.has("radial_clearance_um"):
-        bearing = bearing.with_clearance(top.number("radial_clearance_um", lo=-50, hi=500) * 1e-6)
+        lo, hi = RADIAL_CLEARANCE_RANGE_UM
+        bearing = bearing.with_clearance(top.number("radial_clearance_um", lo=lo, hi=hi) * 1e-6)
     return bearing
 
 
@@ -554,7 +575,7 @@ def scene_from_dict(data: Any, name: str = "scene", source_text: str = "", sourc
         radial_load=load,
         defects=_defects(top, bearing),
         waviness=_waviness(top),
-        random_slip=top.number("random_slip", 0.0, lo=0.0, hi=0.05),
+        random_slip=top.number("random_slip", 0.0, lo=0.0, hi=RANDOM_SLIP_MAX),
         gravity=top.boolean("gravity", True),
         lubrication=_lubrication(top),
         sensor=_sensor(top),

@@ -429,3 +429,27 @@ def test_a_defect_changed_in_python_within_the_limits_runs():
     ball = dataclasses.replace(scene.defects[0], kind="ball", ball=8, wander_turns=3.0)
     sim = Simulator(dataclasses.replace(scene, defects=[wider, ball]), fidelity="kinematic")
     assert np.isfinite(sim.advance(150).accel).all()
+
+
+@pytest.mark.parametrize("change, line", [
+    (lambda s: {"bearing": s.bearing.with_clearance(float("nan"))},
+     "bearing.radial_clearance = nan m: allowed range is [-5e-05, 0.0005] m"),
+    (lambda s: {"bearing": s.bearing.with_clearance(45.0)},
+     "bearing.radial_clearance = 45 m: allowed range is [-5e-05, 0.0005] m"),
+    (lambda s: {"random_slip": -1.0}, "random_slip = -1: allowed range is [0, 0.05]"),
+    (lambda s: {"random_slip": float("nan")}, "random_slip = nan: allowed range is [0, 0.05]"),
+    (lambda s: {"fidelity": "skiding"}, "fidelity = 'skiding': allowed values are auto, kinematic, skidding"),
+    (lambda s: {"fidelity_tolerance": 0.0}, "fidelity_tolerance = 0: allowed range is [0.0001, 1]"),
+])
+def test_a_scenes_clearance_slip_and_tier_changed_in_python_are_held_to_the_yamls_limits(change, line):
+    """A clearance sweep by ``scene.bearing.with_clearance(...)`` ran a NaN clearance to NaN
+    samples without a word and a clearance in um by mistake (45) as 45 m; a negative or NaN
+    ``random_slip`` and a misspelt ``fidelity`` ran as something else.  Now the scene refuses
+    them in one line with the YAML's bounds (``radial_clearance_um``, ``random_slip``,
+    ``fidelity.tier``, ``fidelity.tolerance``) in SI units."""
+    scene = load_scene("er16k_outer_race")
+    with pytest.raises(SceneError) as exc:
+        Simulator(dataclasses.replace(scene, **change(scene)), fidelity="kinematic")
+    assert str(exc.value) == f"scene er16k_outer_race: {line}"
+    inside = dataclasses.replace(scene, bearing=scene.bearing.with_clearance(-5e-6), random_slip=0.02)
+    assert np.isfinite(Simulator(inside, fidelity="kinematic").advance(150).accel).all()
