@@ -163,7 +163,9 @@ class Simulator:
 
     scene: a :class:`~bearing_sim_ros.scene.Scene` or a shipped name / YAML path.
     sample_rate: output rate (Hz).  fidelity: "auto" | "kinematic" | "skidding".
-    seed: random slip and sensor noise.  solver: "default" | "rk4" | "reference" (skidding tier).
+    seed: the kinematic tier's random slip, a wandering ball defect's latitudes and the sensor
+    noise (the skidding tier has no random slip: there a seed changes only those two).
+    solver: "default" | "rk4" | "reference" (skidding tier).
     rk4_step: step of the "rk4" solver (s).  oversample: integration steps per physics sample
     (the accuracy knob: 1, 2 or a multiple of 4 up to 64; by default each tier's own: the
     kinematic tier takes 1 while its bearing mode stays below a tenth of ``physics_rate``, else
