@@ -465,6 +465,8 @@ class Simulator:
         """Size of each of the scene's defects at output sample ``sample`` (sample 0 for a
         negative one): what the signal holds there, e.g. at the last sample a node has published
         while it computes ahead."""
+        if not _whole_number(sample):
+            raise UserError(f"sample = {sample!r}: expected a whole number (an output sample index)")
         return self._defect_schedule.sizes(max(int(sample), 0))
 
     @property
