@@ -156,6 +156,7 @@ _CATALOG_KEYS = {
     "poisson_ratio", "density",
 }
 _REQUIRED = ("balls", "ball_diameter_mm", "pitch_diameter_mm")
+RADIAL_CLEARANCE_RANGE_UM = (-50.0, 500.0)   # a catalog's or a scene's radial_clearance_um (negative: preload)
 
 
 def bearing_from_mapping(name: str, data: dict, where: str = "bearing") -> Bearing:
@@ -209,7 +210,7 @@ def bearing_from_mapping(name: str, data: dict, where: str = "bearing") -> Beari
         pitch_diameter=dm,
         inner_race_diameter=di,
         outer_race_diameter=do,
-        radial_clearance=num("radial_clearance_um", 10.0, -50.0, 500.0) * 1e-6,
+        radial_clearance=num("radial_clearance_um", 10.0, *RADIAL_CLEARANCE_RANGE_UM) * 1e-6,
         contact_angle=math.radians(num("contact_angle_deg", 0.0, 0.0, 45.0)),
         ball_mass=num("ball_mass_kg", mass_default, 1e-6, 100.0),
         width=num("width_mm", 2 * d / _MM, 0.1, 1000.0) * _MM,

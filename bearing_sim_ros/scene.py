@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .catalog import Bearing, bearing_from_mapping, get_bearing
+from .catalog import RADIAL_CLEARANCE_RANGE_UM, Bearing, bearing_from_mapping, get_bearing
 from .errors import SceneError, short_repr
 from .limits import LOAD_MULTIPLE_C0, MAX_LOAD, MAX_SPEED_RPM, NDM_LIMIT, RPM, InputLimits
 from .paths import MCAP_MAGIC, input_file, scenes_dir
@@ -190,6 +190,22 @@ class Scene:
                                                f"{speed:g} rad/s ({speed / RPM:g} rpm)", f"{prefix}radial_load")
             if error:
                 raise SceneError(f"scene {self.name}: {error}")
+        # and its defects (dataclasses.replace(scene.defects[0], width=...) ran a negative or NaN
+        # width as a healthy bearing and a width in mm as a pit of metres)
+        for i, defect in enumerate(self.defects):
+            error = _defect_error(self.bearing, defect, f"defects[{i}]")
+            if error:
+                raise SceneError(f"scene {self.name}: {error}")
+        # and the knobs of a sweep that the YAML bounds (a NaN clearance ran to NaN samples)
+        lo, hi = RADIAL_CLEARANCE_RANGE_UM
+        tier = ("" if isinstance(self.fidelity, str) and self.fidelity in TIERS
+                else f"fidelity = {short_repr(self.fidelity)}: allowed values are {', '.join(TIERS)}")
+        for error in (_number_error("bearing.radial_clearance", self.bearing.radial_clearance, lo * 1e-6,
+                                    hi * 1e-6, "m"),
+                      _number_error("random_slip", self.random_slip, 0.0, RANDOM_SLIP_MAX),
+                      tier, _number_error("fidelity_tolerance", self.fidelity_tolerance, *TOLERANCE_RANGE)):
+            if error:
+                raise SceneError(f"scene {self.name}: {error}")
 
     @property
     def shaft_hz(self) -> float:
@@ -293,6 +309,7 @@ def clock_to_angle(clock: float) -> float:
 
 
 TOLERANCE_RANGE = (1e-4, 1.0)   # relative error allowed to the fidelity choice (fidelity.tolerance)
+RANDOM_SLIP_MAX = 0.05          # random_slip: a fraction of the ball spacing (seed 001: 1-2 %)
 # MAX_LOAD (N) and MAX_SPEED_RPM (limits.py) bound every scene's speeds and loads whatever the
 # bearing; then the bearing's own limits (InputLimits, the live node's) apply: _check_operating_point
 MAX_DEFECT_TIME = 1.0e6   # s (11.6 days of signal): a defect's onset_s and growth_s
@@ -324,6 +341,53 @@ def _operating_point_error(bearing: Bearing, speed: float, load, speed_key: str,
     return ""
 
 
+def _defect_bounds(bearing: Bearing) -> tuple:
+    """Largest width, depth and length (m) of a defect on ``bearing``: a local defect is at most
+    half the ball spacing (and a ball diameter) wide, so one ball meets it at a time; at most half
+    a ball diameter deep and a raceway wide."""
+    spacing = math.pi * bearing.pitch_diameter / bearing.balls
+    return min(0.5 * spacing, bearing.ball_diameter), 0.5 * bearing.ball_diameter, bearing.width
+
+
+def _number_error(key: str, value, lo: float, hi: float, unit: str = "", lo_open: bool = False) -> str:
+    """"" when ``value`` (a field of a scene made in Python) is a finite number in [lo, hi] (or
+    (lo, hi]), else the line naming ``key``, the value, the range and ``unit``."""
+    unit = f" {unit}" if unit else ""
+    rng = f"{'(' if lo_open else '['}{lo:g}, {hi:g}]{unit}"
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        return f"{key} = {short_repr(value)}: expected a number in {rng}"
+    if not (math.isfinite(value) and (lo < value if lo_open else lo <= value) and value <= hi):
+        return f"{key} = {value:g}{unit}: allowed range is {rng}"
+    return ""
+
+
+def _defect_error(bearing: Bearing, defect, key: str) -> str:
+    """"" when ``defect`` (a :class:`Defect` made in Python) keeps to the bounds its YAML keys
+    have (``_defects``), else the line naming the field (``key.field``), its value and unit."""
+    if not isinstance(defect, Defect):
+        return f"{key} = {short_repr(defect)}: expected a bearing_sim_ros.scene.Defect"
+    for name, options in (("kind", DEFECT_KINDS), ("profile", DEPTH_PROFILES)):
+        value = getattr(defect, name)
+        if not (isinstance(value, str) and value in options):
+            return f"{key}.{name} = {short_repr(value)}: allowed values are {', '.join(options)}"
+    width, depth, length = _defect_bounds(bearing)
+    for name, lo, hi, unit in (("width", 0.0, width, "m"), ("depth", 0.0, depth, "m"),
+                               ("length", 0.0, length, "m"), ("angle", -2 * math.pi, 2 * math.pi, "rad"),
+                               ("wander_turns", 0.0, 1e4, ""), ("onset", 0.0, MAX_DEFECT_TIME, "s"),
+                               ("growth", 0.0, MAX_DEFECT_TIME, "s")):
+        error = _number_error(f"{key}.{name}", getattr(defect, name), lo, hi, unit,
+                              lo_open=name in ("width", "depth", "length"))
+        if error:
+            return error
+    if defect.wander_turns and defect.kind != "ball":
+        return (f"{key}.wander_turns = {short_repr(defect.wander_turns)}: only a ball defect has a spin axis "
+                f"to wander (this one is kind {defect.kind})")
+    ball = defect.ball
+    if isinstance(ball, bool) or not isinstance(ball, numbers.Integral) or not 0 <= ball < bearing.balls:
+        return f"{key}.ball = {short_repr(ball)}: expected a whole number in [0, {bearing.balls - 1}]"
+    return ""
+
+
 def _operating_point_type_error(speed, load, speed_key: str, load_key: str) -> str:
     """"" when ``speed`` is a finite number and ``load`` two (a bool is neither), else the line
     naming the key: a scene made in Python has not been through the YAML's readers."""
@@ -351,7 +415,8 @@ def _bearing(top: _Section) -> Bearing:
     else:
         raise SceneError(f"bearing = {short_repr(value)}: expected a catalog name or a mapping of geometry")
     if top.has("radial_clearance_um"):
-        bearing = bearing.with_clearance(top.number("radial_clearance_um", lo=-50, hi=500) * 1e-6)
+        lo, hi = RADIAL_CLEARANCE_RANGE_UM
+        bearing = bearing.with_clearance(top.number("radial_clearance_um", lo=lo, hi=hi) * 1e-6)
     return bearing
 
 
@@ -383,12 +448,10 @@ def _defects(top: _Section, bearing: Bearing) -> tuple:
                       "wander_turns", "onset_s", "growth_s"),
                      required=("kind", "width_mm", "depth_mm"))
         kind = d.choice("kind", DEFECT_KINDS)
-        # a local defect: at most half the ball spacing (and a ball diameter) wide, so one ball meets it at a time
-        spacing = math.pi * bearing.pitch_diameter / bearing.balls
-        max_width = min(0.5 * spacing, bearing.ball_diameter) / 1e-3
+        max_width, max_depth, max_length = (v / 1e-3 for v in _defect_bounds(bearing))
         width = d.number("width_mm", lo=0.0, hi=max_width, lo_open=True) * 1e-3
-        depth = d.number("depth_mm", lo=0.0, hi=0.5 * bearing.ball_diameter / 1e-3, lo_open=True) * 1e-3
-        length = d.number("length_mm", width / 1e-3, lo=0.0, hi=bearing.width / 1e-3, lo_open=True) * 1e-3
+        depth = d.number("depth_mm", lo=0.0, hi=max_depth, lo_open=True) * 1e-3
+        length = d.number("length_mm", width / 1e-3, lo=0.0, hi=max_length, lo_open=True) * 1e-3
         if d.has("clock") and d.has("angle_deg"):
             raise SceneError(f"defects[{i}]: give either clock or angle_deg, not both")
         if d.has("clock"):
@@ -513,7 +576,7 @@ def scene_from_dict(data: Any, name: str = "scene", source_text: str = "", sourc
         radial_load=load,
         defects=_defects(top, bearing),
         waviness=_waviness(top),
-        random_slip=top.number("random_slip", 0.0, lo=0.0, hi=0.05),
+        random_slip=top.number("random_slip", 0.0, lo=0.0, hi=RANDOM_SLIP_MAX),
         gravity=top.boolean("gravity", True),
         lubrication=_lubrication(top),
         sensor=_sensor(top),

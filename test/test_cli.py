@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from bearing_sim_ros import Simulator, UserError, cli
+from bearing_sim_ros.limits import RPM
 
 
 def _subcommands():
@@ -187,18 +188,30 @@ def test_seed_range_is_the_nodes():
     (lambda s: s.advance(10, shaft_speed=True), "shaft_speed = True: expected a number, rad/s"),
     (lambda s: s.advance(10, radial_load=("0", "-50")), "radial_load = ('0', '-50'): expected two numbers (x, y), N"),
     (lambda s: s.advance(10, radial_load="05"), "radial_load = '05': expected two numbers (x, y), N"),
-    # beyond a scene's bounds the kinematic tier returned NaN without a word
+    # beyond a scene's bounds the kinematic tier returned NaN without a word; beyond the bearing's
+    # own (a scene's, the node's) advance ran on: 900 kN put 444 kN on one ball of an ER-16K
     (lambda s: s.advance(10, shaft_speed=1e9),
-     "shaft_speed = 1e+09 rad/s: allowed range is [-6283.19, 6283.19] rad/s (+-60000 rpm, as in a scene)"),
+     "shaft_speed = 1e+09 rad/s (9.5493e+09 rpm): beyond what bearing ER-16K takes (|speed| <= 25974 rpm, "
+     "n*dm <= 1e+06 rpm mm)"),
+    (lambda s: s.advance(10, shaft_speed=-30000 * RPM),
+     "shaft_speed = -3141.59 rad/s (-30000 rpm): beyond what bearing ER-16K takes (|speed| <= 25974 rpm, "
+     "n*dm <= 1e+06 rpm mm)"),
     (lambda s: s.advance(10, radial_load=(0.0, -1e12)),
-     "radial_load = (0, -1e+12) N: each entry must be in [-1e+06, 1e+06] N, as in a scene"),
+     "radial_load = [0, -1e+12] N: |F| = 1e+12 N beyond 2 x C0 = 16681 N of bearing ER-16K"),
+    (lambda s: s.advance(10, radial_load=(0.0, -900000.0)),
+     "radial_load = [0, -900000] N: |F| = 900000 N beyond 2 x C0 = 16681 N of bearing ER-16K"),
+    (lambda s: s.advance(10, radial_load=(12000.0, -12000.0)),
+     "radial_load = [12000, -12000] N: |F| = 16970.6 N beyond 2 x C0 = 16681 N of bearing ER-16K"),
 ])
 def test_advance_names_a_bad_speed_or_load_and_what_is_allowed(call, message):
+    """``advance`` holds a speed and load to the bearing's limits, as a scene and the node do."""
     sim = Simulator("er16k_healthy", fidelity="kinematic")
     with pytest.raises(UserError) as exc:
         call(sim)
     assert str(exc.value) == message
     assert sim.index == 0                     # nothing advanced
+    inside = sim.advance(10, shaft_speed=25970 * RPM, radial_load=np.array([11790.0, -11790.0]))
+    assert np.isfinite(inside.accel).all() and sim.index == 10
 
 
 @pytest.mark.parametrize("call, message", [
@@ -334,3 +347,29 @@ def test_the_recorder_names_a_folder_by_the_callers_argument(tmp_path):
     with pytest.raises(UserError) as exc:
         Recorder(tmp_path, {}, argument="record")
     assert str(exc.value) == f"record = {str(tmp_path)!r}: is a folder; expected the path of an .mcap file"
+
+
+def test_numpy_real_numbers_are_numbers():
+    """``sample_rate``, ``tolerance`` and ``rk4_step`` took only Python ints and floats: a rate
+    read from a numpy array (``np.float32(15000)``, ``np.int64(12000)``) was refused as "allowed
+    range is [1000, 200000] Hz", a value inside that range, while ``seed``, ``n`` and
+    ``shaft_speed`` took numpy numbers.  Now they take any real number (a bool still is none)."""
+    plain = Simulator("er16k_healthy", fidelity="kinematic", sample_rate=12000.0, tolerance=0.05).advance(40)
+    for rate, tol in ((np.float32(12000), np.float32(0.05)), (np.int64(12000), np.float64(0.05))):
+        sim = Simulator("er16k_healthy", fidelity="kinematic", sample_rate=rate, tolerance=tol)
+        assert sim.sample_rate == 12000.0 and type(sim.sample_rate) is float
+        assert np.array_equal(sim.advance(40).accel, plain.accel)
+    step = np.float32(5e-6)
+    rk4 = [Simulator("er16k_healthy", fidelity="skidding", solver="rk4", rk4_step=h).advance(3).accel
+           for h in (step, float(step))]
+    assert np.array_equal(*rk4)
+    for call, message in (
+            (lambda: Simulator("er16k_healthy", sample_rate=np.True_),
+             "sample_rate = np.True_: allowed range is [1000, 200000] Hz"),
+            (lambda: Simulator("er16k_healthy", sample_rate=np.float32("nan")),
+             "sample_rate = np.float32(nan): allowed range is [1000, 200000] Hz"),
+            (lambda: Simulator("er16k_healthy", fidelity="skidding", solver="rk4", rk4_step=np.int64(1)),
+             "rk4_step = np.int64(1): allowed range is [1e-09, 0.001] s")):
+        with pytest.raises(UserError) as exc:
+            call()
+        assert str(exc.value) == message

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from bearing_sim_ros import Simulator, load_scene
+from bearing_sim_ros.errors import UserError
 from bearing_sim_ros.analysis.envelope import diagnose
 from bearing_sim_ros.physics.defects import (D_INDEX, D_KIND, KIND_BALL, KIND_OUTER, DefectSchedule,
                                              active_defect_table, wander_reach)
@@ -319,3 +320,14 @@ def test_a_speed_ramp_across_growth_steps_turns_the_shaft_by_its_integral(tier):
     turned = w0 * ahead / FS + 0.5 * (w0 + w_at_stamp) * (n - ahead) / FS
     assert sim.snapshot().shaft_angle - a0 == pytest.approx(turned, rel=1e-9)
     np.testing.assert_allclose(b.shaft_speed[ahead:], w0 * (1 + 0.5 * np.arange(n - ahead) / n), rtol=1e-12)
+
+
+@pytest.mark.parametrize("sample", [None, "3", 1.5, True, np.array([3])])
+def test_defect_sizes_at_names_a_sample_that_is_not_a_whole_number(sample):
+    """``defect_sizes_at("3")`` and ``(1.5)`` answered for sample 3 and 1, ``(True)`` for sample 1
+    and ``(None)`` ended in a TypeError from int(); a numpy integer is a sample like any other."""
+    sim = Simulator(_with_defects(load_scene("er16k_outer_race"), onset=0.01), fidelity="kinematic")
+    with pytest.raises(UserError) as exc:
+        sim.defect_sizes_at(sample)
+    assert str(exc.value) == f"sample = {sample!r}: expected a whole number (an output sample index)"
+    assert sim.defect_sizes_at(np.int64(149)) == (0.0,) and sim.defect_sizes_at(150) == (1.0,)

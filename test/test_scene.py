@@ -392,3 +392,64 @@ def test_a_scene_changed_in_python_is_held_to_the_bearings_limits(change, line):
     assert str(exc.value) == f"scene er16k_outer_race: {line}"
     inside = dataclasses.replace(scene, shaft_speed=25970 * RPM, radial_load=np.array([11790.0, -11790.0]))
     assert Simulator(inside, fidelity="kinematic").advance(150).accel.shape == (150, 2)
+
+
+@pytest.mark.parametrize("change, line", [
+    ({"width": -1e-3}, "defects[0].width = -0.001 m: allowed range is (0, 0.00671952] m"),
+    ({"width": float("nan")}, "defects[0].width = nan m: allowed range is (0, 0.00671952] m"),
+    ({"width": 0.6, "length": 0.6}, "defects[0].width = 0.6 m: allowed range is (0, 0.00671952] m"),
+    ({"depth": "0.25e-3"}, "defects[0].depth = '0.25e-3': expected a number in (0, 0.00397] m"),
+    ({"length": 0.0}, "defects[0].length = 0 m: allowed range is (0, 0.015] m"),
+    ({"kind": "bogus"}, "defects[0].kind = 'bogus': allowed values are inner, outer, ball"),
+    ({"profile": "square"},
+     "defects[0].profile = 'square': allowed values are geometric, rectangular, half_sine, piecewise, auto"),
+    ({"angle": float("inf")}, "defects[0].angle = inf rad: allowed range is [-6.28319, 6.28319] rad"),
+    ({"wander_turns": 3.0}, "defects[0].wander_turns = 3.0: only a ball defect has a spin axis to wander "
+                            "(this one is kind outer)"),
+    ({"kind": "ball", "ball": 9}, "defects[0].ball = 9: expected a whole number in [0, 8]"),
+    ({"onset": -1.0}, "defects[0].onset = -1 s: allowed range is [0, 1e+06] s"),
+])
+def test_a_defect_changed_in_python_is_held_to_the_yamls_limits(change, line):
+    """A defect-size sweep by ``dataclasses.replace(scene.defects[0], width=...)`` skipped every
+    check that load_scene applies to ``width_mm``: a negative or NaN width ran as a healthy
+    bearing, a width given in mm by mistake (0.6 for 0.6 mm) as a 0.6 m pit that clipped the
+    sensor, and an unknown kind failed deep in the physics with a KeyError.  Now the scene refuses
+    it in one line, in the Python field's name and SI unit, with the YAML's bounds; within them it
+    runs."""
+    scene = load_scene("er16k_outer_race")
+    defect = dataclasses.replace(scene.defects[0], **change)
+    with pytest.raises(SceneError) as exc:
+        Simulator(dataclasses.replace(scene, defects=(defect,)), fidelity="kinematic")
+    assert str(exc.value) == f"scene er16k_outer_race: {line}"
+
+
+def test_a_defect_changed_in_python_within_the_limits_runs():
+    scene = load_scene("er16k_outer_race")
+    wider = dataclasses.replace(scene.defects[0], width=1.2e-3, length=1.2e-3, onset=0.001)
+    ball = dataclasses.replace(scene.defects[0], kind="ball", ball=8, wander_turns=3.0)
+    sim = Simulator(dataclasses.replace(scene, defects=[wider, ball]), fidelity="kinematic")
+    assert np.isfinite(sim.advance(150).accel).all()
+
+
+@pytest.mark.parametrize("change, line", [
+    (lambda s: {"bearing": s.bearing.with_clearance(float("nan"))},
+     "bearing.radial_clearance = nan m: allowed range is [-5e-05, 0.0005] m"),
+    (lambda s: {"bearing": s.bearing.with_clearance(45.0)},
+     "bearing.radial_clearance = 45 m: allowed range is [-5e-05, 0.0005] m"),
+    (lambda s: {"random_slip": -1.0}, "random_slip = -1: allowed range is [0, 0.05]"),
+    (lambda s: {"random_slip": float("nan")}, "random_slip = nan: allowed range is [0, 0.05]"),
+    (lambda s: {"fidelity": "skiding"}, "fidelity = 'skiding': allowed values are auto, kinematic, skidding"),
+    (lambda s: {"fidelity_tolerance": 0.0}, "fidelity_tolerance = 0: allowed range is [0.0001, 1]"),
+])
+def test_a_scenes_clearance_slip_and_tier_changed_in_python_are_held_to_the_yamls_limits(change, line):
+    """A clearance sweep by ``scene.bearing.with_clearance(...)`` ran a NaN clearance to NaN
+    samples without a word and a clearance in um by mistake (45) as 45 m; a negative or NaN
+    ``random_slip`` and a misspelt ``fidelity`` ran as something else.  Now the scene refuses
+    them in one line with the YAML's bounds (``radial_clearance_um``, ``random_slip``,
+    ``fidelity.tier``, ``fidelity.tolerance``) in SI units."""
+    scene = load_scene("er16k_outer_race")
+    with pytest.raises(SceneError) as exc:
+        Simulator(dataclasses.replace(scene, **change(scene)), fidelity="kinematic")
+    assert str(exc.value) == f"scene er16k_outer_race: {line}"
+    inside = dataclasses.replace(scene, bearing=scene.bearing.with_clearance(-5e-6), random_slip=0.02)
+    assert np.isfinite(Simulator(inside, fidelity="kinematic").advance(150).accel).all()

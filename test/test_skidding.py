@@ -940,3 +940,17 @@ if __name__ == "__main__":
     if sys.argv[1:] != ["seed000"]:
         sys.exit("usage: python test/test_skidding.py seed000")
     study_seed000()
+
+
+def test_a_seed_changes_only_the_sensor_noise_in_the_skidding_tier():
+    """README, "The Python API": the skidding tier takes no random slip, so two seeds give the
+    same forces and cage speed to the bit and accelerations apart by the sensor noise only; the
+    kinematic tier's random slip moves its forces."""
+    runs = {seed: Simulator("er16k_outer_race", fidelity="skidding", seed=seed).advance(600) for seed in (0, 1)}
+    assert np.array_equal(runs[0].contact_forces, runs[1].contact_forces)
+    assert np.array_equal(runs[0].cage_speed, runs[1].cage_speed)
+    noise = 3.4e-5 * np.sqrt(7500.0)           # the scene's noise density over the output band
+    apart = np.std(runs[0].accel - runs[1].accel, axis=0)
+    assert np.all(apart > 0.5 * noise) and np.all(apart < 2.5 * noise)
+    kin = [Simulator("er16k_outer_race", fidelity="kinematic", seed=seed).advance(600) for seed in (0, 1)]
+    assert not np.array_equal(kin[0].contact_forces, kin[1].contact_forces)

@@ -83,6 +83,7 @@ sub-steps where a ball is inside a defect under a contact or a contact opens or 
 from __future__ import annotations
 
 import math
+import numbers
 import warnings
 
 import numpy as np
@@ -1593,7 +1594,8 @@ class SkiddingModel:
         self.internal_rate = self.sample_rate * self.decimation
         self.hs = 1.0 / self.internal_rate
         lo, hi = RK4_STEP_RANGE
-        if rk4_step is not None and not (isinstance(rk4_step, (int, float)) and lo <= rk4_step <= hi):
+        if rk4_step is not None and not (isinstance(rk4_step, numbers.Real) and not isinstance(rk4_step, bool)
+                                         and lo <= rk4_step <= hi):
             raise UserError(f"rk4_step = {rk4_step!r}: allowed range is [{lo:g}, {hi:g}] s")
         self.solver = solver
         self.oversample = int(oversample or DEFAULT_OVERSAMPLE)
