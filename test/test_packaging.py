@@ -86,6 +86,9 @@ def test_setup_cfg_puts_the_executables_where_ros2_run_looks():
     cfg = ConfigParser()
     cfg.read(REPO / "setup.cfg")
     assert cfg["develop"]["script_dir"] == cfg["install"]["install_scripts"] == f"$base/lib/{PACKAGE}"
+    # ... which `setup.py install` also follows: pyproject.toml's build system keeps a plain
+    # `pip install .` (a pip before 23.1 without `wheel`) from it, so that bin/ gets the commands
+    assert re.search(r'^build-backend = "setuptools.build_meta"$', (REPO / "pyproject.toml").read_text(), re.M)
 
 
 def test_the_entry_points_named_in_the_readme_and_the_launch_file_exist():
