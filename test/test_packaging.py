@@ -109,3 +109,24 @@ def test_data_files_install_the_ament_marker_package_xml_launch_and_every_config
         expected |= {f"share/{PACKAGE}/{p.relative_to(REPO)}" for p in (REPO / folder).rglob("*")
                      if p.is_file() and "__pycache__" not in p.parts}
     assert expected <= installed
+
+
+def test_an_install_outside_sys_prefix_finds_its_own_config(tmp_path):
+    """``pip install --user`` puts the data files in ~/.local/share, not under sys.prefix
+    (/usr), and AMENT_PREFIX_PATH (apt ROS sourced) does not name ~/.local: every command ended
+    with "cannot find the bearing_sim_ros config folder".  The package now looks in the share/
+    of the prefix it is installed in first."""
+    import shutil
+    import subprocess
+
+    prefix = tmp_path / "user"
+    site = prefix / "lib" / f"python{sys.version_info[0]}.{sys.version_info[1]}" / "site-packages"
+    ignore = shutil.ignore_patterns("__pycache__", "*.nbi", "*.nbc")
+    shutil.copytree(REPO / PACKAGE, site / PACKAGE, ignore=ignore)
+    shutil.copytree(REPO / "config", prefix / "share" / PACKAGE / "config", ignore=ignore)
+    env = {k: v for k, v in os.environ.items() if k != "AMENT_PREFIX_PATH"}
+    env.update(PYTHONPATH=str(site), PYTHONDONTWRITEBYTECODE="1")
+    code = "from bearing_sim_ros.paths import config_dir; print(config_dir())"
+    run = subprocess.run([sys.executable, "-c", code], env=env, cwd=tmp_path, capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.strip() == str(prefix / "share" / PACKAGE / "config")
