@@ -12,20 +12,36 @@ PACKAGE = "bearing_sim_ros"
 MCAP_MAGIC = b"\x89MCAP0\r\n"      # the first bytes of every MCAP file
 
 
+def _installed_prefix():
+    """``<prefix>`` of an installed package, ``<prefix>/lib/pythonX.Y/site-packages/
+    bearing_sim_ros/`` (``dist-packages`` on Debian): a venv, ``~/.local`` of ``pip install
+    --user``, a colcon ``install/bearing_sim_ros``, whose ``share/`` holds its data files.  None
+    in a source checkout."""
+    package = Path(__file__).resolve().parent
+    if package.parent.name in ("site-packages", "dist-packages") and len(package.parents) > 3:
+        return package.parents[3]
+    return None
+
+
 def config_dir() -> Path:
     """The ``config/`` folder: beside the package in a source checkout (pip -e, tests), else the
-    ament share directory of an installed package (colcon, pip wheel)."""
+    ament share directory of an installed package (colcon, pip wheel): the one of the prefix the
+    package is installed in, then sys.prefix's (``pip install --user`` is not there), then each
+    of AMENT_PREFIX_PATH."""
     here = Path(__file__).resolve().parent.parent / "config"
     if (here / "bearings.yaml").is_file():
         return here
-    candidates = [Path(sys.prefix) / "share" / PACKAGE / "config"]
+    prefix = _installed_prefix()
+    candidates = [prefix / "share" / PACKAGE / "config"] if prefix else []
+    candidates.append(Path(sys.prefix) / "share" / PACKAGE / "config")
     for prefix in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep):
         if prefix:
             candidates.append(Path(prefix) / "share" / PACKAGE / "config")
     for cand in candidates:
         if (cand / "bearings.yaml").is_file():
             return cand
-    raise FileNotFoundError(f"cannot find the {PACKAGE} config folder (looked in {here})")
+    raise FileNotFoundError(f"cannot find the {PACKAGE} config folder (looked in "
+                            f"{', '.join(str(c) for c in [here, *candidates])})")
 
 
 def scenes_dir() -> Path:

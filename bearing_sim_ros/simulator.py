@@ -24,6 +24,7 @@ import numpy as np
 
 from numba import njit
 
+from . import physics  # noqa: F401 - sets numba's cache folder before _ramp below asks for it
 from .errors import UserError
 from .scene import RPM, Scene, _operating_point_error, load_scene
 

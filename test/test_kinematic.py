@@ -594,6 +594,36 @@ def test_an_edit_to_any_physics_source_gives_the_kernels_a_new_cache_folder(tmp_
     assert before != after
 
 
+def test_the_kernels_find_a_cache_folder_where_neither_the_package_nor_home_can_be_written(tmp_path):
+    """An installed package owned by another user, run by a service account without a writable
+    home (HOME=/nonexistent): numba found no folder for a cache=True kernel, and every command,
+    `bearing-sim scenes` too, ended at import with "cannot cache function '_ramp': no locator
+    available".  The kernels then go to a private folder under the temporary directory."""
+    import shutil
+    import stat
+    import subprocess
+    import sys
+
+    package = tmp_path / "src" / "bearing_sim_ros"
+    shutil.copytree(Path(__file__).resolve().parent.parent / "bearing_sim_ros", package,
+                    ignore=shutil.ignore_patterns("__pycache__", "*.nbi", "*.nbc"))
+    for folder in [package, *(p for p in package.rglob("*") if p.is_dir())]:
+        (folder / "__pycache__").write_text("")      # no folder can be made beside the sources
+    blocked = tmp_path / "a-file"
+    blocked.write_text("")
+    tmp = tmp_path / "tmp"
+    tmp.mkdir()
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env.update(PYTHONPATH=str(package.parent), PYTHONDONTWRITEBYTECODE="1", TMPDIR=str(tmp),
+               HOME=str(blocked / "home"), XDG_CACHE_HOME=str(blocked / "cache"))
+    code = "import bearing_sim_ros.simulator, numba.core.config as c; print(c.CACHE_DIR)"
+    run = subprocess.run([sys.executable, "-c", code], env=env, cwd=tmp_path, capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    folder = Path(run.stdout.strip())
+    assert folder.parent == tmp / f"bearing_sim_ros-numba-{os.getuid()}"
+    assert folder.is_dir() and not stat.S_IMODE(folder.parent.stat().st_mode) & 0o077
+
+
 _PROPAGATOR_DIGEST = """
 import hashlib, numpy as np
 from bearing_sim_ros import Simulator

@@ -32,7 +32,48 @@ def _isolate_numba_cache() -> None:
         digest.update(src.read_bytes())
     base = nb_config.CACHE_DIR or os.path.join(
         os.environ.get("XDG_CACHE_HOME", os.path.expanduser("~/.cache")), "bearing_sim_ros", "numba")
-    nb_config.CACHE_DIR = os.path.join(base, digest.hexdigest()[:16])
+    folder = os.path.join(base, digest.hexdigest()[:16])
+    if not _can_write_in(folder):
+        # an installed package the user cannot write in (site-packages of another user) and no
+        # writable cache home (a service account, HOME=/nonexistent): numba then had no place
+        # for any cache=True kernel and every command ended at import ("cannot cache function
+        # ...: no locator available")
+        folder = _private_temp_folder(digest.hexdigest()[:16])
+    nb_config.CACHE_DIR = folder
+
+
+def _can_write_in(folder: str) -> bool:
+    """Whether ``folder`` exists or can be made, and a file can be made in it."""
+    import tempfile
+
+    try:
+        os.makedirs(folder, exist_ok=True)
+        fd, probe = tempfile.mkstemp(dir=folder, prefix=".bearing-sim-probe-")
+        os.close(fd)
+        os.unlink(probe)
+    except OSError:
+        return False
+    return True
+
+
+def _private_temp_folder(key: str) -> str:
+    """``$TMPDIR/bearing_sim_ros-numba-<uid>/<key>``, kept across runs, if that folder is the
+    user's own and nobody else can write in it (numba's cache files are pickles: a folder
+    another user could fill must not be loaded from); else a new temporary folder."""
+    import stat
+    import tempfile
+
+    uid = os.getuid() if hasattr(os, "getuid") else None
+    top = os.path.join(tempfile.gettempdir(), f"bearing_sim_ros-numba-{uid}")
+    try:
+        os.makedirs(top, mode=0o700, exist_ok=True)
+        info = os.lstat(top)
+        if (stat.S_ISDIR(info.st_mode) and (uid is None or info.st_uid == uid)
+                and not info.st_mode & 0o022 and _can_write_in(os.path.join(top, key))):
+            return os.path.join(top, key)
+    except OSError:
+        pass
+    return tempfile.mkdtemp(prefix="bearing_sim_ros-numba-")
 
 
 _isolate_numba_cache()
