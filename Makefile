@@ -47,7 +47,7 @@ export PYTHON_CHECK
 # A failed install removes the venv, so that the next attempt (another PYTHON, the network back)
 # starts afresh instead of reusing a half-installed one.  PYTHONWARNINGS: setuptools warns on
 # every editable install that a folder named like the package may shadow it (it is the package).
-$(VENV)/.installed: requirements.lock setup.py package.xml
+$(VENV)/.installed: requirements.lock setup.py setup.cfg pyproject.toml package.xml
 	@test -x $(PY) || { $(PYTHON) -c "$$PYTHON_CHECK" && $(PYTHON) -m venv $(VENV); }
 	@{ $(PY) -m pip install --quiet --upgrade pip \
 	  && $(PY) -m pip install --quiet -r requirements.lock \
