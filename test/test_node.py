@@ -607,6 +607,42 @@ def test_signal_exits_0_with_a_readable_recording(started, tmp_path, sig):
     assert '"record"' in meta["bearing_sim"]["parameters"]
 
 
+def test_a_second_publisher_on_accel_is_said_by_the_node_its_diagnostics_and_the_monitor(
+        started, ros_env, bearing_sim_exe, tmp_path):
+    """Two simulators started in one namespace both published /accel, and every subscriber got
+    their tables interleaved without a word (a monitor printed verdicts at t=1.8e9 s).  Now the
+    first node logs the other publisher within a look at the graph (``PEER_CHECK_S``), its
+    ``/diagnostics`` count it (``other_accel_publishers``, WARN), the monitor says it once, and
+    the node logs when it is gone.  A node alone says nothing of it (its recording: 0)."""
+    out = tmp_path / "first.mcap"
+    first = started({"fidelity": "kinematic", "record": str(out)}, name="first")
+    first.wait_for_output("recording " + str(out), 30)
+    monitor = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / "monitor.log", command=("monitor",))
+    try:
+        time.sleep(3.0)                 # a look at the graph with the first alone
+        second = started({"fidelity": "kinematic", "duration": 6.0}, name="second")
+        first.wait_for_output("1 other publisher on /accel: subscribers get their tables interleaved", 20)
+        monitor.wait_for_output("monitor: 2 publishers on /accel: their tables interleave", 20)
+        assert second.wait(30) == 0, second.output()
+        first.wait_for_output("no other publisher on /accel any more", 20)
+        said = monitor.output()
+    finally:
+        monitor.close()
+    assert said.count("publishers on /accel") == 1, said
+    first.send(signal.SIGINT)
+    assert first.wait(20) == 0, first.output()
+    topics, _meta = read_recording(out)
+    counts = [int({kv.key: kv.value for kv in m.status[0].values}["other_accel_publishers"])
+              for _t, m in topics["/diagnostics"]]
+    levels = [ord(m.status[0].level) if isinstance(m.status[0].level, bytes) else int(m.status[0].level)
+              for _t, m in topics["/diagnostics"]]
+    said = ["other publishers on /accel" in m.status[0].message for _t, m in topics["/diagnostics"]]
+    assert counts[0] == 0 and 1 in counts and counts[-1] == 0, counts
+    # WARN where another publisher was (a second with overruns is WARN too)
+    assert all(lv == 1 and s for lv, s, c in zip(levels, said, counts) if c == 1), (levels, counts)
+    assert said == [c == 1 for c in counts], (said, counts)
+
+
 def test_a_second_node_given_the_same_record_path_ends_with_one_line_and_the_first_records_whole(
         started, ros_env, bearing_sim_exe, tmp_path):
     """Two rigs given one ``record`` path (``/**: record: run.mcap`` in a parameters file for both)

@@ -58,6 +58,7 @@ INPUT_DEPTH = 1000             # keep-last depth of shaft_speed and load: a burs
 TIME_LINE_JUMP = 1.0           # s: a load stamp further back than this behind the last accepted one
                                # starts a new time line (a recording played again, a publisher
                                # restarted with other stamps); closer, it is out of order
+PEER_CHECK_S = 2.0             # s between looks at the graph for another publisher on accel
 SWITCH_COST_GUESS_S = 0.02     # s: a tier switch's batch before the first is measured (8 ms for
                                # kinematic -> skidding on the AMD host; more on a loaded machine)
 
@@ -328,6 +329,7 @@ class BearingSimNode(Node):
         self._repace = False
         self.finished = threading.Event()
         self.error = None
+        self.accel_peers = 0                     # other publishers on accel: _check_peers
         self.stats = _Stats(self.sim.sample_rate, self.sim.bearing, self.scene.sensor.range)
         self._thread = threading.Thread(target=self._run, name="bearing-sim", daemon=True)
 
@@ -431,7 +433,26 @@ class BearingSimNode(Node):
             f"{self.sim.sample_rate:g} Hz in batches of {self.n_batch}, "
             f"real_time {self._cfg['real_time']}, duration {self._cfg['duration']:g} s, "
             f"recording {_recording_text(self._cfg)}; input limits {self.limits}")
+        self._peer_timer = self.create_timer(PEER_CHECK_S, self._check_peers)
         self._thread.start()
+
+    def _check_peers(self):
+        """Another publisher on this node's ``accel`` (a second simulator started in the same
+        namespace, a ``play`` of a recording): every subscriber then gets both streams' tables
+        interleaved, and nothing said so.  Said in the log when it changes and in
+        ``/diagnostics`` (``other_accel_publishers``, WARN)."""
+        topic = self.pub_accel.topic_name
+        others = max(0, self.count_publishers(topic) - 1)
+        if others == self.accel_peers:
+            return
+        if others:
+            self.get_logger().warning(
+                f"{others} other publisher{'s' if others > 1 else ''} on {topic}: subscribers get their tables "
+                f"interleaved with this node's; give each simulator its own namespace (-r __ns:=/rig1) "
+                f"or ROS_DOMAIN_ID")
+        else:
+            self.get_logger().info(f"no other publisher on {topic} any more")
+        self.accel_peers = others
 
     def stop(self, timeout: float = 10.0):
         """Finish the batch in progress, close the recording.  Idempotent."""
@@ -707,6 +728,11 @@ class BearingSimNode(Node):
             level, message = 1, f"{period['overruns']} overruns in the last second"
         if period["clipped"]:
             message = period["clipped"] if level == 0 else f"{message}; {period['clipped']}"
+            level = 1
+        values["other_accel_publishers"] = self.accel_peers
+        if self.accel_peers:
+            text = f"{self.accel_peers} other publishers on {self.pub_accel.topic_name}"
+            message = text if level == 0 else f"{message}; {text}"
             level = 1
         rec = self.recorder
         if rec is None:

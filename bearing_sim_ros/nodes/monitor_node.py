@@ -58,7 +58,7 @@ from .. import ground_truth
 from ..analysis.envelope import DETECTION_THRESHOLD, FAULT_LINES, diagnose
 from ..messages import TOPIC_ACCEL, TOPIC_DIAGNOSTICS, TOPIC_STATE, waveform_qos
 from ..teardown import command_signals, teardown_watchdog
-from .bearing_sim_node import NODE_NAME as SIMULATOR_NODE
+from .bearing_sim_node import NODE_NAME as SIMULATOR_NODE, PEER_CHECK_S
 from ..waveform import NS, from_pointcloud2
 
 DEFAULT_SCENE = "er16k_outer_race"
@@ -253,6 +253,7 @@ class MonitorNode(Node):
         self.verdicts = []
         self.reports = []           # ground_truth.Truth of each /diagnostics (stamps in ns)
         self.simulator = simulator_name(self.resolve_topic_name(TOPIC_ACCEL), simulator)
+        self._several_said = False
         self.truth_status = ground_truth.status_name(self.simulator)
         self.ignored = set()        # names of other simulators' statuses, said once each
         self._speeds = []
@@ -347,6 +348,18 @@ class MonitorNode(Node):
         self.verdicts.append(result)
         print(format_verdict(t, result), file=self.out, flush=True)
 
+    def check_sources(self) -> None:
+        """Several publishers on ``accel`` (two simulators in one namespace, a ``play`` beside a
+        node): their tables interleave, each switch reads as a gap or a restarted source, and the
+        verdicts (and their t=) are of no one signal.  Said once."""
+        topic = self.resolve_topic_name(TOPIC_ACCEL)
+        n = self.count_publishers(topic)
+        if n > 1 and not self._several_said:
+            self._several_said = True
+            print(f"monitor: {n} publishers on {topic}: their tables interleave and the verdicts are not of "
+                  f"one signal; give each simulator its own namespace and watch one (--ros-args -r __ns:=/rig1)",
+                  file=self.out, flush=True)
+
     def destroy_node(self):
         # the window being analysed finishes; queued ones are dropped (Ctrl-C means stop)
         self._analysis.shutdown(wait=True, cancel_futures=True)
@@ -391,9 +404,12 @@ def main(args, ros_args=()) -> int:
                 raise
             raise ExternalShutdownException() from None     # Ctrl-C before the first spin
         executor.add_node(node)
-        t_start = time.monotonic()
+        t_start = next_look = time.monotonic()
         while rclpy.ok() and not node.done and signals.first is None:
             executor.spin_once(timeout_sec=0.2)
+            if time.monotonic() >= next_look:
+                next_look += PEER_CHECK_S
+                node.check_sources()
             if not node.window.samples and not node.verdicts and time.monotonic() - t_start > 5.0 \
                     and not node._warned:
                 node._warned = True
