@@ -74,7 +74,7 @@ def test_input_limits_never_exceed_what_the_simulator_takes():
     """A very small custom bearing's n*dm limit (or a very large one's 2 x C0) lies beyond the
     bounds of ``Simulator.advance``: the node would accept a command that then ends it with a
     UserError from the simulation thread.  Its limits are clamped to those bounds."""
-    from bearing_sim_ros import Simulator
+    from bearing_sim_ros import Simulator, UserError
     from bearing_sim_ros.catalog import bearing_from_mapping
     from bearing_sim_ros.scene import MAX_LOAD, MAX_SPEED_RPM, RPM
 
@@ -82,8 +82,13 @@ def test_input_limits_never_exceed_what_the_simulator_takes():
     huge = bearing_from_mapping("huge", {"balls": 20, "ball_diameter_mm": 150.0, "pitch_diameter_mm": 1200.0})
     assert InputLimits(tiny).max_speed == pytest.approx(MAX_SPEED_RPM * RPM)
     assert InputLimits(huge).max_load == MAX_LOAD and InputLimits(huge).static_capacity > MAX_LOAD
+    # the simulator holds a command to its bearing's own limits (as a scene's operating point):
+    # the largest the node accepts goes through, a little more does not
     sim = Simulator("er16k_healthy", fidelity="kinematic")
-    sim.advance(10, shaft_speed=InputLimits(tiny).max_speed, radial_load=(0.0, -MAX_LOAD))
+    lim = InputLimits(sim.bearing)
+    sim.advance(10, shaft_speed=lim.max_speed, radial_load=(0.0, -lim.max_load))
+    with pytest.raises(UserError):
+        sim.advance(10, shaft_speed=lim.max_speed * 1.001)
 
 
 def test_stamp_checks():

@@ -168,8 +168,9 @@ def test_loop_keeps_tables_contiguous_and_sigint_ends_cleanly(recording, bearing
     assert stamps[len(accel)] == 1 * NS       # the second pass starts where the first ended
     # the second pass is the recording again, sample for sample
     assert [t[2] for t in tables[len(accel):2 * len(accel)]] == [t[2] for t in tables[:len(accel)]]
-    # one pass (first table of pass 1 to first of pass 2: 1 s of log time) takes 0.25 s at --rate 4
-    _assert_paced(tables[:len(accel) + 1], 1 * NS, rate=4)
+    # one pass (first table of pass 2 to first of pass 3: 1 s of log time) takes 0.25 s at --rate 4;
+    # not pass 1, whose first tables may come in a burst behind discovery (0.20 s once, loaded)
+    _assert_paced(tables[len(accel):2 * len(accel) + 1], 1 * NS, rate=4)
     # every header stamp moves on by the recording's length (1 s), not only the waveform tables':
     # /state (every 20 ms), /diagnostics (once, at the end), /contact_forces, /load
     for topic, n in counts.items():
