@@ -108,6 +108,23 @@ def kinematic_error_estimate(scene, shaft_speed: float, radial_load) -> tuple:
     return float(est), chi
 
 
+def support_carries_all(scene, radial_load, margin: float = 1.0) -> bool:
+    """Whether the shaft's own support (``structure.shaft.stiffness``, in parallel with the
+    bearing) carries the whole radial load and the shaft's weight, so that no ball is loaded:
+    until the shaft has moved by the radial play C_r the bearing takes nothing, and the support
+    takes k_s x C_r (100 N on the 6205 scenes: 1e7 N/m over 10 um).  There the kinematic tier's
+    massless balls carry nothing (its signal is the sensor's noise) while the skidding tier's,
+    held out by their centrifugal force, skid; its estimate, from the applied load, said 0.1 %.
+    ``margin`` > 1 raises the line (the hysteresis of a run already on the skidding tier).
+    False for a preloaded bearing (C_r <= 0)."""
+    play = scene.bearing.radial_clearance
+    if play <= 0.0:
+        return False
+    weight = scene.structure.shaft_mass * G if scene.gravity else 0.0
+    load = np.asarray(radial_load, dtype=float) + np.array([0.0, -weight])
+    return float(np.hypot(*load)) <= margin * scene.structure.shaft_stiffness * play
+
+
 def needs_skidding(scene) -> bool:
     """Whether the scene's outputs need the skidding tier whatever the operating point (skid
     ratios: the kinematic tier has no slip)."""
@@ -128,6 +145,9 @@ def select_tier(scene, request: str, shaft_speed: float, radial_load, tolerance:
         return Selection(request, f"{request} requested", est, tolerance, chi)
     if needs_skidding(scene):
         return Selection("skidding", "the scene asks for skid ratios", est, tolerance, chi)
+    if support_carries_all(scene, radial_load, 1.0 / HYSTERESIS if current == "skidding" else 1.0):
+        return Selection("skidding", "no ball loaded: the shaft's support carries the whole load",
+                         est, tolerance, chi)
     limit = tolerance * (HYSTERESIS if current == "skidding" else 1.0)
     if est <= limit:
         return Selection("kinematic", "kinematic error estimate within tolerance", est, tolerance, chi)
