@@ -1,7 +1,7 @@
 """``bearing-sim``: the command line (INTERFACE.md).
 
 Exit status: 0 done; 2 a user mistake (one line naming what is wrong and what is allowed, never a
-traceback); 1 an internal error.  Each subcommand's work lives in its own module; this file only
+traceback); 1 an internal error; 141 (quietly) when the reader of standard output went away.  Each subcommand's work lives in its own module; this file only
 parses arguments and maps errors to exit codes.
 """
 from __future__ import annotations
@@ -13,6 +13,7 @@ import sys
 from .errors import UserError
 
 EXIT_OK, EXIT_INTERNAL, EXIT_USER = 0, 1, 2
+EXIT_STDOUT_CLOSED = 141        # 128 + SIGPIPE: what the shell reports for `yes | head`
 # the commands that run a node: their Ctrl-C and SIGTERM are handled from the first line
 # (teardown.CommandSignals), before the imports of numpy, numba and rclpy, where one was lost
 SIGNAL_COMMANDS = ("node", "run", "monitor", "play")
@@ -322,6 +323,28 @@ def _signal_command(run) -> int:
     return code
 
 
+def _stdout_closed() -> bool:
+    """Whether standard output is a pipe whose reader has gone (``bearing-sim scenes | head -2``:
+    a BrokenPipeError traceback and "internal error", exit 1).  Then it points at /dev/null, so
+    that Python's own flush at exit says nothing either."""
+    import os
+    import select
+
+    try:
+        fd = sys.stdout.fileno()
+        poll = select.poll()
+        poll.register(fd, select.POLLOUT)
+        # the write end of a pipe without a reader polls as an error
+        if not any(events & select.POLLERR for _fd, events in poll.poll(0)):
+            return False
+    except (OSError, ValueError):       # no descriptor (a test's capture): not this case
+        return False
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, fd)
+    os.close(devnull)
+    return True
+
+
 def _main(argv: list) -> int:
     try:
         parser = build_parser()
@@ -345,6 +368,10 @@ def _main(argv: list) -> int:
         return EXIT_OK
     except SystemExit as exc:           # argparse --help
         return int(exc.code or 0)
+    except BrokenPipeError:
+        if not _stdout_closed():
+            raise                       # another pipe (a recording's): an error of its own
+        return EXIT_STDOUT_CLOSED
     except Exception as exc:  # noqa: BLE001 - the last line of defence: say it, exit 1
         import traceback
 

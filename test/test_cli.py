@@ -3,6 +3,7 @@ error lines show numbers as a user types them."""
 from __future__ import annotations
 
 import math
+import subprocess
 
 import numpy as np
 import pytest
@@ -63,7 +64,6 @@ def test_the_node_help_example_runs(ros_env, bearing_sim_exe, tmp_path, capsys):
     gave ``-p duration:=10``, which ROS types as an integer, and the node refused it: ``error:
     parameter duration = 10: wrong type, expected a floating-point number such as 1.0``."""
     import shlex
-    import subprocess
 
     assert cli.main(["node", "--help"]) == 0
     example = next(ln for ln in capsys.readouterr().out.splitlines() if ln.strip().startswith("bearing-sim node "))
@@ -373,3 +373,13 @@ def test_numpy_real_numbers_are_numbers():
         with pytest.raises(UserError) as exc:
             call()
         assert str(exc.value) == message
+
+
+def test_a_reader_that_goes_away_ends_the_command_quietly(bearing_sim_exe):
+    """``bearing-sim scenes | head -2``: the reader closed the pipe, and the command printed a
+    BrokenPipeError traceback and "internal error" (exit 1).  Now nothing is said and the status
+    is 141, as the shell reports for ``yes | head``."""
+    proc = subprocess.Popen([bearing_sim_exe, "scenes"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc.stdout.close()                 # gone before the first line
+    err = proc.stderr.read().decode()
+    assert proc.wait(60) == 141 and err == "", err
