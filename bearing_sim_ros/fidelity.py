@@ -77,10 +77,15 @@ def skid_index(scene, shaft_speed: float, radial_load) -> float:
     r_m = 0.5 * b.pitch_diameter
     drag_ball = drag_coefficient(scene) * (b.pitch_diameter * w_cage) ** 1.95
     cage_drag = getattr(lub, "cage_drag", 0.0) * w_cage / r_m
+    w_eff = max(_load_with_weight(scene, radial_load), 1e-3)
+    return (b.balls * drag_ball + cage_drag) / (traction_peak(lub) * w_eff)
+
+
+def _load_with_weight(scene, radial_load) -> float:
+    """|radial load + the shaft's weight| (N): what the bearing and the shaft's support carry."""
     weight = scene.structure.shaft_mass * G if scene.gravity else 0.0
     load = np.asarray(radial_load, dtype=float) + np.array([0.0, -weight])
-    w_eff = max(float(np.hypot(*load)), 1e-3)
-    return (b.balls * drag_ball + cage_drag) / (traction_peak(lub) * w_eff)
+    return float(np.hypot(*load))
 
 
 @lru_cache(maxsize=None)
@@ -120,9 +125,7 @@ def support_carries_all(scene, radial_load, margin: float = 1.0) -> bool:
     play = scene.bearing.radial_clearance
     if play <= 0.0:
         return False
-    weight = scene.structure.shaft_mass * G if scene.gravity else 0.0
-    load = np.asarray(radial_load, dtype=float) + np.array([0.0, -weight])
-    return float(np.hypot(*load)) <= margin * scene.structure.shaft_stiffness * play
+    return _load_with_weight(scene, radial_load) <= margin * scene.structure.shaft_stiffness * play
 
 
 def needs_skidding(scene) -> bool:
