@@ -152,11 +152,9 @@ def summarise(scene, tail: dict, node_figures: dict, path, out: str | None = Non
                      f"{tier_summary(f['tier_values'])}")
     fs = tail["sample_rate"]
     x = tail["accel"]
-    if not n_msgs:
-        pass
-    elif not fs or x.shape[0] < fs:
+    if n_msgs and (not fs or x.shape[0] < fs):      # no messages: the recording line below says so
         lines.append("envelope analysis: less than 1 s of signal recorded, nothing to analyse")
-    else:
+    elif n_msgs:
         speed = tail["shaft_speed"] if tail["shaft_speed"] is not None else scene.shaft_speed
         shaft_hz = abs(speed) / (2 * math.pi)
         res = verdict(x, tail["channels"], fs, scene.bearing, shaft_hz)

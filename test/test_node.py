@@ -645,7 +645,7 @@ def test_a_second_publisher_on_accel_is_said_by_the_node_its_diagnostics_and_the
               for _t, m in topics["/diagnostics"]]
     levels = [ord(m.status[0].level) if isinstance(m.status[0].level, bytes) else int(m.status[0].level)
               for _t, m in topics["/diagnostics"]]
-    said = ["other publishers on /accel" in m.status[0].message for _t, m in topics["/diagnostics"]]
+    said = ["1 other publisher on /accel" in m.status[0].message for _t, m in topics["/diagnostics"]]
     assert counts[0] == 0 and 1 in counts and counts[-1] == 0, counts
     # WARN where another publisher was (a second with overruns is WARN too)
     assert all(lv == 1 and s for lv, s, c in zip(levels, said, counts) if c == 1), (levels, counts)

@@ -731,7 +731,8 @@ class BearingSimNode(Node):
             level = 1
         values["other_accel_publishers"] = self.accel_peers
         if self.accel_peers:
-            text = f"{self.accel_peers} other publishers on {self.pub_accel.topic_name}"
+            text = (f"{self.accel_peers} other publisher{'s' if self.accel_peers > 1 else ''} "
+                    f"on {self.pub_accel.topic_name}")
             message = text if level == 0 else f"{message}; {text}"
             level = 1
         rec = self.recorder
