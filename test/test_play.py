@@ -456,3 +456,30 @@ def test_loop_over_nothing_or_no_time_is_refused_not_spun(case, bearing_sim_exe,
     r = subprocess.run([bearing_sim_exe, "play", str(path), *args], env=ros_env, capture_output=True, text=True,
                        timeout=30)
     assert (r.returncode, r.stderr) == (2, expected + "\n")
+
+
+def test_loop_over_bytes_that_are_not_the_recorded_type_is_one_line(bearing_sim_exe, ros_env, tmp_path):
+    """Another tool's recording whose /accel messages do not decode as the PointCloud2 its
+    channel names: --loop decodes each table (to measure the length, then to move the stamps)
+    and ended with rclpy's RMWError as a traceback and 'internal error' (exit 1); now one line
+    that names the file and the topic, exit status 2."""
+    from mcap.writer import Writer
+
+    from bearing_sim_ros.recording.schemas import message_definition
+
+    path = tmp_path / "undecodable.mcap"
+    with open(path, "wb") as f:
+        writer = Writer(f)
+        writer.start("ros2", "another tool")
+        schema = writer.register_schema("sensor_msgs/msg/PointCloud2", "ros2msg",
+                                        message_definition("sensor_msgs/msg/PointCloud2").encode())
+        channel = writer.register_channel("/accel", "cdr", schema, {"offered_qos_profiles": ""})
+        for k in range(3):
+            writer.add_message(channel, k * 10_000_000, b"\x00\x01\x00\x00" + b"\xff" * 40, k * 10_000_000)
+        writer.finish()
+    r = subprocess.run([bearing_sim_exe, "play", str(path), "--loop", "--wait", "0"], env=ros_env,
+                       capture_output=True, text=True, timeout=30)
+    err = r.stderr.strip().splitlines()
+    assert r.returncode == 2 and err[-1].startswith(
+        f"error: {path}: a message on /accel does not decode as sensor_msgs/msg/PointCloud2 ("), r.stderr
+    assert "Traceback" not in r.stderr

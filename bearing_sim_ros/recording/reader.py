@@ -45,6 +45,22 @@ def get_message(msg_type: str):
                         f"(pip install ros-jazzy-{pkg.replace('_', '-')})") from None
 
 
+def decode(data: bytes, msg_class, topic: str, where) -> object:
+    """The rclpy message that the recorded CDR bytes ``data`` on ``topic`` hold.  Bytes that are
+    not a message of the channel's type (another tool's file, or a damaged one whose CRCs still
+    pass) are a one-line UserError naming ``where`` (the file) and the topic: rclpy's RMWError
+    came out as a traceback."""
+    from rclpy.serialization import deserialize_message
+
+    try:
+        return deserialize_message(data, msg_class)
+    except Exception as exc:  # noqa: BLE001 - rclpy raises its own RMWError (and others) here
+        type_name = f"{msg_class.__module__.split('.')[0]}/msg/{msg_class.__name__}"
+        reason = (str(exc).splitlines() or [""])[0] or "unreadable"
+        raise UserError(f"{where}: a message on {topic} does not decode as {type_name} "
+                        f"({exc.__class__.__name__}: {reason})") from None
+
+
 class Recording:
     """An opened, checked MCAP recording.  Use as a context manager or call :meth:`close`."""
 
