@@ -483,3 +483,19 @@ def test_loop_over_bytes_that_are_not_the_recorded_type_is_one_line(bearing_sim_
     assert r.returncode == 2 and err[-1].startswith(
         f"error: {path}: a message on /accel does not decode as sensor_msgs/msg/PointCloud2 ("), r.stderr
     assert "Traceback" not in r.stderr
+
+
+@pytest.mark.parametrize("topic, why", [("/1abc", "topic name token must not start with a number"),
+                                        ("/bad topic!", "topic name must not contain characters other than")])
+def test_a_topic_ros_2_cannot_publish_is_one_line_before_anything_is_published(
+        topic, why, bearing_sim_exe, ros_env, tmp_path):
+    """Another tool's recording with a topic name that ROS 2 does not allow (a token that starts
+    with a digit, a space): rclpy's InvalidTopicNameException came out as a traceback of
+    several lines and 'internal error', exit 1.  Now one line naming the file and the topic,
+    exit status 2, before the node starts."""
+    path = _foreign_mcap(tmp_path / "foreign.mcap", [NS, NS + NS // 100], topic=topic)
+    r = subprocess.run([bearing_sim_exe, "play", str(path), "--wait", "0"], env=ros_env, capture_output=True,
+                       text=True, timeout=30)
+    assert r.returncode == 2, r.stderr
+    assert r.stderr.startswith(f"error: {path}: topic {topic!r} cannot be published in ROS 2 ({why}"), r.stderr
+    assert len(r.stderr.splitlines()) == 1, r.stderr

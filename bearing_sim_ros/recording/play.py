@@ -133,6 +133,8 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
         if loop and rec.end_ns == rec.start_ns and not (
                 sample_rate and any(c.msg_type == WAVEFORM_TYPE for c in played)):
             raise UserError(_no_length(path, rec.message_count))
+        for info in played:
+            _check_topic_name(path, info.topic)
 
         from rclpy.signals import SignalHandlerOptions
 
@@ -217,6 +219,22 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
                     rclpy.shutdown()
     finally:
         rec.close()
+
+
+def _check_topic_name(path, topic: str) -> None:
+    """A recorded topic that ROS 2 cannot publish on (another tool's name: ``/1abc``, a space)
+    is a one-line UserError naming ``path`` and the topic, before the node starts: rclpy's
+    InvalidTopicNameException was a traceback of several lines."""
+    from rclpy.exceptions import InvalidTopicNameException
+    from rclpy.validate_topic_name import validate_topic_name
+
+    try:
+        validate_topic_name(topic)
+    except InvalidTopicNameException as exc:
+        # its text: "Invalid topic name: <why>:", then the name and a caret under the fault
+        why = str(exc).splitlines()[0].split(": ", 1)[-1].rstrip(":")
+        raise UserError(f"{path}: topic {topic!r} cannot be published in ROS 2 ({why}); "
+                        "give a recording whose topic names ROS 2 allows") from None
 
 
 def _no_length(path, messages: int) -> str:
