@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import signal
 import subprocess
 import sys
@@ -499,3 +500,40 @@ def test_a_topic_ros_2_cannot_publish_is_one_line_before_anything_is_published(
     assert r.returncode == 2, r.stderr
     assert r.stderr.startswith(f"error: {path}: topic {topic!r} cannot be published in ROS 2 ({why}"), r.stderr
     assert len(r.stderr.splitlines()) == 1, r.stderr
+
+
+@pytest.mark.parametrize("msg_type, qos_text", [
+    ("std_msgs/msg/Float64", "{{{ not: yaml: ["),
+    ("std_msgs/msg/Float64", "- history: keep_last\n  depth: many\n  deadline: 5\n"),
+    ("std_srvs/srv/Empty", ""),
+], ids=["qos_not_yaml", "qos_values_not_rosbag2s", "a_service_type"])
+def test_another_tools_channel_metadata_or_type_is_played_or_refused_in_one_line(msg_type, qos_text, ros_env,
+                                                                                 tmp_path):
+    """Another tool's recording: ``offered_qos_profiles`` that is not YAML, or not rosbag2's
+    (a depth that is not a number, a deadline that is not sec/nsec), ended play in a yaml or
+    Python traceback; a channel whose schema names a service type, in rclpy's RuntimeError
+    ("this might be a service or action").  The QoS text is read where it can be and otherwise
+    the default profile taken, as for a channel without one: the file plays; a service type is
+    one line naming the file, the topic and the type."""
+    from mcap.writer import Writer
+    from rclpy.serialization import serialize_message
+    from std_msgs.msg import Float64
+
+    from bearing_sim_ros.errors import UserError
+    from bearing_sim_ros.recording.play import play
+
+    path = tmp_path / "foreign.mcap"
+    with open(path, "wb") as f:
+        writer = Writer(f)
+        writer.start("ros2", "another tool")
+        schema = writer.register_schema(msg_type, "ros2msg", b"float64 data")
+        channel = writer.register_channel("/x", "cdr", schema, {"offered_qos_profiles": qos_text})
+        for k in range(3):
+            writer.add_message(channel, NS + k * NS // 100, serialize_message(Float64(data=1.0)), NS + k * NS // 100)
+        writer.finish()
+    if msg_type.endswith("Float64"):
+        assert play(path, wait_for_subscribers=0.0, log=lambda text: None) == 3
+    else:
+        with pytest.raises(UserError, match=rf"^{re.escape(str(path))}: /x: message type 'std_srvs/srv/Empty' "
+                                            r"is a service, not a message; expected 'package/msg/Type'$"):
+            play(path, wait_for_subscribers=0.0, log=lambda text: None)

@@ -119,7 +119,12 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
         topics = rec.topics()
         if not topics or rec.message_count == 0:
             raise UserError(f"{path}: the recording holds no messages")
-        classes = {t: get_message(c.msg_type) for t, c in topics.items()}
+        classes = {}
+        for t, c in topics.items():
+            try:
+                classes[t] = get_message(c.msg_type)
+            except UserError as exc:        # which file and topic: another tool's type
+                raise UserError(f"{path}: {t}: {exc}") from None
         sample_rate = None
         try:
             sample_rate = float(rec.parameters().get("sample_rate") or 0) or None

@@ -38,6 +38,10 @@ def get_message(msg_type: str):
     if len(parts) != 3:
         raise UserError(f"message type {msg_type!r}: expected 'package/msg/Type'")
     pkg, kind, name = parts
+    if kind != "msg":
+        # rclpy's RuntimeError ("this might be a service or action") was a traceback
+        raise UserError(f"message type {msg_type!r} is a {'service' if kind == 'srv' else kind}, not a message; "
+                        "expected 'package/msg/Type'")
     try:
         return getattr(importlib.import_module(f"{pkg}.{kind}"), name)
     except (ImportError, AttributeError):
