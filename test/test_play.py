@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import signal
 import subprocess
 import sys
@@ -456,3 +457,83 @@ def test_loop_over_nothing_or_no_time_is_refused_not_spun(case, bearing_sim_exe,
     r = subprocess.run([bearing_sim_exe, "play", str(path), *args], env=ros_env, capture_output=True, text=True,
                        timeout=30)
     assert (r.returncode, r.stderr) == (2, expected + "\n")
+
+
+def test_loop_over_bytes_that_are_not_the_recorded_type_is_one_line(bearing_sim_exe, ros_env, tmp_path):
+    """Another tool's recording whose /accel messages do not decode as the PointCloud2 its
+    channel names: --loop decodes each table (to measure the length, then to move the stamps)
+    and ended with rclpy's RMWError as a traceback and 'internal error' (exit 1); now one line
+    that names the file and the topic, exit status 2."""
+    from mcap.writer import Writer
+
+    from bearing_sim_ros.recording.schemas import message_definition
+
+    path = tmp_path / "undecodable.mcap"
+    with open(path, "wb") as f:
+        writer = Writer(f)
+        writer.start("ros2", "another tool")
+        schema = writer.register_schema("sensor_msgs/msg/PointCloud2", "ros2msg",
+                                        message_definition("sensor_msgs/msg/PointCloud2").encode())
+        channel = writer.register_channel("/accel", "cdr", schema, {"offered_qos_profiles": ""})
+        for k in range(3):
+            writer.add_message(channel, k * 10_000_000, b"\x00\x01\x00\x00" + b"\xff" * 40, k * 10_000_000)
+        writer.finish()
+    r = subprocess.run([bearing_sim_exe, "play", str(path), "--loop", "--wait", "0"], env=ros_env,
+                       capture_output=True, text=True, timeout=30)
+    err = r.stderr.strip().splitlines()
+    assert r.returncode == 2 and err[-1].startswith(
+        f"error: {path}: a message on /accel does not decode as sensor_msgs/msg/PointCloud2 ("), r.stderr
+    assert "Traceback" not in r.stderr
+
+
+@pytest.mark.parametrize("topic, why", [("/1abc", "topic name token must not start with a number"),
+                                        ("/bad topic!", "topic name must not contain characters other than")])
+def test_a_topic_ros_2_cannot_publish_is_one_line_before_anything_is_published(
+        topic, why, bearing_sim_exe, ros_env, tmp_path):
+    """Another tool's recording with a topic name that ROS 2 does not allow (a token that starts
+    with a digit, a space): rclpy's InvalidTopicNameException came out as a traceback of
+    several lines and 'internal error', exit 1.  Now one line naming the file and the topic,
+    exit status 2, before the node starts."""
+    path = _foreign_mcap(tmp_path / "foreign.mcap", [NS, NS + NS // 100], topic=topic)
+    r = subprocess.run([bearing_sim_exe, "play", str(path), "--wait", "0"], env=ros_env, capture_output=True,
+                       text=True, timeout=30)
+    assert r.returncode == 2, r.stderr
+    assert r.stderr.startswith(f"error: {path}: topic {topic!r} cannot be published in ROS 2 ({why}"), r.stderr
+    assert len(r.stderr.splitlines()) == 1, r.stderr
+
+
+@pytest.mark.parametrize("msg_type, qos_text", [
+    ("std_msgs/msg/Float64", "{{{ not: yaml: ["),
+    ("std_msgs/msg/Float64", "- history: keep_last\n  depth: many\n  deadline: 5\n"),
+    ("std_srvs/srv/Empty", ""),
+], ids=["qos_not_yaml", "qos_values_not_rosbag2s", "a_service_type"])
+def test_another_tools_channel_metadata_or_type_is_played_or_refused_in_one_line(msg_type, qos_text, ros_env,
+                                                                                 tmp_path):
+    """Another tool's recording: ``offered_qos_profiles`` that is not YAML, or not rosbag2's
+    (a depth that is not a number, a deadline that is not sec/nsec), ended play in a yaml or
+    Python traceback; a channel whose schema names a service type, in rclpy's RuntimeError
+    ("this might be a service or action").  The QoS text is read where it can be and otherwise
+    the default profile taken, as for a channel without one: the file plays; a service type is
+    one line naming the file, the topic and the type."""
+    from mcap.writer import Writer
+    from rclpy.serialization import serialize_message
+    from std_msgs.msg import Float64
+
+    from bearing_sim_ros.errors import UserError
+    from bearing_sim_ros.recording.play import play
+
+    path = tmp_path / "foreign.mcap"
+    with open(path, "wb") as f:
+        writer = Writer(f)
+        writer.start("ros2", "another tool")
+        schema = writer.register_schema(msg_type, "ros2msg", b"float64 data")
+        channel = writer.register_channel("/x", "cdr", schema, {"offered_qos_profiles": qos_text})
+        for k in range(3):
+            writer.add_message(channel, NS + k * NS // 100, serialize_message(Float64(data=1.0)), NS + k * NS // 100)
+        writer.finish()
+    if msg_type.endswith("Float64"):
+        assert play(path, wait_for_subscribers=0.0, log=lambda text: None) == 3
+    else:
+        with pytest.raises(UserError, match=rf"^{re.escape(str(path))}: /x: message type 'std_srvs/srv/Empty' "
+                                            r"is a service, not a message; expected 'package/msg/Type'$"):
+            play(path, wait_for_subscribers=0.0, log=lambda text: None)

@@ -791,3 +791,46 @@ def test_bsf_hz_is_where_a_skidding_balls_defect_line_is(tmp_path):
         x = np.concatenate(accel)[int(FS) // 5:].astype(float)
         freqs, spec = envelope_spectrum(x, FS, max_freq=2000.0)
         assert abs(line_at(freqs, spec, 2 * rolling, search_rel=0.1).found_hz - 2 * bsf) < 0.5
+
+
+def test_a_render_stopped_by_a_signal_ends_with_the_diagnostics_of_its_last_sample(tmp_path, monkeypatch):
+    """A render stopped by Ctrl-C keeps a finalised file of what it rendered, but its last
+    ``/diagnostics`` was that of the last whole second: the ground truth of the rest was missing
+    (here a pit that appears at 2.2 s, in a file that holds 2.5 s, was in no message, and the
+    report called it "after the analysed stretch").  Now the file ends with the ``/diagnostics``
+    of its last sample, as a render that runs to its end and the live node stopped by a signal
+    do."""
+    import signal
+
+    from bearing_sim_ros.analysis.report import build_report
+
+    scene = tmp_path / "late.yaml"
+    text = load_scene("er16k_outer_race").source_text
+    scene.write_text(text.replace("profile: geometric}", "profile: geometric, onset_s: 2.2}"))
+    calls = []
+    advance = Simulator.advance
+
+    def interrupted_after_2_5_s(self, *a, **kw):
+        calls.append(1)
+        if len(calls) == 250:                     # the batch that ends at 2.5 s; it completes
+            os.kill(os.getpid(), signal.SIGINT)
+        return advance(self, *a, **kw)
+
+    monkeypatch.setattr(Simulator, "advance", interrupted_after_2_5_s)
+    out = tmp_path / "stopped.mcap"
+    with pytest.raises(KeyboardInterrupt):
+        render(str(scene), 10.0, out, fidelity="kinematic", progress=False)
+    diagnostics = []
+    with open_recording(out) as rec:
+        assert rec.topics()["/accel"].count == 250
+        cls = get_message("diagnostic_msgs/msg/DiagnosticArray")
+        from rclpy.serialization import deserialize_message
+
+        for _, _, log_ns, data in rec.messages(["/diagnostics"]):
+            msg = deserialize_message(data, cls)
+            values = {kv.key: kv.value for st in msg.status for kv in st.values}
+            diagnostics.append((log_ns, values["simulated_s"], values["faults_present"]))
+    assert diagnostics == [(1 * NS, "1.000000", "none"), (2 * NS, "2.000000", "none"),
+                           (2_500_000_000, "2.500000", "outer")]
+    s = build_report(out, tmp_path / "report")
+    assert s["scene_defects"] == [{"kind": "outer", "onset_s": pytest.approx(2.2), "present": "in part of the analysed stretch"}]

@@ -603,3 +603,66 @@ def test_report_of_a_recording_with_no_operating_point_says_so_without_a_warning
         speed, load = figures["operating_point.png"].axes
         assert speed.get_legend() is not None and load.get_legend() is None
         assert [t.get_text() for t in load.texts] == ["radial load not recorded (no /load) and no scene"]
+
+
+def _other_tools_recording(path, tables) -> None:
+    """An MCAP file written with ``rosbags`` (another tool, no ``bearing_sim`` metadata) whose
+    ``/accel`` holds ``tables``: PointCloud2 messages (rosbags' type) or raw CDR bytes each."""
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS2_JAZZY)
+    msgtype = "sensor_msgs/msg/PointCloud2"
+    with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
+        conn = writer.add_connection("/accel", msgtype, typestore=store)
+        for k, table in enumerate(tables):
+            data = table if isinstance(table, bytes) else store.serialize_cdr(table, msgtype)
+            writer.write(conn, k * 10_000_000, data)
+
+
+def _table(stamp_ns: int, fields=(("accel_y", 7),), width: int = 150):
+    """A rosbags PointCloud2 of ``width`` points with ``fields`` (name, PointField datatype), 4
+    bytes each: a waveform table where every datatype is FLOAT32 (7)."""
+    from rosbags.typesys import Stores, get_typestore
+
+    types = get_typestore(Stores.ROS2_JAZZY).types
+    header = types["std_msgs/msg/Header"](
+        stamp=types["builtin_interfaces/msg/Time"](sec=stamp_ns // NS, nanosec=stamp_ns % NS), frame_id="s")
+    step = 4 * len(fields)
+    return types["sensor_msgs/msg/PointCloud2"](
+        header=header, height=1, width=width, is_bigendian=False, point_step=step, row_step=step * width,
+        is_dense=True, data=np.zeros(step * width, dtype=np.uint8),
+        fields=[types["sensor_msgs/msg/PointField"](name=n, offset=4 * k, datatype=t, count=1)
+                for k, (n, t) in enumerate(fields)])
+
+
+@pytest.mark.parametrize("kind, said", [
+    ("not_a_table", "/accel: not a waveform table: field(s) intensity not one FLOAT32 each"),
+    ("undecodable", "a message on /accel does not decode as sensor_msgs/msg/PointCloud2"),
+    ("no_samples", "the waveform tables on /accel hold no samples"),
+    ("stamps_go_back", "cannot tell the sample rate from the waveform tables on /accel"),
+    ("one_table", "cannot tell the sample rate from the waveform tables on /accel"),
+    ("channels_change", "/accel: a table's channels (accel_x, accel_y) are not the first table's (accel_y)"),
+])
+def test_report_of_another_tools_recording_it_cannot_read_is_one_line(kind, said, tmp_path, capsys):
+    """Recordings from another tool (written with rosbags) whose ``/accel`` is not what the
+    report reads: a point cloud with a UINT8 field (a lidar's), bytes that are not a
+    PointCloud2, tables of no samples, stamps going back, one table only, channels that change
+    from one table to the next.  Each ended in a traceback and 'internal error' (exit 1:
+    ValueError, RMWError, ZeroDivisionError, scipy's "fs must be positive", numpy's concatenate);
+    now one line that names the file, exit status 2."""
+    tables = {
+        "not_a_table": [_table(k * 10_000_000, (("x", 7), ("intensity", 2))) for k in range(3)],
+        "undecodable": [b"\x00\x01\x00\x00" + b"\xff" * 40] * 3,
+        "no_samples": [_table(k * 10_000_000, width=0) for k in range(3)],
+        "stamps_go_back": [_table(10 * NS - k * 10_000_000) for k in range(3)],
+        "one_table": [_table(0)],
+        "channels_change": [_table(0), _table(10_000_000, (("accel_x", 7), ("accel_y", 7)))],
+    }[kind]
+    bag = tmp_path / "bag"
+    _other_tools_recording(bag, tables)
+    path = bag / "bag.mcap"
+    code = cli.main(["report", str(path), "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1, err
+    assert err[0].startswith(f"error: {path}: ") and said in err[0], err[0]

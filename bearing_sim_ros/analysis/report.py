@@ -48,7 +48,7 @@ import numpy as np
 from .. import ground_truth
 from ..errors import UserError
 from ..paths import output_folder, writing_into
-from ..recording.reader import open_recording
+from ..recording.reader import decode, open_recording
 from ..waveform import NS, from_pointcloud2
 from .envelope import DEFAULT_BAND, DETECTION_THRESHOLD, FAULT_LINES, diagnose, envelope_spectrum, statistics
 
@@ -65,8 +65,6 @@ class _Data:
     """What the report needs from a recording, as arrays."""
 
     def __init__(self, rec):
-        from rclpy.serialization import deserialize_message
-
         from ..recording.reader import get_message
 
         topics = rec.topics()
@@ -96,9 +94,16 @@ class _Data:
         except (TypeError, ValueError):
             fs_meta = None
         for topic, _type, log_ns, data in rec.messages(topics=wanted):
-            msg = deserialize_message(data, classes[topic])
+            msg = decode(data, classes[topic], topic, rec.path)
             if topic == self.accel_topic:
-                stamp, names, arr = from_pointcloud2(msg)
+                try:
+                    stamp, names, arr = from_pointcloud2(msg)
+                except ValueError as exc:     # another tool's point cloud (a lidar's) on .../accel
+                    raise UserError(f"{rec.path}: {topic}: {exc}") from None
+                if self.channels and tuple(names) != self.channels:
+                    # the columns are concatenated: numpy's error was a traceback
+                    raise UserError(f"{rec.path}: {topic}: a table's channels ({', '.join(names)}) are not "
+                                    f"the first table's ({', '.join(self.channels)})")
                 stamps.append(stamp)
                 widths.append(arr.shape[0])
                 self.channels = tuple(names)
@@ -137,7 +142,10 @@ class _Data:
         self.stamps = np.array(stamps, dtype=np.int64)
         self.widths = np.array(widths, dtype=np.int64)
         self.samples = int(self.widths.sum())     # in every table; self.accel holds the first ones
-        self.sample_rate = fs_meta or self._rate_from_stamps()
+        if self.samples == 0:
+            raise UserError(f"{rec.path}: the waveform tables on {self.accel_topic} hold no samples "
+                            f"({len(widths)} tables of width 0)")
+        self.sample_rate = fs_meta or self._rate_from_stamps(rec.path)
         self.t0_ns = int(self.stamps[0])
         # the recorded signal's length (s): first stamp to the end of the last table, not the log
         # times' span (the live node logs a table when its batch is complete, a batch after its stamp)
@@ -188,11 +196,19 @@ class _Data:
                 return t
         return None
 
-    def _rate_from_stamps(self) -> float:
-        if self.stamps.size < 2 or self.stamps[-1] == self.stamps[0]:
-            raise UserError("cannot tell the sample rate: one waveform table and no sample_rate "
-                            "parameter in the metadata")
-        return float((self.widths[:-1].sum()) * NS / (self.stamps[-1] - self.stamps[0]))
+    def _rate_from_stamps(self, path) -> float:
+        """The sample rate (Hz) of a recording without a ``sample_rate`` parameter in its metadata
+        (another tool's), from its tables' samples over their stamps' span."""
+        rate = (float(self.widths[:-1].sum() * NS / (self.stamps[-1] - self.stamps[0]))
+                if self.stamps[-1] != self.stamps[0] else 0.0)
+        if not (math.isfinite(rate) and rate > 0):
+            # zero or negative, the division and scipy's "fs must be positive" were tracebacks
+            why = ("one waveform table" if self.stamps.size < 2 else
+                   f"{self.stamps.size} tables whose stamps do not increase ({self.stamps[0]} ns .. "
+                   f"{self.stamps[-1]} ns)")
+            raise UserError(f"{path}: cannot tell the sample rate from the waveform tables on {self.accel_topic} "
+                            f"({why}) and the metadata has no sample_rate parameter")
+        return rate
 
     def _gaps(self) -> int:
         """Waveform tables whose stamp is not the previous stamp + width / sample_rate (1 us)."""

@@ -42,7 +42,7 @@ import time
 from ..errors import UserError
 from ..teardown import teardown_watchdog
 from ..waveform import NS
-from .reader import get_message, open_recording
+from .reader import decode, get_message, open_recording
 from .schemas import qos_from_yaml
 
 WAIT_FOR_SUBSCRIBERS = 5.0    # s, the default of --wait: one missed 3 s announcement period and margin
@@ -103,7 +103,6 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
     playback between two messages (set by the signal handlers)."""
     import rclpy
     from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
-    from rclpy.serialization import deserialize_message
 
     if not rate > 0:
         raise UserError(f"--rate = {rate!r}: expected a number > 0")
@@ -120,7 +119,12 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
         topics = rec.topics()
         if not topics or rec.message_count == 0:
             raise UserError(f"{path}: the recording holds no messages")
-        classes = {t: get_message(c.msg_type) for t, c in topics.items()}
+        classes = {}
+        for t, c in topics.items():
+            try:
+                classes[t] = get_message(c.msg_type)
+            except UserError as exc:        # which file and topic: another tool's type
+                raise UserError(f"{path}: {t}: {exc}") from None
         sample_rate = None
         try:
             sample_rate = float(rec.parameters().get("sample_rate") or 0) or None
@@ -134,6 +138,8 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
         if loop and rec.end_ns == rec.start_ns and not (
                 sample_rate and any(c.msg_type == WAVEFORM_TYPE for c in played)):
             raise UserError(_no_length(path, rec.message_count))
+        for info in played:
+            _check_topic_name(path, info.topic)
 
         from rclpy.signals import SignalHandlerOptions
 
@@ -186,10 +192,10 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
                     if offset == 0:
                         # first pass: the recorded bytes go out as they are
                         if loop and msg_type == WAVEFORM_TYPE and span.topic in (None, topic):
-                            span.see(topic, deserialize_message(data, classes[topic]))
+                            span.see(topic, decode(data, classes[topic], topic, path))
                         pubs[topic].publish(data)
                     else:
-                        msg = deserialize_message(data, classes[topic])
+                        msg = decode(data, classes[topic], topic, path)
                         _shift_stamp(msg, offset)
                         pubs[topic].publish(msg)
                     published += 1
@@ -218,6 +224,22 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
                     rclpy.shutdown()
     finally:
         rec.close()
+
+
+def _check_topic_name(path, topic: str) -> None:
+    """A recorded topic that ROS 2 cannot publish on (another tool's name: ``/1abc``, a space)
+    is a one-line UserError naming ``path`` and the topic, before the node starts: rclpy's
+    InvalidTopicNameException was a traceback of several lines."""
+    from rclpy.exceptions import InvalidTopicNameException
+    from rclpy.validate_topic_name import validate_topic_name
+
+    try:
+        validate_topic_name(topic)
+    except InvalidTopicNameException as exc:
+        # its text: "Invalid topic name: <why>:", then the name and a caret under the fault
+        why = str(exc).splitlines()[0].split(": ", 1)[-1].rstrip(":")
+        raise UserError(f"{path}: topic {topic!r} cannot be published in ROS 2 ({why}); "
+                        "give a recording whose topic names ROS 2 allows") from None
 
 
 def _no_length(path, messages: int) -> str:

@@ -38,11 +38,31 @@ def get_message(msg_type: str):
     if len(parts) != 3:
         raise UserError(f"message type {msg_type!r}: expected 'package/msg/Type'")
     pkg, kind, name = parts
+    if kind != "msg":
+        # rclpy's RuntimeError ("this might be a service or action") was a traceback
+        raise UserError(f"message type {msg_type!r} is a {'service' if kind == 'srv' else kind}, not a message; "
+                        "expected 'package/msg/Type'")
     try:
         return getattr(importlib.import_module(f"{pkg}.{kind}"), name)
     except (ImportError, AttributeError):
         raise UserError(f"message type {msg_type!r} is not installed in this environment "
                         f"(pip install ros-jazzy-{pkg.replace('_', '-')})") from None
+
+
+def decode(data: bytes, msg_class, topic: str, where) -> object:
+    """The rclpy message that the recorded CDR bytes ``data`` on ``topic`` hold.  Bytes that are
+    not a message of the channel's type (another tool's file, or a damaged one whose CRCs still
+    pass) are a one-line UserError naming ``where`` (the file) and the topic: rclpy's RMWError
+    came out as a traceback."""
+    from rclpy.serialization import deserialize_message
+
+    try:
+        return deserialize_message(data, msg_class)
+    except Exception as exc:  # noqa: BLE001 - rclpy raises its own RMWError (and others) here
+        type_name = f"{msg_class.__module__.split('.')[0]}/msg/{msg_class.__name__}"
+        reason = (str(exc).splitlines() or [""])[0] or "unreadable"
+        raise UserError(f"{where}: a message on {topic} does not decode as {type_name} "
+                        f"({exc.__class__.__name__}: {reason})") from None
 
 
 class Recording:

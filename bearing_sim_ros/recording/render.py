@@ -399,6 +399,27 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
     means = PeriodMeans(scene.bearing.balls, scene.sensor.range, scene.bearing.ball_spin_speed(1.0))
     next_diag_s = 1
     done = 0
+    diagnosed = 0               # samples up to the last /diagnostics written
+
+    def write_diagnostics(pub_ns: int) -> None:
+        """The ``/diagnostics`` of the signal up to ``pub_ns`` (the end of the last batch)."""
+        nonlocal diagnosed
+        # the live node's keys (nodes/bearing_sim_node.py); what depends on the wall clock
+        # or the output path is left out so that the file stays byte-identical
+        values = {"real_time_factor": "nan", "real_time": "false", "mode": "render",
+                  "overruns": 0, "overruns_last_period": 0, "lag_s": "0.000000",
+                  "worst_lag_s": "0.000000", **tier_values(sim), **defect_values(sim),
+                  "shaft_speed_rad_s": f"{sim.shaft_speed:.6g}",
+                  "radial_load_n": " ".join(f"{v:.6g}" for v in sim.radial_load),
+                  "simulated_s": f"{sim.time:.6f}", "rejected_inputs": 0,
+                  "recording": "ok"}
+        values.update(means.values())
+        clipped = means.clipped_text()         # a warning, as the live node gives it
+        means.reset()
+        rec.write(TOPIC_DIAGNOSTICS, diagnostics_message(pub_ns, values, 1 if clipped else 0,
+                                                         clipped or "ok"), pub_ns)
+        diagnosed = done
+
     try:
         for topic in topics:
             rec.add_topic(topic, TYPES[topic], _qos_for(topic, batch_duration))
@@ -426,20 +447,7 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
                 # appears in the last part-second has ground truth too (the report said it came
                 # "after this recording ends")
                 while done >= next_diag_s * sample_rate or (done == total and done > (next_diag_s - 1) * sample_rate):
-                    # the live node's keys (nodes/bearing_sim_node.py); what depends on the wall clock
-                    # or the output path is left out so that the file stays byte-identical
-                    values = {"real_time_factor": "nan", "real_time": "false", "mode": "render",
-                              "overruns": 0, "overruns_last_period": 0, "lag_s": "0.000000",
-                              "worst_lag_s": "0.000000", **tier_values(sim), **defect_values(sim),
-                              "shaft_speed_rad_s": f"{sim.shaft_speed:.6g}",
-                              "radial_load_n": " ".join(f"{v:.6g}" for v in sim.radial_load),
-                              "simulated_s": f"{sim.time:.6f}", "rejected_inputs": 0,
-                              "recording": "ok"}
-                    values.update(means.values())
-                    clipped = means.clipped_text()         # a warning, as the live node gives it
-                    means.reset()
-                    rec.write(TOPIC_DIAGNOSTICS, diagnostics_message(pub_ns, values, 1 if clipped else 0,
-                                                                     clipped or "ok"), pub_ns)
+                    write_diagnostics(pub_ns)
                     next_diag_s += 1
                 bar.update(done / sample_rate)
     except KeyboardInterrupt as exc:
@@ -448,6 +456,12 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
         how = "SIGTERM" if isinstance(exc, Terminated) else "Ctrl-C"
         with _signals_held():
             if done:
+                if diagnosed < done and not rec.error:
+                    # the end of the signal has its /diagnostics, as a render that ran to its end
+                    # and the live node stopped by a signal have: without it the ground truth of
+                    # the last part-second was missing (a pit that appeared there was "after
+                    # this recording ends")
+                    write_diagnostics(msgs.stamp_ns(done))
                 rec.close()
             else:
                 rec.discard()

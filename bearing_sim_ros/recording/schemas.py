@@ -151,15 +151,25 @@ def qos_to_yaml(qos) -> str:
 
 def qos_from_yaml(text: str):
     """An rclpy ``QoSProfile`` from ``offered_qos_profiles`` text (the first profile), accepting
-    rosbag2's v9 enum names and older integer values; None when there is no profile."""
+    rosbag2's v9 enum names and older integer values; None when there is no profile, or none
+    that can be read (another tool's text that is not YAML or not rosbag2's): the publisher then
+    takes the default, as for a channel without one (a yaml or Python traceback ended play)."""
     import yaml
+
+    if not text or not text.strip():
+        return None
+    try:
+        return _qos_from_items(yaml.safe_load(text))
+    except (yaml.YAMLError, ValueError, TypeError, AttributeError, OverflowError):
+        return None
+
+
+def _qos_from_items(items):
+    """``qos_from_yaml`` of the parsed text."""
     from rclpy.duration import Duration
     from rclpy.qos import (DurabilityPolicy, HistoryPolicy, LivelinessPolicy, QoSProfile,
                            ReliabilityPolicy)
 
-    if not text or not text.strip():
-        return None
-    items = yaml.safe_load(text)
     if not isinstance(items, list) or not items or not isinstance(items[0], dict):
         return None
     item = items[0]
