@@ -103,7 +103,7 @@ def _verdict_lines(scene, res: dict, end_s: float = math.inf, analysed_s: float 
     bearing with clearance shows a line at BPFO, the ball-pass (varying compliance) line, which
     the detector cannot tell from an outer-race fault (README "Limitations"); and about a defect
     that appears later than the stretch analysed (``end_s``, ``analysed_s``: s of signal)."""
-    from .analysis.envelope import DETECTION_THRESHOLD
+    from .analysis.envelope import DETECTION_THRESHOLD, no_defect_note
     from .nodes.monitor_node import FAULT_NAMES
 
     threshold = f"threshold x{DETECTION_THRESHOLD:g} the local floor"
@@ -113,11 +113,8 @@ def _verdict_lines(scene, res: dict, end_s: float = math.inf, analysed_s: float 
     if res["verdict"] == "healthy":
         return [f"verdict: healthy ({threshold}; this scene has no defect)"]
     if res["verdict"] == "outer":
-        bpfo = res["lines"]["bpfo"].prominence
-        return [f"verdict: this scene has no defect; the line at BPFO (x{bpfo:.0f}) is the ball-pass "
-                "(varying compliance) line,",
-                "  which the detector alone calls an outer-race fault: compare line heights with a "
-                "healthy baseline"]
+        what, advice = no_defect_note(res)
+        return [f"verdict: {what},", f"  {advice}"]
     return [f"verdict: the detector says {FAULT_NAMES[res['verdict']]} ({threshold}), but this scene "
             "has no defect, so the line is not a defect's"]
 

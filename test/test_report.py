@@ -134,6 +134,24 @@ def test_report_of_a_healthy_bearing_says_healthy(tmp_path):
     assert [(w["verdict"], w["faults_present"]) for w in s["timeline"]] == [("healthy", [])] * 2
     assert s["fault_onset_s"] is None and s["first_detection_s"] is None and s["detection_latency_s"] is None
     assert s["verdict_describes_recording"] is True
+    assert s["verdict_note"] is None                       # nothing to explain
+
+
+def test_a_fault_verdict_on_a_scene_without_a_defect_is_explained(tmp_path, capsys):
+    """The healthy ER-16K rings at BPFO by varying compliance (seed 000 Fig. 9), and the report
+    said "verdict OUTER ... the verdict differs from the scene" and nothing more, where
+    ``bearing-sim run`` explains the ball-pass line.  Now the report says it too: on the command
+    line, in summary.md and as ``verdict_note`` in summary.json."""
+    rec = tmp_path / "healthy.mcap"
+    render("er16k_healthy", 2.0, rec, fidelity="kinematic", progress=False)
+    out = tmp_path / "out"
+    assert cli.main(["report", str(rec), "--out", str(out)]) == 0
+    said = capsys.readouterr().out
+    s = json.loads((out / "summary.json").read_text())
+    assert s["verdict"] == "outer" and s["expected_defects"] == []
+    assert "is the ball-pass (varying compliance) line" in s["verdict_note"], s["verdict_note"]
+    assert "compare line heights with a healthy baseline" in s["verdict_note"]
+    assert s["verdict_note"] in said and s["verdict_note"] in (out / "summary.md").read_text()
 
 
 def _with_onset(tmp_path, onset_s: float):

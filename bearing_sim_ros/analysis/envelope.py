@@ -163,6 +163,23 @@ def diagnose(x: np.ndarray, fs: float, frequencies: dict, band=DEFAULT_BAND,
     return {"verdict": verdict, "lines": lines, "scores": scores}
 
 
+def no_defect_note(verdict: dict) -> tuple | None:
+    """What a fault verdict (:func:`diagnose`'s result) on a scene *without* a defect means, in
+    words: ``(what the line is, what to do)``, or None where the verdict is healthy.  A bearing
+    with radial play rattles from ball to ball at the ball-pass frequency (varying compliance;
+    seed 000 Fig. 9), and a detector that judges the height of the BPFO line alone calls that an
+    outer-race fault."""
+    fault = verdict["verdict"]
+    if fault in ("healthy", "unknown"):
+        return None
+    if fault == "outer":
+        return (f"this scene has no defect; the line at BPFO (x{verdict['lines']['bpfo'].prominence:.0f}) is the "
+                "ball-pass (varying compliance) line",
+                "which the detector alone calls an outer-race fault: compare line heights with a healthy baseline")
+    return ("this scene has no defect, so the line is not a defect's",
+            "a false alarm of the detector: compare line heights with a healthy baseline")
+
+
 def statistics(x: np.ndarray) -> dict:
     """RMS, kurtosis (3 for a Gaussian), crest factor, peak-to-peak of a waveform."""
     x = np.asarray(x, dtype=float)

@@ -50,7 +50,8 @@ from ..errors import UserError
 from ..paths import output_folder, writing_into
 from ..recording.reader import decode, open_recording
 from ..waveform import NS, from_pointcloud2
-from .envelope import DEFAULT_BAND, DETECTION_THRESHOLD, FAULT_LINES, diagnose, envelope_spectrum, statistics
+from .envelope import (DEFAULT_BAND, DETECTION_THRESHOLD, FAULT_LINES, diagnose, envelope_spectrum, no_defect_note,
+                       statistics)
 
 MAX_ANALYSIS_S = 120.0
 DEFAULT_WINDOW_S = 1.0        # s: the verdict timeline's windows (the detector's own segment length)
@@ -857,6 +858,9 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
         "verdict": verdict["verdict"] if verdict else "unknown",
         "expected_defects": expected,
         "expected_defects_from": expected_from,
+        # a fault verdict on a scene without a defect (the healthy ER-16K's ball-pass line at BPFO)
+        "verdict_note": (", ".join(no_defect_note(verdict) or ()) or None
+                         if verdict and scene is not None and not scene.defects else None),
         "scene_defects": scene_defects(scene, d.truth, d.analysed_end_s, d.signal_s),
         "scene_unknown": scene_problem or None,
         "skid_ratios_percent": {k: float(np.mean(v[:, 1])) for k, v in sorted(d.skid.items())},
@@ -926,6 +930,8 @@ def _markdown(s: dict) -> str:
                    else f" (the verdict {agree} the scene)")
         lines += [f"**Verdict (envelope analysis of {s['envelope_channel']}): {verdict}**; the scene's defects: "
                   f"{scene_part or 'none (healthy)'}{against}.", ""]
+    if s["verdict_note"]:
+        lines += [f"The verdict on a scene without a defect: {s['verdict_note']}.", ""]
     if s["verdict_describes_recording"] is False:
         lines += [f"**The faults present change during this recording ({_changes_text(s)}): one verdict does "
                   "not describe it; see \"Verdict over time\".**", ""]
@@ -1121,4 +1127,6 @@ def report_command(args) -> int:
         ("detection_latency_s", "latency")) if s[key] is not None)
     print(f"{args.out}: {', '.join(s['plots'])}, summary.md, summary.json; verdict {s['verdict']} "
           f"(scene defects: {_defects_text(s)}{timing})")
+    if s["verdict_note"]:
+        print(f"{args.out}: {s['verdict_note']}")
     return 0
