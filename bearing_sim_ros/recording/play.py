@@ -163,7 +163,7 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
                                                 reliability=ReliabilityPolicy.RELIABLE,
                                                 durability=DurabilityPolicy.VOLATILE))
             pieces = f" in {len(rec.paths)} files" if len(rec.paths) > 1 else ""
-            log(f"play {path}: {rec.message_count} messages{pieces} on {len(pubs)} topics, "
+            log(f"play {path}: {rec.message_count} messages{pieces} on {len(pubs)} topic{'' if len(pubs) == 1 else 's'}, "
                 f"{(rec.end_ns - rec.start_ns) / NS:.2f} s at {rate:g}x"
                 + (", looping" if loop else "") + (", publishing /clock" if clock else ""))
             _wait_for_subscribers(pubs, wait_for_subscribers, running, lambda text: log(f"play {path}: {text}"))
