@@ -40,6 +40,11 @@ class InputLimits:
         self.max_speed = min(NDM_LIMIT / dm_mm, MAX_SPEED_RPM) * RPM
         self.max_load = min(LOAD_MULTIPLE_C0 * self.static_capacity, MAX_LOAD)
 
+    def __str__(self):
+        """As the node's start line says it."""
+        return (f"shaft speed up to {self.max_speed:.0f} rad/s ({self.max_speed / RPM:.0f} rpm), radial load "
+                f"up to {self.max_load:.0f} N (static capacity C0 {self.static_capacity:.0f} N)")
+
     def __repr__(self):
         return (f"InputLimits(max_speed={self.max_speed:.1f} rad/s, "
                 f"static_capacity={self.static_capacity:.0f} N, max_load={self.max_load:.0f} N)")

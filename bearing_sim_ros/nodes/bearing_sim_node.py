@@ -432,7 +432,7 @@ class BearingSimNode(Node):
             f"scene {self.scene.name}: {self.sim.tier} tier ({self.sim.selection.reason}), "
             f"{self.sim.sample_rate:g} Hz in batches of {self.n_batch}, "
             f"real_time {self._cfg['real_time']}, duration {self._cfg['duration']:g} s, "
-            f"recording {_recording_text(self._cfg)}; input limits {self.limits}")
+            f"recording {_recording_text(self._cfg)}; inputs accepted: {self.limits}")
         self._peer_timer = self.create_timer(PEER_CHECK_S, self._check_peers)
         self._thread.start()
 
