@@ -453,3 +453,60 @@ def test_a_scenes_clearance_slip_and_tier_changed_in_python_are_held_to_the_yaml
     assert str(exc.value) == f"scene er16k_outer_race: {line}"
     inside = dataclasses.replace(scene, bearing=scene.bearing.with_clearance(-5e-6), random_slip=0.02)
     assert np.isfinite(Simulator(inside, fidelity="kinematic").advance(150).accel).all()
+
+
+@pytest.mark.parametrize("section, change, line", [
+    ("structure", {"shaft_mass": 0.0}, "structure.shaft_mass = 0 kg: allowed range is [0.001, 100000] kg"),
+    ("structure", {"pedestal_stiffness": float("nan")},
+     "structure.pedestal_stiffness = nan N/m: allowed range is [0, 1e+12] N/m"),
+    ("structure", {"shaft_damping": "1376"}, "structure.shaft_damping = '1376': expected a number in [0, 1e+08] N s/m"),
+    ("structure", {"resonator_mass": 1e-6},
+     "structure.resonator_mass = 1e-06 kg: allowed 0 (no resonator) or [0.0001, 1000] kg"),
+    ("structure", {"resonator_stiffness": 1.0}, "structure.resonator_stiffness = 1 N/m: allowed range is "
+                                                "[197.392, 4.9348e+09] N/m (10 - 50000 Hz with resonator_mass 0.05 kg)"),
+    ("lubrication", {"viscosity": -1.0}, "lubrication.viscosity = -1: allowed range is [0.0001, 10]"),
+    ("lubrication", {"surface_roughness": 0.05},
+     "lubrication.surface_roughness = 0.05 m: allowed range is [1e-09, 5e-06] m"),
+    ("lubrication", {"ehl_film": "yes"}, "lubrication.ehl_film = 'yes': expected True or False"),
+    ("sensor", {"axes": ("z",)}, "sensor.axes = ('z',): expected a list of distinct axes from x, y"),
+    ("sensor", {"range": 0.0}, "sensor.range = 0 m/s^2: allowed range is (0, 1e+07] m/s^2"),
+    ("sensor", {"resonance_hz": float("inf")}, "sensor.resonance_hz = inf Hz: allowed range is [0, 200000] Hz"),
+])
+def test_a_scenes_structure_lubrication_and_sensor_changed_in_python_are_held_to_the_yamls_limits(
+        section, change, line):
+    """``dataclasses.replace(scene, structure=dataclasses.replace(scene.structure, shaft_mass=0))``
+    failed deep in the physics with a ZeroDivisionError, a NaN stiffness with numpy's LinAlgError,
+    and a sensor axis "z" or a range of 0 ran (labelled accel_z; every sample clipped to 0).  Now
+    the scene refuses them in one line, in the Python field's name and SI unit, with the bounds
+    of the YAML's keys; within them it runs."""
+    scene = load_scene("er16k_outer_race")
+    with pytest.raises(SceneError) as exc:
+        Simulator(dataclasses.replace(scene, **{section: dataclasses.replace(getattr(scene, section), **change)}),
+                  fidelity="kinematic")
+    assert str(exc.value) == f"scene er16k_outer_race: {line}"
+
+
+def test_a_scenes_structure_lubrication_and_sensor_within_the_limits_run():
+    """Every shipped scene meets its own bounds made in Python (the YAML's resonator frequency
+    and damping ratio, turned into a stiffness and a damping, stay within them to the last
+    bit), and changes within them run."""
+    for name in shipped_scenes():
+        load_scene(name)
+    scene = load_scene("er16k_outer_race")
+    changed = dataclasses.replace(scene, structure=dataclasses.replace(scene.structure, shaft_mass=2.0,
+                                                                       resonator_mass=0.0),
+                                  sensor=dataclasses.replace(scene.sensor, axes=("y",)),
+                                  lubrication=dataclasses.replace(scene.lubrication, viscosity=0.1))
+    batch = Simulator(changed, fidelity="kinematic").advance(150)
+    assert batch.accel_channels == ("accel_y",) and np.isfinite(batch.accel).all()
+
+
+def test_a_yaml_resonator_at_the_edges_of_its_bounds_loads():
+    """A YAML resonator at the edges of frequency_hz and damping_ratio loads: the stiffness and
+    damping computed from them are within what the scene's own check allows (sqrt(k / m) need
+    not give back 2 pi f to the last bit)."""
+    for mass in (1e-4, 0.05, 1e3):
+        for frequency, ratio in ((10.0, 0.0), (50000.0, 1.0), (3333.3, 1.0), (10.0, 1.0)):
+            data = load_yaml(GOOD)
+            data["structure"]["resonator"] = {"mass": mass, "frequency_hz": frequency, "damping_ratio": ratio}
+            assert scene_from_dict(data, name="edge").structure.has_resonator
