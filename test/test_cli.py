@@ -214,6 +214,25 @@ def test_advance_names_a_bad_speed_or_load_and_what_is_allowed(call, message):
     assert np.isfinite(inside.accel).all() and sim.index == 10
 
 
+@pytest.mark.parametrize("sample_rate, n", [(15000.0, 10 ** 12), (15000.0, 2 ** 20 + 1), (1000.0, 10 ** 9)])
+def test_an_advance_too_large_to_hold_in_memory_is_refused_in_one_line(sample_rate, n):
+    """``advance(10**12)`` died with a MemoryError (a smaller huge one could meet the OOM killer
+    first): every series of a call is held at once.  Now one line names ``n``, the most one call
+    takes (``sim.max_advance``, MAX_ADVANCE_INTERNAL internal samples) and the way on: chunks,
+    which give the same samples."""
+    from bearing_sim_ros.simulator import MAX_ADVANCE_INTERNAL
+
+    sim = Simulator("er16k_healthy", fidelity="kinematic", sample_rate=sample_rate)
+    assert sim.max_advance == MAX_ADVANCE_INTERNAL // sim.chain_oversample
+    with pytest.raises(UserError) as exc:
+        sim.advance(n)
+    assert str(exc.value) == (
+        f"n = {n}: at most {sim.max_advance} samples ({sim.max_advance / sample_rate:g} s) per advance at "
+        f"{sample_rate:g} Hz ({MAX_ADVANCE_INTERNAL} internal samples, about 2 GB of arrays); advance in chunks "
+        "of up to sim.max_advance, which give the same samples")
+    assert sim.index == 0
+
+
 @pytest.mark.parametrize("call, message", [
     # True is an int to Python: advance(True) advanced one sample, oversample=np.int64(4) was refused
     (lambda: Simulator("er16k_healthy", fidelity="kinematic").advance(True),
