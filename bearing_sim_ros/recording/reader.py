@@ -296,6 +296,14 @@ def open_recording(path) -> Recording | SplitRecording:
     if not paths:
         raise UserError("no recording given: expected an .mcap file")
     if len(paths) > 1:
+        for p in paths:
+            # the name a split recording was made to, among other files (`play run.mcap
+            # run_001.mcap`): it was "run.mcap: no such file", though alone it reads all its pieces
+            pieces = [] if os.path.lexists(p) else existing_pieces(p)
+            if pieces:
+                raise UserError(f"{os.fspath(p)}: the name that split recording {pieces[0].name} .. {pieces[-1].name} "
+                                f"was recorded to, given with other files; give that name alone (it reads all "
+                                f"{len(pieces)} pieces) or its pieces, not both")
         return SplitRecording(paths)
     one = os.fspath(paths[0])
     if not os.path.lexists(one):
