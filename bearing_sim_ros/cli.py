@@ -237,6 +237,38 @@ def _scenes(_args) -> int:
     return EXIT_OK
 
 
+def _params_file_scenes(ros_args: list) -> list:
+    """(file, scene) for each ``--params-file`` among ``ros_args`` that gives the node a ``scene``:
+    under a node entry named like the node (``bearing_sim``, ``/rig1/bearing_sim``, nested
+    namespaces too) or a wildcard (``/**``).  A file that cannot be read or parsed is left to rcl,
+    which names it."""
+    from .nodes.bearing_sim_node import NODE_NAME
+    from .scene import load_yaml
+
+    def scenes(entry, names):
+        if not isinstance(entry, dict):
+            return
+        params = entry.get("ros__parameters")
+        node = "/".join(names).rsplit("/", 1)[-1]
+        if isinstance(params, dict) and "scene" in params and (node == NODE_NAME or "*" in "/".join(names)):
+            yield params["scene"]
+        for key, value in entry.items():
+            if key != "ros__parameters":
+                yield from scenes(value, [*names, str(key)])
+
+    found = []
+    for flag, path in zip(ros_args, ros_args[1:]):
+        if flag != "--params-file":
+            continue
+        try:
+            with open(path, encoding="utf-8") as f:
+                data = load_yaml(f.read())
+        except Exception:  # noqa: BLE001 - rcl says what is wrong with it
+            continue
+        found += [(path, scene) for scene in scenes(data, [])]
+    return found
+
+
 def _dispatch(args, rest) -> int:
     cmd = args.command
     if cmd == "scenes":
@@ -255,6 +287,12 @@ def _dispatch(args, rest) -> int:
                      and b.split(":=", 1)[0].rsplit(":", 1)[-1] == "scene" and ":=" in b]
             if given:
                 raise UserError(f"bearing-sim node: --scene {args.scene} and -p {given[0]} name two scenes; give one")
+            # ... and so does a parameters file's (it came after our -p and ran its scene)
+            in_files = _params_file_scenes(rest)
+            if in_files:
+                path, scene = in_files[0]
+                raise UserError(f"bearing-sim node: --scene {args.scene} and --params-file {path} (scene: {scene}) "
+                                "name two scenes; give one")
             argv += ["--ros-args", "-p", f"scene:={args.scene}"]
         return node_main(argv + rest) or EXIT_OK
     if cmd == "monitor":

@@ -104,6 +104,35 @@ def test_node_refuses_two_scenes(capsys, param):
     assert err == [f"error: bearing-sim node: --scene er16k_healthy and -p {param} name two scenes; give one"]
 
 
+@pytest.mark.parametrize("text", [
+    "bearing_sim:\n  ros__parameters:\n    scene: er16k_outer_race\n",
+    "/**:\n  ros__parameters:\n    scene: er16k_outer_race\n",
+    "rig1:\n  bearing_sim:\n    ros__parameters:\n      scene: er16k_outer_race\n",
+])
+def test_node_refuses_a_scene_and_a_params_files_scene(capsys, tmp_path, text):
+    """``bearing-sim node --scene A --ros-args --params-file f.yaml`` with ``scene: B`` in the file
+    ran B without a word (the file comes after --scene's -p, and rcl takes the last): one line
+    naming both, exit 2, before the node starts."""
+    path = tmp_path / "params.yaml"
+    path.write_text(text)
+    # (a duration: the old code ran the node)
+    assert cli.main(["node", "--scene", "er16k_healthy", "--ros-args", "--params-file", str(path),
+                     "-p", "duration:=0.05", "-p", "real_time:=false"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"error: bearing-sim node: --scene er16k_healthy and --params-file {path} (scene: er16k_outer_race) "
+                   "name two scenes; give one"]
+
+
+def test_a_params_file_without_the_nodes_scene_goes_with_scene(tmp_path):
+    """Another node's scene, or a file rcl will refuse, is no second scene."""
+    from bearing_sim_ros.cli import _params_file_scenes
+
+    path = tmp_path / "params.yaml"
+    path.write_text("bearing_monitor:\n  ros__parameters:\n    scene: er16k_outer_race\n"
+                    "bearing_sim:\n  ros__parameters:\n    duration: 3.0\n")
+    assert _params_file_scenes(["--params-file", str(path), "--params-file", "/nonexistent.yaml"]) == []
+
+
 @pytest.mark.parametrize("argv, line", [
     # Path("") is the current folder: an empty argument (an unset $VAR) was "'': is a folder, not a
     # file" for a scene, ": is a folder, not a file" for a recording, and validate read the
