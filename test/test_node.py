@@ -250,6 +250,25 @@ def test_a_misspelt_parameter_is_named_in_a_warning(ros_env, bearing_sim_exe):
             in r.stderr + r.stdout), r.stderr
 
 
+def test_a_parameter_the_node_does_not_have_set_at_run_time_is_named(started, listener):
+    """``ros2 param set /bearing_sim sampel_rate 1000.0`` while the node runs: rclpy refuses a
+    parameter that is not declared before the node's on-set callback, with "Invalid access to
+    undeclared parameter(s): []" (not even the name).  The node's pre-set callback says which, and
+    what the node has; a read-only one keeps rclpy's reason, which names it."""
+    node = started({"scene": "er16k_healthy"})
+    listener.wait_for(lambda: len(listener.accel) > 0, FIRST_TABLE_S, "the first accel table")
+    (ok, why), = listener.set_parameters({"sampel_rate": 1000.0})
+    assert not ok and why == (
+        "parameter sampel_rate: not a bearing_sim parameter; its parameters are scene, sample_rate, batch_duration, "
+        "real_time, duration, record, record_max_duration, record_max_size, fidelity, seed, oversample, "
+        "publish_clock, frame_id, state_rate, compute_ahead, input_max_age, of which these change while it runs: "
+        "real_time, duration, publish_clock, state_rate, compute_ahead, input_max_age")
+    (ok, why), = listener.set_parameters({"seed": 3})
+    assert not ok and why == "Trying to set a read-only parameter: seed."
+    assert listener.set_parameters({"compute_ahead": 0.1}) == [(True, "")]
+    assert node.proc.poll() is None
+
+
 def _record_a_scene_file(ros_env, bearing_sim_exe, scene, text, duration):
     """Write ``text`` to ``scene``, run the node on it by its name in its folder without pacing
     for ``duration`` s, recorded to live.mcap there: (topics, metadata) of the recording."""

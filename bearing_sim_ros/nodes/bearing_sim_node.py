@@ -213,6 +213,7 @@ class BearingSimNode(Node):
             if reason:
                 raise UserError(reason)
             self._build(cfg)
+            self.add_pre_set_parameters_callback(self._before_set_parameters)
             self.add_on_set_parameters_callback(self._on_set_parameters)
             self.add_post_set_parameters_callback(self._after_set_parameters)
         except BaseException:
@@ -256,6 +257,22 @@ class BearingSimNode(Node):
         rate = 1.0 / cfg["batch_duration"]
         self.set_parameters([Parameter("state_rate", value=rate)])
         cfg["state_rate"] = rate
+
+    def _before_set_parameters(self, params):
+        """A parameter the node does not have, set at run time (``ros2 param set /bearing_sim
+        sampel_rate 1000.0``): rclpy refuses it before the on-set callback, with "Invalid access
+        to undeclared parameter(s): []" (its list comes out empty).  Its own exception, raised
+        here, which its parameter services answer with, says which and what the node has."""
+        from rclpy.exceptions import ParameterNotDeclaredException
+
+        unknown = [p.name for p in params if not self.has_parameter(p.name)]
+        if unknown:
+            changeable = [name for name, (_default, desc) in _descriptors().items() if not desc.read_only]
+            error = ParameterNotDeclaredException(unknown)
+            error.args = (f"parameter {unknown[0]}: not a {NODE_NAME} parameter; its parameters are "
+                          f"{', '.join(self._cfg)}, of which these change while it runs: {', '.join(changeable)}",)
+            raise error
+        return params
 
     def _on_set_parameters(self, params):
         """Validate a run-time change against the whole configuration (read-only parameters
