@@ -325,7 +325,8 @@ STRUCTURE_BOUNDS = {"mass": (1e-3, 1e5, "kg"), "stiffness": (0.0, 1e12, "N/m"), 
 # structure.resonator (mass 0 = none): key -> (lo, hi, unit); Structure holds its mass, stiffness
 # m (2 pi f)^2 and damping 2 zeta m (2 pi f)
 RESONATOR_BOUNDS = {"mass": (1e-4, 1e3, "kg"), "frequency_hz": (10.0, 50000.0, "Hz"), "damping_ratio": (0.0, 1.0, "")}
-# Lubrication's field -> (YAML key, lo, hi) in the key's unit (a key ending _um is in um, the field in m)
+# Lubrication's field -> (YAML key, lo, hi) in the key's unit (a key ending _um is in um, the field in m);
+# lo excluded where LUBRICATION_LO_OPEN names it
 LUBRICATION_BOUNDS = {
     "viscosity": ("viscosity", 1e-4, 10.0),
     "pressure_viscosity": ("pressure_viscosity", 0.0, 1e-7),
@@ -345,6 +346,10 @@ LUBRICATION_BOUNDS = {
     "pocket_damping_ratio": ("pocket_damping_ratio", 0.0, 2.0),
     "cage_drag": ("cage_drag", 0.0, 1.0),
 }
+# the film thickness (Hamrock-Dowson) goes as pressure_viscosity^0.49: 0 is no film at all, and the
+# kinematic tier's share of it between the races 0 / 0 (a ZeroDivisionError; ehl_film: false
+# is the way to have no film)
+LUBRICATION_LO_OPEN = ("pressure_viscosity",)
 # Sensor's numeric fields (the YAML keys of the same names) -> (lo, hi, lo_open, unit)
 SENSOR_BOUNDS = {"resonance_hz": (0.0, 200000.0, False, "Hz"), "damping_ratio": (0.001, 1.0, False, ""),
                  "noise_density": (0.0, 10.0, False, "m/s^2/sqrt(Hz)"), "range": (0.0, 1e7, True, "m/s^2")}
@@ -475,7 +480,8 @@ def _lubrication_error(lubrication) -> str:
         return f"lubrication = {short_repr(lubrication)}: expected a bearing_sim_ros.scene.Lubrication"
     for name, (key, lo, hi) in LUBRICATION_BOUNDS.items():
         si, unit = (1e-6, "m") if key.endswith("_um") else (1.0, "")
-        error = _number_error(f"lubrication.{name}", getattr(lubrication, name), lo * si, hi * si, unit)
+        error = _number_error(f"lubrication.{name}", getattr(lubrication, name), lo * si, hi * si, unit,
+                              lo_open=name in LUBRICATION_LO_OPEN)
         if error:
             return error
     if not isinstance(lubrication.ehl_film, bool):
@@ -598,7 +604,7 @@ def _lubrication(top: _Section) -> Lubrication:
         # a key in um is read in um and held in m (the default converted as it always was)
         um = key.endswith("_um")
         default = getattr(d, name) * 1e6 if um else getattr(d, name)
-        values[name] = s.number(key, default, lo=lo, hi=hi) * (1e-6 if um else 1.0)
+        values[name] = s.number(key, default, lo=lo, hi=hi, lo_open=name in LUBRICATION_LO_OPEN) * (1e-6 if um else 1.0)
     return Lubrication(ehl_film=s.boolean("ehl_film", d.ehl_film), **values)
 
 

@@ -85,6 +85,9 @@ def test_numbers_in_exponent_form_are_floats(tmp_path):
     ("clock: 6}\n", "clock: 6}\nsensor: {axes: [x, z]}\n", ["sensor.axes", "'z'", "x, y"]),
     # a range of 0 m/s^2 would clip every sample to 0
     ("clock: 6}\n", "clock: 6}\nsensor: {range: 0}\n", ["sensor.range", "0", "(0, "]),
+    # the film goes as pressure_viscosity^0.49: 0 was a ZeroDivisionError in the kinematic tier
+    ("clock: 6}\n", "clock: 6}\nlubrication: {pressure_viscosity: 0}\n",
+     ["lubrication.pressure_viscosity = 0: allowed range is (0, 1e-07]"]),
 ])
 def test_bad_scene_is_one_line_naming_key_value_and_allowed(tmp_path, old, new, expect):
     path = tmp_path / "bad.yaml"
@@ -468,6 +471,7 @@ def test_a_scenes_clearance_slip_and_tier_changed_in_python_are_held_to_the_yaml
     ("lubrication", {"surface_roughness": 0.05},
      "lubrication.surface_roughness = 0.05 m: allowed range is [1e-09, 5e-06] m"),
     ("lubrication", {"ehl_film": "yes"}, "lubrication.ehl_film = 'yes': expected True or False"),
+    ("lubrication", {"pressure_viscosity": 0.0}, "lubrication.pressure_viscosity = 0: allowed range is (0, 1e-07]"),
     ("sensor", {"axes": ("z",)}, "sensor.axes = ('z',): expected a list of distinct axes from x, y"),
     ("sensor", {"range": 0.0}, "sensor.range = 0 m/s^2: allowed range is (0, 1e+07] m/s^2"),
     ("sensor", {"resonance_hz": float("inf")}, "sensor.resonance_hz = inf Hz: allowed range is [0, 200000] Hz"),
