@@ -502,6 +502,32 @@ def test_bad_inputs_are_rejected_and_a_speed_change_moves_bpfo(started, listener
     assert line_at(freqs, spec, f_old).prominence < DETECTION_THRESHOLD     # the old line is gone
 
 
+def test_a_load_in_another_frame_is_rejected_and_counted(started, listener):
+    """A ``load`` stamped in another frame (``base_link``, ``map``) was applied along the bearing's
+    axes as if it were in theirs: the node transforms nothing.  It is rejected (``wrong_frame``),
+    logged once with the frame expected, counted in /diagnostics; the node's own frame (its
+    tables', which its recordings give their loads) and an empty one are taken."""
+    node = started({"scene": "er16k_outer_race", "fidelity": "kinematic"})
+    listener.wait_matched()
+    listener.wait_for(lambda: len(listener.accel) > 0, FIRST_TABLE_S, "the first accel table")
+    listener.publish_load(0.0, -70.0, frame_id="base_link")
+    listener.publish_load(0.0, -75.0, frame_id="map")
+    listener.publish_load(0.0, -80.0, frame_id="bearing_accel")
+    listener.publish_load(0.0, -85.0)
+
+    def counted():
+        return next((v for _t, _lvl, _m, v, _stamp in reversed(listener.diagnostics)
+                     if v["radial_load_n"] == "0 -85" and int(v["rejected_inputs"]) >= 2), None)
+
+    v = listener.wait_for(counted, 8, "diagnostics at the last load, counting the 2 rejected")
+    assert int(v["rejected_wrong_frame"]) == 2 and int(v["rejected_inputs"]) == 2, v
+    log = node.output()
+    assert log.count("input rejected (wrong_frame)") == 1, log
+    assert ("load frame_id = 'base_link': expected 'bearing_accel' or empty (x horizontal, y vertical up, at the "
+            "bearing; the node transforms nothing)") in log
+    assert node.proc.poll() is None
+
+
 def test_a_burst_of_inputs_is_taken_whole_and_its_last_command_holds(started, listener):
     """300 NaN speeds published back to back (in a few ms), then a good one: the inputs' keep-last
     depth (1000) holds the burst until the executor takes it, so every NaN is counted, and the last
