@@ -191,11 +191,14 @@ class Scene:
             if error:
                 raise SceneError(f"scene {self.name}: {error}")
         # and its defects (dataclasses.replace(scene.defects[0], width=...) ran a negative or NaN
-        # width as a healthy bearing and a width in mm as a pit of metres)
-        for i, defect in enumerate(self.defects):
-            error = _defect_error(self.bearing, defect, f"defects[{i}]")
-            if error:
-                raise SceneError(f"scene {self.name}: {error}")
+        # width as a healthy bearing and a width in mm as a pit of metres) and waviness (a NaN
+        # amplitude ran to NaN samples)
+        for section, items, error_of in (("defects", self.defects, lambda d, k: _defect_error(self.bearing, d, k)),
+                                         ("waviness", self.waviness, _waviness_error)):
+            for i, item in enumerate(items):
+                error = error_of(item, f"{section}[{i}]")
+                if error:
+                    raise SceneError(f"scene {self.name}: {error}")
         # and the knobs of a sweep that the YAML bounds (a NaN clearance ran to NaN samples)
         lo, hi = RADIAL_CLEARANCE_RANGE_UM
         tier = ("" if isinstance(self.fidelity, str) and self.fidelity in TIERS
@@ -207,7 +210,10 @@ class Scene:
                       # and its structure, lubrication and sensor (a shaft_mass of 0 was a
                       # ZeroDivisionError inside the physics)
                       _structure_error(self.structure), _lubrication_error(self.lubrication),
-                      _sensor_error(self.sensor)):
+                      _sensor_error(self.sensor),
+                      # a string "no" was a gravity that acts
+                      "" if isinstance(self.gravity, bool) else
+                      f"gravity = {short_repr(self.gravity)}: expected True or False"):
             if error:
                 raise SceneError(f"scene {self.name}: {error}")
 
@@ -354,6 +360,10 @@ LUBRICATION_LO_OPEN = ("pressure_viscosity",)
 SENSOR_BOUNDS = {"resonance_hz": (0.0, 200000.0, False, "Hz"), "damping_ratio": (0.001, 1.0, False, ""),
                  "noise_density": (0.0, 10.0, False, "m/s^2/sqrt(Hz)"), "range": (0.0, 1e7, True, "m/s^2")}
 SENSOR_AXES = ("x", "y")
+# waviness: which race, the harmonic's order (whole, 1 - 200) and its amplitude (um in the YAML)
+WAVINESS_RACES = ("inner", "outer")
+WAVINESS_ORDER_MAX = 200
+WAVINESS_AMPLITUDE_MAX_UM = 20.0
 
 
 def _check_operating_point(where: _Section, rpm: float, load: tuple, bearing: Bearing):
@@ -439,6 +449,27 @@ def _axes_error(axes, kinds: tuple) -> str:
     return ""
 
 
+def _um_range(lo: float, hi: float) -> tuple:
+    """[lo, hi] um as m, wide enough for both a YAML value read in um and turned into m (x 1e-6)
+    and the same value written in m in Python (20e-6 is one bit above 20 x 1e-6)."""
+    return min(lo * 1e-6, lo / 1e6), max(hi * 1e-6, hi / 1e6)
+
+
+def _waviness_error(waviness, key: str) -> str:
+    """"" when ``waviness`` (a :class:`Waviness` made in Python, m and rad) keeps to the bounds of
+    the YAML's ``waviness`` keys, else the line naming the field: a NaN amplitude ran to NaN
+    samples (the skidding tier: diverged), a race "middle" or an order 2.5 ran as something else."""
+    if not isinstance(waviness, Waviness):
+        return f"{key} = {short_repr(waviness)}: expected a bearing_sim_ros.scene.Waviness"
+    if not (isinstance(waviness.race, str) and waviness.race in WAVINESS_RACES):
+        return f"{key}.race = {short_repr(waviness.race)}: allowed values are {', '.join(WAVINESS_RACES)}"
+    order = waviness.order
+    if isinstance(order, bool) or not isinstance(order, numbers.Integral) or not 1 <= order <= WAVINESS_ORDER_MAX:
+        return f"{key}.order = {short_repr(order)}: expected a whole number in [1, {WAVINESS_ORDER_MAX}]"
+    return (_number_error(f"{key}.amplitude", waviness.amplitude, *_um_range(0.0, WAVINESS_AMPLITUDE_MAX_UM), "m")
+            or _number_error(f"{key}.phase", waviness.phase, -2 * math.pi, 2 * math.pi, "rad"))
+
+
 def _structure_error(structure) -> str:
     """"" when ``structure`` (a :class:`Structure` made in Python) keeps to the bounds of the YAML's
     ``structure`` keys (STRUCTURE_BOUNDS, RESONATOR_BOUNDS), else the line naming the field: a
@@ -479,8 +510,8 @@ def _lubrication_error(lubrication) -> str:
     if not isinstance(lubrication, Lubrication):
         return f"lubrication = {short_repr(lubrication)}: expected a bearing_sim_ros.scene.Lubrication"
     for name, (key, lo, hi) in LUBRICATION_BOUNDS.items():
-        si, unit = (1e-6, "m") if key.endswith("_um") else (1.0, "")
-        error = _number_error(f"lubrication.{name}", getattr(lubrication, name), lo * si, hi * si, unit,
+        (lo, hi), unit = (_um_range(lo, hi), "m") if key.endswith("_um") else ((lo, hi), "")
+        error = _number_error(f"lubrication.{name}", getattr(lubrication, name), lo, hi, unit,
                               lo_open=name in LUBRICATION_LO_OPEN)
         if error:
             return error
@@ -589,9 +620,9 @@ def _waviness(top: _Section) -> tuple:
     for i, raw in enumerate(top.items("waviness")):
         w = _Section(raw, f"waviness[{i}]", ("race", "order", "amplitude_um", "phase_deg"),
                      required=("race", "order", "amplitude_um"))
-        out.append(Waviness(w.choice("race", ("inner", "outer")),
-                            int(w.number("order", lo=1, hi=200, integer=True)),
-                            w.number("amplitude_um", lo=0.0, hi=20.0) * 1e-6,
+        out.append(Waviness(w.choice("race", WAVINESS_RACES),
+                            int(w.number("order", lo=1, hi=WAVINESS_ORDER_MAX, integer=True)),
+                            w.number("amplitude_um", lo=0.0, hi=WAVINESS_AMPLITUDE_MAX_UM) * 1e-6,
                             math.radians(w.number("phase_deg", 0.0, lo=-360, hi=360))))
     return tuple(out)
 

@@ -10,7 +10,7 @@ import pytest
 
 from bearing_sim_ros import Simulator
 from bearing_sim_ros.errors import SceneError
-from bearing_sim_ros.scene import RPM, ProfilePoint, load_scene, load_yaml, scene_from_dict, shipped_scenes
+from bearing_sim_ros.scene import RPM, ProfilePoint, Waviness, load_scene, load_yaml, scene_from_dict, shipped_scenes
 
 CONTRACT_SCENES = {
     "er16k_healthy", "er16k_inner_race", "er16k_outer_race", "er16k_skidding",
@@ -443,6 +443,7 @@ def test_a_defect_changed_in_python_within_the_limits_runs():
     (lambda s: {"random_slip": float("nan")}, "random_slip = nan: allowed range is [0, 0.05]"),
     (lambda s: {"fidelity": "skiding"}, "fidelity = 'skiding': allowed values are auto, kinematic, skidding"),
     (lambda s: {"fidelity_tolerance": 0.0}, "fidelity_tolerance = 0: allowed range is [0.0001, 1]"),
+    (lambda s: {"gravity": "no"}, "gravity = 'no': expected True or False"),
 ])
 def test_a_scenes_clearance_slip_and_tier_changed_in_python_are_held_to_the_yamls_limits(change, line):
     """A clearance sweep by ``scene.bearing.with_clearance(...)`` ran a NaN clearance to NaN
@@ -514,3 +515,24 @@ def test_a_yaml_resonator_at_the_edges_of_its_bounds_loads():
             data = load_yaml(GOOD)
             data["structure"]["resonator"] = {"mass": mass, "frequency_hz": frequency, "damping_ratio": ratio}
             assert scene_from_dict(data, name="edge").structure.has_resonator
+
+
+@pytest.mark.parametrize("waviness, line", [
+    (Waviness("inner", 3, float("nan")), "waviness[0].amplitude = nan m: allowed range is [0, 2e-05] m"),
+    (Waviness("inner", 3, 1.0), "waviness[0].amplitude = 1 m: allowed range is [0, 2e-05] m"),
+    (Waviness("middle", 3, 1e-6), "waviness[0].race = 'middle': allowed values are inner, outer"),
+    (Waviness("outer", 2.5, 1e-6), "waviness[0].order = 2.5: expected a whole number in [1, 200]"),
+    (Waviness("outer", 0, 1e-6), "waviness[0].order = 0: expected a whole number in [1, 200]"),
+    (Waviness("outer", 3, 1e-6, float("inf")), "waviness[0].phase = inf rad: allowed range is [-6.28319, 6.28319] rad"),
+])
+def test_a_scenes_waviness_changed_in_python_is_held_to_the_yamls_limits(waviness, line):
+    """``dataclasses.replace(scene, waviness=(Waviness("inner", 3, nan),))`` ran to NaN samples in
+    the kinematic tier (the skidding tier: SolverDiverged), an amplitude of 1 m likewise, and a
+    race "middle" or an order 2.5 ran as something else.  Now one line, the YAML's bounds in SI
+    units; within them it runs."""
+    scene = load_scene("er16k_outer_race")
+    with pytest.raises(SceneError) as exc:
+        dataclasses.replace(scene, waviness=(waviness,))
+    assert str(exc.value) == f"scene er16k_outer_race: {line}"
+    wavy = dataclasses.replace(scene, waviness=[Waviness("outer", 200, 20e-6, -6.0), Waviness("inner", np.int64(1), 0)])
+    assert np.isfinite(Simulator(wavy, fidelity="kinematic").advance(150).accel).all()
