@@ -179,6 +179,11 @@ class Scene:
     source_path: str = field(default="", compare=False, repr=False)
 
     def __post_init__(self):
+        # a bearing changed in Python (dataclasses.replace(scene.bearing, ...)) first: every
+        # check below rests on it (a ball_mass of -1 was a math domain error inside the physics)
+        error = _bearing_error(self.bearing)
+        if error:
+            raise SceneError(f"scene {self.name}: {error}")
         # the bearing's limits for a scene made in Python too (dataclasses.replace(scene,
         # radial_load=...) ran a scene that load_scene refuses); a YAML scene has met them already,
         # named by its own keys
@@ -436,6 +441,42 @@ def _defect_error(bearing: Bearing, defect, key: str) -> str:
     ball = defect.ball
     if isinstance(ball, bool) or not isinstance(ball, numbers.Integral) or not 0 <= ball < bearing.balls:
         return f"{key}.ball = {short_repr(ball)}: expected a whole number in [0, {bearing.balls - 1}]"
+    return ""
+
+
+def _bearing_error(bearing) -> str:
+    """"" when ``bearing`` (a :class:`Bearing`, perhaps made or changed in Python) is one that the
+    catalog's keys allow (``catalog.bearing_from_mapping``, which the YAML goes through), else its
+    line: the geometry given back in the catalog's units (mm, deg, GPa; to 12 digits, so that a
+    value read from them comes back within its bounds) and checked there.  Its clearance is left
+    to the scene's own check, which names it in m."""
+    from .catalog import bearing_from_mapping
+
+    if not isinstance(bearing, Bearing):
+        return f"bearing = {short_repr(bearing)}: expected a bearing_sim_ros.catalog.Bearing"
+    balls = bearing.balls
+    if isinstance(balls, bool) or not isinstance(balls, numbers.Integral):
+        return f"bearing.balls = {short_repr(balls)}: expected a whole number (int) in [3, 40]"
+    given = {"balls": int(balls), "ball_diameter_mm": (bearing.ball_diameter, 1e3),
+             "pitch_diameter_mm": (bearing.pitch_diameter, 1e3),
+             "inner_race_diameter_mm": (bearing.inner_race_diameter, 1e3),
+             "outer_race_diameter_mm": (bearing.outer_race_diameter, 1e3),
+             "contact_angle_deg": (bearing.contact_angle, 180.0 / math.pi), "ball_mass_kg": (bearing.ball_mass, 1.0),
+             "width_mm": (bearing.width, 1e3), "inner_groove_conformity": (bearing.inner_groove_conformity, 1.0),
+             "outer_groove_conformity": (bearing.outer_groove_conformity, 1.0),
+             "elastic_modulus_gpa": (bearing.elastic_modulus, 1e-9), "poisson_ratio": (bearing.poisson_ratio, 1.0),
+             "density": (bearing.density, 1.0)}
+    mapping = {}
+    for key, value in given.items():
+        if isinstance(value, tuple):
+            value, scale = value
+            if isinstance(value, numbers.Real) and not isinstance(value, bool):
+                value = float(f"{float(value) * scale:.12g}")
+        mapping[key] = value
+    try:
+        bearing_from_mapping(str(bearing.name), mapping, where="bearing")
+    except SceneError as exc:
+        return f"{exc} (a Bearing checked in the catalog's units: mm, deg, GPa)"
     return ""
 
 

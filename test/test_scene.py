@@ -536,3 +536,25 @@ def test_a_scenes_waviness_changed_in_python_is_held_to_the_yamls_limits(wavines
     assert str(exc.value) == f"scene er16k_outer_race: {line}"
     wavy = dataclasses.replace(scene, waviness=[Waviness("outer", 200, 20e-6, -6.0), Waviness("inner", np.int64(1), 0)])
     assert np.isfinite(Simulator(wavy, fidelity="kinematic").advance(150).accel).all()
+
+
+@pytest.mark.parametrize("change, line", [
+    ({"ball_mass": -1.0}, "bearing.ball_mass_kg = -1.0: allowed range is [1e-06, 100.0]"),
+    ({"elastic_modulus": 0.0}, "bearing.elastic_modulus_gpa = 0.0: allowed range is [1.0, 1000.0]"),
+    ({"inner_groove_conformity": 0.4}, "bearing.inner_groove_conformity = 0.4: allowed range is [0.505, 0.6]"),
+    ({"ball_diameter": float("nan")}, "bearing.ball_diameter_mm = nan: allowed range is [0.5, 200.0]"),
+    ({"balls": 0}, "bearing.balls = 0: allowed range is [3, 40]"),
+    ({"balls": 9.0}, "bearing.balls = 9.0: expected a whole number (int) in [3, 40]"),
+])
+def test_a_bearing_changed_in_python_is_held_to_the_catalogs_limits(change, line):
+    """``dataclasses.replace(scene, bearing=dataclasses.replace(scene.bearing, ball_mass=-1.0))``
+    was a "math domain error" inside the physics, an elastic modulus of 0 a ZeroDivisionError, a
+    NaN ball diameter a message about the defect's depth.  Now the catalog's own check, in its
+    units, in one line; a bearing within it (numpy's int for the balls too) runs."""
+    scene = load_scene("er16k_outer_race")
+    with pytest.raises(SceneError) as exc:
+        dataclasses.replace(scene, bearing=dataclasses.replace(scene.bearing, **change))
+    assert str(exc.value) in (f"scene er16k_outer_race: {line}",
+                              f"scene er16k_outer_race: {line} (a Bearing checked in the catalog's units: mm, deg, GPa)")
+    other = dataclasses.replace(scene.bearing, balls=np.int64(8), contact_angle=math.radians(45.0), ball_mass=0.01)
+    assert np.isfinite(Simulator(dataclasses.replace(scene, bearing=other), fidelity="kinematic").advance(150).accel).all()
