@@ -138,11 +138,14 @@ class Recording:
         """(topic, msg_type, channel id, log_time_ns, CDR bytes) of the messages; a damaged file
         is a one-line UserError."""
         from mcap.exceptions import McapError
+        from zstandard import ZstdError
 
         try:
             for schema, channel, msg in self._reader.iter_messages(topics=topics, log_time_order=log_time_order):
                 yield channel.topic, (schema.name if schema else ""), channel.id, int(msg.log_time), msg.data
-        except (McapError, ValueError, KeyError, EOFError) as exc:
+        # ZstdError: a chunk whose compressed bytes are damaged fails to decompress before its CRC
+        # is checked (it was a traceback and "internal error")
+        except (McapError, ZstdError, ValueError, KeyError, EOFError) as exc:
             raise UserError(f"{self.path}: corrupt MCAP recording ({exc.__class__.__name__}: "
                             f"{str(exc).splitlines()[0] if str(exc) else 'unreadable'})") from None
 
