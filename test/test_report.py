@@ -603,3 +603,37 @@ def test_report_of_a_recording_with_no_operating_point_says_so_without_a_warning
         speed, load = figures["operating_point.png"].axes
         assert speed.get_legend() is not None and load.get_legend() is None
         assert [t.get_text() for t in load.texts] == ["radial load not recorded (no /load) and no scene"]
+
+
+def _one_topic_recording(path, data: bytes):
+    """A ros2-profile MCAP with five messages of ``data`` on /accel, typed PointCloud2."""
+    from mcap.writer import Writer
+
+    with open(path, "wb") as f:
+        writer = Writer(f)
+        writer.start(profile="ros2", library="test")
+        schema = writer.register_schema(name="sensor_msgs/msg/PointCloud2", encoding="ros2msg", data=b"")
+        channel = writer.register_channel(topic="/accel", message_encoding="cdr", schema_id=schema)
+        for k in range(5):
+            writer.add_message(channel, log_time=k * NS // 10, publish_time=k * NS // 10, data=data)
+        writer.finish()
+
+
+def test_a_recording_of_other_bytes_or_tables_is_one_line(tmp_path, capsys):
+    """Bytes that are not the type the channel names (a damaged file, another writer's), and a
+    PointCloud2 that is no waveform table, ended report with rclpy's RMWError or a ValueError
+    traceback and "internal error" (exit 1).  Now one line naming the file, topic and message,
+    exit 2."""
+    from rclpy.serialization import serialize_message
+    from sensor_msgs.msg import PointCloud2
+
+    garbage, empty = tmp_path / "garbage.mcap", tmp_path / "empty_cloud.mcap"
+    _one_topic_recording(garbage, b"\x00\x01\x00\x00garbage")
+    _one_topic_recording(empty, serialize_message(PointCloud2()))
+    for path, line in ((garbage, f"error: {garbage}: the sensor_msgs/msg/PointCloud2 on /accel logged at 0.000000000 s "
+                                 "does not deserialize as that type (RMWError); a damaged recording or another writer's"),
+                       (empty, f"error: {empty}: the table on /accel logged at 0.000000000 s: not a waveform table: "
+                               "point_step 0, channels 0, height 0, big-endian False; expected the node's waveform "
+                               "tables (README, \"Consuming a waveform table\")")):
+        assert cli.main(["report", str(path), "--out", str(tmp_path / "r")]) == 2
+        assert capsys.readouterr().err.strip().splitlines() == [line]

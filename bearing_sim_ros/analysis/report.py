@@ -65,9 +65,7 @@ class _Data:
     """What the report needs from a recording, as arrays."""
 
     def __init__(self, rec):
-        from rclpy.serialization import deserialize_message
-
-        from ..recording.reader import get_message
+        from ..recording.reader import deserialize, get_message
 
         topics = rec.topics()
         self.topics = {t: {"type": c.msg_type, "messages": c.count} for t, c in topics.items()}
@@ -96,9 +94,14 @@ class _Data:
         except (TypeError, ValueError):
             fs_meta = None
         for topic, _type, log_ns, data in rec.messages(topics=wanted):
-            msg = deserialize_message(data, classes[topic])
+            # another writer's bytes or tables were a traceback and "internal error"
+            msg = deserialize(rec.path, topic, topics[topic].msg_type, log_ns, data, classes[topic])
             if topic == self.accel_topic:
-                stamp, names, arr = from_pointcloud2(msg)
+                try:
+                    stamp, names, arr = from_pointcloud2(msg)
+                except ValueError as exc:
+                    raise UserError(f"{rec.path}: the table on {topic} logged at {log_ns / NS:.9f} s: {exc}; "
+                                    "expected the node's waveform tables (README, \"Consuming a waveform table\")") from None
                 stamps.append(stamp)
                 widths.append(arr.shape[0])
                 self.channels = tuple(names)

@@ -42,7 +42,7 @@ import time
 from ..errors import UserError
 from ..teardown import teardown_watchdog
 from ..waveform import NS
-from .reader import get_message, open_recording
+from .reader import deserialize, get_message, open_recording
 from .schemas import qos_from_yaml
 
 WAIT_FOR_SUBSCRIBERS = 5.0    # s, the default of --wait: one missed 3 s announcement period and margin
@@ -103,7 +103,6 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
     playback between two messages (set by the signal handlers)."""
     import rclpy
     from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
-    from rclpy.serialization import deserialize_message
 
     if not rate > 0:
         raise UserError(f"--rate = {rate!r}: expected a number > 0")
@@ -186,10 +185,10 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
                     if offset == 0:
                         # first pass: the recorded bytes go out as they are
                         if loop and msg_type == WAVEFORM_TYPE and span.topic in (None, topic):
-                            span.see(topic, deserialize_message(data, classes[topic]))
+                            span.see(topic, deserialize(rec.path, topic, msg_type, log_ns, data, classes[topic]))
                         pubs[topic].publish(data)
                     else:
-                        msg = deserialize_message(data, classes[topic])
+                        msg = deserialize(rec.path, topic, msg_type, log_ns, data, classes[topic])
                         _shift_stamp(msg, offset)
                         pubs[topic].publish(msg)
                     published += 1

@@ -45,6 +45,19 @@ def get_message(msg_type: str):
                         f"(pip install ros-jazzy-{pkg.replace('_', '-')})") from None
 
 
+def deserialize(path, topic: str, msg_type: str, log_ns: int, data: bytes, cls):
+    """The message of ``cls`` (of ``msg_type``) in ``data``, recorded on ``topic`` at ``log_ns`` in
+    ``path``; bytes that are not that type (a damaged file, another writer's under the type's name)
+    are a one-line UserError naming the message, not rclpy's RMWError traceback."""
+    from rclpy.serialization import deserialize_message
+
+    try:
+        return deserialize_message(data, cls)
+    except Exception as exc:  # noqa: BLE001 - rclpy's RMWError, or a plain RuntimeError
+        raise UserError(f"{path}: the {msg_type} on {topic} logged at {log_ns * 1e-9:.9f} s does not deserialize as "
+                        f"that type ({exc.__class__.__name__}); a damaged recording or another writer's") from None
+
+
 class Recording:
     """An opened, checked MCAP recording.  Use as a context manager or call :meth:`close`."""
 
