@@ -98,6 +98,20 @@ def _oversample(text):
     return value
 
 
+def _node_name(text):
+    """argparse type of ``monitor --simulator``: a ROS node name, bare (``sim``), with its
+    namespace (``rig1/sim``) or from the root (``/bearing_sim``).  Anything else names no node,
+    and the monitor waited for a ground truth that could never come."""
+    import re
+
+    token = r"[A-Za-z_][A-Za-z0-9_]*"
+    if not re.fullmatch(rf"/?{token}(/{token})*", text):
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not a ROS node name: letters, digits and _, not starting with a digit, namespaces "
+            "before it with /, e.g. bearing_sim, rig1/bearing_sim, /bearing_sim")
+    return text
+
+
 def build_parser() -> argparse.ArgumentParser:
     from .physics.integrators import RK4_DEFAULT_STEP, RK4_STEP_RANGE
     from .simulator import AUTO_OVERSAMPLE_MAX, DURATION_MAX_S, OVERSAMPLE_ALLOWED, SAMPLE_RATE_RANGE, SEED_RANGE
@@ -220,7 +234,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="stop after this many verdicts (default: %(default)s = never)")
     s.add_argument("--scene", default=None, metavar="S",
                    help="scene giving the bearing geometry (default: er16k_outer_race)")
-    s.add_argument("--simulator", default=None, metavar="NAME",
+    s.add_argument("--simulator", type=_node_name, default=None, metavar="NAME",
                    help="the simulator node whose /diagnostics give the ground truth: a node name, "
                         "in the namespace of the accel topic (sim), or a full name (rig1/sim, "
                         "/bearing_sim from the root) (default: bearing_sim)")

@@ -104,6 +104,19 @@ def test_node_refuses_two_scenes(capsys, param):
     assert err == [f"error: bearing-sim node: --scene er16k_healthy and -p {param} name two scenes; give one"]
 
 
+@pytest.mark.parametrize("name", ["", "bad!name", "/", "a//b", "1abc", "rig1/"])
+def test_monitor_refuses_a_simulator_that_is_no_node_name(name):
+    """``monitor --simulator bad!name`` (or '', '/') named no node that could ever publish its
+    ground truth, and the monitor ran on without one, saying only which status it watched."""
+    with pytest.raises(UserError) as exc:
+        cli.build_parser().parse_args(["monitor", "--simulator", name])
+    assert str(exc.value) == (f"bearing-sim monitor: argument --simulator: {name!r} is not a ROS node name: letters, "
+                              "digits and _, not starting with a digit, namespaces before it with /, e.g. "
+                              "bearing_sim, rig1/bearing_sim, /bearing_sim")
+    for good in ("sim", "rig1/bearing_sim", "/bearing_sim"):
+        assert cli.build_parser().parse_args(["monitor", "--simulator", good]).simulator == good
+
+
 @pytest.mark.parametrize("text", [
     "bearing_sim:\n  ros__parameters:\n    scene: er16k_outer_race\n",
     "/**:\n  ros__parameters:\n    scene: er16k_outer_race\n",
