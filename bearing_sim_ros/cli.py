@@ -295,6 +295,12 @@ def _dispatch(args, rest) -> int:
         if stray:
             raise stray_arguments_error("bearing-sim node", stray)
         argv = []
+        if args.scene is not None and not args.scene.strip():
+            # --scene "$SCENE" with SCENE unset ran the default scene without a word: the scene
+            # loader's own line for an empty path
+            from .scene import resolve_scene_path
+
+            resolve_scene_path(args.scene)
         if args.scene:
             # rcl takes the last of two: --scene A -p scene:=B ran B without a word
             given = [b for a, b in zip(rest, rest[1:]) if a in ("-p", "--param")

@@ -95,6 +95,19 @@ def test_a_stray_argument_is_named_with_its_command(capsys, argv):
     assert len(err) == 1 and err[0].startswith(f"error: bearing-sim {argv[0]}: unrecognized arguments: "), err
 
 
+@pytest.mark.parametrize("command", [["node", "--scene", "", "--ros-args", "-p", "duration:=0.05", "-p",
+                                      "real_time:=false"],
+                                     ["monitor", "--scene", "", "--count", "1"]])
+def test_an_empty_scene_is_refused_not_the_default(bearing_sim_exe, ros_env, command):
+    """``bearing-sim node --scene "$SCENE"`` with SCENE unset ran the default scene without a word
+    (``monitor`` alike), where ``run`` and ``render`` refuse an empty scene: now the same line,
+    exit 2."""
+    done = subprocess.run([bearing_sim_exe, *command], env=ros_env, capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.startswith("error: scene = '': an empty path; give a YAML path or one of b6205_ball_inner")
+    assert len(done.stderr.strip().splitlines()) == 1
+
+
 @pytest.mark.parametrize("param", ["scene:=er16k_outer_race", "bearing_sim:scene:=er16k_outer_race"])
 def test_node_refuses_two_scenes(capsys, param):
     """``bearing-sim node --scene A --ros-args -p scene:=B`` ran B without a word (rcl takes the
