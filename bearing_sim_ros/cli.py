@@ -98,6 +98,20 @@ def _oversample(text):
     return value
 
 
+def _node_name(text):
+    """argparse type of ``monitor --simulator``: a ROS node name, bare (``sim``), with its
+    namespace (``rig1/sim``) or from the root (``/bearing_sim``).  Anything else names no node,
+    and the monitor waited for a ground truth that could never come."""
+    import re
+
+    token = r"[A-Za-z_][A-Za-z0-9_]*"
+    if not re.fullmatch(rf"/?{token}(/{token})*", text):
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not a ROS node name: letters, digits and _, not starting with a digit, namespaces "
+            "before it with /, e.g. bearing_sim, rig1/bearing_sim, /bearing_sim")
+    return text
+
+
 def build_parser() -> argparse.ArgumentParser:
     from .physics.integrators import RK4_DEFAULT_STEP, RK4_STEP_RANGE
     from .simulator import AUTO_OVERSAMPLE_MAX, DURATION_MAX_S, OVERSAMPLE_ALLOWED, SAMPLE_RATE_RANGE, SEED_RANGE
@@ -220,7 +234,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="stop after this many verdicts (default: %(default)s = never)")
     s.add_argument("--scene", default=None, metavar="S",
                    help="scene giving the bearing geometry (default: er16k_outer_race)")
-    s.add_argument("--simulator", default=None, metavar="NAME",
+    s.add_argument("--simulator", type=_node_name, default=None, metavar="NAME",
                    help="the simulator node whose /diagnostics give the ground truth: a node name, "
                         "in the namespace of the accel topic (sim), or a full name (rig1/sim, "
                         "/bearing_sim from the root) (default: bearing_sim)")
@@ -237,6 +251,38 @@ def _scenes(_args) -> int:
     return EXIT_OK
 
 
+def _params_file_scenes(ros_args: list) -> list:
+    """(file, scene) for each ``--params-file`` among ``ros_args`` that gives the node a ``scene``:
+    under a node entry named like the node (``bearing_sim``, ``/rig1/bearing_sim``, nested
+    namespaces too) or a wildcard (``/**``).  A file that cannot be read or parsed is left to rcl,
+    which names it."""
+    from .nodes.bearing_sim_node import NODE_NAME
+    from .scene import load_yaml
+
+    def scenes(entry, names):
+        if not isinstance(entry, dict):
+            return
+        params = entry.get("ros__parameters")
+        node = "/".join(names).rsplit("/", 1)[-1]
+        if isinstance(params, dict) and "scene" in params and (node == NODE_NAME or "*" in "/".join(names)):
+            yield params["scene"]
+        for key, value in entry.items():
+            if key != "ros__parameters":
+                yield from scenes(value, [*names, str(key)])
+
+    found = []
+    for flag, path in zip(ros_args, ros_args[1:]):
+        if flag != "--params-file":
+            continue
+        try:
+            with open(path, encoding="utf-8") as f:
+                data = load_yaml(f.read())
+        except Exception:  # noqa: BLE001 - rcl says what is wrong with it
+            continue
+        found += [(path, scene) for scene in scenes(data, [])]
+    return found
+
+
 def _dispatch(args, rest) -> int:
     cmd = args.command
     if cmd == "scenes":
@@ -249,12 +295,24 @@ def _dispatch(args, rest) -> int:
         if stray:
             raise stray_arguments_error("bearing-sim node", stray)
         argv = []
+        if args.scene is not None and not args.scene.strip():
+            # --scene "$SCENE" with SCENE unset ran the default scene without a word: the scene
+            # loader's own line for an empty path
+            from .scene import resolve_scene_path
+
+            resolve_scene_path(args.scene)
         if args.scene:
             # rcl takes the last of two: --scene A -p scene:=B ran B without a word
             given = [b for a, b in zip(rest, rest[1:]) if a in ("-p", "--param")
                      and b.split(":=", 1)[0].rsplit(":", 1)[-1] == "scene" and ":=" in b]
             if given:
                 raise UserError(f"bearing-sim node: --scene {args.scene} and -p {given[0]} name two scenes; give one")
+            # ... and so does a parameters file's (it came after our -p and ran its scene)
+            in_files = _params_file_scenes(rest)
+            if in_files:
+                path, scene = in_files[0]
+                raise UserError(f"bearing-sim node: --scene {args.scene} and --params-file {path} (scene: {scene}) "
+                                "name two scenes; give one")
             argv += ["--ros-args", "-p", f"scene:={args.scene}"]
         return node_main(argv + rest) or EXIT_OK
     if cmd == "monitor":

@@ -179,6 +179,11 @@ class Scene:
     source_path: str = field(default="", compare=False, repr=False)
 
     def __post_init__(self):
+        # a bearing changed in Python (dataclasses.replace(scene.bearing, ...)) first: every
+        # check below rests on it (a ball_mass of -1 was a math domain error inside the physics)
+        error = _bearing_error(self.bearing)
+        if error:
+            raise SceneError(f"scene {self.name}: {error}")
         # the bearing's limits for a scene made in Python too (dataclasses.replace(scene,
         # radial_load=...) ran a scene that load_scene refuses); a YAML scene has met them already,
         # named by its own keys
@@ -191,11 +196,14 @@ class Scene:
             if error:
                 raise SceneError(f"scene {self.name}: {error}")
         # and its defects (dataclasses.replace(scene.defects[0], width=...) ran a negative or NaN
-        # width as a healthy bearing and a width in mm as a pit of metres)
-        for i, defect in enumerate(self.defects):
-            error = _defect_error(self.bearing, defect, f"defects[{i}]")
-            if error:
-                raise SceneError(f"scene {self.name}: {error}")
+        # width as a healthy bearing and a width in mm as a pit of metres) and waviness (a NaN
+        # amplitude ran to NaN samples)
+        for section, items, error_of in (("defects", self.defects, lambda d, k: _defect_error(self.bearing, d, k)),
+                                         ("waviness", self.waviness, _waviness_error)):
+            for i, item in enumerate(items):
+                error = error_of(item, f"{section}[{i}]")
+                if error:
+                    raise SceneError(f"scene {self.name}: {error}")
         # and the knobs of a sweep that the YAML bounds (a NaN clearance ran to NaN samples)
         lo, hi = RADIAL_CLEARANCE_RANGE_UM
         tier = ("" if isinstance(self.fidelity, str) and self.fidelity in TIERS
@@ -203,7 +211,14 @@ class Scene:
         for error in (_number_error("bearing.radial_clearance", self.bearing.radial_clearance, lo * 1e-6,
                                     hi * 1e-6, "m"),
                       _number_error("random_slip", self.random_slip, 0.0, RANDOM_SLIP_MAX),
-                      tier, _number_error("fidelity_tolerance", self.fidelity_tolerance, *TOLERANCE_RANGE)):
+                      tier, _number_error("fidelity_tolerance", self.fidelity_tolerance, *TOLERANCE_RANGE),
+                      # and its structure, lubrication and sensor (a shaft_mass of 0 was a
+                      # ZeroDivisionError inside the physics)
+                      _structure_error(self.structure), _lubrication_error(self.lubrication),
+                      _sensor_error(self.sensor),
+                      # a string "no" was a gravity that acts
+                      "" if isinstance(self.gravity, bool) else
+                      f"gravity = {short_repr(self.gravity)}: expected True or False"):
             if error:
                 raise SceneError(f"scene {self.name}: {error}")
 
@@ -313,6 +328,47 @@ RANDOM_SLIP_MAX = 0.05          # random_slip: a fraction of the ball spacing (s
 # MAX_LOAD (N) and MAX_SPEED_RPM (limits.py) bound every scene's speeds and loads whatever the
 # bearing; then the bearing's own limits (InputLimits, the live node's) apply: _check_operating_point
 MAX_DEFECT_TIME = 1.0e6   # s (11.6 days of signal): a defect's onset_s and growth_s
+# The bounds of the structure, lubrication and sensor keys: the YAML's readers (_structure,
+# _lubrication, _sensor) and a scene made in Python (_structure_error, _lubrication_error,
+# _sensor_error) take them from here, so that the two cannot drift apart.
+# structure.shaft and structure.pedestal: key -> (lo, hi, unit); Structure's field is part_key
+STRUCTURE_BOUNDS = {"mass": (1e-3, 1e5, "kg"), "stiffness": (0.0, 1e12, "N/m"), "damping": (0.0, 1e8, "N s/m")}
+# structure.resonator (mass 0 = none): key -> (lo, hi, unit); Structure holds its mass, stiffness
+# m (2 pi f)^2 and damping 2 zeta m (2 pi f)
+RESONATOR_BOUNDS = {"mass": (1e-4, 1e3, "kg"), "frequency_hz": (10.0, 50000.0, "Hz"), "damping_ratio": (0.0, 1.0, "")}
+# Lubrication's field -> (YAML key, lo, hi) in the key's unit (a key ending _um is in um, the field in m);
+# lo excluded where LUBRICATION_LO_OPEN names it
+LUBRICATION_BOUNDS = {
+    "viscosity": ("viscosity", 1e-4, 10.0),
+    "pressure_viscosity": ("pressure_viscosity", 0.0, 1e-7),
+    "traction_a": ("traction_a", -1.0, 1.0),
+    "traction_b": ("traction_b", -10.0, 10.0),
+    "traction_c": ("traction_c", 0.0, 100.0),
+    "traction_d": ("traction_d", 0.0, 0.5),
+    "creep_velocity": ("creep_velocity", 1e-5, 1.0),
+    "drag_coefficient": ("drag_coefficient", 0.0, 10.0),
+    "fluid_density": ("fluid_density", 0.0, 2000.0),
+    "cage_stiffness": ("cage_stiffness", 1e3, 1e10),
+    "cage_pocket_clearance": ("cage_pocket_clearance_um", 0.0, 2000.0),
+    "cage_inertia": ("cage_inertia", 0.0, 10.0),
+    "cage_mass": ("cage_mass", 0.0, 100.0),
+    "contact_damping_ratio": ("contact_damping_ratio", 0.0, 2.0),
+    "surface_roughness": ("surface_roughness_um", 0.001, 5.0),
+    "pocket_damping_ratio": ("pocket_damping_ratio", 0.0, 2.0),
+    "cage_drag": ("cage_drag", 0.0, 1.0),
+}
+# the film thickness (Hamrock-Dowson) goes as pressure_viscosity^0.49: 0 is no film at all, and the
+# kinematic tier's share of it between the races 0 / 0 (a ZeroDivisionError; ehl_film: false
+# is the way to have no film)
+LUBRICATION_LO_OPEN = ("pressure_viscosity",)
+# Sensor's numeric fields (the YAML keys of the same names) -> (lo, hi, lo_open, unit)
+SENSOR_BOUNDS = {"resonance_hz": (0.0, 200000.0, False, "Hz"), "damping_ratio": (0.001, 1.0, False, ""),
+                 "noise_density": (0.0, 10.0, False, "m/s^2/sqrt(Hz)"), "range": (0.0, 1e7, True, "m/s^2")}
+SENSOR_AXES = ("x", "y")
+# waviness: which race, the harmonic's order (whole, 1 - 200) and its amplitude (um in the YAML)
+WAVINESS_RACES = ("inner", "outer")
+WAVINESS_ORDER_MAX = 200
+WAVINESS_AMPLITUDE_MAX_UM = 20.0
 
 
 def _check_operating_point(where: _Section, rpm: float, load: tuple, bearing: Bearing):
@@ -388,6 +444,137 @@ def _defect_error(bearing: Bearing, defect, key: str) -> str:
     return ""
 
 
+def _bearing_error(bearing) -> str:
+    """"" when ``bearing`` (a :class:`Bearing`, perhaps made or changed in Python) is one that the
+    catalog's keys allow (``catalog.bearing_from_mapping``, which the YAML goes through), else its
+    line: the geometry given back in the catalog's units (mm, deg, GPa; to 12 digits, so that a
+    value read from them comes back within its bounds) and checked there.  Its clearance is left
+    to the scene's own check, which names it in m."""
+    from .catalog import bearing_from_mapping
+
+    if not isinstance(bearing, Bearing):
+        return f"bearing = {short_repr(bearing)}: expected a bearing_sim_ros.catalog.Bearing"
+    balls = bearing.balls
+    if isinstance(balls, bool) or not isinstance(balls, numbers.Integral):
+        return f"bearing.balls = {short_repr(balls)}: expected a whole number (int) in [3, 40]"
+    given = {"balls": int(balls), "ball_diameter_mm": (bearing.ball_diameter, 1e3),
+             "pitch_diameter_mm": (bearing.pitch_diameter, 1e3),
+             "inner_race_diameter_mm": (bearing.inner_race_diameter, 1e3),
+             "outer_race_diameter_mm": (bearing.outer_race_diameter, 1e3),
+             "contact_angle_deg": (bearing.contact_angle, 180.0 / math.pi), "ball_mass_kg": (bearing.ball_mass, 1.0),
+             "width_mm": (bearing.width, 1e3), "inner_groove_conformity": (bearing.inner_groove_conformity, 1.0),
+             "outer_groove_conformity": (bearing.outer_groove_conformity, 1.0),
+             "elastic_modulus_gpa": (bearing.elastic_modulus, 1e-9), "poisson_ratio": (bearing.poisson_ratio, 1.0),
+             "density": (bearing.density, 1.0)}
+    mapping = {}
+    for key, value in given.items():
+        if isinstance(value, tuple):
+            value, scale = value
+            if isinstance(value, numbers.Real) and not isinstance(value, bool):
+                value = float(f"{float(value) * scale:.12g}")
+        mapping[key] = value
+    try:
+        bearing_from_mapping(str(bearing.name), mapping, where="bearing")
+    except SceneError as exc:
+        return f"{exc} (a Bearing checked in the catalog's units: mm, deg, GPa)"
+    return ""
+
+
+def _axes_error(axes, kinds: tuple) -> str:
+    """"" when ``axes`` (a ``kinds`` sequence) names distinct sensor axes from SENSOR_AXES, at least
+    one, else the line naming ``sensor.axes``."""
+    # the names first: set() cannot take a list or a mapping among them
+    if (not isinstance(axes, kinds) or not axes or any(not isinstance(a, str) or a not in SENSOR_AXES for a in axes)
+            or len(set(axes)) != len(axes)):
+        return f"sensor.axes = {short_repr(axes)}: expected a list of distinct axes from {', '.join(SENSOR_AXES)}"
+    return ""
+
+
+def _um_range(lo: float, hi: float) -> tuple:
+    """[lo, hi] um as m, wide enough for both a YAML value read in um and turned into m (x 1e-6)
+    and the same value written in m in Python (20e-6 is one bit above 20 x 1e-6)."""
+    return min(lo * 1e-6, lo / 1e6), max(hi * 1e-6, hi / 1e6)
+
+
+def _waviness_error(waviness, key: str) -> str:
+    """"" when ``waviness`` (a :class:`Waviness` made in Python, m and rad) keeps to the bounds of
+    the YAML's ``waviness`` keys, else the line naming the field: a NaN amplitude ran to NaN
+    samples (the skidding tier: diverged), a race "middle" or an order 2.5 ran as something else."""
+    if not isinstance(waviness, Waviness):
+        return f"{key} = {short_repr(waviness)}: expected a bearing_sim_ros.scene.Waviness"
+    if not (isinstance(waviness.race, str) and waviness.race in WAVINESS_RACES):
+        return f"{key}.race = {short_repr(waviness.race)}: allowed values are {', '.join(WAVINESS_RACES)}"
+    order = waviness.order
+    if isinstance(order, bool) or not isinstance(order, numbers.Integral) or not 1 <= order <= WAVINESS_ORDER_MAX:
+        return f"{key}.order = {short_repr(order)}: expected a whole number in [1, {WAVINESS_ORDER_MAX}]"
+    return (_number_error(f"{key}.amplitude", waviness.amplitude, *_um_range(0.0, WAVINESS_AMPLITUDE_MAX_UM), "m")
+            or _number_error(f"{key}.phase", waviness.phase, -2 * math.pi, 2 * math.pi, "rad"))
+
+
+def _structure_error(structure) -> str:
+    """"" when ``structure`` (a :class:`Structure` made in Python) keeps to the bounds of the YAML's
+    ``structure`` keys (STRUCTURE_BOUNDS, RESONATOR_BOUNDS), else the line naming the field: a
+    shaft_mass of 0 was a ZeroDivisionError deep in the physics, a NaN stiffness a LinAlgError."""
+    if not isinstance(structure, Structure):
+        return f"structure = {short_repr(structure)}: expected a bearing_sim_ros.scene.Structure"
+    for part in ("shaft", "pedestal"):
+        for key, (lo, hi, unit) in STRUCTURE_BOUNDS.items():
+            error = _number_error(f"structure.{part}_{key}", getattr(structure, f"{part}_{key}"), lo, hi, unit)
+            if error:
+                return error
+    mass = structure.resonator_mass
+    error = _number_error("structure.resonator_mass", mass, 0.0, RESONATOR_BOUNDS["mass"][1], "kg")
+    if error or mass == 0.0:
+        return error            # no resonator: its stiffness and damping are not used
+    if mass < RESONATOR_BOUNDS["mass"][0]:
+        lo, hi, unit = RESONATOR_BOUNDS["mass"]
+        return f"structure.resonator_mass = {mass:g} {unit}: allowed 0 (no resonator) or [{lo:g}, {hi:g}] {unit}"
+    # the YAML gives the resonator's frequency and damping ratio (``_structure``): the stiffness
+    # and damping they bound, computed as it computes them; the damping's bound takes a hair of
+    # slack, for sqrt(k / m) need not give back the YAML's 2 pi f to the last bit
+    lo, hi, _unit = RESONATOR_BOUNDS["frequency_hz"]
+    w_lo, w_hi = 2 * math.pi * lo, 2 * math.pi * hi
+    error = _number_error("structure.resonator_stiffness", structure.resonator_stiffness,
+                          mass * w_lo * w_lo, mass * w_hi * w_hi, "N/m")
+    if error:
+        return f"{error} ({lo:g} - {hi:g} Hz with resonator_mass {mass:g} kg)"
+    w = math.sqrt(structure.resonator_stiffness / mass)
+    lo, hi, _unit = RESONATOR_BOUNDS["damping_ratio"]
+    error = _number_error("structure.resonator_damping", structure.resonator_damping, 2 * lo * mass * w,
+                          2 * hi * mass * w * (1 + 1e-9), "N s/m")
+    return f"{error} (damping ratio {lo:g} - {hi:g} at this mass and stiffness)" if error else ""
+
+
+def _lubrication_error(lubrication) -> str:
+    """"" when ``lubrication`` (a :class:`Lubrication` made in Python, SI units) keeps to the
+    bounds of the YAML's ``lubrication`` keys (LUBRICATION_BOUNDS), else the line naming the field."""
+    if not isinstance(lubrication, Lubrication):
+        return f"lubrication = {short_repr(lubrication)}: expected a bearing_sim_ros.scene.Lubrication"
+    for name, (key, lo, hi) in LUBRICATION_BOUNDS.items():
+        (lo, hi), unit = (_um_range(lo, hi), "m") if key.endswith("_um") else ((lo, hi), "")
+        error = _number_error(f"lubrication.{name}", getattr(lubrication, name), lo, hi, unit,
+                              lo_open=name in LUBRICATION_LO_OPEN)
+        if error:
+            return error
+    if not isinstance(lubrication.ehl_film, bool):
+        return f"lubrication.ehl_film = {short_repr(lubrication.ehl_film)}: expected True or False"
+    return ""
+
+
+def _sensor_error(sensor) -> str:
+    """"" when ``sensor`` (a :class:`Sensor` made in Python) keeps to the bounds of the YAML's
+    ``sensor`` keys (SENSOR_BOUNDS, SENSOR_AXES), else the line naming the field: an axis "z" ran
+    as the vertical one labelled accel_z, a range of 0 clipped every sample to 0."""
+    if not isinstance(sensor, Sensor):
+        return f"sensor = {short_repr(sensor)}: expected a bearing_sim_ros.scene.Sensor"
+    error = _axes_error(sensor.axes, (list, tuple))
+    for name, (lo, hi, lo_open, unit) in SENSOR_BOUNDS.items():
+        error = error or _number_error(f"sensor.{name}", getattr(sensor, name), lo, hi, unit, lo_open)
+    if not error and not (isinstance(sensor.frame_id, str) and sensor.frame_id):
+        error = f"sensor.frame_id = {short_repr(sensor.frame_id)}: expected a non-empty string"
+    return error
+
+
 def _operating_point_type_error(speed, load, speed_key: str, load_key: str) -> str:
     """"" when ``speed`` is a finite number and ``load`` two (a bool is neither), else the line
     naming the key: a scene made in Python has not been through the YAML's readers."""
@@ -424,17 +611,12 @@ def _structure(top: _Section) -> Structure:
     s = top.section("structure", ("shaft", "pedestal", "resonator"), required=("shaft", "pedestal"))
     parts = {}
     for part in ("shaft", "pedestal"):
-        p = s.section(part, ("mass", "stiffness", "damping"), required=("mass", "stiffness", "damping"))
-        parts[part] = (p.number("mass", lo=1e-3, hi=1e5),
-                       p.number("stiffness", lo=0.0, hi=1e12),
-                       p.number("damping", lo=0.0, hi=1e8))
+        p = s.section(part, tuple(STRUCTURE_BOUNDS), required=tuple(STRUCTURE_BOUNDS))
+        parts[part] = tuple(p.number(key, lo=lo, hi=hi) for key, (lo, hi, _unit) in STRUCTURE_BOUNDS.items())
     res = (0.0, 0.0, 0.0)
     if s.has("resonator") and s.data["resonator"] is not None:
-        r = s.section("resonator", ("mass", "frequency_hz", "damping_ratio"),
-                      required=("mass", "frequency_hz", "damping_ratio"))
-        m = r.number("mass", lo=1e-4, hi=1e3)
-        f = r.number("frequency_hz", lo=10.0, hi=50000.0)
-        z = r.number("damping_ratio", lo=0.0, hi=1.0)
+        r = s.section("resonator", tuple(RESONATOR_BOUNDS), required=tuple(RESONATOR_BOUNDS))
+        m, f, z = (r.number(key, lo=lo, hi=hi) for key, (lo, hi, _unit) in RESONATOR_BOUNDS.items())
         w = 2 * math.pi * f
         res = (m, m * w * w, 2 * z * m * w)
     return Structure(*parts["shaft"], *parts["pedestal"], *res)
@@ -479,57 +661,35 @@ def _waviness(top: _Section) -> tuple:
     for i, raw in enumerate(top.items("waviness")):
         w = _Section(raw, f"waviness[{i}]", ("race", "order", "amplitude_um", "phase_deg"),
                      required=("race", "order", "amplitude_um"))
-        out.append(Waviness(w.choice("race", ("inner", "outer")),
-                            int(w.number("order", lo=1, hi=200, integer=True)),
-                            w.number("amplitude_um", lo=0.0, hi=20.0) * 1e-6,
+        out.append(Waviness(w.choice("race", WAVINESS_RACES),
+                            int(w.number("order", lo=1, hi=WAVINESS_ORDER_MAX, integer=True)),
+                            w.number("amplitude_um", lo=0.0, hi=WAVINESS_AMPLITUDE_MAX_UM) * 1e-6,
                             math.radians(w.number("phase_deg", 0.0, lo=-360, hi=360))))
     return tuple(out)
 
 
 def _lubrication(top: _Section) -> Lubrication:
-    keys = ("viscosity", "pressure_viscosity", "traction_a", "traction_b", "traction_c", "traction_d",
-            "creep_velocity", "drag_coefficient", "fluid_density", "ehl_film", "cage_stiffness",
-            "cage_pocket_clearance_um", "cage_inertia", "cage_mass", "contact_damping_ratio",
-            "surface_roughness_um", "pocket_damping_ratio", "cage_drag")
-    s = top.section("lubrication", keys)
+    s = top.section("lubrication", (*(key for key, _lo, _hi in LUBRICATION_BOUNDS.values()), "ehl_film"))
     d = Lubrication()
-    return Lubrication(
-        viscosity=s.number("viscosity", d.viscosity, lo=1e-4, hi=10.0),
-        pressure_viscosity=s.number("pressure_viscosity", d.pressure_viscosity, lo=0.0, hi=1e-7),
-        traction_a=s.number("traction_a", d.traction_a, lo=-1.0, hi=1.0),
-        traction_b=s.number("traction_b", d.traction_b, lo=-10.0, hi=10.0),
-        traction_c=s.number("traction_c", d.traction_c, lo=0.0, hi=100.0),
-        traction_d=s.number("traction_d", d.traction_d, lo=0.0, hi=0.5),
-        creep_velocity=s.number("creep_velocity", d.creep_velocity, lo=1e-5, hi=1.0),
-        drag_coefficient=s.number("drag_coefficient", d.drag_coefficient, lo=0.0, hi=10.0),
-        fluid_density=s.number("fluid_density", d.fluid_density, lo=0.0, hi=2000.0),
-        ehl_film=s.boolean("ehl_film", d.ehl_film),
-        cage_stiffness=s.number("cage_stiffness", d.cage_stiffness, lo=1e3, hi=1e10),
-        cage_pocket_clearance=s.number("cage_pocket_clearance_um", 0.0, lo=0.0, hi=2000.0) * 1e-6,
-        cage_inertia=s.number("cage_inertia", 0.0, lo=0.0, hi=10.0),
-        cage_mass=s.number("cage_mass", 0.0, lo=0.0, hi=100.0),
-        contact_damping_ratio=s.number("contact_damping_ratio", d.contact_damping_ratio, lo=0.0, hi=2.0),
-        surface_roughness=s.number("surface_roughness_um", d.surface_roughness * 1e6, lo=0.001, hi=5.0) * 1e-6,
-        pocket_damping_ratio=s.number("pocket_damping_ratio", d.pocket_damping_ratio, lo=0.0, hi=2.0),
-        cage_drag=s.number("cage_drag", d.cage_drag, lo=0.0, hi=1.0),
-    )
+    values = {}
+    for name, (key, lo, hi) in LUBRICATION_BOUNDS.items():
+        # a key in um is read in um and held in m (the default converted as it always was)
+        um = key.endswith("_um")
+        default = getattr(d, name) * 1e6 if um else getattr(d, name)
+        values[name] = s.number(key, default, lo=lo, hi=hi, lo_open=name in LUBRICATION_LO_OPEN) * (1e-6 if um else 1.0)
+    return Lubrication(ehl_film=s.boolean("ehl_film", d.ehl_film), **values)
 
 
 def _sensor(top: _Section) -> Sensor:
     s = top.section("sensor", ("axes", "resonance_hz", "damping_ratio", "noise_density", "range", "frame_id"))
-    axes = s.data.get("axes", ["x", "y"])
-    # the names first: set() cannot take a list or a mapping among them
-    if (not isinstance(axes, list) or not axes or any(not isinstance(a, str) or a not in ("x", "y") for a in axes)
-            or len(set(axes)) != len(axes)):
-        raise SceneError(f"sensor.axes = {short_repr(axes)}: expected a list of distinct axes from x, y")
-    return Sensor(
-        axes=tuple(a for a in ("x", "y") if a in axes),
-        resonance_hz=s.number("resonance_hz", 0.0, lo=0.0, hi=200000.0),
-        damping_ratio=s.number("damping_ratio", 0.05, lo=0.001, hi=1.0),
-        noise_density=s.number("noise_density", 0.0, lo=0.0, hi=10.0),
-        range=s.number("range", 490.3, lo=0.0, hi=1e7, lo_open=True),
-        frame_id=s.string("frame_id", "bearing_accel") or "bearing_accel",
-    )
+    axes = s.data.get("axes", list(SENSOR_AXES))
+    error = _axes_error(axes, (list,))
+    if error:
+        raise SceneError(error)
+    return Sensor(axes=tuple(a for a in SENSOR_AXES if a in axes),
+                  **{name: s.number(name, getattr(Sensor, name), lo=lo, hi=hi, lo_open=lo_open)
+                     for name, (lo, hi, lo_open, _unit) in SENSOR_BOUNDS.items()},
+                  frame_id=s.string("frame_id", "bearing_accel") or "bearing_accel")
 
 
 def _profile(top: _Section, speed: float, load: tuple, bearing: Bearing) -> tuple:

@@ -37,6 +37,12 @@ SAMPLE_RATE_RANGE = (1000.0, 200000.0)
 # --duration` and `run --duration` accept: 31 years, a guard against a typo (1e12) that would
 # otherwise run until the disk is full
 DURATION_MAX_S = 1.0e9
+# the most internal samples of the sensor chain (``chain_oversample`` per output sample) that one
+# ``advance`` computes: every series of the call is held in memory at once, up to about 450 bytes
+# per internal sample (the skidding tier, 9 balls: measured), so this is at most about 2 GB, 70 s of
+# signal at 15 kHz.  advance(10**12) died with a MemoryError (or worse, the OOM killer) before;
+# longer signals go in chunks, which give the same samples (``Simulator.max_advance``)
+MAX_ADVANCE_INTERNAL = 2 ** 22
 # the slowest rate the physics runs at (Hz): the tiers' steps and the sensor chain's anti-aliasing
 # were made and measured at 15 kHz.  Below it the tiers run at the smallest whole multiple of the
 # output rate that reaches it (``physics_rate_factor``) and the chain decimates to the output: a
@@ -313,6 +319,12 @@ class Simulator:
         return self._model.decimation
 
     @property
+    def max_advance(self) -> int:
+        """The most output samples one ``advance`` takes: ``MAX_ADVANCE_INTERNAL`` internal samples
+        of the sensor chain (a memory bound; longer signals go in chunks, the same samples)."""
+        return max(1, MAX_ADVANCE_INTERNAL // self.chain_oversample)
+
+    @property
     def time(self) -> float:
         """Time of the next output sample (s)."""
         return self.index / self.sample_rate
@@ -405,6 +417,10 @@ class Simulator:
         replace the operating point; the change is ramped over this call."""
         if not (_whole_number(n) and n > 0):
             raise UserError(f"n = {n!r}: expected a whole number of samples > 0")
+        if n > self.max_advance:
+            raise UserError(f"n = {n!r}: at most {self.max_advance} samples ({self.max_advance / self.sample_rate:g} s) "
+                            f"per advance at {self.sample_rate:g} Hz ({MAX_ADVANCE_INTERNAL} internal samples, about "
+                            f"2 GB of arrays); advance in chunks of up to sim.max_advance, which give the same samples")
         s0 = self._shaft_speed
         l0x, l0y = self._radial_load
         # numbers only: float('167') and float(True) would take a string or a bool for one

@@ -95,6 +95,19 @@ def test_a_stray_argument_is_named_with_its_command(capsys, argv):
     assert len(err) == 1 and err[0].startswith(f"error: bearing-sim {argv[0]}: unrecognized arguments: "), err
 
 
+@pytest.mark.parametrize("command", [["node", "--scene", "", "--ros-args", "-p", "duration:=0.05", "-p",
+                                      "real_time:=false"],
+                                     ["monitor", "--scene", "", "--count", "1"]])
+def test_an_empty_scene_is_refused_not_the_default(bearing_sim_exe, ros_env, command):
+    """``bearing-sim node --scene "$SCENE"`` with SCENE unset ran the default scene without a word
+    (``monitor`` alike), where ``run`` and ``render`` refuse an empty scene: now the same line,
+    exit 2."""
+    done = subprocess.run([bearing_sim_exe, *command], env=ros_env, capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.startswith("error: scene = '': an empty path; give a YAML path or one of b6205_ball_inner")
+    assert len(done.stderr.strip().splitlines()) == 1
+
+
 @pytest.mark.parametrize("param", ["scene:=er16k_outer_race", "bearing_sim:scene:=er16k_outer_race"])
 def test_node_refuses_two_scenes(capsys, param):
     """``bearing-sim node --scene A --ros-args -p scene:=B`` ran B without a word (rcl takes the
@@ -102,6 +115,48 @@ def test_node_refuses_two_scenes(capsys, param):
     assert cli.main(["node", "--scene", "er16k_healthy", "--ros-args", "-p", param]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f"error: bearing-sim node: --scene er16k_healthy and -p {param} name two scenes; give one"]
+
+
+@pytest.mark.parametrize("name", ["", "bad!name", "/", "a//b", "1abc", "rig1/"])
+def test_monitor_refuses_a_simulator_that_is_no_node_name(name):
+    """``monitor --simulator bad!name`` (or '', '/') named no node that could ever publish its
+    ground truth, and the monitor ran on without one, saying only which status it watched."""
+    with pytest.raises(UserError) as exc:
+        cli.build_parser().parse_args(["monitor", "--simulator", name])
+    assert str(exc.value) == (f"bearing-sim monitor: argument --simulator: {name!r} is not a ROS node name: letters, "
+                              "digits and _, not starting with a digit, namespaces before it with /, e.g. "
+                              "bearing_sim, rig1/bearing_sim, /bearing_sim")
+    for good in ("sim", "rig1/bearing_sim", "/bearing_sim"):
+        assert cli.build_parser().parse_args(["monitor", "--simulator", good]).simulator == good
+
+
+@pytest.mark.parametrize("text", [
+    "bearing_sim:\n  ros__parameters:\n    scene: er16k_outer_race\n",
+    "/**:\n  ros__parameters:\n    scene: er16k_outer_race\n",
+    "rig1:\n  bearing_sim:\n    ros__parameters:\n      scene: er16k_outer_race\n",
+])
+def test_node_refuses_a_scene_and_a_params_files_scene(capsys, tmp_path, text):
+    """``bearing-sim node --scene A --ros-args --params-file f.yaml`` with ``scene: B`` in the file
+    ran B without a word (the file comes after --scene's -p, and rcl takes the last): one line
+    naming both, exit 2, before the node starts."""
+    path = tmp_path / "params.yaml"
+    path.write_text(text)
+    # (a duration: the old code ran the node)
+    assert cli.main(["node", "--scene", "er16k_healthy", "--ros-args", "--params-file", str(path),
+                     "-p", "duration:=0.05", "-p", "real_time:=false"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"error: bearing-sim node: --scene er16k_healthy and --params-file {path} (scene: er16k_outer_race) "
+                   "name two scenes; give one"]
+
+
+def test_a_params_file_without_the_nodes_scene_goes_with_scene(tmp_path):
+    """Another node's scene, or a file rcl will refuse, is no second scene."""
+    from bearing_sim_ros.cli import _params_file_scenes
+
+    path = tmp_path / "params.yaml"
+    path.write_text("bearing_monitor:\n  ros__parameters:\n    scene: er16k_outer_race\n"
+                    "bearing_sim:\n  ros__parameters:\n    duration: 3.0\n")
+    assert _params_file_scenes(["--params-file", str(path), "--params-file", "/nonexistent.yaml"]) == []
 
 
 @pytest.mark.parametrize("argv, line", [
@@ -212,6 +267,25 @@ def test_advance_names_a_bad_speed_or_load_and_what_is_allowed(call, message):
     assert sim.index == 0                     # nothing advanced
     inside = sim.advance(10, shaft_speed=25970 * RPM, radial_load=np.array([11790.0, -11790.0]))
     assert np.isfinite(inside.accel).all() and sim.index == 10
+
+
+@pytest.mark.parametrize("sample_rate, n", [(15000.0, 10 ** 12), (15000.0, 2 ** 20 + 1), (1000.0, 10 ** 9)])
+def test_an_advance_too_large_to_hold_in_memory_is_refused_in_one_line(sample_rate, n):
+    """``advance(10**12)`` died with a MemoryError (a smaller huge one could meet the OOM killer
+    first): every series of a call is held at once.  Now one line names ``n``, the most one call
+    takes (``sim.max_advance``, MAX_ADVANCE_INTERNAL internal samples) and the way on: chunks,
+    which give the same samples."""
+    from bearing_sim_ros.simulator import MAX_ADVANCE_INTERNAL
+
+    sim = Simulator("er16k_healthy", fidelity="kinematic", sample_rate=sample_rate)
+    assert sim.max_advance == MAX_ADVANCE_INTERNAL // sim.chain_oversample
+    with pytest.raises(UserError) as exc:
+        sim.advance(n)
+    assert str(exc.value) == (
+        f"n = {n}: at most {sim.max_advance} samples ({sim.max_advance / sample_rate:g} s) per advance at "
+        f"{sample_rate:g} Hz ({MAX_ADVANCE_INTERNAL} internal samples, about 2 GB of arrays); advance in chunks "
+        "of up to sim.max_advance, which give the same samples")
+    assert sim.index == 0
 
 
 @pytest.mark.parametrize("call, message", [

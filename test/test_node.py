@@ -253,6 +253,25 @@ def test_a_misspelt_parameter_is_named_in_a_warning(ros_env, bearing_sim_exe):
             in r.stderr + r.stdout), r.stderr
 
 
+def test_a_parameter_the_node_does_not_have_set_at_run_time_is_named(started, listener):
+    """``ros2 param set /bearing_sim sampel_rate 1000.0`` while the node runs: rclpy refuses a
+    parameter that is not declared before the node's on-set callback, with "Invalid access to
+    undeclared parameter(s): []" (not even the name).  The node's pre-set callback says which, and
+    what the node has; a read-only one keeps rclpy's reason, which names it."""
+    node = started({"scene": "er16k_healthy"})
+    listener.wait_for(lambda: len(listener.accel) > 0, FIRST_TABLE_S, "the first accel table")
+    (ok, why), = listener.set_parameters({"sampel_rate": 1000.0})
+    assert not ok and why == (
+        "parameter sampel_rate: not a bearing_sim parameter; its parameters are scene, sample_rate, batch_duration, "
+        "real_time, duration, record, record_max_duration, record_max_size, fidelity, seed, oversample, "
+        "publish_clock, frame_id, state_rate, compute_ahead, input_max_age, of which these change while it runs: "
+        "real_time, duration, publish_clock, state_rate, compute_ahead, input_max_age")
+    (ok, why), = listener.set_parameters({"seed": 3})
+    assert not ok and why == "Trying to set a read-only parameter: seed."
+    assert listener.set_parameters({"compute_ahead": 0.1}) == [(True, "")]
+    assert node.proc.poll() is None
+
+
 def _record_a_scene_file(ros_env, bearing_sim_exe, scene, text, duration):
     """Write ``text`` to ``scene``, run the node on it by its name in its folder without pacing
     for ``duration`` s, recorded to live.mcap there: (topics, metadata) of the recording."""
@@ -484,6 +503,32 @@ def test_bad_inputs_are_rejected_and_a_speed_change_moves_bpfo(started, listener
     assert lines["bpfo"].found_hz == pytest.approx(f_new, rel=0.005)
     freqs, spec = envelope_spectrum(x, FS, max_freq=300.0, segment=1.0)
     assert line_at(freqs, spec, f_old).prominence < DETECTION_THRESHOLD     # the old line is gone
+
+
+def test_a_load_in_another_frame_is_rejected_and_counted(started, listener):
+    """A ``load`` stamped in another frame (``base_link``, ``map``) was applied along the bearing's
+    axes as if it were in theirs: the node transforms nothing.  It is rejected (``wrong_frame``),
+    logged once with the frame expected, counted in /diagnostics; the node's own frame (its
+    tables', which its recordings give their loads) and an empty one are taken."""
+    node = started({"scene": "er16k_outer_race", "fidelity": "kinematic"})
+    listener.wait_matched()
+    listener.wait_for(lambda: len(listener.accel) > 0, FIRST_TABLE_S, "the first accel table")
+    listener.publish_load(0.0, -70.0, frame_id="base_link")
+    listener.publish_load(0.0, -75.0, frame_id="map")
+    listener.publish_load(0.0, -80.0, frame_id="bearing_accel")
+    listener.publish_load(0.0, -85.0)
+
+    def counted():
+        return next((v for _t, _lvl, _m, v, _stamp in reversed(listener.diagnostics)
+                     if v["radial_load_n"] == "0 -85" and int(v["rejected_inputs"]) >= 2), None)
+
+    v = listener.wait_for(counted, 8, "diagnostics at the last load, counting the 2 rejected")
+    assert int(v["rejected_wrong_frame"]) == 2 and int(v["rejected_inputs"]) == 2, v
+    log = node.output()
+    assert log.count("input rejected (wrong_frame)") == 1, log
+    assert ("load frame_id = 'base_link': expected 'bearing_accel' or empty (x horizontal, y vertical up, at the "
+            "bearing; the node transforms nothing)") in log
+    assert node.proc.poll() is None
 
 
 def test_a_burst_of_inputs_is_taken_whole_and_its_last_command_holds(started, listener):

@@ -193,10 +193,12 @@ class Listener:
 
         self.pub_speed.publish(Float64(data=float(value)))
 
-    def publish_load(self, fx: float, fy: float, fz: float = 0.0, stamp_ns: int | None = None) -> None:
+    def publish_load(self, fx: float, fy: float, fz: float = 0.0, stamp_ns: int | None = None,
+                     frame_id: str = "") -> None:
         from geometry_msgs.msg import WrenchStamped
 
         msg = WrenchStamped()
+        msg.header.frame_id = frame_id
         if stamp_ns is None:
             stamp_ns = self.node.get_clock().now().nanoseconds
         msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(int(stamp_ns), NS)

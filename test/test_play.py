@@ -484,7 +484,8 @@ def test_loop_over_bytes_that_are_not_the_recorded_type_is_one_line(bearing_sim_
                        capture_output=True, text=True, timeout=30)
     err = r.stderr.strip().splitlines()
     assert r.returncode == 2 and err[-1].startswith(
-        f"error: {path}: a message on /accel does not decode as sensor_msgs/msg/PointCloud2 ("), r.stderr
+        f"error: {path}: the sensor_msgs/msg/PointCloud2 on /accel logged at 0.000000000 s does not deserialize as "
+        "that type (RMWError: "), r.stderr
     assert "Traceback" not in r.stderr
 
 

@@ -749,6 +749,30 @@ def test_an_empty_file_is_said_to_be_empty(tmp_path):
         open_recording(empty)
 
 
+@pytest.mark.parametrize("offset", [53, 60])
+def test_a_chunk_that_does_not_decompress_is_a_corrupt_recording(tmp_path, offset):
+    """A byte flipped in a chunk's compressed data (its zstd frame header, or the data) fails to
+    decompress before the chunk's CRC is checked: report and play ended with a ZstdError traceback
+    and "internal error" (exit 1) where every other damage is one line, exit 2."""
+    from mcap.reader import SeekingReader
+
+    from bearing_sim_ros.recording.render import render
+
+    path = tmp_path / "run.mcap"
+    render("er16k_outer_race", 0.2, path, fidelity="kinematic", progress=False)
+    data = bytearray(path.read_bytes())
+    with open(path, "rb") as f:
+        chunk = SeekingReader(f).get_summary().chunk_indexes[0]
+    # 53 bytes into a zstd chunk record: its compressed records begin (opcode, lengths, times, CRC,
+    # the compression's name)
+    data[chunk.chunk_start_offset + offset] ^= 0xFF
+    path.write_bytes(bytes(data))
+    with pytest.raises(UserError, match=rf"^{path}: corrupt MCAP recording \(ZstdError: "):
+        with open_recording(path) as rec:
+            for _ in rec.messages():
+                pass
+
+
 def test_the_first_file_is_checked_before_anything_is_written(tmp_path):
     kept = tmp_path / "scene.yaml"
     kept.write_text("name: x\n")

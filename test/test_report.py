@@ -4,6 +4,7 @@ by window against the recorded ground truth; bad inputs end with exit status 2 a
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -655,8 +656,9 @@ def _table(stamp_ns: int, fields=(("accel_y", 7),), width: int = 150):
 
 
 @pytest.mark.parametrize("kind, said", [
-    ("not_a_table", "/accel: not a waveform table: field(s) intensity not one FLOAT32 each"),
-    ("undecodable", "a message on /accel does not decode as sensor_msgs/msg/PointCloud2"),
+    ("not_a_table", "/accel logged at 0.000000000 s: not a waveform table: field(s) intensity not one FLOAT32 each"),
+    ("undecodable", "the sensor_msgs/msg/PointCloud2 on /accel logged at 0.000000000 s does not deserialize as that "
+                    "type (RMWError: "),
     ("no_samples", "the waveform tables on /accel hold no samples"),
     ("stamps_go_back", "cannot tell the sample rate from the waveform tables on /accel"),
     ("one_table", "cannot tell the sample rate from the waveform tables on /accel"),
@@ -684,3 +686,39 @@ def test_report_of_another_tools_recording_it_cannot_read_is_one_line(kind, said
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1, err
     assert err[0].startswith(f"error: {path}: ") and said in err[0], err[0]
+
+
+def _one_topic_recording(path, data: bytes):
+    """A ros2-profile MCAP with five messages of ``data`` on /accel, typed PointCloud2."""
+    from mcap.writer import Writer
+
+    with open(path, "wb") as f:
+        writer = Writer(f)
+        writer.start(profile="ros2", library="test")
+        schema = writer.register_schema(name="sensor_msgs/msg/PointCloud2", encoding="ros2msg", data=b"")
+        channel = writer.register_channel(topic="/accel", message_encoding="cdr", schema_id=schema)
+        for k in range(5):
+            writer.add_message(channel, log_time=k * NS // 10, publish_time=k * NS // 10, data=data)
+        writer.finish()
+
+
+def test_a_recording_of_other_bytes_or_tables_is_one_line(tmp_path, capsys):
+    """Bytes that are not the type the channel names (a damaged file, another writer's), and a
+    PointCloud2 that is no waveform table, ended report with rclpy's RMWError or a ValueError
+    traceback and "internal error" (exit 1).  Now one line naming the file, topic and message,
+    exit 2."""
+    from rclpy.serialization import serialize_message
+    from sensor_msgs.msg import PointCloud2
+
+    garbage, empty = tmp_path / "garbage.mcap", tmp_path / "empty_cloud.mcap"
+    _one_topic_recording(garbage, b"\x00\x01\x00\x00garbage")
+    _one_topic_recording(empty, serialize_message(PointCloud2()))
+    for path, line in ((garbage, rf"error: {re.escape(str(garbage))}: the sensor_msgs/msg/PointCloud2 on /accel logged "
+                                 r"at 0\.000000000 s does not deserialize as that type \(RMWError: [^\n]+\); a damaged "
+                                 r"recording or another writer's"),
+                       (empty, re.escape(f"error: {empty}: the table on /accel logged at 0.000000000 s: not a waveform "
+                                         "table: point_step 0, channels 0, height 0, big-endian False; expected the "
+                                         "node's waveform tables (README, \"Consuming a waveform table\")"))):
+        assert cli.main(["report", str(path), "--out", str(tmp_path / "r")]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and re.fullmatch(line, err[0]), err

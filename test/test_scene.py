@@ -10,7 +10,7 @@ import pytest
 
 from bearing_sim_ros import Simulator
 from bearing_sim_ros.errors import SceneError
-from bearing_sim_ros.scene import RPM, ProfilePoint, load_scene, load_yaml, scene_from_dict, shipped_scenes
+from bearing_sim_ros.scene import RPM, ProfilePoint, Waviness, load_scene, load_yaml, scene_from_dict, shipped_scenes
 
 CONTRACT_SCENES = {
     "er16k_healthy", "er16k_inner_race", "er16k_outer_race", "er16k_skidding",
@@ -85,6 +85,9 @@ def test_numbers_in_exponent_form_are_floats(tmp_path):
     ("clock: 6}\n", "clock: 6}\nsensor: {axes: [x, z]}\n", ["sensor.axes", "'z'", "x, y"]),
     # a range of 0 m/s^2 would clip every sample to 0
     ("clock: 6}\n", "clock: 6}\nsensor: {range: 0}\n", ["sensor.range", "0", "(0, "]),
+    # the film goes as pressure_viscosity^0.49: 0 was a ZeroDivisionError in the kinematic tier
+    ("clock: 6}\n", "clock: 6}\nlubrication: {pressure_viscosity: 0}\n",
+     ["lubrication.pressure_viscosity = 0: allowed range is (0, 1e-07]"]),
 ])
 def test_bad_scene_is_one_line_naming_key_value_and_allowed(tmp_path, old, new, expect):
     path = tmp_path / "bad.yaml"
@@ -440,6 +443,7 @@ def test_a_defect_changed_in_python_within_the_limits_runs():
     (lambda s: {"random_slip": float("nan")}, "random_slip = nan: allowed range is [0, 0.05]"),
     (lambda s: {"fidelity": "skiding"}, "fidelity = 'skiding': allowed values are auto, kinematic, skidding"),
     (lambda s: {"fidelity_tolerance": 0.0}, "fidelity_tolerance = 0: allowed range is [0.0001, 1]"),
+    (lambda s: {"gravity": "no"}, "gravity = 'no': expected True or False"),
 ])
 def test_a_scenes_clearance_slip_and_tier_changed_in_python_are_held_to_the_yamls_limits(change, line):
     """A clearance sweep by ``scene.bearing.with_clearance(...)`` ran a NaN clearance to NaN
@@ -453,3 +457,104 @@ def test_a_scenes_clearance_slip_and_tier_changed_in_python_are_held_to_the_yaml
     assert str(exc.value) == f"scene er16k_outer_race: {line}"
     inside = dataclasses.replace(scene, bearing=scene.bearing.with_clearance(-5e-6), random_slip=0.02)
     assert np.isfinite(Simulator(inside, fidelity="kinematic").advance(150).accel).all()
+
+
+@pytest.mark.parametrize("section, change, line", [
+    ("structure", {"shaft_mass": 0.0}, "structure.shaft_mass = 0 kg: allowed range is [0.001, 100000] kg"),
+    ("structure", {"pedestal_stiffness": float("nan")},
+     "structure.pedestal_stiffness = nan N/m: allowed range is [0, 1e+12] N/m"),
+    ("structure", {"shaft_damping": "1376"}, "structure.shaft_damping = '1376': expected a number in [0, 1e+08] N s/m"),
+    ("structure", {"resonator_mass": 1e-6},
+     "structure.resonator_mass = 1e-06 kg: allowed 0 (no resonator) or [0.0001, 1000] kg"),
+    ("structure", {"resonator_stiffness": 1.0}, "structure.resonator_stiffness = 1 N/m: allowed range is "
+                                                "[197.392, 4.9348e+09] N/m (10 - 50000 Hz with resonator_mass 0.05 kg)"),
+    ("lubrication", {"viscosity": -1.0}, "lubrication.viscosity = -1: allowed range is [0.0001, 10]"),
+    ("lubrication", {"surface_roughness": 0.05},
+     "lubrication.surface_roughness = 0.05 m: allowed range is [1e-09, 5e-06] m"),
+    ("lubrication", {"ehl_film": "yes"}, "lubrication.ehl_film = 'yes': expected True or False"),
+    ("lubrication", {"pressure_viscosity": 0.0}, "lubrication.pressure_viscosity = 0: allowed range is (0, 1e-07]"),
+    ("sensor", {"axes": ("z",)}, "sensor.axes = ('z',): expected a list of distinct axes from x, y"),
+    ("sensor", {"range": 0.0}, "sensor.range = 0 m/s^2: allowed range is (0, 1e+07] m/s^2"),
+    ("sensor", {"resonance_hz": float("inf")}, "sensor.resonance_hz = inf Hz: allowed range is [0, 200000] Hz"),
+])
+def test_a_scenes_structure_lubrication_and_sensor_changed_in_python_are_held_to_the_yamls_limits(
+        section, change, line):
+    """``dataclasses.replace(scene, structure=dataclasses.replace(scene.structure, shaft_mass=0))``
+    failed deep in the physics with a ZeroDivisionError, a NaN stiffness with numpy's LinAlgError,
+    and a sensor axis "z" or a range of 0 ran (labelled accel_z; every sample clipped to 0).  Now
+    the scene refuses them in one line, in the Python field's name and SI unit, with the bounds
+    of the YAML's keys; within them it runs."""
+    scene = load_scene("er16k_outer_race")
+    with pytest.raises(SceneError) as exc:
+        Simulator(dataclasses.replace(scene, **{section: dataclasses.replace(getattr(scene, section), **change)}),
+                  fidelity="kinematic")
+    assert str(exc.value) == f"scene er16k_outer_race: {line}"
+
+
+def test_a_scenes_structure_lubrication_and_sensor_within_the_limits_run():
+    """Every shipped scene meets its own bounds made in Python (the YAML's resonator frequency
+    and damping ratio, turned into a stiffness and a damping, stay within them to the last
+    bit), and changes within them run."""
+    for name in shipped_scenes():
+        load_scene(name)
+    scene = load_scene("er16k_outer_race")
+    changed = dataclasses.replace(scene, structure=dataclasses.replace(scene.structure, shaft_mass=2.0,
+                                                                       resonator_mass=0.0),
+                                  sensor=dataclasses.replace(scene.sensor, axes=("y",)),
+                                  lubrication=dataclasses.replace(scene.lubrication, viscosity=0.1))
+    batch = Simulator(changed, fidelity="kinematic").advance(150)
+    assert batch.accel_channels == ("accel_y",) and np.isfinite(batch.accel).all()
+
+
+def test_a_yaml_resonator_at_the_edges_of_its_bounds_loads():
+    """A YAML resonator at the edges of frequency_hz and damping_ratio loads: the stiffness and
+    damping computed from them are within what the scene's own check allows (sqrt(k / m) need
+    not give back 2 pi f to the last bit)."""
+    for mass in (1e-4, 0.05, 1e3):
+        for frequency, ratio in ((10.0, 0.0), (50000.0, 1.0), (3333.3, 1.0), (10.0, 1.0)):
+            data = load_yaml(GOOD)
+            data["structure"]["resonator"] = {"mass": mass, "frequency_hz": frequency, "damping_ratio": ratio}
+            assert scene_from_dict(data, name="edge").structure.has_resonator
+
+
+@pytest.mark.parametrize("waviness, line", [
+    (Waviness("inner", 3, float("nan")), "waviness[0].amplitude = nan m: allowed range is [0, 2e-05] m"),
+    (Waviness("inner", 3, 1.0), "waviness[0].amplitude = 1 m: allowed range is [0, 2e-05] m"),
+    (Waviness("middle", 3, 1e-6), "waviness[0].race = 'middle': allowed values are inner, outer"),
+    (Waviness("outer", 2.5, 1e-6), "waviness[0].order = 2.5: expected a whole number in [1, 200]"),
+    (Waviness("outer", 0, 1e-6), "waviness[0].order = 0: expected a whole number in [1, 200]"),
+    (Waviness("outer", 3, 1e-6, float("inf")), "waviness[0].phase = inf rad: allowed range is [-6.28319, 6.28319] rad"),
+])
+def test_a_scenes_waviness_changed_in_python_is_held_to_the_yamls_limits(waviness, line):
+    """``dataclasses.replace(scene, waviness=(Waviness("inner", 3, nan),))`` ran to NaN samples in
+    the kinematic tier (the skidding tier: SolverDiverged), an amplitude of 1 m likewise, and a
+    race "middle" or an order 2.5 ran as something else.  Now one line, the YAML's bounds in SI
+    units; within them it runs."""
+    scene = load_scene("er16k_outer_race")
+    with pytest.raises(SceneError) as exc:
+        dataclasses.replace(scene, waviness=(waviness,))
+    assert str(exc.value) == f"scene er16k_outer_race: {line}"
+    wavy = dataclasses.replace(scene, waviness=[Waviness("outer", 200, 20e-6, -6.0), Waviness("inner", np.int64(1), 0)])
+    assert np.isfinite(Simulator(wavy, fidelity="kinematic").advance(150).accel).all()
+
+
+@pytest.mark.parametrize("change, line", [
+    ({"ball_mass": -1.0}, "bearing.ball_mass_kg = -1.0: allowed range is [1e-06, 100.0]"),
+    ({"elastic_modulus": 0.0}, "bearing.elastic_modulus_gpa = 0.0: allowed range is [1.0, 1000.0]"),
+    ({"inner_groove_conformity": 0.4}, "bearing.inner_groove_conformity = 0.4: allowed range is [0.505, 0.6]"),
+    ({"ball_diameter": float("nan")}, "bearing.ball_diameter_mm = nan: allowed range is [0.5, 200.0]"),
+    ({"balls": 0}, "bearing.balls = 0: allowed range is [3, 40]"),
+    ({"balls": 9.0}, "bearing.balls = 9.0: expected a whole number (int) in [3, 40]"),
+])
+def test_a_bearing_changed_in_python_is_held_to_the_catalogs_limits(change, line):
+    """``dataclasses.replace(scene, bearing=dataclasses.replace(scene.bearing, ball_mass=-1.0))``
+    was a "math domain error" inside the physics, an elastic modulus of 0 a ZeroDivisionError, a
+    NaN ball diameter a message about the defect's depth.  Now the catalog's own check, in its
+    units, in one line; a bearing within it (numpy's int for the balls too) runs."""
+    scene = load_scene("er16k_outer_race")
+    with pytest.raises(SceneError) as exc:
+        dataclasses.replace(scene, bearing=dataclasses.replace(scene.bearing, **change))
+    assert str(exc.value) in (f"scene er16k_outer_race: {line}",
+                              f"scene er16k_outer_race: {line} (a Bearing checked in the catalog's units: mm, deg, GPa)")
+    other = dataclasses.replace(scene.bearing, balls=np.int64(8), contact_angle=math.radians(45.0), ball_mass=0.01)
+    assert np.isfinite(Simulator(dataclasses.replace(scene, bearing=other), fidelity="kinematic").advance(150).accel).all()

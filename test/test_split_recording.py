@@ -126,6 +126,22 @@ def _refusal(given) -> str:
     return text
 
 
+def test_the_name_of_a_split_recording_given_with_files_says_so(whole, bearing_sim_exe, tmp_path):
+    """``report run.mcap run_001.mcap``: the name the recording was split from (no such file, its
+    pieces found from it when given alone) among other files was "run.mcap: no such file", which
+    reads as a typo in a name that works alone.  Now one line says what it is and the two ways
+    to give it; the command line's status is 2."""
+    _src, base, pieces = whole
+    line = (f"{base}: the name that split recording run_000.mcap .. run_003.mcap was recorded to, given with "
+            "other files; give that name alone (it reads all 4 pieces) or its pieces, not both")
+    for given in ([base, pieces[1]], [pieces[0], base], [base, base]):
+        assert _refusal(given) == line
+    for command in (["report", str(base), str(pieces[1]), "--out", str(tmp_path / "r")],
+                    ["play", str(pieces[0]), str(base)]):
+        done = subprocess.run([bearing_sim_exe, *command], capture_output=True, text=True, timeout=120)
+        assert (done.returncode, done.stderr) == (2, f"error: {line}\n")
+
+
 def test_files_that_are_not_the_consecutive_pieces_of_one_recording_are_refused(whole, tmp_path):
     src, base, pieces = whole
     text = _refusal([pieces[0], pieces[2]])

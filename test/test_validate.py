@@ -423,3 +423,14 @@ def test_the_calibration_fit_round_trips_the_shipped_values():
         assert dataclasses.astuple(again.structure) == pytest.approx(dataclasses.astuple(scene.structure))
         assert again.bearing.radial_clearance == pytest.approx(scene.bearing.radial_clearance)
         assert again.sensor == scene.sensor and again.defects == scene.defects
+
+
+def test_a_recording_longer_than_one_advance_is_simulated_in_chunks(monkeypatch):
+    """One ``advance`` takes at most ``sim.max_advance`` samples (a memory bound): a CWRU-length
+    recording beyond it is simulated in chunks, the same samples as one call."""
+    from bearing_sim_ros import simulator
+
+    whole = V.simulate("cwru_6205_ir007", 12000.0, 1797.0, 250)
+    monkeypatch.setattr(simulator, "MAX_ADVANCE_INTERNAL", 8 * 100)     # 100 samples at 12 kHz
+    chunked = V.simulate("cwru_6205_ir007", 12000.0, 1797.0, 250)
+    assert chunked.shape == (250,) and np.array_equal(chunked, whole)

@@ -48,7 +48,7 @@ import numpy as np
 from .. import ground_truth
 from ..errors import UserError
 from ..paths import output_folder, writing_into
-from ..recording.reader import decode, open_recording
+from ..recording.reader import open_recording
 from ..waveform import NS, from_pointcloud2
 from .envelope import (DEFAULT_BAND, DETECTION_THRESHOLD, FAULT_LINES, diagnose, envelope_spectrum, no_defect_note,
                        statistics)
@@ -66,7 +66,7 @@ class _Data:
     """What the report needs from a recording, as arrays."""
 
     def __init__(self, rec):
-        from ..recording.reader import get_message
+        from ..recording.reader import deserialize, get_message
 
         topics = rec.topics()
         self.topics = {t: {"type": c.msg_type, "messages": c.count} for t, c in topics.items()}
@@ -95,12 +95,14 @@ class _Data:
         except (TypeError, ValueError):
             fs_meta = None
         for topic, _type, log_ns, data in rec.messages(topics=wanted):
-            msg = decode(data, classes[topic], topic, rec.path)
+            # another writer's bytes or tables were a traceback and "internal error"
+            msg = deserialize(rec.path, topic, topics[topic].msg_type, log_ns, data, classes[topic])
             if topic == self.accel_topic:
                 try:
                     stamp, names, arr = from_pointcloud2(msg)
                 except ValueError as exc:     # another tool's point cloud (a lidar's) on .../accel
-                    raise UserError(f"{rec.path}: {topic}: {exc}") from None
+                    raise UserError(f"{rec.path}: the table on {topic} logged at {log_ns / NS:.9f} s: {exc}; "
+                                    "expected the node's waveform tables (README, \"Consuming a waveform table\")") from None
                 if self.channels and tuple(names) != self.channels:
                     # the columns are concatenated: numpy's error was a traceback
                     raise UserError(f"{rec.path}: {topic}: a table's channels ({', '.join(names)}) are not "

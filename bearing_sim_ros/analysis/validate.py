@@ -83,8 +83,15 @@ def simulate(scene, fs: float, rpm: float, n: int, seed: int = SEED, radial_load
     sim = Simulator(scene, sample_rate=fs, fidelity="kinematic", seed=seed)
     w = rpm * 2.0 * math.pi / 60.0
     col = sim.accel_channels.index(channel)
-    sim.advance(int(SETTLE_S * fs), shaft_speed=w, radial_load=radial_load)
-    return sim.advance(int(n), shaft_speed=w, radial_load=radial_load).accel[:, col].copy()
+    # in chunks of what one advance takes (its memory bound): a long recording is compared whole
+    # (at least one call: n = 0 is advance's error to say)
+    def samples(count):
+        return [sim.advance(min(sim.max_advance, count - done), shaft_speed=w, radial_load=radial_load).accel[:, col]
+                for done in range(0, max(count, 1), sim.max_advance)]
+
+    samples(int(SETTLE_S * fs))
+    chunks = samples(int(n))
+    return np.concatenate(chunks) if len(chunks) != 1 else chunks[0].copy()
 
 
 def _bearing(scene_name: str):

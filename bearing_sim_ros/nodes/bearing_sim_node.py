@@ -16,7 +16,7 @@ whatever the pacing did.
 
 Inputs ``shaft_speed`` (std_msgs/Float64, rad/s) and ``load`` (geometry_msgs/WrenchStamped, N;
 x horizontal, y up, z axial) are checked in the subscription callback (see :class:`InputLimits`
-and :func:`check_speed`, :func:`check_load`); a bad message is rejected, logged (throttled) and
+and :func:`check_speed`, :func:`check_load`, :func:`check_frame`); a bad message is rejected, logged (throttled) and
 counted in ``/diagnostics``, and the last good value stays.  An accepted value becomes the target
 of the next chunk computed: ``Simulator.advance`` ramps speed and load linearly from the value in
 use to the target over that chunk (10 ms by default), so the signal never jumps.  In the
@@ -83,6 +83,17 @@ def check_load(fx: float, fy: float, fz: float, limits: InputLimits):
         return "out_of_range", (f"load = ({fx:.6g}, {fy:.6g}, {fz:.6g}) N: |F| = {mag:.6g} N beyond "
                                 f"{LOAD_MULTIPLE_C0:g} x C0 = {limits.max_load:.0f} N")
     return None
+
+
+def check_frame(frame_id: str, own_frame: str):
+    """None if a load's ``frame_id`` is the node's own frame (its tables', which its recordings
+    give their loads) or empty (not said), else ``(reason_key, reason)``: the node transforms
+    nothing, so a force given in another frame ("base_link", "map") would be applied along the
+    bearing's axes as if it were in theirs."""
+    if frame_id in ("", own_frame):
+        return None
+    return "wrong_frame", (f"load frame_id = {frame_id!r}: expected {own_frame!r} or empty (x horizontal, y "
+                           "vertical up, at the bearing; the node transforms nothing)")
 
 
 def check_stamp(stamp_ns: int, last_ns: int | None, now_ns: int, max_age: float):
@@ -213,6 +224,7 @@ class BearingSimNode(Node):
             if reason:
                 raise UserError(reason)
             self._build(cfg)
+            self.add_pre_set_parameters_callback(self._before_set_parameters)
             self.add_on_set_parameters_callback(self._on_set_parameters)
             self.add_post_set_parameters_callback(self._after_set_parameters)
         except BaseException:
@@ -256,6 +268,22 @@ class BearingSimNode(Node):
         rate = 1.0 / cfg["batch_duration"]
         self.set_parameters([Parameter("state_rate", value=rate)])
         cfg["state_rate"] = rate
+
+    def _before_set_parameters(self, params):
+        """A parameter the node does not have, set at run time (``ros2 param set /bearing_sim
+        sampel_rate 1000.0``): rclpy refuses it before the on-set callback, with "Invalid access
+        to undeclared parameter(s): []" (its list comes out empty).  Its own exception, raised
+        here, which its parameter services answer with, says which and what the node has."""
+        from rclpy.exceptions import ParameterNotDeclaredException
+
+        unknown = [p.name for p in params if not self.has_parameter(p.name)]
+        if unknown:
+            changeable = [name for name, (_default, desc) in _descriptors().items() if not desc.read_only]
+            error = ParameterNotDeclaredException(unknown)
+            error.args = (f"parameter {unknown[0]}: not a {NODE_NAME} parameter; its parameters are "
+                          f"{', '.join(self._cfg)}, of which these change while it runs: {', '.join(changeable)}",)
+            raise error
+        return params
 
     def _on_set_parameters(self, params):
         """Validate a run-time change against the whole configuration (read-only parameters
@@ -316,7 +344,7 @@ class BearingSimNode(Node):
         self._cmd_speed = float(self.sim.shaft_speed)
         self._cmd_load = tuple(float(v) for v in self.sim.radial_load)
         self._last_load_stamp = None
-        self.rejected = {"not_finite": 0, "out_of_range": 0, "stale": 0, "out_of_order": 0}
+        self.rejected = {"not_finite": 0, "out_of_range": 0, "wrong_frame": 0, "stale": 0, "out_of_order": 0}
         self._reject_log = {}                     # reason -> (monotonic s of its last line, since)
 
         self.start_ns = self.get_clock().now().nanoseconds
@@ -412,7 +440,7 @@ class BearingSimNode(Node):
     def _on_load(self, msg):
         f = msg.wrench.force
         fx, fy, fz = float(f.x), float(f.y), float(f.z)
-        bad = check_load(fx, fy, fz, self.limits)
+        bad = check_load(fx, fy, fz, self.limits) or check_frame(msg.header.frame_id, self.msgs.frame_id)
         if bad:
             self._reject(*bad)
             return

@@ -377,7 +377,9 @@ def main(args, ros_args=()) -> int:
     from ..scene import load_scene
     from .bearing_sim_node import ros_arguments_error
 
-    scene = load_scene(getattr(args, "scene", None) or DEFAULT_SCENE)   # UserError: exit 2
+    # UserError: exit 2; an empty --scene ("$SCENE" unset) too, which ran the default scene
+    scene = getattr(args, "scene", None)
+    scene = load_scene(DEFAULT_SCENE if scene is None else scene)
     # the command's handlers from its first line (cli.SIGNAL_COMMANDS): a Ctrl-C while numpy and
     # rclpy were imported went missing, and the monitor waited on for tables
     signals = command_signals()

@@ -42,7 +42,7 @@ import time
 from ..errors import UserError
 from ..teardown import teardown_watchdog
 from ..waveform import NS
-from .reader import decode, get_message, open_recording
+from .reader import deserialize, get_message, open_recording
 from .schemas import qos_from_yaml
 
 WAIT_FOR_SUBSCRIBERS = 5.0    # s, the default of --wait: one missed 3 s announcement period and margin
@@ -192,10 +192,10 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
                     if offset == 0:
                         # first pass: the recorded bytes go out as they are
                         if loop and msg_type == WAVEFORM_TYPE and span.topic in (None, topic):
-                            span.see(topic, decode(data, classes[topic], topic, path))
+                            span.see(topic, deserialize(rec.path, topic, msg_type, log_ns, data, classes[topic]))
                         pubs[topic].publish(data)
                     else:
-                        msg = decode(data, classes[topic], topic, path)
+                        msg = deserialize(rec.path, topic, msg_type, log_ns, data, classes[topic])
                         _shift_stamp(msg, offset)
                         pubs[topic].publish(msg)
                     published += 1

@@ -49,20 +49,20 @@ def get_message(msg_type: str):
                         f"(pip install ros-jazzy-{pkg.replace('_', '-')})") from None
 
 
-def decode(data: bytes, msg_class, topic: str, where) -> object:
-    """The rclpy message that the recorded CDR bytes ``data`` on ``topic`` hold.  Bytes that are
-    not a message of the channel's type (another tool's file, or a damaged one whose CRCs still
-    pass) are a one-line UserError naming ``where`` (the file) and the topic: rclpy's RMWError
-    came out as a traceback."""
+def deserialize(path, topic: str, msg_type: str, log_ns: int, data: bytes, cls):
+    """The message of ``cls`` (of ``msg_type``) in ``data``, recorded on ``topic`` at ``log_ns`` in
+    ``path``; bytes that are not that type (a damaged file whose CRCs still pass, another writer's
+    under the type's name) are a one-line UserError naming the message, not rclpy's RMWError
+    traceback."""
     from rclpy.serialization import deserialize_message
 
     try:
-        return deserialize_message(data, msg_class)
-    except Exception as exc:  # noqa: BLE001 - rclpy raises its own RMWError (and others) here
-        type_name = f"{msg_class.__module__.split('.')[0]}/msg/{msg_class.__name__}"
+        return deserialize_message(data, cls)
+    except Exception as exc:  # noqa: BLE001 - rclpy's RMWError, or a plain RuntimeError
         reason = (str(exc).splitlines() or [""])[0] or "unreadable"
-        raise UserError(f"{where}: a message on {topic} does not decode as {type_name} "
-                        f"({exc.__class__.__name__}: {reason})") from None
+        raise UserError(f"{path}: the {msg_type} on {topic} logged at {log_ns * 1e-9:.9f} s does not deserialize as "
+                        f"that type ({exc.__class__.__name__}: {reason}); a damaged recording or another "
+                        "writer's") from None
 
 
 class Recording:
@@ -158,11 +158,14 @@ class Recording:
         """(topic, msg_type, channel id, log_time_ns, CDR bytes) of the messages; a damaged file
         is a one-line UserError."""
         from mcap.exceptions import McapError
+        from zstandard import ZstdError
 
         try:
             for schema, channel, msg in self._reader.iter_messages(topics=topics, log_time_order=log_time_order):
                 yield channel.topic, (schema.name if schema else ""), channel.id, int(msg.log_time), msg.data
-        except (McapError, ValueError, KeyError, EOFError) as exc:
+        # ZstdError: a chunk whose compressed bytes are damaged fails to decompress before its CRC
+        # is checked (it was a traceback and "internal error")
+        except (McapError, ZstdError, ValueError, KeyError, EOFError) as exc:
             raise UserError(f"{self.path}: corrupt MCAP recording ({exc.__class__.__name__}: "
                             f"{str(exc).splitlines()[0] if str(exc) else 'unreadable'})") from None
 
@@ -316,6 +319,14 @@ def open_recording(path) -> Recording | SplitRecording:
     if not paths:
         raise UserError("no recording given: expected an .mcap file")
     if len(paths) > 1:
+        for p in paths:
+            # the name a split recording was made to, among other files (`play run.mcap
+            # run_001.mcap`): it was "run.mcap: no such file", though alone it reads all its pieces
+            pieces = [] if os.path.lexists(p) else existing_pieces(p)
+            if pieces:
+                raise UserError(f"{os.fspath(p)}: the name that split recording {pieces[0].name} .. {pieces[-1].name} "
+                                f"was recorded to, given with other files; give that name alone (it reads all "
+                                f"{len(pieces)} pieces) or its pieces, not both")
         return SplitRecording(paths)
     one = os.fspath(paths[0])
     if not os.path.lexists(one):
