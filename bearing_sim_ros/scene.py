@@ -127,6 +127,15 @@ class Lubrication:
     pocket_damping_ratio: float = 0.05    # ball-cage pocket contact, same definition with k_c
     cage_drag: float = 0.0            # N m s: viscous torque on the cage (not in seed 000)
 
+    def traction_extreme(self, slip_max: float = 100.0) -> tuple:
+        """(largest |mu| of the traction curve over slip velocities 0 - ``slip_max`` m/s, the slip
+        velocity (m/s) where it is): at an end, or where the curve turns, v = 1/C - A/B."""
+        a, b, c, d = self.traction_a, self.traction_b, self.traction_c, self.traction_d
+        slips = [0.0, slip_max]
+        if b != 0.0 and c > 0.0 and 0.0 < 1.0 / c - a / b < slip_max:
+            slips.append(1.0 / c - a / b)
+        return max((abs((a + b * v) * math.exp(-c * v) + d), v) for v in slips)
+
 
 @dataclass(frozen=True)
 class Sensor:
@@ -361,6 +370,11 @@ LUBRICATION_BOUNDS = {
 # kinematic tier's share of it between the races 0 / 0 (a ZeroDivisionError; ehl_film: false
 # is the way to have no film)
 LUBRICATION_LO_OPEN = ("pressure_viscosity",)
+# the traction curve's largest |mu| (over slips up to 100 m/s): dry steel on steel is about 0.6,
+# lubricated contacts 0.02-0.1; each key within its bounds, the curve could reach 18 (B = 10), 1.5
+# at zero slip (A = 1, D = 0.5) or grow without end (C = 0), and the skidding solver diverged
+# (a curve peaking at 1.43 did at 10000 rpm / 10 N; 1.0 ran at 600-20000 rpm, 10-2000 N)
+MAX_TRACTION = 1.0
 # Sensor's numeric fields (the YAML keys of the same names) -> (lo, hi, lo_open, unit)
 SENSOR_BOUNDS = {"resonance_hz": (0.0, 200000.0, False, "Hz"), "damping_ratio": (0.001, 1.0, False, ""),
                  "noise_density": (0.0, 10.0, False, "m/s^2/sqrt(Hz)"), "range": (0.0, 1e7, True, "m/s^2")}
@@ -558,7 +572,19 @@ def _lubrication_error(lubrication) -> str:
             return error
     if not isinstance(lubrication.ehl_film, bool):
         return f"lubrication.ehl_film = {short_repr(lubrication.ehl_film)}: expected True or False"
-    return ""
+    return _traction_error(lubrication)
+
+
+def _traction_error(lubrication) -> str:
+    """"" when the traction curve of ``lubrication`` stays within MAX_TRACTION, else the line
+    naming its four keys."""
+    mu, slip = lubrication.traction_extreme()
+    if mu <= MAX_TRACTION:
+        return ""
+    curve = ", ".join(f"{k} = {getattr(lubrication, 'traction_' + k.lower()):g}" for k in "ABCD")
+    return (f"lubrication.traction_a .. traction_d ({curve}): the traction curve (A + B v) exp(-C v) + D "
+            f"reaches |mu| = {mu:.3g} at a slip of {slip:.3g} m/s; allowed at most {MAX_TRACTION:g} "
+            "(dry steel on steel is about 0.6, lubricated contacts 0.02 - 0.1)")
 
 
 def _sensor_error(sensor) -> str:
@@ -677,7 +703,11 @@ def _lubrication(top: _Section) -> Lubrication:
         um = key.endswith("_um")
         default = getattr(d, name) * 1e6 if um else getattr(d, name)
         values[name] = s.number(key, default, lo=lo, hi=hi, lo_open=name in LUBRICATION_LO_OPEN) * (1e-6 if um else 1.0)
-    return Lubrication(ehl_film=s.boolean("ehl_film", d.ehl_film), **values)
+    lubrication = Lubrication(ehl_film=s.boolean("ehl_film", d.ehl_film), **values)
+    error = _traction_error(lubrication)        # the four keys together (Scene checks it again)
+    if error:
+        raise SceneError(error)
+    return lubrication
 
 
 def _sensor(top: _Section) -> Sensor:

@@ -7,6 +7,7 @@ import textwrap
 
 import numpy as np
 import pytest
+import yaml
 
 from bearing_sim_ros import Simulator
 from bearing_sim_ros.errors import SceneError
@@ -473,6 +474,10 @@ def test_a_scenes_clearance_slip_and_tier_changed_in_python_are_held_to_the_yaml
      "lubrication.surface_roughness = 0.05 m: allowed range is [1e-09, 5e-06] m"),
     ("lubrication", {"ehl_film": "yes"}, "lubrication.ehl_film = 'yes': expected True or False"),
     ("lubrication", {"pressure_viscosity": 0.0}, "lubrication.pressure_viscosity = 0: allowed range is (0, 1e-07]"),
+    ("lubrication", {"traction_b": 2.0},
+     "lubrication.traction_a .. traction_d (A = -0.1, B = 2, C = 0.2, D = 0.1): the traction curve (A + B v) "
+     "exp(-C v) + D reaches |mu| = 3.74 at a slip of 5.05 m/s; allowed at most 1 (dry steel on steel is about "
+     "0.6, lubricated contacts 0.02 - 0.1)"),
     ("sensor", {"axes": ("z",)}, "sensor.axes = ('z',): expected a list of distinct axes from x, y"),
     ("sensor", {"range": 0.0}, "sensor.range = 0 m/s^2: allowed range is (0, 1e+07] m/s^2"),
     ("sensor", {"resonance_hz": float("inf")}, "sensor.resonance_hz = inf Hz: allowed range is [0, 200000] Hz"),
@@ -504,6 +509,40 @@ def test_a_scenes_structure_lubrication_and_sensor_within_the_limits_run():
                                   lubrication=dataclasses.replace(scene.lubrication, viscosity=0.1))
     batch = Simulator(changed, fidelity="kinematic").advance(150)
     assert batch.accel_channels == ("accel_y",) and np.isfinite(batch.accel).all()
+
+
+@pytest.mark.parametrize("curve, mu", [
+    ({"traction_b": 10.0}, "18.5 at a slip of 5.01 m/s"),                 # each key within its own bounds
+    ({"traction_a": 1.0, "traction_d": 0.5}, "1.5 at a slip of 0 m/s"),   # 1.5 at zero slip
+    ({"traction_a": 0.0, "traction_b": 0.1, "traction_c": 0.0}, "10.1 at a slip of 100 m/s"),   # no end
+])
+def test_a_traction_curve_beyond_dry_friction_is_refused_in_one_line(curve, mu, tmp_path):
+    """Each traction key within its bounds, the curve could peak at mu = 18 (B = 10) or start at
+    1.5, and the skidding solver diverged: ``SolverDiverged``, a traceback and "internal error"
+    (a helper's finding).  Now the YAML (and a scene changed in Python) is refused where the
+    curve's |mu| passes 1 over slips up to 100 m/s, naming the four keys; 1 runs (below)."""
+    data = load_yaml(GOOD)
+    data.setdefault("lubrication", {}).update(curve)
+    path = tmp_path / "curve.yaml"
+    path.write_text(yaml.safe_dump(data), encoding="utf-8")
+    with pytest.raises(SceneError) as exc:
+        load_scene(str(path))
+    assert str(exc.value).startswith("scene curve.yaml: lubrication.traction_a .. traction_d (") and (
+        f"reaches |mu| = {mu}; allowed at most 1" in str(exc.value)), str(exc.value)
+
+
+def test_a_traction_curve_at_the_limit_runs_on_the_skidding_tier():
+    """The curves at |mu| = 1 that the limit lets through run finite where one at 1.43 diverged
+    (10000 rpm, 10 N: the most slip of the ER-16K scenes)."""
+    scene = load_scene("er16k_skidding")
+    for curve in ({"traction_a": 0.5, "traction_b": 0.0, "traction_d": 0.5},        # 1.0 at zero slip
+                  {"traction_b": 0.49}):                                           # 0.97 at 5.2 m/s
+        lub = dataclasses.replace(scene.lubrication, **curve)
+        assert 0.95 < lub.traction_extreme()[0] <= 1.0
+        sim = Simulator(dataclasses.replace(scene, lubrication=lub, shaft_speed=10000 * 2 * np.pi / 60,
+                                            radial_load=(0.0, -10.0)), fidelity="skidding")
+        batch = sim.advance(1500)                                                  # 0.1 s
+        assert np.isfinite(batch.accel).all() and np.isfinite(batch.cage_speed).all()
 
 
 def test_a_yaml_resonator_at_the_edges_of_its_bounds_loads():
