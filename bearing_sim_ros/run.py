@@ -233,7 +233,10 @@ def run_command(args) -> int:
         figures = None
         if node is not None:
             rs = node.recorder.status
-            figures = {"signal_s": node.sim.time, "wall_s": node.stats.last - node.stats.started,
+            # the signal published (and recorded), not the simulator's time: after a Ctrl-C
+            # that holds the batches computed ahead, which were never published
+            figures = {"signal_s": node.stats.samples / node.stats.sample_rate,
+                       "wall_s": node.stats.last - node.stats.started,
                        "rtf": node.stats.real_time_factor,
                        "overruns": node.stats.overruns, "worst_lag": node.stats.worst_lag,
                        "tier_values": tier_values(node.sim),
