@@ -190,8 +190,9 @@ def run_command(args) -> int:
     from rclpy.parameter import Parameter
     from rclpy.signals import SignalHandlerOptions
 
-    from .nodes.bearing_sim_node import BearingSimNode, build_node, log_recording, say_held, spin_node
-    from .messages import BATCH_DURATION
+    from .nodes.bearing_sim_node import (DEFAULT_SAMPLE_RATE, BearingSimNode, build_node, log_recording,
+                                         say_held, spin_node)
+    from .messages import BATCH_DURATION, duration_error
     from .recording.recorder import files_text, sizes_text, split_error
     from .recording.render import tier_values
     from .scene import load_scene
@@ -202,8 +203,9 @@ def run_command(args) -> int:
     # the node takes an empty record for "no recording"; and nothing starts if --out is the scene
     output_file(out, keep=[scene.source_path])
     split = (float(args.max_file_duration), int(args.max_file_size))
-    reason = split_error(*split, BATCH_DURATION, names=("--max-file-duration", "--max-file-size"))
-    if reason:                                # said in run's words, not the node parameter's
+    reason = (duration_error("--duration", duration, DEFAULT_SAMPLE_RATE, no_end=True)
+              or split_error(*split, BATCH_DURATION, names=("--max-file-duration", "--max-file-size")))
+    if reason:                                # said in run's words, not the node parameters'
         raise UserError(reason)
     overrides = [Parameter("scene", value=str(args.scene)), Parameter("duration", value=duration),
                  Parameter("record", value=out), Parameter("real_time", value=True),

@@ -155,7 +155,7 @@ def test_run_whose_recording_is_deleted_says_so_and_ends_with_status_2(ros_env, 
 
 
 @pytest.mark.parametrize("case", ["unknown scene", "missing output folder", "the scene's own file",
-                                  "files too small"])
+                                  "files too small", "shorter than a sample"])
 def test_run_user_mistakes_are_one_line(ros_env, bearing_sim_exe, tmp_path, case):
     if case == "unknown scene":
         args, word = ["--scene", "nope", "--duration", "1", "--out", str(tmp_path / "x.mcap")], "nope"
@@ -164,6 +164,10 @@ def test_run_user_mistakes_are_one_line(ros_env, bearing_sim_exe, tmp_path, case
         scene = tmp_path / "my.yaml"
         scene.write_text(_shipped_scene_text())
         args, word = ["--scene", str(scene), "--duration", "1", "--out", str(scene)], "is the scene's own file"
+    elif case == "shorter than a sample":
+        # under half a sample it rounded to none, the node's "forever": a run "for 1e-05 s" ran on
+        args = ["--duration", "0.00001", "--out", str(tmp_path / "x.mcap")]
+        word = "--duration = 1e-05 s: shorter than one sample at 15000 Hz"
     elif case == "files too small":
         # in run's words, not the node parameter's (record_max_size)
         args = ["--duration", "1", "--out", str(tmp_path / "x.mcap"), "--max-file-size", "1000"]
