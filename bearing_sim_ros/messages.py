@@ -58,6 +58,20 @@ def batching_error(sample_rate: float, batch_duration, state_rate) -> str | None
     return None
 
 
+def duration_error(name: str, duration: float, sample_rate: float, no_end: bool = False) -> str | None:
+    """None if ``duration`` (s) holds at least one sample at ``sample_rate`` (Hz), else a one-line
+    reason naming ``name`` (``--duration``, the node's ``duration``).  ``no_end``: 0 means no end
+    (the node's), and is allowed; a positive duration under half a sample rounded to 0 samples,
+    which the node took for that: ``-p duration:=0.00001`` ran until Ctrl-C."""
+    if no_end and duration == 0:
+        return None
+    if round(duration * sample_rate) >= 1:
+        return None
+    least = f"at least {1.0 / sample_rate:.6g} s"
+    return (f"{name} = {duration!r} s: shorter than one sample at {sample_rate:g} Hz; expected "
+            + (f"0 (no end) or {least}" if no_end else least))
+
+
 def batch_qos_depth(batch_duration: float) -> int:
     """Keep-last depth holding about one second of batches."""
     return max(10, int(math.ceil(1.0 / batch_duration)))

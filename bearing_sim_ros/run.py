@@ -185,8 +185,9 @@ def run_command(args) -> int:
     from rclpy.parameter import Parameter
     from rclpy.signals import SignalHandlerOptions
 
-    from .nodes.bearing_sim_node import BearingSimNode, build_node, log_recording, say_held, spin_node
-    from .messages import BATCH_DURATION
+    from .nodes.bearing_sim_node import (DEFAULT_SAMPLE_RATE, BearingSimNode, build_node, log_recording,
+                                         say_held, spin_node)
+    from .messages import BATCH_DURATION, duration_error
     from .recording.recorder import files_text, sizes_text, split_error
     from .recording.render import tier_values
     from .scene import load_scene
@@ -197,8 +198,9 @@ def run_command(args) -> int:
     # the node takes an empty record for "no recording"; and nothing starts if --out is the scene
     output_file(out, keep=[scene.source_path])
     split = (float(args.max_file_duration), int(args.max_file_size))
-    reason = split_error(*split, BATCH_DURATION, names=("--max-file-duration", "--max-file-size"))
-    if reason:                                # said in run's words, not the node parameter's
+    reason = (duration_error("--duration", duration, DEFAULT_SAMPLE_RATE, no_end=True)
+              or split_error(*split, BATCH_DURATION, names=("--max-file-duration", "--max-file-size")))
+    if reason:                                # said in run's words, not the node parameters'
         raise UserError(reason)
     overrides = [Parameter("scene", value=str(args.scene)), Parameter("duration", value=duration),
                  Parameter("record", value=out), Parameter("real_time", value=True),
@@ -228,7 +230,10 @@ def run_command(args) -> int:
         figures = None
         if node is not None:
             rs = node.recorder.status
-            figures = {"signal_s": node.sim.time, "wall_s": node.stats.last - node.stats.started,
+            # the signal published (and recorded), not the simulator's time: after a Ctrl-C
+            # that holds the batches computed ahead, which were never published
+            figures = {"signal_s": node.stats.samples / node.stats.sample_rate,
+                       "wall_s": node.stats.last - node.stats.started,
                        "rtf": node.stats.real_time_factor,
                        "overruns": node.stats.overruns, "worst_lag": node.stats.worst_lag,
                        "tier_values": tier_values(node.sim),

@@ -203,6 +203,21 @@ def test_a_record_path_that_is_the_scene_file_or_not_a_recording_ends_the_node_w
     assert scene.read_text() == text and notes.read_text() == "my notes\n"
 
 
+def test_a_duration_shorter_than_one_sample_ends_the_node_with_one_line(ros_env, bearing_sim_exe):
+    """``-p duration:=0.00001``: positive, but under half a sample at 15 kHz, which rounded to 0
+    samples, the node's "forever": it ran on until Ctrl-C.  Refused like ``render --duration``,
+    at start-up and on ``ros2 param set`` (``check_config``)."""
+    from bearing_sim_ros.nodes.bearing_sim_node import _descriptors, check_config
+
+    r = subprocess.run([bearing_sim_exe, "node", "--ros-args", "-p", "duration:=0.00001"],
+                       env=ros_env, capture_output=True, text=True, timeout=60)
+    assert_one_error_line(r, ["duration = 1e-05 s: shorter than one sample at 15000 Hz",
+                              "0 (no end) or at least 6.66667e-05 s"])
+    cfg = {name: default for name, (default, _desc) in _descriptors().items()}
+    assert check_config(dict(cfg, duration=1e-5)).startswith("duration = 1e-05 s")
+    assert check_config(dict(cfg, duration=0.0)) is None and check_config(dict(cfg, duration=1e-4)) is None
+
+
 @pytest.mark.parametrize("args, words", [
     # rclpy ignored arguments before --ros-args without a word: the node ran on
     (["--bogus"], ["unrecognized arguments: --bogus", "follow --ros-args"]),

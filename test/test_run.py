@@ -155,7 +155,7 @@ def test_run_whose_recording_is_deleted_says_so_and_ends_with_status_2(ros_env, 
 
 
 @pytest.mark.parametrize("case", ["unknown scene", "missing output folder", "the scene's own file",
-                                  "files too small"])
+                                  "files too small", "shorter than a sample"])
 def test_run_user_mistakes_are_one_line(ros_env, bearing_sim_exe, tmp_path, case):
     if case == "unknown scene":
         args, word = ["--scene", "nope", "--duration", "1", "--out", str(tmp_path / "x.mcap")], "nope"
@@ -164,6 +164,10 @@ def test_run_user_mistakes_are_one_line(ros_env, bearing_sim_exe, tmp_path, case
         scene = tmp_path / "my.yaml"
         scene.write_text(_shipped_scene_text())
         args, word = ["--scene", str(scene), "--duration", "1", "--out", str(scene)], "is the scene's own file"
+    elif case == "shorter than a sample":
+        # under half a sample it rounded to none, the node's "forever": a run "for 1e-05 s" ran on
+        args = ["--duration", "0.00001", "--out", str(tmp_path / "x.mcap")]
+        word = "--duration = 1e-05 s: shorter than one sample at 15000 Hz"
     elif case == "files too small":
         # in run's words, not the node parameter's (record_max_size)
         args = ["--duration", "1", "--out", str(tmp_path / "x.mcap"), "--max-file-size", "1000"]
@@ -201,3 +205,25 @@ def test_the_verdict_line_says_when_a_scene_defect_appears():
     assert _verdict_lines(growing, healthy, 60.0, 10.0)[0].endswith("outer (from 5 s))")
     assert _verdict_lines(fixed, {"verdict": "outer"}, 3.0, 3.0) == [
         "verdict: outer-race fault (threshold x4 the local floor; the scene's defects: outer)"]
+
+
+def test_run_stopped_by_ctrl_c_states_the_signal_it_recorded(ros_env, bearing_sim_exe, tmp_path):
+    """``--duration 0`` ended with Ctrl-C: the node drops the batches it computed ahead that were
+    not due yet (the file ends where the published stream ends), and the summary's ``s of
+    signal`` is that stream's, the recording's.  It gave the simulator's time, up to
+    ``compute_ahead`` (50 ms) more than anyone received: 4.39 s of signal over a 4.34 s file."""
+    import signal
+
+    from test_node_support import signal_when
+
+    out = tmp_path / "r.mcap"
+    proc = subprocess.Popen([bearing_sim_exe, "run", "--duration", "0", "--out", str(out)],
+                            env=ros_env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    stdout, stderr = signal_when(proc, lambda: out.exists() and out.stat().st_size > 200_000,
+                                 signal.SIGINT, 1.0, "no recording")
+    assert proc.returncode == 0, stdout + stderr
+    topics, _meta = read_recording(out)
+    recorded_s = sum(m.width for _t, m in topics["/accel"]) / 15000.0
+    said = re.search(r"([\d.]+) s of signal in", stdout)
+    assert said, stdout
+    assert float(said.group(1)) == pytest.approx(recorded_s, abs=0.006), (stdout, recorded_s)

@@ -46,6 +46,7 @@ from ..teardown import EXIT_INTERRUPTED, SIGNAL_NAMES, command_signals, teardown
 NODE_NAME = "bearing_sim"
 OVERSAMPLE_ZERO = "each tier's own"       # what the parameter oversample's default 0 means
 DEFAULT_SCENE = "er16k_outer_race"
+DEFAULT_SAMPLE_RATE = 15000.0         # Hz: the parameter sample_rate's default
 FIDELITIES = ("auto", "kinematic", "skidding")
 
 # ---- input limits --------------------------------------------------------------------------
@@ -142,7 +143,7 @@ def _descriptors():
     return {
         "scene": (DEFAULT_SCENE, d(T.PARAMETER_STRING, "shipped scene name or path of a scene YAML", True,
                                    constraints="see `bearing-sim scenes`")),
-        "sample_rate": (15000.0, d(T.PARAMETER_DOUBLE, "output sample rate, Hz", True, *SAMPLE_RATE_RANGE)),
+        "sample_rate": (DEFAULT_SAMPLE_RATE, d(T.PARAMETER_DOUBLE, "output sample rate, Hz", True, *SAMPLE_RATE_RANGE)),
         "batch_duration": (BATCH_DURATION, d(T.PARAMETER_DOUBLE, "samples per waveform table, s", True,
                                              *BATCH_DURATION_RANGE,
                                    "batch_duration x sample_rate must be a whole number of samples")),
@@ -183,7 +184,7 @@ def check_config(cfg: dict):
     """None if the parameter set ``cfg`` (name -> value) is usable together, else a one-line reason."""
     if cfg["fidelity"] not in FIDELITIES:
         return f"fidelity = {cfg['fidelity']!r}: allowed values are {', '.join(FIDELITIES)}"
-    from ..messages import batching_error
+    from ..messages import batching_error, duration_error
     from ..recording.recorder import split_error
     from ..simulator import OVERSAMPLE_ALLOWED, oversample_allowed
 
@@ -192,6 +193,7 @@ def check_config(cfg: dict):
         return f"oversample = {cfg['oversample']!r}: allowed values are 0 ({OVERSAMPLE_ZERO}), {OVERSAMPLE_ALLOWED}"
 
     return (batching_error(cfg["sample_rate"], cfg["batch_duration"], cfg["state_rate"])
+            or duration_error("duration", cfg["duration"], cfg["sample_rate"], no_end=True)
             or split_error(cfg["record_max_duration"], cfg["record_max_size"], cfg["batch_duration"]))
 
 

@@ -31,7 +31,7 @@ from ..errors import UserError
 from ..paths import output_file
 from ..teardown import EXIT_INTERRUPTED, signal_handlers
 from ..messages import BATCH_DURATION, STATE_RATE, TOPIC_ACCEL, TOPIC_CONTACT, TOPIC_DIAGNOSTICS, TOPIC_LOAD, \
-    TOPIC_SHAFT_SPEED, TOPIC_STATE, TYPES, batching_error, waveform_qos
+    TOPIC_SHAFT_SPEED, TOPIC_STATE, TYPES, batching_error, duration_error, waveform_qos
 from ..ground_truth import diagnostics_values, status_name
 from ..waveform import NS
 
@@ -354,11 +354,11 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
     reason = batching_error(sim.sample_rate, batch_duration, state_rate)
     if reason:
         raise UserError(reason)
+    # a file without a single table, which report and play then refuse
+    reason = duration_error("--duration", duration, sample_rate)
+    if reason:
+        raise UserError(reason)
     total = int(round(duration * sample_rate))
-    if total < 1:
-        # a file without a single table, which report and play then refuse
-        raise UserError(f"--duration = {duration!r} s: shorter than one sample at {sample_rate:g} Hz; "
-                        f"expected at least {1.0 / sample_rate:.6g} s")
     n_batch = int(round(sample_rate * batch_duration))
     runs_skidding = _runs_skidding(scene, sim, duration, sample_rate, n_batch)
     solver_unused = solver != "default" and not runs_skidding
