@@ -9,6 +9,7 @@ from __future__ import annotations
 import fcntl
 import itertools
 import os
+import signal
 import sys
 import tempfile
 from pathlib import Path
@@ -16,6 +17,14 @@ from pathlib import Path
 import pytest
 
 REPO = Path(__file__).resolve().parent.parent
+
+# The suite sends SIGINT and SIGHUP to the commands it starts, and they inherit what this
+# process ignores: run from a script's background job (SIGINT ignored) or under nohup (SIGHUP
+# ignored), the signal tests hung or failed.  The commands honour an ignored signal on purpose
+# (nohup keeps a node running), so the suite starts them with both at their defaults.
+for _sig, _default in ((signal.SIGINT, signal.default_int_handler), (signal.SIGHUP, signal.SIG_DFL)):
+    if signal.getsignal(_sig) == signal.SIG_IGN:
+        signal.signal(_sig, _default)
 SHARED = REPO.parent / "shared"
 VENV_BIN = Path(sys.executable).parent
 

@@ -21,7 +21,8 @@ ROSDEP_KEYS = {"numpy": "python3-numpy", "yaml": "python3-yaml", "scipy": "pytho
                "matplotlib": "python3-matplotlib"}
 # imported, but without a rosdep key on Ubuntu 24.04 (an unresolvable key stops `rosdep install`
 # for the whole workspace): installed by the README's pip line instead
-PIP_ONLY = {"numba": "numba", "mcap": "mcap", "threadpoolctl": "threadpoolctl"}
+# (zstandard, whose ZstdError the reader catches, comes with mcap: a requirement of it)
+PIP_ONLY = {"numba": "numba", "mcap": "mcap", "threadpoolctl": "threadpoolctl", "zstandard": "mcap"}
 
 
 def _package_xml():
