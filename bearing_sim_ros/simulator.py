@@ -102,6 +102,21 @@ class OversampleForAuto(UserError):
                 f"or {AUTO_OVERSAMPLE_MAX} (or choose {fidelity_name} kinematic or skidding)")
 
 
+class OversampleWithOwnStep(UserError):
+    """``oversample`` where only the skidding tier runs, with its "rk4" or "reference" solver: that
+    solver keeps its own step (``rk4_step`` s; 1/32 of an internal sample), so the setting would do
+    nothing.  ``worded`` lets a caller name the two in its own words (the CLI's ``--oversample``)."""
+
+    def __init__(self, value, solver: str):
+        self.value = value
+        self.solver = solver
+        super().__init__(self.worded("oversample", "solver"))
+
+    def worded(self, oversample_name: str, solver_name: str) -> str:
+        return (f"{oversample_name} = {self.value!r}: {solver_name} {self.solver} keeps its own step; "
+                f"{oversample_name} applies to the kinematic tier and {solver_name} default only")
+
+
 @dataclass
 class Batch:
     """``n`` output samples.  Times in s, accelerations m/s^2, forces N, speeds rad/s."""
@@ -241,6 +256,10 @@ class Simulator:
         self.selection = select_tier(scene, request, self._shaft_speed, self._radial_load,
                                      float(tolerance) if tolerance is not None else scene.fidelity_tolerance)
         self.tier = self.selection.tier
+        # only the kinematic tier and the default solver take it: with no kinematic tier to run,
+        # "rk4" and "reference" would ignore it
+        if oversample is not None and solver != "default" and self.tier == "skidding" and not self.can_switch_tiers:
+            raise OversampleWithOwnStep(oversample, solver)
         self._oversample = None if oversample is None else int(oversample)
         from .physics.defects import DefectSchedule
 

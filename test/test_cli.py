@@ -310,6 +310,13 @@ def test_bools_are_not_whole_numbers(call, message):
      "solver = 'rk4': applies to the skidding tier only, and fidelity='kinematic' runs the kinematic tier"),
     (lambda: Simulator("er16k_healthy", fidelity="skidding", rk4_step=2e-6),
      "rk4_step = 2e-06: applies to solver='rk4' only (given solver='default')"),
+    # these two solvers keep their own steps: oversample=8 ran them as without it
+    (lambda: Simulator("er16k_healthy", fidelity="skidding", solver="reference", oversample=8),
+     "oversample = 8: solver reference keeps its own step; oversample applies to the kinematic tier "
+     "and solver default only"),
+    (lambda: Simulator("er16k_skidding", solver="rk4", rk4_step=2e-6, oversample=4),
+     "oversample = 4: solver rk4 keeps its own step; oversample applies to the kinematic tier "
+     "and solver default only"),
 ])
 def test_solver_settings_that_would_do_nothing_are_named(call, message):
     with pytest.raises(UserError) as exc:

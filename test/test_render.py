@@ -210,6 +210,9 @@ def test_scene_error_and_bad_output_exit_2_with_one_line(tmp_path, capsys):
     (["--oversample", "x"], "bearing-sim render: argument --oversample: 'x' is not a whole number"),
     (["--oversample", "8"], "--oversample = 8: with --fidelity auto allowed values are 1, 2 or 4 "
                             "(or choose --fidelity kinematic or skidding)"),
+    (["--fidelity", "skidding", "--solver", "reference", "--oversample", "8"],
+     "--oversample = 8: --solver reference keeps its own step; --oversample applies to the kinematic "
+     "tier and --solver default only"),
 ])
 def test_oversample_mistakes_name_the_option(tmp_path, capsys, extra, message):
     out = tmp_path / "x.mcap"

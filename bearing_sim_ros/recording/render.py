@@ -515,7 +515,7 @@ def render_command(args) -> int:
     """CLI entry: ``bearing-sim render S --duration SEC --out F.mcap [...]``."""
     from ..physics.skidding import RK4Diverged
     from ..scene import load_scene
-    from ..simulator import OversampleForAuto
+    from ..simulator import OversampleForAuto, OversampleWithOwnStep
 
     out = str(args.out)
     try:
@@ -534,6 +534,8 @@ def render_command(args) -> int:
         raise UserError(exc.worded("--rk4-step", "--solver default")) from None
     except OversampleForAuto as exc:
         raise UserError(exc.worded("--oversample", "--fidelity")) from None
+    except OversampleWithOwnStep as exc:
+        raise UserError(exc.worded("--oversample", "--solver")) from None
     tier = tier_summary(summary["tier_values"])
     if summary["solver_unused"]:
         tier += "; --solver applies to the skidding tier only, not used"
