@@ -591,8 +591,9 @@ def test_diagnostics_give_the_operating_point_at_their_stamp_not_of_what_is_comp
     for t, v in diag:
         assert v["shaft_speed_rad_s"] == f"{speed_at[t]:.6g}", (t, v["shaft_speed_rad_s"], speed_at[t])
         assert v["radial_load_n"] == " ".join(f"{f:.6g}" for f in load_at[t])
-        # but the last, at the end of the run (4.5 s), when there is nothing left to compute ahead
-        assert float(v["computed_ahead_s"]) > 0.3 or v["simulated_s"] == "4.500000", v
+    # the simulator ran well ahead while they were sent (not necessarily by the first, at 1 s: on
+    # a busy machine the lead builds up over more than a second, 0.17 s at 1 s in a full suite)
+    assert max(float(v["computed_ahead_s"]) for _t, v in diag) > 0.3, diag
     assert diag[-1][1]["simulated_s"] == "4.500000"
     # the test can fail: the operating point half a second later is another one
     times = sorted(speed_at)
