@@ -251,6 +251,9 @@ class MonitorNode(Node):
         self.tables = 0
         self.rejected = 0           # tables that were no waveform table or held non-finite samples
         self.windows_queued = 0
+        # (window end ns, verdict, truth) of each verdict printed, for the score at the end: the
+        # whole analysis (lines, scores, frequencies) kept per verdict was about 3 kB, and a
+        # monitor left running grew by megabytes an hour
         self.verdicts = []
         self.reports = []           # ground_truth.Truth of each /diagnostics (stamps in ns)
         self.simulator = simulator_name(self.resolve_topic_name(TOPIC_ACCEL), simulator)
@@ -352,7 +355,7 @@ class MonitorNode(Node):
         while time.monotonic() < grace and not (self.reports and self.reports[-1].t >= end - SLACK_NS):
             time.sleep(0.01)        # the diagnostics stamped at ``end`` (if any) are not in yet
         result.update(end_ns=end, truth=truth_at(self.reports, end))
-        self.verdicts.append(result)
+        self.verdicts.append((end, result["verdict"], result["truth"]))
         print(format_verdict(t, result), file=self.out, flush=True)
 
     def check_sources(self) -> None:
@@ -440,8 +443,7 @@ def main(args, ros_args=()) -> int:
                     line = source_start_line(node._t0, node._source_start)
                     if line:
                         print(line, flush=True)
-                scored = [(r["end_ns"], r["verdict"], r["truth"]) for r in node.verdicts]
-                for line in score_lines(scored, node.reports, node._t0 or 0):
+                for line in score_lines(node.verdicts, node.reports, node._t0 or 0):
                     print(line, flush=True)
             rclpy.try_shutdown()
     return 0
