@@ -22,7 +22,7 @@ from test_node_support import (FIRST_TABLE_S, NS, Listener, NodeProcess, assert_
 
 from bearing_sim_ros.analysis.envelope import DETECTION_THRESHOLD, envelope_spectrum, fault_lines, line_at
 from bearing_sim_ros.catalog import get_bearing
-from bearing_sim_ros.nodes.bearing_sim_node import InputLimits, check_load, check_speed, check_stamp
+from bearing_sim_ros.nodes.bearing_sim_node import InputLimits, check_frame, check_load, check_speed, check_stamp
 from bearing_sim_ros.scene import load_scene
 
 FS = 15000.0
@@ -93,6 +93,15 @@ def test_input_limits_never_exceed_what_the_simulator_takes():
     sim.advance(10, shaft_speed=lim.max_speed, radial_load=(0.0, -lim.max_load))
     with pytest.raises(UserError):
         sim.advance(10, shaft_speed=lim.max_speed * 1.001)
+
+
+def test_frame_checks():
+    """A load in the node's frame or none is taken; another is refused (the node transforms
+    nothing); a leading slash, which tf2 ignores, is ignored (``/bearing_accel`` was refused)."""
+    for frame in ("", "bearing_accel", "/bearing_accel"):
+        assert check_frame(frame, "bearing_accel") is None, frame
+    for frame in ("base_link", "map", "bearing_accel_2", "/base_link"):
+        assert check_frame(frame, "bearing_accel")[0] == "wrong_frame", frame
 
 
 def test_stamp_checks():

@@ -90,8 +90,8 @@ def check_frame(frame_id: str, own_frame: str):
     """None if a load's ``frame_id`` is the node's own frame (its tables', which its recordings
     give their loads) or empty (not said), else ``(reason_key, reason)``: the node transforms
     nothing, so a force given in another frame ("base_link", "map") would be applied along the
-    bearing's axes as if it were in theirs."""
-    if frame_id in ("", own_frame):
+    bearing's axes as if it were in theirs.  A leading ``/`` is ignored, as tf2 ignores it."""
+    if frame_id.lstrip("/") in ("", own_frame.lstrip("/")):
         return None
     return "wrong_frame", (f"load frame_id = {frame_id!r}: expected {own_frame!r} or empty (x horizontal, y "
                            "vertical up, at the bearing; the node transforms nothing)")
