@@ -546,16 +546,21 @@ class BearingSimNode(Node):
             self.start_ns = msgs.start_ns = max(0, before)
         end_index = sim.index
         start_stamp, end_stamp = msgs.stamp_ns(batch.index0), msgs.stamp_ns(end_index)
-        out = [(self.pub_accel, msgs.accel(batch)), (self.pub_contact, msgs.contact_forces(batch))]
-        rate, sr = cfg["state_rate"], sim.sample_rate
-        if rate > 0 and math.floor(end_index * rate / sr) > math.floor(batch.index0 * rate / sr):
-            out.append((self.pub_state, msgs.state(end_stamp)))
+        out = []
         if cfg["publish_clock"]:
+            # the clock first, as a simulator advances its time before it publishes data stamped
+            # up to it: in real time a table goes out once the moment of its last sample has
+            # come, and with sim time a subscriber's clock must have reached it too (published
+            # after the tables, it was a batch behind on arrival for most tables)
             if self.pub_clock is None:
                 self.pub_clock = self.create_publisher(Clock, "/clock", self.small_qos)
             clk = Clock()
             clk.clock.sec, clk.clock.nanosec = divmod(end_stamp, 1_000_000_000)
             out.append((self.pub_clock, clk))
+        out += [(self.pub_accel, msgs.accel(batch)), (self.pub_contact, msgs.contact_forces(batch))]
+        rate, sr = cfg["state_rate"], sim.sample_rate
+        if rate > 0 and math.floor(end_index * rate / sr) > math.floor(batch.index0 * rate / sr):
+            out.append((self.pub_state, msgs.state(end_stamp)))
         return _Pending(batch, end_index, start_stamp, end_stamp, speed, load, self._tier_keys(), out)
 
     def _tier_keys(self) -> dict:
