@@ -34,8 +34,8 @@ def started(ros_env, bearing_sim_exe, tmp_path):
     """Start nodes with ``started(params)``; every one is stopped (SIGINT) at the end of the test."""
     procs = []
 
-    def start(params, name="node"):
-        p = NodeProcess(bearing_sim_exe, ros_env, params, tmp_path / f"{name}.log")
+    def start(params, name="node", ros_args=()):
+        p = NodeProcess(bearing_sim_exe, ros_env, params, tmp_path / f"{name}.log", ros_args=ros_args)
         procs.append(p)
         return p
 
@@ -714,6 +714,27 @@ def test_a_second_publisher_on_accel_is_said_by_the_node_its_diagnostics_and_the
     # WARN where another publisher was (a second with overruns is WARN too)
     assert all(lv == 1 and s for lv, s, c in zip(levels, said, counts) if c == 1), (levels, counts)
     assert said == [c == 1 for c in counts], (said, counts)
+
+
+def test_a_second_clock_beside_publish_clock_is_said_and_a_remapped_clock_is_not(started):
+    """Two rigs in two namespaces with publish_clock both published the one /clock (under sim
+    time each from 0 at its own start) and every node on sim time followed both time lines
+    interleaved, without a word.  Now a node that publishes /clock logs another publisher on it;
+    with each rig's clock remapped to a name of its own (-r /clock:=/rig3/clock) it says nothing."""
+    first = started({"fidelity": "kinematic", "publish_clock": True, "use_sim_time": True,
+                     "duration": 12.0}, name="rig1", ros_args=("-r", "__ns:=/rig1"))
+    first.wait_for_output("scene er16k_outer_race", 30)
+    second = started({"fidelity": "kinematic", "publish_clock": True, "use_sim_time": True,
+                      "duration": 6.0}, name="rig2", ros_args=("-r", "__ns:=/rig2"))
+    first.wait_for_output("1 other publisher on /clock: nodes on sim time follow both clocks interleaved", 30)
+    assert second.wait(30) == 0, second.output()
+    first.wait_for_output("no other publisher on /clock any more", 20)
+    third = started({"fidelity": "kinematic", "publish_clock": True, "use_sim_time": True,
+                     "duration": 5.0}, name="rig3", ros_args=("-r", "__ns:=/rig3", "-r", "/clock:=/rig3/clock"))
+    assert third.wait(30) == 0, third.output()
+    assert first.wait(30) == 0, first.output()
+    assert first.output().count("1 other publisher on /clock") == 1, first.output()
+    assert "other publisher on" not in third.output(), third.output()
 
 
 def test_a_second_node_given_the_same_record_path_ends_with_one_line_and_the_first_records_whole(
