@@ -56,12 +56,13 @@ def param_text(value) -> str:
 class NodeProcess:
     """``bearing-sim node --ros-args -p k:=v ...`` as a subprocess, output to a file."""
 
-    def __init__(self, exe, env, params: dict, log_path, command=("node",)):
+    def __init__(self, exe, env, params: dict, log_path, command=("node",), ros_args=()):
         args = [exe, *command]
         if params is not None:
             args.append("--ros-args")
             for key, value in params.items():
                 args += ["-p", f"{key}:={param_text(value)}"]
+            args += ros_args                     # remaps: -r __ns:=/rig1, -r /clock:=/rig1/clock
         self.log_path = log_path
         self._log = open(log_path, "w+")  # noqa: SIM115 - closed in close()
         self.proc = subprocess.Popen(args, env=env, stdout=self._log, stderr=subprocess.STDOUT,

@@ -360,6 +360,7 @@ class BearingSimNode(Node):
         self.finished = threading.Event()
         self.error = None
         self.accel_peers = 0                     # other publishers on accel: _check_peers
+        self.clock_peers = 0                     # other publishers on this node's /clock: _check_peers
         self.stats = _Stats(self.sim.sample_rate, self.sim.bearing, self.scene.sensor.range)
         self._thread = threading.Thread(target=self._run, name="bearing-sim", daemon=True)
 
@@ -470,19 +471,34 @@ class BearingSimNode(Node):
         """Another publisher on this node's ``accel`` (a second simulator started in the same
         namespace, a ``play`` of a recording): every subscriber then gets both streams' tables
         interleaved, and nothing said so.  Said in the log when it changes and in
-        ``/diagnostics`` (``other_accel_publishers``, WARN)."""
-        topic = self.pub_accel.topic_name
+        ``/diagnostics`` (``other_accel_publishers``, WARN).
+
+        Another publisher on the ``/clock`` this node publishes (``publish_clock``): two rigs in
+        two namespaces both publish the one ``/clock``, each from 0 at its own start under sim
+        time, and every node on sim time, these too, then follows two time lines that jump back
+        and forth (1.3 s apart 196 times in 4 s, two rigs started 1.5 s apart).  Said in the log
+        when it changes."""
+        self.accel_peers = self._other_publishers(
+            self.pub_accel.topic_name, self.accel_peers,
+            "subscribers get their tables interleaved with this node's; give each simulator its own "
+            "namespace (-r __ns:=/rig1) or ROS_DOMAIN_ID")
+        if self.pub_clock is not None:
+            self.clock_peers = self._other_publishers(
+                self.pub_clock.topic_name, self.clock_peers,
+                "nodes on sim time follow both clocks interleaved; give each rig's clock its own name "
+                "(-r /clock:=/rig1/clock, and the same remap for the rig's consumers) or ROS_DOMAIN_ID")
+
+    def _other_publishers(self, topic: str, known: int, advice: str) -> int:
+        """The number of publishers on ``topic`` besides this node's, logged (with ``advice``)
+        when it differs from ``known``, the number at the last look."""
         others = max(0, self.count_publishers(topic) - 1)
-        if others == self.accel_peers:
-            return
-        if others:
-            self.get_logger().warning(
-                f"{others} other publisher{'s' if others > 1 else ''} on {topic}: subscribers get their tables "
-                f"interleaved with this node's; give each simulator its own namespace (-r __ns:=/rig1) "
-                f"or ROS_DOMAIN_ID")
-        else:
-            self.get_logger().info(f"no other publisher on {topic} any more")
-        self.accel_peers = others
+        if others != known:
+            if others:
+                self.get_logger().warning(
+                    f"{others} other publisher{'s' if others > 1 else ''} on {topic}: {advice}")
+            else:
+                self.get_logger().info(f"no other publisher on {topic} any more")
+        return others
 
     def stop(self, timeout: float = 10.0):
         """Finish the batch in progress, close the recording.  Idempotent."""
@@ -546,16 +562,21 @@ class BearingSimNode(Node):
             self.start_ns = msgs.start_ns = max(0, before)
         end_index = sim.index
         start_stamp, end_stamp = msgs.stamp_ns(batch.index0), msgs.stamp_ns(end_index)
-        out = [(self.pub_accel, msgs.accel(batch)), (self.pub_contact, msgs.contact_forces(batch))]
-        rate, sr = cfg["state_rate"], sim.sample_rate
-        if rate > 0 and math.floor(end_index * rate / sr) > math.floor(batch.index0 * rate / sr):
-            out.append((self.pub_state, msgs.state(end_stamp)))
+        out = []
         if cfg["publish_clock"]:
+            # the clock first, as a simulator advances its time before it publishes data stamped
+            # up to it: in real time a table goes out once the moment of its last sample has
+            # come, and with sim time a subscriber's clock must have reached it too (published
+            # after the tables, it was a batch behind on arrival for most tables)
             if self.pub_clock is None:
                 self.pub_clock = self.create_publisher(Clock, "/clock", self.small_qos)
             clk = Clock()
             clk.clock.sec, clk.clock.nanosec = divmod(end_stamp, 1_000_000_000)
             out.append((self.pub_clock, clk))
+        out += [(self.pub_accel, msgs.accel(batch)), (self.pub_contact, msgs.contact_forces(batch))]
+        rate, sr = cfg["state_rate"], sim.sample_rate
+        if rate > 0 and math.floor(end_index * rate / sr) > math.floor(batch.index0 * rate / sr):
+            out.append((self.pub_state, msgs.state(end_stamp)))
         return _Pending(batch, end_index, start_stamp, end_stamp, speed, load, self._tier_keys(), out)
 
     def _tier_keys(self) -> dict:
