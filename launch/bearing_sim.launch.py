@@ -32,6 +32,7 @@ ARGUMENTS = [
     ("state_rate", "50.0", float, "JointState rate, Hz (<= 1 / batch_duration); 0 = off"),
     ("compute_ahead", "0.05", float, "compute batches up to this long before they are due, s"),
     ("input_max_age", "1.0", float, "reject load messages older than this, s; 0 = any age"),
+    ("wait_for_subscribers", "0", int, "hold the first batch until this many subscribe to accel; 0 = start at once"),
 ]
 
 
