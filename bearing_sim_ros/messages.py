@@ -36,6 +36,9 @@ TYPES = {
 # one place, so that a render's batching also runs live
 BATCH_DURATION, BATCH_DURATION_RANGE = 0.01, (0.001, 1.0)
 STATE_RATE, STATE_RATE_RANGE = 50.0, (0.0, 1000.0)
+# s without a new match once a subscriber matched: its topics match one by one, and what goes out
+# before they all have is lost to it (volatile).  `play` and the node's wait_for_subscribers wait so
+DISCOVERY_GRACE_S = 0.5
 
 
 def batching_error(sample_rate: float, batch_duration, state_rate) -> str | None:

@@ -59,10 +59,7 @@ INPUT_DEPTH = 1000             # keep-last depth of shaft_speed and load: a burs
 TIME_LINE_JUMP = 1.0           # s: a load stamp further back than this behind the last accepted one
                                # starts a new time line (a recording played again, a publisher
                                # restarted with other stamps); closer, it is out of order
-# wait_for_subscribers: after the last of them matched accel, s without a new match before the
-# first batch (a subscriber's topics match one by one, as `play` waits: recording.play)
-DISCOVERY_GRACE_S = 0.5
-WAIT_FOR_SUBSCRIBERS_MAX = 1000
+WAIT_FOR_SUBSCRIBERS_MAX = 1000    # the parameter's range: 0 - this many subscribers
 PEER_CHECK_S = 2.0             # s between looks at the graph for another publisher on accel
 SWITCH_COST_GUESS_S = 0.02     # s: a tier switch's batch before the first is measured (8 ms for
                                # kinematic -> skidding on the AMD host; more on a loaded machine)
@@ -131,7 +128,7 @@ def _descriptors():
     from ..physics.kinematic import DEFAULT_OVERSAMPLE as KINEMATIC_OVERSAMPLE
     from ..physics.kinematic import SOFT_MODE_FRACTION
     from ..physics.skidding import DEFAULT_OVERSAMPLE as SKIDDING_OVERSAMPLE
-    from ..messages import BATCH_DURATION, BATCH_DURATION_RANGE, STATE_RATE, STATE_RATE_RANGE
+    from ..messages import BATCH_DURATION, BATCH_DURATION_RANGE, DISCOVERY_GRACE_S, STATE_RATE, STATE_RATE_RANGE
     from ..recording.recorder import SPLIT_MAX_BYTES, SPLIT_MIN_BYTES
     from ..simulator import AUTO_OVERSAMPLE_MAX, DURATION_MAX_S, OVERSAMPLE_ALLOWED, SAMPLE_RATE_RANGE, SEED_RANGE
 
@@ -552,6 +549,8 @@ class BearingSimNode(Node):
         a consumer started with the node lost the first tables to discovery (the whole of a 1 s
         run in 2 of 5 runs, 1.0 - 1.7 s of a rig in 2 of 4), since the tables are volatile.  The
         signal starts when the wait ends.  False if the node stops while it waits."""
+        from ..messages import DISCOVERY_GRACE_S
+
         want = self._cfg["wait_for_subscribers"]
         if not want:
             return True

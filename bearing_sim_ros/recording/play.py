@@ -40,13 +40,13 @@ import threading
 import time
 
 from ..errors import UserError
+from ..messages import DISCOVERY_GRACE_S
 from ..teardown import teardown_watchdog
 from ..waveform import NS
 from .reader import deserialize, get_message, open_recording
 from .schemas import qos_from_yaml
 
 WAIT_FOR_SUBSCRIBERS = 5.0    # s, the default of --wait: one missed 3 s announcement period and margin
-DISCOVERY_GRACE = 0.5         # s without a new match: the subscriber's topics have all matched
 WAIT_NOTICE = 1.0             # s without a subscriber before saying that play is waiting for one
 ACK_TIMEOUT = 2.0             # s to let reliable subscribers receive the tail at the end
 WAVEFORM_TYPE = "sensor_msgs/msg/PointCloud2"
@@ -251,7 +251,7 @@ def _no_length(path, messages: int) -> str:
 
 def _wait_for_subscribers(pubs: dict, timeout: float, running, log) -> None:
     """Wait up to ``timeout`` s for a first subscriber; once one appears, until the number of
-    matched subscriptions has not changed for ``DISCOVERY_GRACE`` s (a subscriber's topics
+    matched subscriptions has not changed for ``DISCOVERY_GRACE_S`` s (a subscriber's topics
     match one by one), at most ``timeout`` s more.  After ``WAIT_NOTICE`` s without one it
     ``log``s once that it is waiting (a silent 5 s looked like a hung command), then whether one
     came or it plays anyway."""
@@ -268,7 +268,7 @@ def _wait_for_subscribers(pubs: dict, timeout: float, running, log) -> None:
                     log(f"a subscriber matched after {now - start:.1f} s")
             if new != counts:
                 counts, stable_since = new, now
-            elif now - stable_since >= DISCOVERY_GRACE:
+            elif now - stable_since >= DISCOVERY_GRACE_S:
                 return
             if now - first_match >= timeout:
                 return
