@@ -9,8 +9,9 @@ radial load and rises with speed).  The dimensionless *skid index*
 
 compares the two: F_v the lubricant drag of one ball (seed 000 eq. 30 in SI, as the skidding
 tier uses it: c_v pi xi d^2 (D_m w_c)^1.95 / 32), T_cage the cage's viscous torque, R_m the pitch
-radius, mu_max the peak of the scene's traction curve (eq. 23), W the radial load plus the
-shaft's weight.  It is computed from the scene's own lubrication data, so it carries over to
+radius, mu_max the peak of the scene's traction curve (eq. 23), W the part of the radial load
+and the shaft's weight that the balls carry (``bearing_load``: the shaft's support, in parallel
+with the bearing, takes the rest).  It is computed from the scene's own lubrication data, so it carries over to
 other bearings and lubricants.
 
 The error skidding causes in the kinematic tier is in its timing: the cage, and with it every
@@ -75,7 +76,7 @@ def skid_index(scene, shaft_speed: float, radial_load) -> float:
     r_m = 0.5 * b.pitch_diameter
     drag_ball = drag_coefficient(scene) * (b.pitch_diameter * w_cage) ** 1.95
     cage_drag = getattr(lub, "cage_drag", 0.0) * w_cage / r_m
-    w_eff = max(_load_with_weight(scene, radial_load), 1e-3)
+    w_eff = max(bearing_load(scene, radial_load), 1e-3)
     return (b.balls * drag_ball + cage_drag) / (traction_peak(lub) * w_eff)
 
 
@@ -84,6 +85,57 @@ def _load_with_weight(scene, radial_load) -> float:
     weight = scene.structure.shaft_mass * G if scene.gravity else 0.0
     load = np.asarray(radial_load, dtype=float) + np.array([0.0, -weight])
     return float(np.hypot(*load))
+
+
+# cage positions over one ball spacing that the static load-deflection law averages over
+_CAGE_POSITIONS = 8
+
+
+def bearing_static_force(bearing, displacement) -> np.ndarray:
+    """The bearing's static radial force (N) at radial displacements of the inner race (m, along
+    the load; an array): Hertz contacts of every ball through both races in series
+    (``Bearing.combined_stiffness``), less the radial play (a negative play, a preload, loads every
+    ball at no displacement), no film, averaged over the cage's position in one ball spacing.  The
+    kinematic tier's ``_mean_force`` is the same law with the films."""
+    z = bearing.balls
+    phase = (np.arange(_CAGE_POSITIONS)[:, None] / _CAGE_POSITIONS + np.arange(z)[None, :]) * (2.0 * np.pi / z)
+    cos_psi = np.cos(phase).ravel()
+    e = np.asarray(displacement, dtype=float)[..., None]
+    compression = np.maximum(e * cos_psi - bearing.radial_clearance, 0.0)
+    return bearing.combined_stiffness * np.sum(compression ** 1.5 * cos_psi, axis=-1) / _CAGE_POSITIONS
+
+
+@lru_cache(maxsize=64)
+def _load_sharing(bearing, support_stiffness: float) -> tuple:
+    """(W, the balls' share of W) (N, increasing) for the shaft's support (N/m) in parallel with
+    ``bearing``: the law ``bearing_static_force`` on a grid of displacements, from none through
+    the radial play to 1 cm (far beyond any Hertz deflection), which ``bearing_load``
+    interpolates (a root-find per call took 0.3 - 0.9 ms; the tier is chosen again at every new
+    operating point, every batch of a ramp)."""
+    play = max(bearing.radial_clearance, 0.0)
+    # the play itself a point: below k_s C_r the balls carry exactly nothing
+    e = np.unique(np.concatenate([[0.0, play], play + np.geomspace(1e-12, 1e-2, 600)]))
+    share = bearing_static_force(bearing, e)
+    return support_stiffness * e + share, share
+
+
+def bearing_load(scene, radial_load) -> float:
+    """The radial load the balls carry (N): of W = |radial load + the shaft's weight|, the
+    shaft's support (``structure.shaft.stiffness`` k_s, in parallel with the bearing) takes
+    k_s e, e the inner race's displacement where k_s e + F_b(e) = W (F_b:
+    ``bearing_static_force``).  With radial play the support takes at least k_s C_r (100 N on
+    the 6205 scenes: 1e7 N/m over 10 um) and the balls nothing below that
+    (``support_carries_all``); under load the balls' deflection adds to it (about 300 N of the
+    6205's 2000 N).  Until 2026-11-29 the skid index took W itself, and so underestimated
+    skidding where the support's share is large: 2.7x at 200 N on the 6205."""
+    total = _load_with_weight(scene, radial_load)
+    k_support = scene.structure.shaft_stiffness
+    if total <= 0.0 or k_support <= 0.0:
+        return total
+    loads, shares = _load_sharing(scene.bearing, float(k_support))
+    if total >= loads[-1]:
+        return total * shares[-1] / loads[-1]
+    return float(np.interp(total, loads, shares))
 
 
 @lru_cache(maxsize=None)
