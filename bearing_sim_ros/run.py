@@ -112,11 +112,10 @@ def _verdict_lines(scene, res: dict, end_s: float = math.inf, analysed_s: float 
         return [f"verdict: {FAULT_NAMES[res['verdict']]} ({threshold}; the scene's defects: {defects})"]
     if res["verdict"] == "healthy":
         return [f"verdict: healthy ({threshold}; this scene has no defect)"]
-    if res["verdict"] == "outer":
-        what, advice = no_defect_note(res)
-        return [f"verdict: {what},", f"  {advice}"]
-    return [f"verdict: the detector says {FAULT_NAMES[res['verdict']]} ({threshold}), but this scene "
-            "has no defect, so the line is not a defect's"]
+    what, advice = no_defect_note(res)
+    # the outer-race note names the line itself; another fault's says only what it is not
+    said = "" if res["verdict"] == "outer" else f"the detector says {FAULT_NAMES[res['verdict']]} ({threshold}); "
+    return [f"verdict: {said}{what},", f"  {advice}"]
 
 
 def recording_argument(out: str, split: bool) -> str:

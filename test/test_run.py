@@ -207,6 +207,20 @@ def test_the_verdict_line_says_when_a_scene_defect_appears():
         "verdict: outer-race fault (threshold x4 the local floor; the scene's defects: outer)"]
 
 
+def test_a_fault_verdict_on_a_healthy_scene_is_explained_in_the_reports_words():
+    """An inner-race verdict on a scene without a defect: the summary says what the detector said
+    and then, in ``report``'s own words (``analysis.envelope.no_defect_note``), what the line is
+    not and what to do; it had a sentence of its own, without the advice."""
+    from bearing_sim_ros import load_scene
+    from bearing_sim_ros.analysis.envelope import no_defect_note
+    from bearing_sim_ros.run import _verdict_lines
+
+    inner = {"verdict": "inner"}
+    what, advice = no_defect_note(inner)
+    assert _verdict_lines(load_scene("er16k_healthy"), inner, 3.0, 3.0) == [
+        f"verdict: the detector says inner-race fault (threshold x4 the local floor); {what},", f"  {advice}"]
+
+
 def test_run_stopped_by_ctrl_c_states_the_signal_it_recorded(ros_env, bearing_sim_exe, tmp_path):
     """``--duration 0`` ended with Ctrl-C: the node drops the batches it computed ahead that were
     not due yet (the file ends where the published stream ends), and the summary's ``s of
