@@ -583,3 +583,55 @@ def test_the_monitor_has_its_analysis_ready_before_it_takes_a_table(ros_env):
     r = subprocess.run([sys.executable, "-c", code], env=ros_env, capture_output=True, text=True, timeout=60)
     assert r.returncode == 0, r.stderr
     assert r.stdout.split() == ["False", "True"], r.stdout
+
+
+def _recorded_diagnostics(path):
+    """The /diagnostics messages of the recording ``path``, deserialized."""
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.serialization import deserialize_message
+
+    from bearing_sim_ros.recording.reader import open_recording
+
+    with open_recording(path) as rec:
+        return [deserialize_message(data, DiagnosticArray) for _t, _type, _log, data in rec.messages(["/diagnostics"])]
+
+
+def test_the_monitor_says_once_that_the_node_runs_another_scene(ros_env, tmp_path):
+    """A monitor told another scene than the node's (``--scene`` left at its default beside a
+    node on cwru_6205_normal) judged with that scene's bearing and never said so.  The
+    simulator's /diagnostics now name its scene and bearing (node and render alike); the monitor
+    says once that they differ from ``--scene``, with where the signal's BPFO is against the one
+    it looks at, or that the bearing is the same; nothing where the scene is its own."""
+    import io
+
+    import rclpy
+
+    recording = tmp_path / "normal.mcap"
+    render("cwru_6205_normal", 2.0, recording, fidelity="kinematic", seed=1, progress=False)
+    diagnostics = _recorded_diagnostics(recording)
+    values = {kv.key: kv.value for kv in diagnostics[0].status[0].values}
+    assert values["scene"] == "cwru_6205_normal" and values["bearing"] == "6205-2RS-SKF"
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx)
+    said = {}
+    try:
+        for scene in ("er16k_outer_race", "cwru_6205_ir007", "cwru_6205_normal"):
+            out = io.StringIO()
+            node = MonitorNode(load_scene(scene), window=1.0, out=out, context=ctx)
+            try:
+                for msg in diagnostics:
+                    node._on_diagnostics(msg)
+            finally:
+                node.destroy_node()
+            said[scene] = out.getvalue().splitlines()
+    finally:
+        rclpy.shutdown(context=ctx)
+    assert len(diagnostics) == 2 and said["cwru_6205_normal"] == []
+    assert said["er16k_outer_race"] == [
+        "monitor: 'bearing_sim' runs scene cwru_6205_normal (6205-2RS-SKF), not --scene er16k_outer_race (ER-16K): "
+        "the verdicts look for the fault lines of another bearing (BPFO 107.0 Hz, the signal's 107.4 Hz at 1797 rpm); "
+        "give the monitor the node's scene (--scene cwru_6205_normal)"]
+    assert said["cwru_6205_ir007"] == [
+        "monitor: 'bearing_sim' runs scene cwru_6205_normal (6205-2RS-SKF), not --scene cwru_6205_ir007 "
+        "(6205-2RS-SKF): the same bearing, so the verdicts look for the fault lines where they are; only the "
+        "operating point used without `state` is --scene's"]

@@ -216,6 +216,32 @@ def score_lines(scored, reports, t0_ns: int) -> list:
     return lines
 
 
+def scene_mismatch_line(scene, values: dict, simulator: str):
+    """The line that says the simulator ``simulator`` runs another scene than the monitor's
+    ``scene`` (``--scene``), by the ``scene`` and ``bearing`` of its ``/diagnostics`` ``values``;
+    None where it runs the same or does not say (a recording made before those keys).  The
+    monitor keeps to ``--scene``, as a condition monitoring system keeps to the bearing its
+    engineer configured; the line says whether that bearing is the signal's, and if not where the
+    signal's BPFO is against the one the verdicts look at (at the simulator's shaft speed)."""
+    theirs = values.get(ground_truth.SCENE_KEY)
+    if theirs is None or theirs == scene.name:
+        return None
+    bearing = values.get(ground_truth.BEARING_KEY, "bearing not given")
+    said = (f"monitor: {simulator!r} runs scene {theirs} ({bearing}), not --scene {scene.name} "
+            f"({scene.bearing.name})")
+    if bearing == scene.bearing.name:
+        return (f"{said}: the same bearing, so the verdicts look for the fault lines where they are; "
+                "only the operating point used without `state` is --scene's")
+    try:
+        shaft_hz = abs(float(values["shaft_speed_rad_s"])) / (2 * np.pi)
+        where = (f" (BPFO {scene.bearing.fault_frequencies(shaft_hz)['bpfo']:.1f} Hz, the signal's "
+                 f"{float(values['bpfo_hz']):.1f} Hz at {shaft_hz * 60:.0f} rpm)")
+    except (KeyError, ValueError):
+        where = ""
+    return (f"{said}: the verdicts look for the fault lines of another bearing{where}; give the monitor "
+            f"the node's scene (--scene {theirs})")
+
+
 def source_start_line(t0_ns: int, source_start_ns: int):
     """The exit line that places the first table taken (stamp ``t0_ns``) on the source's signal
     time line (its signal time 0 stamped ``source_start_ns``, by ``simulated_s`` of its
@@ -260,6 +286,7 @@ class MonitorNode(Node):
         self._several_said = False
         self.truth_status = ground_truth.status_name(self.simulator)
         self.ignored = set()        # names of other simulators' statuses, said once each
+        self.scenes_said = set()    # the simulator's scenes that are not --scene, said once each
         self._speeds = []
         self._t0 = None
         self._source_start = None   # stamp (ns) of the source's signal time 0, by its diagnostics
@@ -303,11 +330,23 @@ class MonitorNode(Node):
                           f"{self.truth_status!r}'s (--simulator names another)", file=self.out, flush=True)
                 continue
             self.reports.append(truth)
+            self._check_scene(values)
             if self._source_start is None and ground_truth.TIME_KEY in values:
                 try:
                     self._source_start = stamp - round(float(values[ground_truth.TIME_KEY]) * NS)
                 except ValueError:
                     pass
+
+    def _check_scene(self, values: dict) -> None:
+        """Say once (for each scene it runs) that the simulator runs another scene than
+        ``--scene``: the verdicts may look for the fault lines of another bearing."""
+        theirs = values.get(ground_truth.SCENE_KEY)
+        if theirs in self.scenes_said:
+            return
+        line = scene_mismatch_line(self.scene, values, self.simulator)
+        if line:
+            self.scenes_said.add(theirs)
+            print(line, file=self.out, flush=True)
 
     def _on_accel(self, msg):
         if self.count and self.windows_queued >= self.count:
