@@ -186,13 +186,13 @@ def agrees(verdict: str, truth):
     return not truth if verdict == "healthy" else verdict in truth
 
 
-def score_lines(scored, reports, t0_ns: int) -> list:
+def score_lines(scored, appeared, t0_ns: int) -> list:
     """The exit lines on ``scored`` ((window end ns, verdict, truth) per verdict, in order) and
-    all the diagnostics ``reports``: agreement of each verdict with the truth its line printed
-    (the diagnostics that came later may tell a window's truth better, after a grace that ran
-    out, but the score must count what the lines say), and one latency line per fault kind that
-    appeared during the run (after ``t0_ns``, the first table's stamp), by all the ``reports``.
-    Times as in the verdict lines: s from ``t0_ns``."""
+    ``appeared``, the faults that appeared during the run (after ``t0_ns``, the first table's
+    stamp) by all the diagnostics (``ground_truth.appearances``): agreement of each verdict with
+    the truth its line printed (the diagnostics that came later may tell a window's truth
+    better, after a grace that ran out, but the score must count what the lines say), and one
+    latency line per appearance.  Times as in the verdict lines: s from ``t0_ns``."""
     marks = [agrees(verdict, truth) for _end, verdict, truth in scored]
     known = [m for m in marks if m is not None]
     lines = [f"monitor: score {sum(known)} of {len(known)} verdicts agree with the truth, "
@@ -200,7 +200,7 @@ def score_lines(scored, reports, t0_ns: int) -> list:
     if not scored:
         return lines
     calls = [(end, verdict) for end, verdict, _truth in scored]
-    for fault in ground_truth.appearances(reports, t0_ns, SLACK_NS):
+    for fault in appeared:
         before, after = ((t - t0_ns) / NS for t in (fault.earliest, fault.latest))
         found, since = ground_truth.first_detection(calls, fault, SLACK_NS)
         where = (f"{fault.kind} appeared at t={after:.2f}s" if fault.exact else
@@ -281,7 +281,11 @@ class MonitorNode(Node):
         # whole analysis (lines, scores, frequencies) kept per verdict was about 3 kB, and a
         # monitor left running grew by megabytes an hour
         self.verdicts = []
-        self.reports = []           # ground_truth.Truth of each /diagnostics (stamps in ns)
+        # ground_truth.Truth of the /diagnostics that the windows still to come may ask about
+        # (stamps in ns; ground_truth.forget_before after each verdict), and what the latency lines
+        # need of them all: a monitor kept every 1 Hz message for those, about 1 kB an hour
+        self.reports = []
+        self.appeared = ground_truth.AppearanceLog(SLACK_NS)
         self.simulator = simulator_name(self.resolve_topic_name(TOPIC_ACCEL), simulator)
         self._several_said = False
         self.truth_status = ground_truth.status_name(self.simulator)
@@ -330,6 +334,7 @@ class MonitorNode(Node):
                           f"{self.truth_status!r}'s (--simulator names another)", file=self.out, flush=True)
                 continue
             self.reports.append(truth)
+            self.appeared.add(truth)
             self._check_scene(values)
             if self._source_start is None and ground_truth.TIME_KEY in values:
                 try:
@@ -396,6 +401,7 @@ class MonitorNode(Node):
         result.update(end_ns=end, truth=truth_at(self.reports, end))
         self.verdicts.append((end, result["verdict"], result["truth"]))
         print(format_verdict(t, result), file=self.out, flush=True)
+        ground_truth.forget_before(self.reports, end, SLACK_NS)      # the next windows end later
 
     def check_sources(self) -> None:
         """Several publishers on ``accel`` (two simulators in one namespace, a ``play`` beside a
@@ -482,7 +488,7 @@ def main(args, ros_args=()) -> int:
                     line = source_start_line(node._t0, node._source_start)
                     if line:
                         print(line, flush=True)
-                for line in score_lines(node.verdicts, node.reports, node._t0 or 0):
+                for line in score_lines(node.verdicts, node.appeared.appearances(node._t0 or 0), node._t0 or 0):
                     print(line, flush=True)
             rclpy.try_shutdown()
     return 0
