@@ -698,3 +698,23 @@ def test_the_monitor_keeps_a_few_diagnostics_and_scores_as_with_all_of_them(ros_
     lines = score_lines(node.verdicts, node.appeared.appearances(t0), t0)
     assert lines == score_lines(node.verdicts, _appeared(every, t0), t0)
     assert lines[1].startswith("monitor: latency ") and lines[1].endswith("outer appeared at t=2.50s, first called at t=3.00s"), lines
+
+
+def test_the_monitor_says_no_tables_only_before_the_first(ros_env, bearing_sim_exe, tmp_path):
+    """The monitor says "no waveform tables on /accel yet" 5 s after it starts without any.  It
+    looked at the window instead, which is empty too from the moment it is taken for analysis:
+    a first window that ended more than 5 s after the start (6 s windows, a play started with the
+    monitor) printed the line after the first table, with 600 taken.  Now the line, if any, comes
+    before the first table."""
+    recording = tmp_path / "seven_seconds.mcap"
+    render("cwru_6205_normal", 7.0, recording, fidelity="kinematic", seed=1, progress=False)
+    monitor = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / "monitor.log",
+                          command=("monitor", "--window", "6", "--count", "1", "--scene", "cwru_6205_normal"))
+    try:
+        out = _play_into(monitor, bearing_sim_exe, recording, ros_env)
+    finally:
+        monitor.close()
+    lines = out.splitlines()
+    first = next(k for k, line in enumerate(lines) if line.startswith("monitor: first table stamped"))
+    assert not any("no waveform tables" in line for line in lines[first:]), out
+    assert "monitor: 1 verdicts from 600 tables, 0 gaps" in out, out

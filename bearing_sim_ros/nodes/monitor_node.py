@@ -467,8 +467,10 @@ def main(args, ros_args=()) -> int:
             if time.monotonic() >= next_look:
                 next_look += PEER_CHECK_S
                 node.check_sources()
-            if not node.window.samples and not node.verdicts and time.monotonic() - t_start > 5.0 \
-                    and not node._warned:
+            # no table at all, not an empty window: the window is empty too from the moment it is
+            # taken for its analysis, and a first window that ended after 5 s said "no waveform
+            # tables yet" with hundreds taken
+            if not node.tables and not node.rejected and time.monotonic() - t_start > 5.0 and not node._warned:
                 node._warned = True
                 print(f"monitor: no waveform tables on {node.resolve_topic_name(TOPIC_ACCEL)} yet "
                       "(is `bearing-sim node` running on this ROS_DOMAIN_ID?)", flush=True)
