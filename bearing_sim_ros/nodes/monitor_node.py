@@ -16,6 +16,8 @@ at the fault frequencies of the scene's bearing at the measured shaft speed, and
 
 ``found/theory Hz`` and ``x`` the height of the line over the median of its neighbourhood
 (threshold x4, ``envelope.DETECTION_THRESHOLD``).  The axis where a line stands highest counts.
+The bearing is ``--scene``'s; where the simulator's ``/diagnostics`` name another scene, one line
+says so and whether its bearing differs (:func:`scene_mismatch_line`).
 
 It also scores itself.  The simulator's ``/diagnostics`` (1 Hz) say which faults are in the signal
 and since when (``faults_present``: ``none``, ``outer``, ``ball, outer``, ...; ``fault_onsets_s``:
