@@ -233,7 +233,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--count", type=_nonnegative(int), default=0, metavar="N",
                    help="stop after this many verdicts (default: %(default)s = never)")
     s.add_argument("--scene", default=None, metavar="S",
-                   help="scene giving the bearing geometry (default: er16k_outer_race)")
+                   help="scene giving the bearing geometry (default: er16k_outer_race); the monitor says once "
+                        "when the simulator's /diagnostics name another")
     s.add_argument("--simulator", type=_node_name, default=None, metavar="NAME",
                    help="the simulator node whose /diagnostics give the ground truth: a node name, "
                         "in the namespace of the accel topic (sim), or a full name (rig1/sim, "

@@ -37,6 +37,8 @@ FAULTS_KEY = "faults_present"
 SIZES_KEY = "defect_sizes"
 ONSETS_KEY = "fault_onsets_s"
 TIME_KEY = "simulated_s"
+SCENE_KEY = "scene"         # the scene the simulator runs (its name: a YAML path's file name without .yaml)
+BEARING_KEY = "bearing"     # that scene's bearing (``Bearing.name``): what the fault frequencies follow from
 STATUS_SUFFIX = ": simulator"
 
 
@@ -125,6 +127,15 @@ def truth_before(truths, t, slack=0):
     return before if before is not None else (truths[0] if truths else None)
 
 
+def forget_before(truths: list, t, slack=0) -> None:
+    """Drop from the list ``truths`` (in stamp order) the messages that :func:`faults_at` asked
+    at any time after ``t`` (by more than 2 ``slack``) no longer reads: those before the latest
+    stamped at or before ``t``.  A consumer that asks at times that only move on (its windows'
+    ends) keeps a few messages instead of one a second for as long as it runs."""
+    k = bisect_right(truths, t + slack, key=_stamp)
+    del truths[:max(0, k - 1)]
+
+
 def _stamp(truth) -> float:
     return truth.t
 
@@ -149,40 +160,67 @@ class Appearance(NamedTuple):
 
 def appearances(truths, t0, slack=0) -> list:
     """The fault kinds that appeared after ``t0`` (the first sample a consumer has), in order of
-    appearance: :class:`Appearance` each.  From the onsets of the last message of each run of
-    messages that has the kind; without onsets, from where a message first shows a kind that
-    the one before it did not (the bracket between the two stamps).
+    appearance: :class:`Appearance` each, by the messages ``truths`` in order
+    (:class:`AppearanceLog`, which a consumer that runs for hours keeps instead of the messages)."""
+    log = AppearanceLog(slack)
+    for truth in truths:
+        log.add(truth)
+    return log.appearances(t0)
 
-    Defects do not vanish, so a kind that leaves the messages means the signal started over (a
-    recording played with ``--loop``, each pass's stamps moved on): its next appearance counts
-    again.  A kind that stays while its onset moves past a message that already had it was
-    there on both sides of such a seam (from the recording's first sample): no new appearance;
-    its first stays.  Within one time line the onsets the messages give agree to their rounding
-    (1 us of ``simulated_s``), far less than the time between two messages."""
-    found = []
-    if any(r.onsets is not None for r in truths):
+
+class AppearanceLog:
+    """What :func:`appearances` needs of the messages, kept as they come (``add``): a few entries
+    per fault kind and appearance, not every 1 Hz message, so that a monitor left running does
+    not grow with the run.
+
+    From the onsets of the last message of each run of messages that has the kind; without
+    onsets, from where a message first shows a kind that the one before it did not (the bracket
+    between the two stamps).  Defects do not vanish, so a kind that leaves the messages means the
+    signal started over (a recording played with ``--loop``, each pass's stamps moved on): its
+    next appearance counts again.  A kind that stays while its onset moves past a message that
+    already had it was there on both sides of such a seam (from the recording's first sample): no
+    new appearance; its first stays.  Within one time line the onsets the messages give agree to
+    their rounding (1 us of ``simulated_s``), far less than the time between two messages.
+    ``slack``: times this close count as equal."""
+
+    def __init__(self, slack=0):
+        self.slack = slack
+        self._ended = []            # (kind, onset) whose time line ended (the kind left the messages)
         # kind -> [its onset, the stamp of the last message with it, still on the onset's time line]
-        current: dict = {}
-        for r in (r for r in truths if r.onsets is not None):
-            for kind in [k for k in current if k not in r.onsets]:
-                found.append((kind, current.pop(kind)[0]))          # gone: its time line ended
-            for kind, on in r.onsets.items():
-                have = current.get(kind)
+        self._current: dict = {}
+        self._with_onsets = False   # any message had onsets: those alone count
+        self._previous = None       # the last message, for the brackets of messages without onsets
+        self._bracketed = []        # Appearance between two messages without onsets
+
+    def add(self, truth: Truth) -> None:
+        """Take one message's :class:`Truth` (in stamp order)."""
+        if truth.onsets is not None:
+            self._with_onsets = True
+            for kind in [k for k in self._current if k not in truth.onsets]:
+                self._ended.append((kind, self._current.pop(kind)[0]))   # gone: its time line ended
+            for kind, on in truth.onsets.items():
+                have = self._current.get(kind)
                 if have is None:
-                    current[kind] = [on, r.t, True]
+                    self._current[kind] = [on, truth.t, True]
                     continue
-                if on > have[1] + slack:
+                if on > have[1] + self.slack:
                     have[2] = False             # a seam with the fault on both sides: not new
                 elif have[2]:
                     have[0] = on                # the latest message's, as it was
-                have[1] = r.t
-        found += [(kind, have[0]) for kind, have in current.items()]
-        found = [Appearance(kind, on, on) for kind, on in found if on > t0 + slack]
-    else:
-        for before, after in zip(truths, truths[1:]):
-            for kind in sorted(set(after.faults) - set(before.faults)):
-                found.append(Appearance(kind, before.t, after.t))
-    return sorted(found, key=lambda a: (a.latest, a.kind))
+                have[1] = truth.t
+        if self._previous is not None:
+            for kind in sorted(set(truth.faults) - set(self._previous.faults)):
+                self._bracketed.append(Appearance(kind, self._previous.t, truth.t))
+        self._previous = truth
+
+    def appearances(self, t0) -> list:
+        """The kinds that appeared after ``t0``, in order of appearance (:func:`appearances`)."""
+        if self._with_onsets:
+            found = self._ended + [(kind, have[0]) for kind, have in self._current.items()]
+            found = [Appearance(kind, on, on) for kind, on in found if on > t0 + self.slack]
+        else:
+            found = list(self._bracketed)
+        return sorted(found, key=lambda a: (a.latest, a.kind))
 
 
 def first_detection(scored, appearance: Appearance, slack=0):

@@ -58,6 +58,11 @@ def _printed(calls, reports):
     return [(end, v, truth_at(reports, end)) for end, v in calls]
 
 
+def _appeared(reports, t0):
+    """The faults that appeared after ``t0`` by ``reports``, as the monitor's score lines take them."""
+    return ground_truth.appearances(reports, t0, SLACK_NS)
+
+
 def test_truth_without_onsets_is_the_latest_diagnostics_and_scores_the_verdicts():
     """The plain functions behind ``truth=`` and the exit lines, on made-up diagnostics from a
     source without ``fault_onsets_s`` (a recording from before it): none at 1 and 2 s, outer from
@@ -85,24 +90,26 @@ def test_truth_without_onsets_is_the_latest_diagnostics_and_scores_the_verdicts(
     assert [truth_text(truth_at(reports, end)) for end, _v in scored] == ["none", "none", "outer"] + ["ball,outer"] * 3
     # outer appeared after 2 s (t=1.50s), by 3 s (t=2.50s), ball between t=2.50s and 3.50s;
     # inner is no detection of either
-    assert score_lines(_printed(scored, reports), reports, t0) == [
+    assert score_lines(_printed(scored, reports), _appeared(reports, t0), t0) == [
         "monitor: score 4 of 6 verdicts agree with the truth, 0 truth=unknown",
         "monitor: latency 1.50s (to 1.00s more): outer appeared between t=1.50s and t=2.50s by the "
         "diagnostics, first called at t=4.00s",
         "monitor: latency 1.50s (to 1.00s more): ball appeared between t=2.50s and t=3.50s by the "
         "diagnostics, first called at t=5.00s"]
     never = [(end, "healthy") for end, _v in scored]
-    assert score_lines(_printed(never, reports), reports, t0)[:2] == [
+    assert score_lines(_printed(never, reports), _appeared(reports, t0), t0)[:2] == [
         "monitor: score 2 of 6 verdicts agree with the truth, 0 truth=unknown",
         "monitor: latency none: outer appeared between t=1.50s and t=2.50s by the diagnostics, "
         "not called in 4 verdicts since"]
     # a window that ends at the stamp of the first diagnostics with the fault: latency 0, never -0.00
     at_stamp = [(3 * NS - 500, "outer")]              # 0.5 us short of the stamp: rounding
-    assert score_lines(_printed(at_stamp, reports), reports, 2 * NS)[1].startswith("monitor: latency 0.00s (to 1.00s more)")
+    assert score_lines(_printed(at_stamp, reports), _appeared(reports, 2 * NS), 2 * NS)[1].startswith(
+        "monitor: latency 0.00s (to 1.00s more)")
     # a real sensor or a recording without diagnostics: every truth unknown, no latency
-    assert score_lines(_printed(scored, []), [], t0) == ["monitor: score 0 of 0 verdicts agree with the truth, 6 truth=unknown"]
+    assert score_lines(_printed(scored, []), _appeared([], t0), t0) == [
+        "monitor: score 0 of 0 verdicts agree with the truth, 6 truth=unknown"]
     # a fault there from the first diagnostics on: scored, and only the later one's latency
-    assert score_lines(_printed(scored, reports[2:]), reports[2:], t0)[1:] == [
+    assert score_lines(_printed(scored, reports[2:]), _appeared(reports[2:], t0), t0)[1:] == [
         "monitor: latency 1.50s (to 1.00s more): ball appeared between t=2.50s and t=3.50s by the "
         "diagnostics, first called at t=5.00s"]
 
@@ -124,13 +131,13 @@ def test_truth_with_onsets_is_exact_between_diagnostics_and_so_is_the_latency():
     # windows end at 1.0 .. 4.5 s: the one ending 2.5 s holds 0.3 s of outer and is scored against it
     assert [truth_text(truth_at(reports, end)) for end, _v in scored] == \
         ["none"] * 3 + ["outer"] * 3 + ["ball,outer"] * 2
-    assert score_lines(_printed(scored, reports), reports, t0) == [
+    assert score_lines(_printed(scored, reports), _appeared(reports, t0), t0) == [
         "monitor: score 7 of 8 verdicts agree with the truth, 0 truth=unknown",
         "monitor: latency 0.80s: outer appeared at t=1.70s, first called at t=2.50s",
         "monitor: latency 0.30s: ball appeared at t=3.20s, first called at t=3.50s"]
     # lines printed before the onsets were known (their grace ran out) said none throughout: the
     # score counts that, the later diagnostics give only the latencies
-    assert score_lines(_printed(scored, reports[:2]), reports, t0)[:2] == [
+    assert score_lines(_printed(scored, reports[:2]), _appeared(reports, t0), t0)[:2] == [
         "monitor: score 4 of 8 verdicts agree with the truth, 0 truth=unknown",
         "monitor: latency 0.80s: outer appeared at t=1.70s, first called at t=2.50s"]
 
@@ -169,7 +176,7 @@ def test_each_pass_of_a_looped_recording_scores_the_fault_that_appears_in_it():
     t0 = NS // 2
     verdicts = ["healthy", "healthy", "healthy", "outer", "outer"] * 2 + ["healthy"] * 5
     scored = [(t0 + (k + 1) * NS, v) for k, v in enumerate(verdicts)]
-    assert score_lines(_printed(scored, exact), exact, t0)[1:] == [
+    assert score_lines(_printed(scored, exact), _appeared(exact, t0), t0)[1:] == [
         "monitor: latency 2.30s: outer appeared at t=1.70s, first called at t=4.00s",
         "monitor: latency 2.30s: outer appeared at t=6.70s, first called at t=9.00s",
         "monitor: latency none: outer appeared at t=11.70s, not called in 4 verdicts since"]
@@ -583,3 +590,131 @@ def test_the_monitor_has_its_analysis_ready_before_it_takes_a_table(ros_env):
     r = subprocess.run([sys.executable, "-c", code], env=ros_env, capture_output=True, text=True, timeout=60)
     assert r.returncode == 0, r.stderr
     assert r.stdout.split() == ["False", "True"], r.stdout
+
+
+def _recorded_diagnostics(path):
+    """The /diagnostics messages of the recording ``path``, deserialized."""
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.serialization import deserialize_message
+
+    from bearing_sim_ros.recording.reader import open_recording
+
+    with open_recording(path) as rec:
+        return [deserialize_message(data, DiagnosticArray) for _t, _type, _log, data in rec.messages(["/diagnostics"])]
+
+
+def test_the_monitor_says_once_that_the_node_runs_another_scene(ros_env, tmp_path):
+    """A monitor told another scene than the node's (``--scene`` left at its default beside a
+    node on cwru_6205_normal) judged with that scene's bearing and never said so.  The
+    simulator's /diagnostics now name its scene and bearing (node and render alike); the monitor
+    says once that they differ from ``--scene``, with where the signal's BPFO is against the one
+    it looks at, or that the bearing is the same; nothing where the scene is its own."""
+    import io
+
+    import rclpy
+
+    recording = tmp_path / "normal.mcap"
+    render("cwru_6205_normal", 2.0, recording, fidelity="kinematic", seed=1, progress=False)
+    diagnostics = _recorded_diagnostics(recording)
+    values = {kv.key: kv.value for kv in diagnostics[0].status[0].values}
+    assert values["scene"] == "cwru_6205_normal" and values["bearing"] == "6205-2RS-SKF"
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx)
+    said = {}
+    try:
+        for scene in ("er16k_outer_race", "cwru_6205_ir007", "cwru_6205_normal"):
+            out = io.StringIO()
+            node = MonitorNode(load_scene(scene), window=1.0, out=out, context=ctx)
+            try:
+                for msg in diagnostics:
+                    node._on_diagnostics(msg)
+            finally:
+                node.destroy_node()
+            said[scene] = out.getvalue().splitlines()
+    finally:
+        rclpy.shutdown(context=ctx)
+    assert len(diagnostics) == 2 and said["cwru_6205_normal"] == []
+    assert said["er16k_outer_race"] == [
+        "monitor: 'bearing_sim' runs scene cwru_6205_normal (6205-2RS-SKF), not --scene er16k_outer_race (ER-16K): "
+        "the verdicts look for the fault lines of another bearing (BPFO 107.0 Hz, the signal's 107.4 Hz at 1797 rpm); "
+        "give the monitor the node's scene (--scene cwru_6205_normal)"]
+    assert said["cwru_6205_ir007"] == [
+        "monitor: 'bearing_sim' runs scene cwru_6205_normal (6205-2RS-SKF), not --scene cwru_6205_ir007 "
+        "(6205-2RS-SKF): the same bearing, so the verdicts look for the fault lines where they are; only the "
+        "operating point used without `state` is --scene's"]
+
+
+def test_the_monitor_keeps_a_few_diagnostics_and_scores_as_with_all_of_them(ros_env, tmp_path):
+    """The monitor kept every 1 Hz /diagnostics message for as long as it ran, for the truth of
+    its windows and the latency lines at exit: a list that grew with the run.  Now it keeps the
+    messages that windows still to come may ask about (``ground_truth.forget_before`` after each
+    verdict) and what the latency lines need of them all (``ground_truth.AppearanceLog``).  A 12 s
+    recording whose pit appears at 2.5 s, fed to the monitor's callbacks in log-time order (no
+    DDS between): it holds at most 2 messages at any time (the old code all 12 at the end), and
+    every truth= and exit line is what all the messages give."""
+    import io
+
+    import rclpy
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.serialization import deserialize_message
+    from sensor_msgs.msg import JointState, PointCloud2
+
+    from bearing_sim_ros.recording.reader import open_recording
+
+    scene = tmp_path / "or_onset.yaml"
+    scene.write_text(load_scene("cwru_6205_or007_6").source_text.replace(
+        "clock: 6, profile: geometric}", "clock: 6, profile: geometric, onset_s: 2.5}"))
+    recording = tmp_path / "onset.mcap"
+    render(str(scene), 12.0, recording, fidelity="kinematic", seed=1, progress=False)
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx)
+    out = io.StringIO()
+    node = MonitorNode(load_scene(str(scene)), window=1.0, out=out, context=ctx)
+    every, held = [], []
+    feed = {"/accel": (PointCloud2, node._on_accel), "/state": (JointState, node._on_state),
+            "/diagnostics": (DiagnosticArray, node._on_diagnostics)}
+    try:
+        with open_recording(recording) as rec:
+            for topic, _type, _log_ns, data in rec.messages(list(feed)):
+                cls, callback = feed[topic]
+                msg = deserialize_message(data, cls)
+                callback(msg)
+                if topic == "/diagnostics":
+                    stamp = msg.header.stamp.sec * NS + msg.header.stamp.nanosec
+                    every.append(ground_truth.parse({kv.key: kv.value for kv in msg.status[0].values}, stamp, NS))
+                    # as in real time: the window that ended here is judged before the next second comes
+                    deadline = time.monotonic() + 30.0
+                    while len(node.verdicts) < node.windows_queued and time.monotonic() < deadline:
+                        time.sleep(0.005)
+                held.append(len(node.reports))
+    finally:
+        node.destroy_node()             # the analyses queued finish first
+        rclpy.shutdown(context=ctx)
+    assert len(every) == 12 and len(node.verdicts) == 12 and max(held) <= 2, (len(every), max(held))
+    printed = [line.split(" truth=")[1].split()[0] for line in out.getvalue().splitlines() if " truth=" in line]
+    assert printed == [truth_text(truth_at(every, end)) for end, _v, _truth in node.verdicts]
+    assert printed[:2] == ["none", "none"] and set(printed[3:]) == {"outer"}
+    t0 = node._t0
+    lines = score_lines(node.verdicts, node.appeared.appearances(t0), t0)
+    assert lines == score_lines(node.verdicts, _appeared(every, t0), t0)
+    assert lines[1].startswith("monitor: latency ") and lines[1].endswith("outer appeared at t=2.50s, first called at t=3.00s"), lines
+
+
+def test_the_monitor_says_no_tables_only_before_the_first(ros_env, bearing_sim_exe, tmp_path):
+    """The monitor says "no waveform tables on /accel yet" 5 s after it starts without any.  It
+    looked at the window instead, which is empty too from the moment it is taken for analysis:
+    a first window that ended more than 5 s after the start (6 s windows, a play started with the
+    monitor) printed the line after the first table, with 600 taken.  Now the line, if any, comes
+    before the first table."""
+    recording = tmp_path / "seven_seconds.mcap"
+    render("cwru_6205_normal", 7.0, recording, fidelity="kinematic", seed=1, progress=False)
+    monitor = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / "monitor.log",
+                          command=("monitor", "--window", "6", "--count", "1", "--scene", "cwru_6205_normal"))
+    try:
+        out = _play_into(monitor, bearing_sim_exe, recording, ros_env)
+    finally:
+        monitor.close()
+    lines = out.splitlines()
+    first = next(k for k, line in enumerate(lines) if line.startswith("monitor: first table stamped"))
+    assert not any("no waveform tables" in line for line in lines[first:]), out
+    assert "monitor: 1 verdicts from 600 tables, 0 gaps" in out, out

@@ -464,6 +464,7 @@ def test_stream_is_15khz_contiguous_and_paced(started, listener):
         assert key in values, key
     assert values["oversample"] == "1"       # the kinematic tier at 50 N: its bearing mode is soft
     assert values["tier"] == "kinematic" and values["recording"] == "off"
+    assert values["scene"] == "er16k_outer_race" and values["bearing"] == bearing.name     # what the signal is of
     ahead = [float(d[3]["computed_ahead_s"]) for d in diags]
     assert max(ahead) > 0.0 and max(ahead) <= 0.06 + 1e-9      # compute_ahead 0.05 s + one batch
     assert float(values["shaft_speed_rad_s"]) == pytest.approx(167.552, rel=1e-5)

@@ -609,7 +609,8 @@ def test_report_of_a_recording_with_no_operating_point_says_so_without_a_warning
         warnings.simplefilter("always")
         s = build_report(rec, tmp_path / "out")
     assert [str(w.message) for w in caught] == []
-    no_verdict = "no verdict: no bearing to place the fault lines on (the recording has no bearing_sim scene)"
+    no_verdict = ("no verdict: no bearing to place the fault lines on (the recording has no bearing_sim scene) "
+                  "and no fault frequencies in its /diagnostics (cage_hz, bpfo_hz, bpfi_hz, bsf_hz)")
     md = (tmp_path / "out" / "summary.md").read_text()
     if kept == ("/accel",):
         why = "no /shaft_speed, /state or /load in the recording and no scene to take the operating point from"
@@ -722,3 +723,54 @@ def test_a_recording_of_other_bytes_or_tables_is_one_line(tmp_path, capsys):
         assert cli.main(["report", str(path), "--out", str(tmp_path / "r")]) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and re.fullmatch(line, err[0]), err
+
+
+def _rewritten_by_rosbags(src, folder, exclude_topics=()):
+    """``src`` rewritten by the ``rosbags`` library (``rosbags-convert``, the independent reader
+    the README names): the messages, schemas and channels as they were, the ``bearing_sim``
+    metadata record (scene, parameters) gone.  The path of the MCAP file it writes."""
+    from rosbags.convert import convert
+
+    convert([src], folder, dst_storage="mcap", dst_version=9, compress=None, compress_mode="file",
+            default_typestore=None, typestore=None, exclude_topics=list(exclude_topics), include_topics=[],
+            exclude_msgtypes=[], include_msgtypes=[])
+    return folder / f"{folder.name}.mcap"
+
+
+def test_report_without_the_bearing_sim_metadata_takes_the_fault_lines_from_the_recorded_diagnostics(
+        outer, tmp_path, capsys):
+    """A recording rewritten by rosbags has no ``bearing_sim`` metadata, so no scene and no
+    bearing: the report gave no verdict ("unknown", no envelope, no timeline), although every
+    recorded ``/diagnostics`` gives the fault frequencies as the signal has them (``cage_hz``,
+    ``bpfo_hz``, ``bpfi_hz``, ``bsf_hz``).  Now it looks for the lines there, says so, and finds
+    the outer-race fault as it does in the original; without those /diagnostics either, one line
+    says there is no verdict and why."""
+    rewritten = _rewritten_by_rosbags(outer[0], tmp_path / "rewritten")
+    with open_recording(rewritten) as rec:
+        assert "scene_yaml" not in rec.metadata          # what rosbags keeps of the original
+    out = tmp_path / "rewritten_report"
+    assert cli.main(["report", str(rewritten), "--out", str(out)]) == 0
+    printed = capsys.readouterr().out.splitlines()
+    s = json.loads((out / "summary.json").read_text())
+    original = build_report(outer[0], tmp_path / "original_report")
+    assert s["verdict"] == original["verdict"] == "outer"
+    assert s["fault_frequencies_hz"] == pytest.approx(original["fault_frequencies_hz"])
+    assert [w["verdict"] for w in s["timeline"]] == [w["verdict"] for w in original["timeline"]]
+    assert {"envelope.png", "timeline.png"} <= set(s["plots"]) and not s["plots_not_drawn"]
+    assert s["expected_defects"] is None                 # no scene: no agreement claimed
+    source = ("the recording's /diagnostics (cage_hz, bpfo_hz, bpfi_hz, bsf_hz), mean over the recording, as it "
+              "has no scene to take the bearing from (the recording has no bearing_sim scene)")
+    assert s["fault_frequencies_from"] == source
+    assert printed[-1] == f"{out}: fault lines looked for at the frequencies of {source}"
+    assert f"Expected at the fault frequencies of {source}." in (out / "summary.md").read_text()
+
+    bare = _rewritten_by_rosbags(outer[0], tmp_path / "bare", exclude_topics=["/diagnostics"])
+    out = tmp_path / "bare_report"
+    assert cli.main(["report", str(bare), "--out", str(out)]) == 0
+    printed = capsys.readouterr().out.splitlines()
+    why = ("no verdict: no bearing to place the fault lines on (the recording has no bearing_sim scene) and no "
+           "fault frequencies in its /diagnostics (cage_hz, bpfo_hz, bpfi_hz, bsf_hz)")
+    assert printed[-1] == f"{out}: {why}"
+    s = json.loads((out / "summary.json").read_text())
+    assert s["verdict"] == "unknown" and s["plots_not_drawn"]["envelope.png"] == why
+    assert f"Fault frequencies: none: {why[len('no verdict: '):]}." in (out / "summary.md").read_text()

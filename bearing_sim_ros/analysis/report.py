@@ -340,6 +340,40 @@ def recorded_frequencies(periods: list, start_s: float, end_s: float) -> dict:
     return {k: float(sum(wi * f[k] for wi, (_, _, f) in zip(w, periods))) for k in sorted(common)}
 
 
+LINE_KEYS = {"ftf", "bpfo", "bpfi", "bsf"}     # what envelope.diagnose places its lines by
+RECORDED_KEYS = "cage_hz, bpfo_hz, bpfi_hz, bsf_hz"
+
+
+def line_frequencies(rolling: dict, recorded: dict) -> dict:
+    """{"ftf", "bpfo", "bpfi", "bsf": Hz} to look for the fault lines at: pure rolling of the
+    scene's bearing (``rolling``, {} without a scene) overridden by what the recording's
+    ``/diagnostics`` give (``recorded``: where the cage skids, the lines are there); without a
+    scene, ``recorded`` alone when it has all four (a recording that lost its ``bearing_sim``
+    metadata, rewritten by another tool, still carries them); {} when neither places every line."""
+    found = {**rolling, **recorded}
+    return found if LINE_KEYS <= set(found) else {}
+
+
+def frequencies_source(rolling: dict, recorded: dict, scene_problem: str) -> str:
+    """Where ``line_frequencies(rolling, recorded)`` come from, in words (``fault_frequencies_from``)."""
+    if not line_frequencies(rolling, recorded):
+        return f"none: {no_frequencies_reason(scene_problem)}"
+    if not rolling:
+        return (f"the recording's /diagnostics ({RECORDED_KEYS}), mean over the recording, as it has no scene "
+                f"to take the bearing from ({scene_problem})")
+    if not recorded:
+        return "pure rolling at the mean shaft speed"
+    return (f"the recording's /diagnostics ({RECORDED_KEYS})" if "bsf" in recorded else
+            "the recording's /diagnostics (cage_hz, bpfo_hz, bpfi_hz; bsf: pure rolling)")
+
+
+def no_frequencies_reason(scene_problem: str) -> str:
+    """Why there are no fault lines to look at: no scene (``scene_problem``: why) and no
+    ``/diagnostics`` that give every fault frequency."""
+    return (f"no bearing to place the fault lines on ({scene_problem}) and no fault frequencies in its "
+            f"/diagnostics ({RECORDED_KEYS})")
+
+
 SLACK_S = 1e-6      # s: times this close count as equal (stamps rounded to the ns)
 
 
@@ -484,8 +518,9 @@ def verdict_timeline(d: "_Data", x, scene, window_s: float, mean_speed_rad_s: fl
     ``state``, else ``mean_speed_rad_s``) and fault frequencies (pure rolling at that speed, with
     the cage, BPFO and BPFI of the recorded ``/diagnostics`` over the window where present).
     ``x`` holds the first samples (``MAX_ANALYSIS_S``); the windows beyond it come from
-    ``reread(bounds)`` (``_windows_read_again``)."""
-    if scene is None:
+    ``reread(bounds)`` (``_windows_read_again``).  Without a scene, the recorded ``/diagnostics``
+    alone (``line_frequencies``); [] where they do not give all four lines either."""
+    if scene is None and not line_frequencies({}, d.signal_frequencies):
         return []
     fs = d.sample_rate
     bounds = window_bounds(d.samples, fs, window_s)
@@ -499,8 +534,8 @@ def verdict_timeline(d: "_Data", x, scene, window_s: float, mean_speed_rad_s: fl
             speed = mean_in_window(state_t, d.shaft_w, t0, t1)
         speed = mean_speed_rad_s if speed is None else speed
         speeds.append(speed)
-        freqs.append({**scene.bearing.fault_frequencies(speed / (2 * math.pi)),
-                      **recorded_frequencies(d.signal_frequency_periods, t0, t1)})
+        rolling = scene.bearing.fault_frequencies(speed / (2 * math.pi)) if scene is not None else {}
+        freqs.append(line_frequencies(rolling, recorded_frequencies(d.signal_frequency_periods, t0, t1)))
     held = [b for b in bounds if b[1] <= x.size]          # the windows in memory; the rest read again
     rest = bounds[len(held):]
     windows = itertools.chain((x[i0:i1] for i0, i1 in held), reread(rest) if rest else ())
@@ -792,13 +827,15 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
     speed = float(np.mean(d.cmd_speed)) if d.cmd_speed.size else (
         float(np.mean(d.shaft_w)) if d.shaft_w.size else (scene.shaft_speed if scene else float("nan")))
     rolling = scene.bearing.fault_frequencies(speed / (2 * math.pi)) if scene is not None else {}
-    # where the cage skids, the lines are where the recorded cage puts them, not at pure rolling
-    freqs = {**rolling, **d.signal_frequencies} if rolling else {}
+    # where the cage skids, the lines are where the recorded cage puts them, not at pure rolling;
+    # without a scene (a recording rewritten by another tool lost the bearing_sim metadata) the
+    # recorded /diagnostics alone place them, when they give all four
+    freqs = line_frequencies(rolling, d.signal_frequencies)
     verdict = diagnose(x, fs, freqs) if freqs and x.size > fs * 0.2 else None
 
     not_drawn = {}                      # plot -> why it is not drawn
     if verdict is None:
-        why = "less than 0.2 s of signal" if freqs else f"no bearing to place the fault lines on ({scene_problem})"
+        why = "less than 0.2 s of signal" if freqs else no_frequencies_reason(scene_problem)
         not_drawn["envelope.png"] = not_drawn["timeline.png"] = f"no verdict: {why}"
     missing = operating_point_missing(d, scene)
     if missing:
@@ -818,8 +855,8 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
         onset = fault_onset(d.truth)
         detected = first_detection(timeline)
         if timeline:
-            plots.append(plot_timeline(timeline, d.truth, [df.kind for df in scene.defects], onset, detected,
-                                       out, meta))
+            plots.append(plot_timeline(timeline, d.truth, [df.kind for df in scene.defects] if scene else [],
+                                       onset, detected, out, meta))
     changes = truth_changes(d.truth)
 
     expected, expected_from = expected_defects(scene, d.truth, d.analysed_end_s)
@@ -849,10 +886,7 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
         "shaft_speed_variation": speed_var,
         "fault_frequencies_hz": freqs,
         "fault_frequencies_pure_rolling_hz": rolling,
-        "fault_frequencies_from": (("the recording's /diagnostics (cage_hz, bpfo_hz, bpfi_hz, bsf_hz)"
-                                    if "bsf" in d.signal_frequencies else
-                                    "the recording's /diagnostics (cage_hz, bpfo_hz, bpfi_hz; bsf: pure rolling)")
-                                   if d.signal_frequencies and rolling else "pure rolling at the mean shaft speed"),
+        "fault_frequencies_from": frequencies_source(rolling, d.signal_frequencies, scene_problem),
         "envelope_channel": ch,
         "fault_lines": ({k: {"expected_hz": v.expected_hz, "found_hz": v.found_hz, "height": v.height,
                              "prominence": v.prominence} for k, v in verdict["lines"].items()}
@@ -934,6 +968,8 @@ def _markdown(s: dict) -> str:
                   f"{scene_part or 'none (healthy)'}{against}.", ""]
     if s["verdict_note"]:
         lines += [f"The verdict on a scene without a defect: {s['verdict_note']}.", ""]
+    if s["scene_unknown"] and not s["fault_lines"]:     # (with them, the lines' section says where from)
+        lines += [f"Fault frequencies: {s['fault_frequencies_from']}.", ""]
     if s["verdict_describes_recording"] is False:
         lines += [f"**The faults present change during this recording ({_changes_text(s)}): one verdict does "
                   "not describe it; see \"Verdict over time\".**", ""]
@@ -1131,4 +1167,7 @@ def report_command(args) -> int:
           f"(scene defects: {_defects_text(s)}{timing})")
     if s["verdict_note"]:
         print(f"{args.out}: {s['verdict_note']}")
+    if s["scene_unknown"]:              # the fault lines without a scene: where from, or why none
+        print(f"{args.out}: " + (f"fault lines looked for at the frequencies of {s['fault_frequencies_from']}"
+                                 if s["fault_lines"] else s["plots_not_drawn"]["envelope.png"]))
     return 0

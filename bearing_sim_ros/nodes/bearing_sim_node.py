@@ -780,13 +780,14 @@ class BearingSimNode(Node):
     def _diagnostics(self, item, now):
         """The ``/diagnostics`` message published with ``item``, the batch whose end it is
         stamped with: what the signal held there, not at the end of what is computed ahead."""
-        from ..recording.render import defect_values, diagnostics_message
+        from ..recording.render import defect_values, diagnostics_message, scene_values
 
         st = self.stats
         published_index = item.end_index
         period = st.period_end(now, published_index)
         rtf = period["signal_s"] / period["wall_s"] if period["wall_s"] > 0 else float("nan")
         values = {
+            **scene_values(self.scene),
             "real_time_factor": f"{rtf:.4f}",
             "real_time": str(bool(self._cfg["real_time"])).lower(),
             "overruns": st.overruns,

@@ -16,6 +16,8 @@ at the fault frequencies of the scene's bearing at the measured shaft speed, and
 
 ``found/theory Hz`` and ``x`` the height of the line over the median of its neighbourhood
 (threshold x4, ``envelope.DETECTION_THRESHOLD``).  The axis where a line stands highest counts.
+The bearing is ``--scene``'s; where the simulator's ``/diagnostics`` name another scene, one line
+says so and whether its bearing differs (:func:`scene_mismatch_line`).
 
 It also scores itself.  The simulator's ``/diagnostics`` (1 Hz) say which faults are in the signal
 and since when (``faults_present``: ``none``, ``outer``, ``ball, outer``, ...; ``fault_onsets_s``:
@@ -186,13 +188,13 @@ def agrees(verdict: str, truth):
     return not truth if verdict == "healthy" else verdict in truth
 
 
-def score_lines(scored, reports, t0_ns: int) -> list:
+def score_lines(scored, appeared, t0_ns: int) -> list:
     """The exit lines on ``scored`` ((window end ns, verdict, truth) per verdict, in order) and
-    all the diagnostics ``reports``: agreement of each verdict with the truth its line printed
-    (the diagnostics that came later may tell a window's truth better, after a grace that ran
-    out, but the score must count what the lines say), and one latency line per fault kind that
-    appeared during the run (after ``t0_ns``, the first table's stamp), by all the ``reports``.
-    Times as in the verdict lines: s from ``t0_ns``."""
+    ``appeared``, the faults that appeared during the run (after ``t0_ns``, the first table's
+    stamp) by all the diagnostics (``ground_truth.appearances``): agreement of each verdict with
+    the truth its line printed (the diagnostics that came later may tell a window's truth
+    better, after a grace that ran out, but the score must count what the lines say), and one
+    latency line per appearance.  Times as in the verdict lines: s from ``t0_ns``."""
     marks = [agrees(verdict, truth) for _end, verdict, truth in scored]
     known = [m for m in marks if m is not None]
     lines = [f"monitor: score {sum(known)} of {len(known)} verdicts agree with the truth, "
@@ -200,7 +202,7 @@ def score_lines(scored, reports, t0_ns: int) -> list:
     if not scored:
         return lines
     calls = [(end, verdict) for end, verdict, _truth in scored]
-    for fault in ground_truth.appearances(reports, t0_ns, SLACK_NS):
+    for fault in appeared:
         before, after = ((t - t0_ns) / NS for t in (fault.earliest, fault.latest))
         found, since = ground_truth.first_detection(calls, fault, SLACK_NS)
         where = (f"{fault.kind} appeared at t={after:.2f}s" if fault.exact else
@@ -214,6 +216,32 @@ def score_lines(scored, reports, t0_ns: int) -> list:
         more = "" if fault.exact else f" (to {after - before:.2f}s more)"
         lines.append(f"monitor: latency {max(0.0, t - after):.2f}s{more}: {where}, first called at t={t:.2f}s")
     return lines
+
+
+def scene_mismatch_line(scene, values: dict, simulator: str):
+    """The line that says the simulator ``simulator`` runs another scene than the monitor's
+    ``scene`` (``--scene``), by the ``scene`` and ``bearing`` of its ``/diagnostics`` ``values``;
+    None where it runs the same or does not say (a recording made before those keys).  The
+    monitor keeps to ``--scene``, as a condition monitoring system keeps to the bearing its
+    engineer configured; the line says whether that bearing is the signal's, and if not where the
+    signal's BPFO is against the one the verdicts look at (at the simulator's shaft speed)."""
+    theirs = values.get(ground_truth.SCENE_KEY)
+    if theirs is None or theirs == scene.name:
+        return None
+    bearing = values.get(ground_truth.BEARING_KEY, "bearing not given")
+    said = (f"monitor: {simulator!r} runs scene {theirs} ({bearing}), not --scene {scene.name} "
+            f"({scene.bearing.name})")
+    if bearing == scene.bearing.name:
+        return (f"{said}: the same bearing, so the verdicts look for the fault lines where they are; "
+                "only the operating point used without `state` is --scene's")
+    try:
+        shaft_hz = abs(float(values["shaft_speed_rad_s"])) / (2 * np.pi)
+        where = (f" (BPFO {scene.bearing.fault_frequencies(shaft_hz)['bpfo']:.1f} Hz, the signal's "
+                 f"{float(values['bpfo_hz']):.1f} Hz at {shaft_hz * 60:.0f} rpm)")
+    except (KeyError, ValueError):
+        where = ""
+    return (f"{said}: the verdicts look for the fault lines of another bearing{where}; give the monitor "
+            f"the node's scene (--scene {theirs})")
 
 
 def source_start_line(t0_ns: int, source_start_ns: int):
@@ -255,11 +283,16 @@ class MonitorNode(Node):
         # whole analysis (lines, scores, frequencies) kept per verdict was about 3 kB, and a
         # monitor left running grew by megabytes an hour
         self.verdicts = []
-        self.reports = []           # ground_truth.Truth of each /diagnostics (stamps in ns)
+        # ground_truth.Truth of the /diagnostics that the windows still to come may ask about
+        # (stamps in ns; ground_truth.forget_before after each verdict), and what the latency lines
+        # need of them all: a monitor kept every 1 Hz message for those, about 1 kB an hour
+        self.reports = []
+        self.appeared = ground_truth.AppearanceLog(SLACK_NS)
         self.simulator = simulator_name(self.resolve_topic_name(TOPIC_ACCEL), simulator)
         self._several_said = False
         self.truth_status = ground_truth.status_name(self.simulator)
         self.ignored = set()        # names of other simulators' statuses, said once each
+        self.scenes_said = set()    # the simulator's scenes that are not --scene, said once each
         self._speeds = []
         self._t0 = None
         self._source_start = None   # stamp (ns) of the source's signal time 0, by its diagnostics
@@ -303,11 +336,24 @@ class MonitorNode(Node):
                           f"{self.truth_status!r}'s (--simulator names another)", file=self.out, flush=True)
                 continue
             self.reports.append(truth)
+            self.appeared.add(truth)
+            self._check_scene(values)
             if self._source_start is None and ground_truth.TIME_KEY in values:
                 try:
                     self._source_start = stamp - round(float(values[ground_truth.TIME_KEY]) * NS)
                 except ValueError:
                     pass
+
+    def _check_scene(self, values: dict) -> None:
+        """Say once (for each scene it runs) that the simulator runs another scene than
+        ``--scene``: the verdicts may look for the fault lines of another bearing."""
+        theirs = values.get(ground_truth.SCENE_KEY)
+        if theirs in self.scenes_said:
+            return
+        line = scene_mismatch_line(self.scene, values, self.simulator)
+        if line:
+            self.scenes_said.add(theirs)
+            print(line, file=self.out, flush=True)
 
     def _on_accel(self, msg):
         if self.count and self.windows_queued >= self.count:
@@ -357,6 +403,7 @@ class MonitorNode(Node):
         result.update(end_ns=end, truth=truth_at(self.reports, end))
         self.verdicts.append((end, result["verdict"], result["truth"]))
         print(format_verdict(t, result), file=self.out, flush=True)
+        ground_truth.forget_before(self.reports, end, SLACK_NS)      # the next windows end later
 
     def check_sources(self) -> None:
         """Several publishers on ``accel`` (two simulators in one namespace, a ``play`` beside a
@@ -422,8 +469,10 @@ def main(args, ros_args=()) -> int:
             if time.monotonic() >= next_look:
                 next_look += PEER_CHECK_S
                 node.check_sources()
-            if not node.window.samples and not node.verdicts and time.monotonic() - t_start > 5.0 \
-                    and not node._warned:
+            # no table at all, not an empty window: the window is empty too from the moment it is
+            # taken for its analysis, and a first window that ended after 5 s said "no waveform
+            # tables yet" with hundreds taken
+            if not node.tables and not node.rejected and time.monotonic() - t_start > 5.0 and not node._warned:
                 node._warned = True
                 print(f"monitor: no waveform tables on {node.resolve_topic_name(TOPIC_ACCEL)} yet "
                       "(is `bearing-sim node` running on this ROS_DOMAIN_ID?)", flush=True)
@@ -443,7 +492,7 @@ def main(args, ros_args=()) -> int:
                     line = source_start_line(node._t0, node._source_start)
                     if line:
                         print(line, flush=True)
-                for line in score_lines(node.verdicts, node.reports, node._t0 or 0):
+                for line in score_lines(node.verdicts, node.appeared.appearances(node._t0 or 0), node._t0 or 0):
                     print(line, flush=True)
             rclpy.try_shutdown()
     return 0

@@ -32,7 +32,7 @@ from ..paths import output_file
 from ..teardown import EXIT_INTERRUPTED, signal_handlers
 from ..messages import BATCH_DURATION, STATE_RATE, TOPIC_ACCEL, TOPIC_CONTACT, TOPIC_DIAGNOSTICS, TOPIC_LOAD, \
     TOPIC_SHAFT_SPEED, TOPIC_STATE, TYPES, batching_error, duration_error, waveform_qos
-from ..ground_truth import diagnostics_values, status_name
+from ..ground_truth import BEARING_KEY, SCENE_KEY, diagnostics_values, status_name
 from ..waveform import NS
 
 NODE_NAME = "bearing_sim"
@@ -239,6 +239,13 @@ def defect_values(sim, sample: int | None = None) -> dict:
     return diagnostics_values([d.kind for d in sim.scene.defects], sizes, sim.defect_onsets_s)
 
 
+def scene_values(scene) -> dict:
+    """The ``/diagnostics`` keys that say what the signal is of, the live node's and a render's
+    alike: ``scene`` (its name) and ``bearing`` (its bearing's), so that a consumer told another
+    scene (``bearing-sim monitor --scene``) can tell."""
+    return {SCENE_KEY: scene.name, BEARING_KEY: scene.bearing.name}
+
+
 def tier_summary(values: dict) -> str:
     """``kinematic tier``, or after switches of ``fidelity: auto`` (``tier_values``) ``skidding
     tier at the end: 1 switch, the last kinematic -> skidding at 0.430 s``."""
@@ -406,7 +413,7 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
         nonlocal diagnosed
         # the live node's keys (nodes/bearing_sim_node.py); what depends on the wall clock
         # or the output path is left out so that the file stays byte-identical
-        values = {"real_time_factor": "nan", "real_time": "false", "mode": "render",
+        values = {**scene_values(scene), "real_time_factor": "nan", "real_time": "false", "mode": "render",
                   "overruns": 0, "overruns_last_period": 0, "lag_s": "0.000000",
                   "worst_lag_s": "0.000000", **tier_values(sim), **defect_values(sim),
                   "shaft_speed_rad_s": f"{sim.shaft_speed:.6g}",
