@@ -41,6 +41,39 @@ STATE_RATE, STATE_RATE_RANGE = 50.0, (0.0, 1000.0)
 DISCOVERY_GRACE_S = 0.5
 
 
+# /diagnostics: the run's state in every message of the simulator's status, ``running``, and in the
+# last one ``ended``, with why (``END_REASONS``) and the samples of signal published, so that a
+# consumer can tell a run that is complete from a simulator that crashed or stalled and from a
+# discovery loss (the publishers just went away before).  The node and ``render`` alike
+RUN_KEY, RUN_RUNNING, RUN_ENDED = "run", "running", "ended"
+END_REASON_KEY, PUBLISHED_SAMPLES_KEY = "end_reason", "published_samples"
+# why a run ended: its duration reached, or a signal (the node's Ctrl-C, SIGTERM, SIGHUP; render's
+# Ctrl-C and SIGTERM), or the node's stop() called by a program that runs it in its own process
+END_REASONS = ("duration", "SIGINT", "SIGTERM", "SIGHUP", "stopped")
+# s the node waits at its end for reliable subscribers to acknowledge its last messages (the end
+# status, the last tables), and `play` for its tail: they are lost to a subscriber that has not
+# received them when the publisher is destroyed
+END_ACK_TIMEOUT_S = 2.0
+
+
+def end_of_run(values: dict, level: int, message: str, reason: str, samples: int, sample_rate: float,
+               duration: float) -> tuple:
+    """The last ``/diagnostics`` of a run from the status (``values``, ``level``, ``message``) its
+    last batch would have had: ``(values, level, message)`` with ``run: ended``, ``end_reason``
+    (one of ``END_REASONS``) and ``published_samples`` (``samples`` at ``sample_rate``, Hz), and a
+    message that says so before what the status said otherwise (a warning, an error: its level
+    stays).  ``duration``: the run's duration (s, 0 = no end), named where it was reached."""
+    seconds = f"{samples / sample_rate:.6f} s of signal ({samples} samples) published"
+    if reason == "duration":
+        text = f"run ended: duration {duration:g} s reached, {seconds}"
+    elif reason == "stopped":
+        text = f"run ended: stopped by the program that runs the node, {seconds}"
+    else:
+        text = f"run ended by {reason}: {seconds}"
+    values = dict(values, **{RUN_KEY: RUN_ENDED, END_REASON_KEY: reason, PUBLISHED_SAMPLES_KEY: samples})
+    return values, level, text if message == "ok" else f"{text}; {message}"
+
+
 def batching_error(sample_rate: float, batch_duration, state_rate) -> str | None:
     """None if ``batch_duration`` (s) and ``state_rate`` (Hz) are usable at ``sample_rate`` (Hz, a
     valid one), else a one-line reason naming the argument, its value and what is allowed: each

@@ -185,7 +185,7 @@ def run_command(args) -> int:
     from rclpy.signals import SignalHandlerOptions
 
     from .nodes.bearing_sim_node import (DEFAULT_SAMPLE_RATE, BearingSimNode, build_node, log_recording,
-                                         say_held, spin_node)
+                                         say_held, spin_node, stop_reason)
     from .messages import BATCH_DURATION, duration_error
     from .recording.recorder import files_text, sizes_text, split_error
     from .recording.render import tier_values
@@ -224,7 +224,7 @@ def run_command(args) -> int:
     finally:
         signals.shutting_down()         # a signal from here on is held, said, and exits 130 / 143
         if node is not None:
-            node.stop()
+            node.stop(reason=stop_reason(signals))
             error = node.error
         figures = None
         if node is not None:

@@ -426,6 +426,34 @@ def test_monitor_takes_the_ground_truth_of_the_rig_it_watches_only(ros_env, bear
     assert out.count("monitor: ground truth of 'rig2/bearing_sim: simulator' ignored") == 1, out
 
 
+def test_the_monitor_says_that_the_run_it_watches_ended_and_waits_for_more(ros_env, bearing_sim_exe, tmp_path):
+    """The node's end status (its last /diagnostics) is printed by the monitor: without it the
+    tables just stopped, as they do when a node crashes or discovery loses it.  The monitor waits
+    on (a node started again, the next pass of ``play --loop``) until Ctrl-C."""
+    import signal
+
+    monitor = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / "monitor.log",
+                          command=("monitor", "--window", "1"))
+    node = None
+    try:
+        monitor.wait_for_output("envelope analysis every")
+        node = NodeProcess(bearing_sim_exe, ros_env, {"fidelity": "kinematic", "duration": 1.5,
+                                                      "wait_for_subscribers": 1}, tmp_path / "node.log")
+        assert node.wait(90) == 0, node.output()
+        monitor.wait_for_output("monitor: bearing_sim: run ended: duration 1.5 s reached, 1.500000 s of signal "
+                                "(22500 samples) published; waiting for more", timeout=5)
+        time.sleep(1.0)
+        assert monitor.proc.poll() is None, monitor.output()
+        monitor.send(signal.SIGINT)
+        assert monitor.wait(20) == 0, monitor.output()
+        out = monitor.output()
+    finally:
+        monitor.close()
+        if node is not None:
+            node.close()
+    assert out.count("run ended") == 1 and "monitor: 1 verdicts from 150 tables, 0 gaps" in out, out
+
+
 def _wait_for_subscribers(monitor, *publishers, timeout: float = 30.0) -> None:
     """Wait until the monitor's subscriptions match each of ``publishers`` (DDS discovery)."""
     deadline = time.monotonic() + timeout

@@ -718,6 +718,46 @@ def test_signal_exits_0_with_a_readable_recording(started, tmp_path, sig):
     assert '"record"' in meta["bearing_sim"]["parameters"]
 
 
+@pytest.mark.parametrize("how", ["duration", "SIGTERM"])
+def test_a_consumer_is_told_that_the_run_ended_and_how_much_signal_was_published(started, listener, how):
+    """A run that ended (``duration`` reached, or SIGTERM) and a node that crashed or stalled
+    looked the same to a consumer: the publishers were simply gone.  The node's last
+    ``/diagnostics`` now says the run ended (``run: ended``; ``running`` before), why, and how much
+    signal it published, and the node waits for the consumer to have it (and the last tables)
+    before it exits: received here with nothing to wait for after the exit."""
+    params = {"scene": "er16k_outer_race", "fidelity": "kinematic", "wait_for_subscribers": 1}
+    if how == "duration":
+        params["duration"] = 1.5
+    node = started(params)
+    listener.wait_for(lambda: len(listener.accel) >= 50, FIRST_TABLE_S, "half a second of tables")
+    if how == "SIGTERM":
+        node.send(signal.SIGTERM)
+    assert node.wait(30) == 0, node.output()
+    # the listener's executor thread may still be taking what arrived: nothing new arrives now
+    ended = listener.wait_for(lambda: [d for d in listener.diagnostics if d[3].get("run") == "ended"], 2.0,
+                              "the end status")
+    assert len(ended) == 1 and ended[0] is listener.diagnostics[-1]
+    assert {d[3].get("run") for d in listener.diagnostics[:-1]} <= {"running"}
+    _t, level, message, values, stamp = ended[0]
+    assert values["end_reason"] == how
+    # wait_for_subscribers: every table from the first reached the listener, the last ones too
+    # (taken by its executor after the end status, maybe: topics are not ordered with each other)
+    samples = int(values["published_samples"])
+    listener.wait_for(lambda: sum(d.shape[0] for _t, _s, _c, d in listener.accel) == samples, 2.0,
+                      f"the {samples} samples published")
+    assert stamp == listener.accel[-1][1] + listener.accel[-1][3].shape[0] * NS // 15000
+    assert values["simulated_s"] == f"{samples / FS:.6f}"
+    # (a warning of the last second, overruns on a loaded machine, follows, at its level)
+    if how == "duration":
+        assert samples == 22500
+        assert message.startswith("run ended: duration 1.5 s reached, 1.500000 s of signal (22500 samples) "
+                                  "published"), message
+    else:
+        assert message.startswith(f"run ended by SIGTERM: {samples / FS:.6f} s of signal ({samples} samples) "
+                                  "published"), message
+    assert level == (0 if message.endswith("published") else 1), (level, message)
+
+
 def test_a_second_publisher_on_accel_is_said_by_the_node_its_diagnostics_and_the_monitor(
         started, ros_env, bearing_sim_exe, tmp_path):
     """Two simulators started in one namespace both published /accel, and every subscriber got

@@ -130,6 +130,26 @@ def test_the_ground_truth_block_scores_with_a_rendered_recordings_diagnostics(tm
     assert gt.appearances(truths, first_ns, slack=1_000) == [("outer", first_ns + 1_500_000_000, first_ns + 1_500_000_000)]
 
 
+def test_the_end_of_a_run_block_sees_a_rendered_recordings_end_status(tmp_path):
+    """"The end of a run": the callback, run as written on the /diagnostics of a 1.5 s render,
+    calls ``run_ended`` once, with the reason and the samples the recording holds."""
+    from rclpy.serialization import deserialize_message
+
+    from bearing_sim_ros.recording.reader import get_message, open_recording
+    from bearing_sim_ros.recording.render import render
+
+    render("er16k_outer_race", 1.5, tmp_path / "r.mcap", fidelity="kinematic", progress=False)
+    with open_recording(tmp_path / "r.mcap") as rec:
+        diag = [deserialize_message(data, get_message("diagnostic_msgs/msg/DiagnosticArray"))
+                for _t, _ty, _log, data in rec.messages(topics=["/diagnostics"])]
+    ended = []
+    scope = {"run_ended": lambda reason, samples: ended.append((reason, samples))}
+    exec(_block_containing("python", 'values.get("run") == "ended"'), scope)
+    for msg in diag:
+        scope["on_diagnostics"](msg)
+    assert len(diag) == 2 and ended == [("duration", 22500)]
+
+
 def test_the_rosbags_block_reads_a_rendered_recording(tmp_path, monkeypatch, bearing_sim_exe):
     """"Open a recording ...": the rosbags loop, run as written on ``outer.mcap`` from the
     README's own render command (shortened), reads waveform tables."""

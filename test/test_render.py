@@ -755,9 +755,13 @@ def test_a_saturated_sensor_is_counted_and_warned_in_the_diagnostics(tmp_path):
                     diag.append((int(st.level[0]) if isinstance(st.level, bytes) else int(st.level), st.message,
                                  int({kv.key: kv.value for kv in st.values}["accel_clipped_samples"])))
         assert len(diag) == 2
+        # the last is the end status, whose message says so before the warning (at its level)
+        end = "run ended: duration 2 s reached, 2.000000 s of signal (30000 samples) published"
         if limit is None:
-            assert diag == [(0, "ok", 0)] * 2
+            assert diag == [(0, "ok", 0), (0, end, 0)]
         else:
+            assert diag[1][1].startswith(end + "; ")
+            diag[1] = (diag[1][0], diag[1][1].removeprefix(end + "; "), diag[1][2])
             assert all(level == 1 and message.startswith("accelerometer saturated: ") for level, message, _n in diag)
             assert all(n > 0 for _l, _m, n in diag) and sum(n for _l, _m, n in diag) == at_range
 
@@ -794,6 +798,52 @@ def test_bsf_hz_is_where_a_skidding_balls_defect_line_is(tmp_path):
         x = np.concatenate(accel)[int(FS) // 5:].astype(float)
         freqs, spec = envelope_spectrum(x, FS, max_freq=2000.0)
         assert abs(line_at(freqs, spec, 2 * rolling, search_rel=0.1).found_hz - 2 * bsf) < 0.5
+
+
+@pytest.mark.parametrize("batches, sig", [(None, None), (200, "SIGINT"), (130, "SIGTERM")],
+                         ids=["duration", "SIGINT-at-a-whole-second", "SIGTERM"])
+def test_a_renders_last_diagnostics_is_its_end_status(tmp_path, monkeypatch, batches, sig):
+    """A recording's last ``/diagnostics`` says the run ended (``run: ended``; ``running`` in the
+    others), why and how much signal it holds, as the live node's end status says it to its
+    consumers (``play`` republishes it): a render that ran its duration, one stopped by Ctrl-C just
+    at a whole second (its last /diagnostics was the ordinary one of that second) and one stopped
+    by SIGTERM."""
+    import signal
+
+    calls = []
+    advance = Simulator.advance
+
+    def interrupted(self, *a, **kw):
+        calls.append(1)
+        if len(calls) == batches:                 # the batch completes, and is the last
+            os.kill(os.getpid(), getattr(signal, sig))
+        return advance(self, *a, **kw)
+
+    monkeypatch.setattr(Simulator, "advance", interrupted)
+    out = tmp_path / "r.mcap"
+    if batches is None:
+        render("er16k_outer_race", 2.5, out, fidelity="kinematic", progress=False)
+    else:
+        with pytest.raises(KeyboardInterrupt):
+            from bearing_sim_ros.recording.render import _terminated_on_sigterm
+
+            with _terminated_on_sigterm():
+                render("er16k_outer_race", 10.0, out, fidelity="kinematic", progress=False)
+    from rclpy.serialization import deserialize_message
+
+    statuses = []
+    with open_recording(out) as rec:
+        cls = get_message("diagnostic_msgs/msg/DiagnosticArray")
+        for _, _, log_ns, data in rec.messages(["/diagnostics"]):
+            st = deserialize_message(data, cls).status[0]
+            statuses.append((log_ns, st.message, {kv.key: kv.value for kv in st.values}))
+    samples = 37500 if batches is None else batches * 150
+    assert statuses[-1][0] == samples * NS // 15000 and len(statuses) == math.ceil(samples / 15000)
+    assert [v["run"] for _t, _m, v in statuses] == ["running"] * (len(statuses) - 1) + ["ended"]
+    _t, message, values = statuses[-1]
+    assert values["end_reason"] == (sig or "duration") and values["published_samples"] == str(samples)
+    seconds = f"{samples / 15000:.6f} s of signal ({samples} samples) published"
+    assert message == (f"run ended by {sig}: {seconds}" if sig else f"run ended: duration 2.5 s reached, {seconds}")
 
 
 def test_a_render_stopped_by_a_signal_ends_with_the_diagnostics_of_its_last_sample(tmp_path, monkeypatch):

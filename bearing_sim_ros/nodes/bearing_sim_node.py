@@ -361,6 +361,8 @@ class BearingSimNode(Node):
         if cfg["record"]:
             self._open_recorder(cfg)
         self._stop = threading.Event()
+        self._stop_reason = None                 # stop(reason): why the run ended, for its end status
+        self._last_status = None                 # (item, values, level, message) of the last /diagnostics
         self._repace = False
         self.finished = threading.Event()
         self.error = None
@@ -505,8 +507,12 @@ class BearingSimNode(Node):
                 self.get_logger().info(f"no other publisher on {topic} any more")
         return others
 
-    def stop(self, timeout: float = 10.0):
-        """Finish the batch in progress, close the recording.  Idempotent."""
+    def stop(self, timeout: float = 10.0, reason: str = "stopped"):
+        """Finish the batch in progress, publish the end status (``reason``: why the run ended,
+        one of ``messages.END_REASONS``, for a run that had not ended by itself), close the
+        recording.  Idempotent: the first reason holds."""
+        if self._stop_reason is None:
+            self._stop_reason = reason
         self._stop.set()
         if self._thread.is_alive() and threading.current_thread() is not self._thread:
             self._thread.join(timeout)
@@ -652,15 +658,15 @@ class BearingSimNode(Node):
         # the computation of a batch that switches the tier (the new tier's set-up: about 8 ms
         # for kinematic -> skidding), a decaying maximum like est, measured at each switch
         switch_est = SWITCH_COST_GUESS_S
-        published_index = 0
         last_published = None                 # (item, its log time) of the latest batch published
-        diag_end_index = 0                    # end index of the batch the latest /diagnostics came with
+        ended = False                         # the end status went out with the last batch
         rec_failed = False
         stats.period_start(time.monotonic(), 0)
         while True:
             stop = self._stop.is_set() or not context.ok()
             cfg = self._cfg
             real_time = cfg["real_time"]
+            total = int(round(cfg["duration"] * sr)) if cfg["duration"] > 0 else 0
             now = time.monotonic()
             if queue and (stop or not real_time or queue[0].due <= now):
                 item = queue.popleft()
@@ -670,16 +676,23 @@ class BearingSimNode(Node):
                     continue
                 lag = max(0.0, now - item.due) if real_time else 0.0
                 stats.batch(lag, item.batch, now)
-                published_index = item.end_index
                 out = item.out
-                if (now >= next_diag) if real_time else (item.end_index >= next_diag_index):
+                # the run's last batch carries its end status: nothing due after it on a stop (the
+                # batches computed ahead are dropped), or the duration's last sample
+                if stop:
+                    last = not queue or (real_time and queue[0].due > now)
+                    ending = (self._stop_reason or "stopped") if last else None
+                else:
+                    ending = "duration" if total and sim.index >= total and not queue else None
+                if ending is not None:
+                    out = out + [(self.pub_diag, self._end_status(item, now, ending))]
+                elif (now >= next_diag) if real_time else (item.end_index >= next_diag_index):
                     # without pacing, a second of signal passes in far less than a second: the
                     # steady-clock schedule restarts from now, or it would lie as far in the future
                     # as the signal ran ahead, and real_time:=true again would publish none till then
                     next_diag = max(next_diag + 1.0, now - 0.5) if real_time else now + 1.0
                     next_diag_index = (math.floor(item.end_index / sr) + 1) * sr
                     out = out + [(self.pub_diag, self._diagnostics(item, now))]
-                    diag_end_index = item.end_index
                 self._publish(out)
                 # real time: when it was published = end stamp + lateness; otherwise the end
                 # stamp, like `render`, so the file replays at the signal's pace
@@ -697,10 +710,12 @@ class BearingSimNode(Node):
                         rec_failed = True        # said once, when it happens; again at exit
                         self.get_logger().error(f"recording failed, publishing goes on: {rec.error}")
                 stats.work(time.monotonic() - now)
+                if ending is not None:
+                    ended = True
+                    break                      # the run is over: a longer duration set now comes too late
                 continue
             if stop:
                 break                          # every batch that was due is published and recorded
-            total = int(round(cfg["duration"] * sr)) if cfg["duration"] > 0 else 0
             if total and sim.index >= total:
                 if not queue:
                     break
@@ -756,15 +771,19 @@ class BearingSimNode(Node):
             if not may:
                 wake = min(wake, start_at)
             self._stop.wait(max(0.0, wake - now))
-        # the ground truth of the last sample published, as `render` ends: a run that ends between
-        # two /diagnostics (duration 5.5 s, Ctrl-C) had none for its last part-second, and a pit
-        # that appeared there was "after this recording ends" to `report`
-        if last_published is not None and last_published[0].end_index > diag_end_index:
+        # the end status with the last batch published where the loop ended after it (a stop that
+        # came just after it, a duration set below the signal published).  It is the ground truth
+        # of the last sample too, as `render` ends: a run that ended between two /diagnostics
+        # (duration 5.5 s, Ctrl-C) had none for its last part-second, and a pit that appeared
+        # there was "after this recording ends" to `report`
+        if last_published is not None and not ended:
             item, log_ns = last_published
-            msg = self._diagnostics(item, time.monotonic())
+            msg = self._end_status(item, time.monotonic(), (self._stop_reason or "stopped") if stop else "duration")
             self._publish([(self.pub_diag, msg)])
             if self.recorder is not None:
                 self.recorder.write(self.pub_diag.topic_name, msg, log_ns)
+        if last_published is not None:
+            self._deliver_the_end()
 
     def _publish(self, out):
         """Publish each (publisher, message) of ``out`` while the context lives (a signal may end
@@ -780,13 +799,68 @@ class BearingSimNode(Node):
     def _diagnostics(self, item, now):
         """The ``/diagnostics`` message published with ``item``, the batch whose end it is
         stamped with: what the signal held there, not at the end of what is computed ahead."""
-        from ..recording.render import defect_values, diagnostics_message, scene_values
+        from ..recording.render import diagnostics_message
+
+        values, level, message = self._status(item, now)
+        self._last_status = (item, values, level, message)
+        return diagnostics_message(item.end_stamp, values, level, message,
+                                   self.get_fully_qualified_name().lstrip("/"))
+
+    def _end_status(self, item, now, reason: str):
+        """The run's last ``/diagnostics``, published with ``item``, its last batch: the status
+        with ``run: ended``, ``end_reason`` (``reason``) and ``published_samples``
+        (``messages.end_of_run``).  Where a /diagnostics went out with that batch already, the
+        same status ended: its second's figures, not those of the moment since."""
+        from ..messages import end_of_run
+        from ..recording.render import diagnostics_message
+
+        last = self._last_status
+        if last is not None and last[0] is item:
+            values, level, message = last[1:]
+        else:
+            values, level, message = self._status(item, now)
+        values, level, message = end_of_run(values, level, message, reason, item.end_index,
+                                            self.sim.sample_rate, self._cfg["duration"])
+        return diagnostics_message(item.end_stamp, values, level, message,
+                                   self.get_fully_qualified_name().lstrip("/"))
+
+    def _deliver_the_end(self) -> None:
+        """Wait up to ``END_ACK_TIMEOUT_S`` for every reliable subscriber to acknowledge what the
+        node published (its end status, its last tables): destroyed at once, the node took away
+        what was still on its way, and a consumer could not tell the end of the run from a crash.
+        Said in the log where some subscriber did not acknowledge in time (a stalled one)."""
+        from rclpy.duration import Duration
+
+        from ..messages import END_ACK_TIMEOUT_S
+
+        deadline = time.monotonic() + END_ACK_TIMEOUT_S
+        late = []
+        for pub in (self.pub_diag, self.pub_accel, self.pub_contact, self.pub_state):
+            if not self.context.ok():
+                return
+            left = max(0.0, deadline - time.monotonic())
+            try:
+                if not pub.wait_for_all_acked(Duration(seconds=left)):
+                    late.append(pub.topic_name)
+            except Exception:  # noqa: BLE001 - the context went away while it waited
+                if self.context.ok():
+                    raise
+                return
+        if late:
+            self.get_logger().warning(f"the end of the run not acknowledged within {END_ACK_TIMEOUT_S:g} s "
+                                      f"by every subscriber of {', '.join(late)}: exiting all the same")
+
+    def _status(self, item, now) -> tuple:
+        """``(values, level, message)`` of the ``/diagnostics`` published with ``item``."""
+        from ..messages import RUN_KEY, RUN_RUNNING
+        from ..recording.render import defect_values, scene_values
 
         st = self.stats
         published_index = item.end_index
         period = st.period_end(now, published_index)
         rtf = period["signal_s"] / period["wall_s"] if period["wall_s"] > 0 else float("nan")
         values = {
+            RUN_KEY: RUN_RUNNING,
             **scene_values(self.scene),
             "real_time_factor": f"{rtf:.4f}",
             "real_time": str(bool(self._cfg["real_time"])).lower(),
@@ -841,8 +915,7 @@ class BearingSimNode(Node):
                 text = f"recording dropped {dropped} messages in the last second (the disk is not keeping up)"
                 message = text if level == 0 else f"{message}; {text}"
                 level = 1
-        return diagnostics_message(item.end_stamp, values, level, message,
-                                   self.get_fully_qualified_name().lstrip("/"))
+        return values, level, message
 
 
 
@@ -1042,6 +1115,14 @@ def spin_node(node, signals=None) -> None:
         executor.shutdown(timeout_sec=0)
 
 
+def stop_reason(signals) -> str:
+    """Why the run ends where it did not end by itself (``messages.END_REASONS``), for the node's
+    end status: the signal that ended it (``SIGTERM``), else ``stopped``."""
+    import signal
+
+    return signal.Signals(signals.first).name if signals.first is not None else "stopped"
+
+
 def build_node(factory):
     """``factory()``, the node, with a signal during start-up taken as what it is.  Ctrl-C or
     SIGTERM while the node is being built (loading or, on a cold cache, compiling its kernels:
@@ -1122,7 +1203,7 @@ def main(argv=None) -> int:
     finally:
         signals.shutting_down()         # a signal from here on is held, said, and exits 130 / 143
         if node is not None:
-            node.stop()                 # the recording is closed here, before anything can hang
+            node.stop(reason=stop_reason(signals))      # the recording is closed here, before anything can hang
             error = node.error
         with teardown_watchdog():
             if node is not None:

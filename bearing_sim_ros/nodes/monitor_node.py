@@ -58,7 +58,7 @@ from rclpy.node import Node
 
 from .. import ground_truth
 from ..analysis.envelope import DETECTION_THRESHOLD, FAULT_LINES, diagnose
-from ..messages import TOPIC_ACCEL, TOPIC_DIAGNOSTICS, TOPIC_STATE, waveform_qos
+from ..messages import RUN_ENDED, RUN_KEY, TOPIC_ACCEL, TOPIC_DIAGNOSTICS, TOPIC_STATE, waveform_qos
 from ..teardown import command_signals, teardown_watchdog
 from .bearing_sim_node import NODE_NAME as SIMULATOR_NODE, PEER_CHECK_S
 from ..waveform import NS, from_pointcloud2
@@ -338,6 +338,11 @@ class MonitorNode(Node):
             self.reports.append(truth)
             self.appeared.add(truth)
             self._check_scene(values)
+            if values.get(RUN_KEY) == RUN_ENDED:
+                # the simulator's end status (its last /diagnostics): the tables stopped because the
+                # run is complete (or was stopped), not because it crashed or discovery lost it
+                print(f"monitor: {self.simulator}: {status.message}; waiting for more (a node started "
+                      "again, the next pass of play --loop; Ctrl-C ends the monitor)", file=self.out, flush=True)
             if self._source_start is None and ground_truth.TIME_KEY in values:
                 try:
                     self._source_start = stamp - round(float(values[ground_truth.TIME_KEY]) * NS)

@@ -40,7 +40,7 @@ import threading
 import time
 
 from ..errors import UserError
-from ..messages import DISCOVERY_GRACE_S
+from ..messages import DISCOVERY_GRACE_S, END_ACK_TIMEOUT_S
 from ..teardown import teardown_watchdog
 from ..waveform import NS
 from .reader import deserialize, get_message, open_recording
@@ -48,7 +48,6 @@ from .schemas import qos_from_yaml
 
 WAIT_FOR_SUBSCRIBERS = 5.0    # s, the default of --wait: one missed 3 s announcement period and margin
 WAIT_NOTICE = 1.0             # s without a subscriber before saying that play is waiting for one
-ACK_TIMEOUT = 2.0             # s to let reliable subscribers receive the tail at the end
 WAVEFORM_TYPE = "sensor_msgs/msg/PointCloud2"
 
 
@@ -212,7 +211,7 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
             if not stop.is_set():          # let reliable subscribers receive the tail
                 for pub in pubs.values():
                     try:
-                        pub.wait_for_all_acked(rclpy.duration.Duration(seconds=ACK_TIMEOUT))
+                        pub.wait_for_all_acked(rclpy.duration.Duration(seconds=END_ACK_TIMEOUT_S))
                     except Exception:  # noqa: BLE001 - best effort at the end
                         pass
             log(f"play {path}: {'stopped after' if stop.is_set() else 'published'} {published} messages")

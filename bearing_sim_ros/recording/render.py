@@ -30,8 +30,9 @@ import numpy as np
 from ..errors import UserError
 from ..paths import output_file
 from ..teardown import EXIT_INTERRUPTED, signal_handlers
-from ..messages import BATCH_DURATION, STATE_RATE, TOPIC_ACCEL, TOPIC_CONTACT, TOPIC_DIAGNOSTICS, TOPIC_LOAD, \
-    TOPIC_SHAFT_SPEED, TOPIC_STATE, TYPES, batching_error, duration_error, waveform_qos
+from ..messages import BATCH_DURATION, RUN_KEY, RUN_RUNNING, STATE_RATE, TOPIC_ACCEL, TOPIC_CONTACT, \
+    TOPIC_DIAGNOSTICS, TOPIC_LOAD, TOPIC_SHAFT_SPEED, TOPIC_STATE, TYPES, batching_error, duration_error, \
+    end_of_run, waveform_qos
 from ..ground_truth import BEARING_KEY, SCENE_KEY, diagnostics_values, status_name
 from ..waveform import NS
 
@@ -408,12 +409,14 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
     done = 0
     diagnosed = 0               # samples up to the last /diagnostics written
 
-    def write_diagnostics(pub_ns: int) -> None:
-        """The ``/diagnostics`` of the signal up to ``pub_ns`` (the end of the last batch)."""
+    def write_diagnostics(pub_ns: int, ending: str | None = None) -> None:
+        """The ``/diagnostics`` of the signal up to ``pub_ns`` (the end of the last batch); with
+        ``ending`` (``messages.END_REASONS``) the render's last, its end status, as the node's."""
         nonlocal diagnosed
         # the live node's keys (nodes/bearing_sim_node.py); what depends on the wall clock
         # or the output path is left out so that the file stays byte-identical
-        values = {**scene_values(scene), "real_time_factor": "nan", "real_time": "false", "mode": "render",
+        values = {RUN_KEY: RUN_RUNNING, **scene_values(scene), "real_time_factor": "nan", "real_time": "false",
+                  "mode": "render",
                   "overruns": 0, "overruns_last_period": 0, "lag_s": "0.000000",
                   "worst_lag_s": "0.000000", **tier_values(sim), **defect_values(sim),
                   "shaft_speed_rad_s": f"{sim.shaft_speed:.6g}",
@@ -423,8 +426,10 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
         values.update(means.values())
         clipped = means.clipped_text()         # a warning, as the live node gives it
         means.reset()
-        rec.write(TOPIC_DIAGNOSTICS, diagnostics_message(pub_ns, values, 1 if clipped else 0,
-                                                         clipped or "ok"), pub_ns)
+        level, message = (1, clipped) if clipped else (0, "ok")
+        if ending is not None:
+            values, level, message = end_of_run(values, level, message, ending, done, sample_rate, duration)
+        rec.write(TOPIC_DIAGNOSTICS, diagnostics_message(pub_ns, values, level, message), pub_ns)
         diagnosed = done
 
     try:
@@ -432,7 +437,7 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
             rec.add_topic(topic, TYPES[topic], _qos_for(topic, batch_duration))
         with _stop_at_batch_end() as stop:
             while done < total:
-                if stop.signum is not None:         # a whole batch each, so done is exact
+                if stop.signum is not None and not done:     # before the first batch: nothing rendered
                     raise Terminated() if stop.signum == signal.SIGTERM else KeyboardInterrupt()
                 if rec.error:
                     break       # the recording stopped (disk full, its file deleted): said below
@@ -450,13 +455,21 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
                 if math.floor(done * state_rate / sample_rate) > math.floor((done - n) * state_rate / sample_rate):
                     rec.write(TOPIC_STATE, msgs.state(pub_ns), pub_ns)
                 means.add(batch)
-                # once per second of signal, and at its end when that is within a second: a pit that
-                # appears in the last part-second has ground truth too (the report said it came
-                # "after this recording ends")
-                while done >= next_diag_s * sample_rate or (done == total and done > (next_diag_s - 1) * sample_rate):
+                # a signal stops the render after a whole batch (so done is exact), this one: its
+                # /diagnostics is the end status, as the node's on a signal
+                ending = ("duration" if done == total else
+                          None if stop.signum is None else signal.Signals(stop.signum).name)
+                # once per second of signal, and at its end (the end status) when that is within a
+                # second: a pit that appears in the last part-second has ground truth too (the report
+                # said it came "after this recording ends")
+                while done >= next_diag_s * sample_rate and not ending:
                     write_diagnostics(pub_ns)
                     next_diag_s += 1
+                if ending:
+                    write_diagnostics(pub_ns, ending)
                 bar.update(done / sample_rate)
+                if stop.signum is not None and done < total:     # in the last batch: complete
+                    raise Terminated() if stop.signum == signal.SIGTERM else KeyboardInterrupt()
     except KeyboardInterrupt as exc:
         # Ctrl-C or SIGTERM: keep what was rendered, finalised, and say so (nothing rendered:
         # nothing replaces what out held)
@@ -464,11 +477,11 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
         with _signals_held():
             if done:
                 if diagnosed < done and not rec.error:
-                    # the end of the signal has its /diagnostics, as a render that ran to its end
-                    # and the live node stopped by a signal have: without it the ground truth of
-                    # the last part-second was missing (a pit that appeared there was "after
-                    # this recording ends")
-                    write_diagnostics(msgs.stamp_ns(done))
+                    # a KeyboardInterrupt from a caller's own handler, in the middle of the loop:
+                    # the end of the signal has its end status all the same (and the ground truth
+                    # of its last part-second: a pit that appeared there was "after this recording
+                    # ends")
+                    write_diagnostics(msgs.stamp_ns(done), signal.Signals(getattr(exc, "signum", signal.SIGINT)).name)
                 rec.close()
             else:
                 rec.discard()
