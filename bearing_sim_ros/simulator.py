@@ -412,6 +412,12 @@ class Simulator:
             done = end
         for key, parts in extras.items():
             old = pend.get("x_" + key)
+            if old is None and p:
+                # the tier that has them took over now: the pending rows, the first of this
+                # call's output, were computed by the other one, which has no such series.  NaN
+                # keeps every row on its own sample (without it, every batch after a switch to
+                # the skidding tier carried the values of the samples ``p`` later)
+                old = np.full((p, *parts[0].shape[1:]), np.nan)
             if old is not None:
                 parts.insert(0, old)
             series["x_" + key] = parts[0] if len(parts) == 1 else np.concatenate(parts, axis=0)

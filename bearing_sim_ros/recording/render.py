@@ -176,7 +176,12 @@ class PeriodMeans:
         for name, val in batch.extras.items():
             if name in PERIOD_EXTRAS:
                 key, absolute = PERIOD_EXTRAS[name]
-                self._add(key, float(np.mean(np.abs(val) if absolute else val)) * n, n)
+                # the rows that have values: where fidelity auto switched to the skidding tier,
+                # the batch's first rows came from the kinematic tier and are NaN
+                rows = ~np.isnan(val).reshape(val.shape[0], -1).any(axis=1)
+                had = int(np.count_nonzero(rows))
+                if had:
+                    self._add(key, float(np.mean(np.abs(val[rows]) if absolute else val[rows])) * had, had)
         self._add("cage", float(np.sum(batch.cage_speed)), n)
         self._add("shaft", float(np.sum(batch.shaft_speed)), n)
         if self.clip_limit is not None:
