@@ -271,6 +271,14 @@ class Simulator:
         self._model = self._build_model(self.tier, self._defect_schedule.sizes(0))
         self._build_chain()
 
+    def __copy__(self):
+        """An independent simulator that continues from here bit for bit, as ``copy.deepcopy``
+        (and pickle) give: a shallow copy shared the tier's and the sensor chain's buffers, and
+        advancing one broke the other."""
+        import copy
+
+        return copy.deepcopy(self)
+
     # ---- construction ---------------------------------------------------------------------
     def _build_model(self, tier: str, defect_sizes: tuple, ellipse_ball_load: float | None = None,
                      takes_over_from=None):
