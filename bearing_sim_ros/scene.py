@@ -233,10 +233,13 @@ class Scene:
 
     @property
     def shaft_hz(self) -> float:
+        """The operating point's shaft speed in Hz (revolutions per second; negative: turning
+        the other way), what ``Bearing.fault_frequencies`` takes."""
         return self.shaft_speed / (2.0 * math.pi)
 
     def fault_frequencies(self, shaft_speed: float | None = None) -> dict:
-        """Fault frequencies (Hz) at ``shaft_speed`` (rad/s; default: the scene's)."""
+        """Fault frequencies (Hz, ``Bearing.fault_frequencies``) at ``shaft_speed`` (rad/s, unlike
+        the bearing's, which takes Hz; default: the scene's)."""
         w = self.shaft_speed if shaft_speed is None else shaft_speed
         return self.bearing.fault_frequencies(w / (2.0 * math.pi))
 
