@@ -190,7 +190,7 @@ class Scene:
     def __post_init__(self):
         # a bearing changed in Python (dataclasses.replace(scene.bearing, ...)) first: every
         # check below rests on it (a ball_mass of -1 was a math domain error inside the physics)
-        error = _bearing_error(self.bearing)
+        error = _bearing_error(self.bearing) or _lists_error(self)
         if error:
             raise SceneError(f"scene {self.name}: {error}")
         # the bearing's limits for a scene made in Python too (dataclasses.replace(scene,
@@ -602,6 +602,37 @@ def _sensor_error(sensor) -> str:
     if not error and not (isinstance(sensor.frame_id, str) and sensor.frame_id):
         error = f"sensor.frame_id = {short_repr(sensor.frame_id)}: expected a non-empty string"
     return error
+
+
+# what each list of a Scene holds, and how its error names it
+_LIST_ITEMS = {"defects": (Defect, "scene.Defect (m, rad, s)"), "waviness": (Waviness, "scene.Waviness (m, rad)"),
+               "profile": (ProfilePoint, "scene.ProfilePoint (t s, shaft_speed rad/s, radial_load (x, y) N)")}
+
+
+def _lists_error(scene) -> str:
+    """"" when the defects, waviness and profile of a scene made in Python are lists of their
+    dataclasses, the profile's times increase from 0 on and the outputs are known, as the YAML's
+    readers make them; else the line naming the field (a lone Defect was "'Defect' object is not
+    iterable", a knot as a plain tuple an AttributeError, a misspelt output ran without it)."""
+    for key, (kind, what) in _LIST_ITEMS.items():
+        items = getattr(scene, key)
+        if not isinstance(items, (tuple, list)):
+            return f"{key} = {short_repr(items)}: expected a tuple of {what.split(' ')[0]}"
+        for i, item in enumerate(items):
+            if not isinstance(item, kind):
+                return f"{key}[{i}] = {short_repr(item)}: expected a {what}"
+    last_t = -math.inf
+    for i, knot in enumerate(scene.profile):
+        error = _number_error(f"profile[{i}].t", knot.t, 0.0, 1e6, "s")
+        if error:
+            return error
+        if knot.t <= last_t:
+            return f"profile[{i}].t = {knot.t:g} s: times must increase (previous {last_t:g})"
+        last_t = knot.t
+    outputs = scene.outputs
+    if isinstance(outputs, str) or not isinstance(outputs, (tuple, list)) or any(o not in OUTPUTS for o in outputs):
+        return f"outputs = {short_repr(outputs)}: expected a list from {', '.join(OUTPUTS)}"
+    return ""
 
 
 def _operating_point_type_error(speed, load, speed_key: str, load_key: str) -> str:

@@ -578,6 +578,36 @@ def test_a_scenes_waviness_changed_in_python_is_held_to_the_yamls_limits(wavines
 
 
 @pytest.mark.parametrize("change, line", [
+    (lambda s: {"defects": s.defects[0]}, r"defects = Defect\(kind='outer', .*: expected a tuple of scene.Defect"),
+    (lambda s: {"defects": (("outer", 1e-3, 1e-4, 1e-3),)},
+     r"defects\[0\] = \('outer', 0.001, 0.0001, 0.001\): expected a scene.Defect \(m, rad, s\)"),
+    (lambda s: {"waviness": Waviness("inner", 3, 1e-6)},
+     r"waviness = Waviness\(race='inner', .*: expected a tuple of scene.Waviness"),
+    (lambda s: {"profile": ((0.5, 100.0, (0.0, -50.0)),)},
+     r"profile\[0\] = \(0.5, 100.0, \(0.0, -50.0\)\): expected a scene.ProfilePoint \(t s, shaft_speed rad/s, "
+     r"radial_load \(x, y\) N\)"),
+    (lambda s: {"profile": (ProfilePoint(1.0, 100.0, (0.0, -50.0)), ProfilePoint(0.5, 100.0, (0.0, -50.0)))},
+     r"profile\[1\].t = 0.5 s: times must increase \(previous 1\)"),
+    (lambda s: {"profile": (ProfilePoint(-1.0, 100.0, (0.0, -50.0)),)},
+     r"profile\[0\].t = -1 s: allowed range is \[0, 1e\+06\] s"),
+    (lambda s: {"outputs": ("accel", "skid_ratio")},
+     r"outputs = \('accel', 'skid_ratio'\): expected a list from accel, contact_forces, cage_speed, skid_ratios"),
+])
+def test_a_scenes_lists_changed_in_python_are_checked(change, line):
+    """A scene's defects, waviness, profile and outputs set in Python: a lone Defect for a tuple
+    of them was "TypeError: 'Defect' object is not iterable", a knot given as a plain tuple an
+    AttributeError, knots out of order or before 0 were taken as given (the YAML refuses them),
+    and a misspelt output ("skid_ratio") ran the kinematic tier without the skid ratios the scene
+    asked for, without a word.  Now one line each, as the YAML's keys have it."""
+    scene = load_scene("er16k_outer_race")
+    with pytest.raises(SceneError, match=rf"^scene er16k_outer_race: {line}$"):
+        dataclasses.replace(scene, **change(scene))
+    fine = dataclasses.replace(scene, defects=list(scene.defects), outputs=["accel", "skid_ratios"],
+                               profile=[ProfilePoint(0.0, 100.0, (0.0, -50.0)), ProfilePoint(1.0, 150.0, (0.0, -60.0))])
+    assert Simulator(fine).tier == "skidding"
+
+
+@pytest.mark.parametrize("change, line", [
     ({"ball_mass": -1.0}, "bearing.ball_mass_kg = -1.0: allowed range is [1e-06, 100.0]"),
     ({"elastic_modulus": 0.0}, "bearing.elastic_modulus_gpa = 0.0: allowed range is [1.0, 1000.0]"),
     ({"inner_groove_conformity": 0.4}, "bearing.inner_groove_conformity = 0.4: allowed range is [0.505, 0.6]"),
