@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 import numbers
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
@@ -829,6 +829,17 @@ def scene_argument(scene: Scene) -> str:
     if path.suffix == ".yaml" and path == (scenes_dir() / f"{path.stem}.yaml").resolve():
         return path.stem
     return str(path)
+
+
+def changes_since_loaded(scene: Scene) -> tuple:
+    """The fields of ``scene`` that differ from the YAML it was loaded from (``source_text``):
+    a scene changed in Python (``dataclasses.replace``) keeps its file's text and path, which a
+    recording takes for how to make it again.  () for a scene as loaded, or without a text."""
+    if not scene.source_text:
+        return ()
+    name = Path(scene.source_path).stem if scene.source_path else scene.name
+    loaded = scene_from_dict(load_yaml(scene.source_text), name=name)
+    return tuple(f.name for f in fields(Scene) if f.compare and getattr(scene, f.name) != getattr(loaded, f.name))
 
 
 def resolve_scene_path(name_or_path: str | Path) -> Path:

@@ -862,3 +862,25 @@ def test_period_means_leave_out_the_rows_without_skid_ratios():
     # sample-weighted: 131 rows at 2 %, 150 at 4 %
     assert float(values["cage_skid_ratio"]) == pytest.approx((131 * 2.0 + 150 * 4.0) / 281, rel=1e-3)
     assert float(values["slip_inner_m_s"]) == pytest.approx((131 * 0.5 + 150 * 1.0) / 281, rel=1e-3)
+
+
+def test_a_scene_changed_in_python_is_not_recorded_as_its_file(tmp_path):
+    """A recording holds its scene's YAML and the command that makes it again (INTERFACE:
+    "a recording says how to reproduce it").  A scene changed in Python after loading
+    (``dataclasses.replace``) was recorded with its file's YAML and command: an inner-race pit at
+    200 N went into the file as er16k_outer_race's outer-race pit at 50 N, and ``report`` said
+    the scene's outer-race defect was "not in this recording".  Now ``render`` refuses it in one
+    line that names the fields that differ, before any work; the scene as loaded renders."""
+    import dataclasses
+
+    scene = load_scene("er16k_outer_race")
+    changed = dataclasses.replace(scene, defects=(dataclasses.replace(scene.defects[0], kind="inner"),),
+                                  radial_load=(0.0, -200.0))
+    out = tmp_path / "changed.mcap"
+    with pytest.raises(UserError, match=r"^scene er16k_outer_race: changed in Python since it was loaded from "
+                                        r"er16k_outer_race.yaml \(radial_load, defects\); .* write the changed "
+                                        r"scene to a YAML file and render that$"):
+        render(changed, 0.05, out, fidelity="kinematic", progress=False)
+    assert not out.exists()
+    render(dataclasses.replace(scene), 0.05, out, fidelity="kinematic", progress=False)    # the same scene
+    assert out.exists()
