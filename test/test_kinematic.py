@@ -156,6 +156,17 @@ def test_chunked_equals_continuous(scene, oversample):
     assert [p.index0 for p in parts] == list(np.cumsum([0] + sizes[:-1]))
 
 
+def test_batches_compare_by_their_samples():
+    """``batch_a == batch_b`` says whether two runs gave the same samples (the check of a seed's
+    reproducibility): the generated comparison asked numpy for the truth value of whole arrays
+    and raised "The truth value of an array ... is ambiguous"."""
+    a = Simulator("er16k_outer_race", seed=1, fidelity="kinematic").advance(150)
+    b = Simulator("er16k_outer_race", seed=1, fidelity="kinematic").advance(150)
+    c = Simulator("er16k_outer_race", seed=2, fidelity="kinematic").advance(150)
+    assert a == b and not (a != b)
+    assert a != c and a != "a batch"
+
+
 def test_a_copied_simulator_continues_on_its_own():
     """copy.copy, copy.deepcopy and pickle give a simulator that continues from where the
     original is, bit for bit, and advancing it leaves the original as it was.  Until 2026-11-29
