@@ -604,25 +604,25 @@ def _sensor_error(sensor) -> str:
     return error
 
 
-# what each list of a Scene holds, and how its error names it
-_LIST_ITEMS = {"defects": (Defect, "scene.Defect (m, rad, s)"), "waviness": (Waviness, "scene.Waviness (m, rad)"),
-               "profile": (ProfilePoint, "scene.ProfilePoint (t s, shaft_speed rad/s, radial_load (x, y) N)")}
+# the lists of a Scene and what they hold (their items are checked by _defect_error and so on)
+_LISTS = {"defects": "bearing_sim_ros.scene.Defect", "waviness": "bearing_sim_ros.scene.Waviness",
+          "profile": "bearing_sim_ros.scene.ProfilePoint"}
 
 
 def _lists_error(scene) -> str:
-    """"" when the defects, waviness and profile of a scene made in Python are lists of their
-    dataclasses, the profile's times increase from 0 on and the outputs are known, as the YAML's
-    readers make them; else the line naming the field (a lone Defect was "'Defect' object is not
-    iterable", a knot as a plain tuple an AttributeError, a misspelt output ran without it)."""
-    for key, (kind, what) in _LIST_ITEMS.items():
+    """"" when the defects, waviness and profile of a scene made in Python are lists, the
+    profile's knots ProfilePoints whose times increase from 0 on and the outputs known, as the
+    YAML's readers make them; else the line naming the field (a lone Defect was "'Defect' object
+    is not iterable", a knot as a plain tuple an AttributeError, a misspelt output ran without it)."""
+    for key, what in _LISTS.items():
         items = getattr(scene, key)
         if not isinstance(items, (tuple, list)):
-            return f"{key} = {short_repr(items)}: expected a tuple of {what.split(' ')[0]}"
-        for i, item in enumerate(items):
-            if not isinstance(item, kind):
-                return f"{key}[{i}] = {short_repr(item)}: expected a {what}"
+            return f"{key} = {short_repr(items)}: expected a tuple of {what}"
     last_t = -math.inf
     for i, knot in enumerate(scene.profile):
+        if not isinstance(knot, ProfilePoint):
+            return (f"profile[{i}] = {short_repr(knot)}: expected a {_LISTS['profile']} (t s, shaft_speed rad/s, "
+                    "radial_load (x, y) N)")
         error = _number_error(f"profile[{i}].t", knot.t, 0.0, 1e6, "s")
         if error:
             return error
