@@ -166,7 +166,17 @@ class ProfilePoint:
 
 @dataclass(frozen=True)
 class Scene:
-    """Everything a simulation needs, in SI units.  Built by :func:`load_scene`."""
+    """Everything a simulation needs, in SI units (where the YAML says rpm, mm, um or degrees).
+    Built by :func:`load_scene`; ``dataclasses.replace`` makes a changed one, checked as the YAML
+    is (a :class:`~bearing_sim_ros.errors.SceneError` of one line).
+
+    shaft_speed: rad/s (not rpm); radial_load: (x, y) N, y up; defects, waviness, profile: tuples
+    of :class:`Defect` (m, rad, s), :class:`Waviness` (m, rad) and :class:`ProfilePoint` (s,
+    rad/s, N; ``render`` follows it, a ``Simulator`` does not); random_slip: a fraction of the
+    ball spacing; fidelity: "auto" | "kinematic" | "skidding" with ``fidelity_tolerance`` (a
+    relative error); outputs: from accel, contact_forces, cage_speed, skid_ratios.
+    ``source_text`` and ``source_path``: the YAML it was loaded from (not compared).
+    """
 
     name: str
     description: str
