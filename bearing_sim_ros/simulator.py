@@ -483,8 +483,13 @@ class Simulator:
         return s0 + (s1 - s0) * f, (l0x + (l1x - l0x) * f, l0y + (l1y - l0y) * f)
 
     def advance(self, n: int, shaft_speed: float | None = None, radial_load=None) -> Batch:
-        """Advance by ``n`` output samples.  ``shaft_speed`` (rad/s) and ``radial_load`` (N, (x, y))
-        replace the operating point; the change is ramped over this call."""
+        """Advance by ``n`` output samples (1 - ``max_advance``) and return them as a :class:`Batch`.
+        ``shaft_speed`` (rad/s, not rpm) and ``radial_load`` (N, (x, y), y up) replace the operating
+        point; the change is ramped over this call, and shows in the samples the sensor chain's
+        lookahead later (19 samples at 15 kHz: the physics runs that far ahead of the output).
+        Chunks give the same samples as one call at the same operating point (a command ramps
+        over the call that gives it, so where it falls is part of the run).  A bad argument, or an
+        operating point beyond the bearing's limits, is a one-line UserError."""
         if not (_whole_number(n) and n > 0):
             raise UserError(f"n = {n!r}: expected a whole number of samples > 0")
         if n > self.max_advance:
