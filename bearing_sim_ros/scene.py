@@ -240,6 +240,13 @@ class Scene:
                       f"gravity = {short_repr(self.gravity)}: expected True or False"):
             if error:
                 raise SceneError(f"scene {self.name}: {error}")
+        # held as load_scene makes them, tuples of numbers, so that scenes compare and hash: a
+        # numpy load made ``scene == other`` numpy's "truth value ... is ambiguous"
+        object.__setattr__(self, "radial_load", tuple(float(v) for v in self.radial_load))
+        knots = (ProfilePoint(p.t, p.shaft_speed, tuple(float(v) for v in p.radial_load)) for p in self.profile)
+        object.__setattr__(self, "profile", tuple(knots))
+        for name in ("defects", "waviness", "outputs"):
+            object.__setattr__(self, name, tuple(getattr(self, name)))
 
     @property
     def shaft_hz(self) -> float:

@@ -577,6 +577,22 @@ def test_a_scenes_waviness_changed_in_python_is_held_to_the_yamls_limits(wavines
     assert np.isfinite(Simulator(wavy, fidelity="kinematic").advance(150).accel).all()
 
 
+def test_a_scene_changed_in_python_holds_tuples_and_compares():
+    """A scene given a numpy load or lists (``dataclasses.replace(scene, radial_load=np.array(...),
+    defects=[...])``, which the README's Python API takes) holds them as tuples of numbers, as
+    load_scene makes them: ``scene == other`` raised numpy's "truth value of an array ... is
+    ambiguous" (and so did render's check that a scene is as loaded), and ``hash(scene)``
+    "unhashable type: 'numpy.ndarray'"."""
+    scene = load_scene("er16k_outer_race")
+    same = dataclasses.replace(scene, radial_load=np.array([0.0, -50.0]), defects=list(scene.defects),
+                               outputs=list(scene.outputs),
+                               profile=[ProfilePoint(1.0, np.float64(100.0), np.array([0.0, -60.0]))])
+    assert same.radial_load == (0.0, -50.0) and type(same.radial_load[1]) is float
+    assert isinstance(same.defects, tuple) and isinstance(same.outputs, tuple) and isinstance(same.profile, tuple)
+    assert same.profile[0].radial_load == (0.0, -60.0)
+    assert same == dataclasses.replace(scene, profile=same.profile) and hash(same) == hash(same)
+
+
 @pytest.mark.parametrize("change, line", [
     (lambda s: {"defects": s.defects[0]},
      r"defects = Defect\(kind='outer', .*: expected a tuple of bearing_sim_ros.scene.Defect"),
