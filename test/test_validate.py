@@ -405,6 +405,18 @@ def test_the_detector_refuses_a_record_too_short_for_its_lines_neighbourhood():
     assert all(np.isfinite(v) for v in scores.values()), scores
 
 
+def test_a_line_whose_search_window_fills_its_neighbourhood_is_measured_beyond_it():
+    """Above about 1.8 kHz (a shaft beyond some 20 000 rpm: BPFI of an ER-16K at 25 000 rpm is
+    2.26 kHz) the +-1 % search window and two bins fill the +-20 Hz neighbourhood: the line's
+    prominence was infinite, a fault on anything.  Its neighbourhood is then the next 20 Hz beyond
+    the window; below that nothing changes."""
+    freqs = np.arange(0.0, 3000.0, 1.0)
+    spec = np.ones_like(freqs)
+    for f0 in (2300.0, 300.0):
+        spec[int(f0)] = 10.0
+        assert env.line_at(freqs, spec, f0).prominence == pytest.approx(10.0)
+
+
 def test_the_detector_calls_a_flat_signal_healthy():
     """A channel that holds a constant (a dead sensor, zeros) has no lines: prominence 0, verdict
     "healthy".  Until 2026-11-29 0 / 0 counted as an infinite prominence and the verdict was

@@ -139,9 +139,10 @@ class Line:
 def line_at(freqs: np.ndarray, spec: np.ndarray, f0: float, search_rel: float = 0.01,
             neighbourhood_hz: float = 20.0) -> Line:
     """The largest line within +-``search_rel`` of ``f0`` and its prominence over the median of
-    the spectrum in +-``neighbourhood_hz`` around it (the search window excluded).  The
-    prominence is NaN where that neighbourhood holds no bin (bins too coarse, or a search window
-    as wide as it) and 0 where the spectrum is 0 there (a flat signal has no lines)."""
+    the spectrum in +-``neighbourhood_hz`` around it (the search window and two bins excluded;
+    where they fill it, the ``neighbourhood_hz`` beyond them).  The prominence is NaN where that
+    holds no bin (bins as coarse as it) and 0 where the spectrum is 0 there (a flat signal has
+    no lines)."""
     df = freqs[1] - freqs[0]
     tol = max(search_rel * f0, 1.5 * df)
     sel = np.flatnonzero(np.abs(freqs - f0) <= tol)
@@ -161,6 +162,10 @@ def line_at(freqs: np.ndarray, spec: np.ndarray, f0: float, search_rel: float = 
             fk = freqs[k] + 0.5 * (a - c) / denom * df
     near = np.abs(freqs - fk)
     ring = (near <= neighbourhood_hz) & (near > tol + 2 * df)
+    if not ring.any():
+        # a search window (+-search_rel) that fills the neighbourhood, a line above about 1.8 kHz:
+        # the neighbourhood's width beyond it (there was no bin, an infinite prominence)
+        ring = (near <= tol + 2 * df + neighbourhood_hz) & (near > tol + 2 * df)
     median = float(np.median(spec[ring])) if ring.any() else float("nan")
     # not a number where there is nothing to compare with (it was infinite, and every line of a
     # record too short for its neighbourhood a fault); 0 / 0 (a flat signal: no line, no floor)
@@ -189,8 +194,8 @@ def fault_lines(x: np.ndarray, fs: float, frequencies: dict, band=DEFAULT_BAND,
 
     ``frequencies``: ``{"ftf", "bpfo", "bpfi", "bsf"}`` in Hz (``Bearing.fault_frequencies``).
     Returns ``{name: Line}`` for "bpfo", "bpfi", "2bsf", "ftf".  A record (or ``segment``)
-    shorter than :func:`shortest_record_s`, or a line whose search window leaves it no
-    neighbourhood, is a one-line :class:`~bearing_sim_ros.errors.UserError`.
+    shorter than :func:`shortest_record_s`, whose bins leave a line no neighbourhood, is a
+    one-line :class:`~bearing_sim_ros.errors.UserError`.
     """
     x = one_channel(x)
     reason = _too_short(x.size, fs, segment, neighbourhood_hz)
@@ -199,13 +204,7 @@ def fault_lines(x: np.ndarray, fs: float, frequencies: dict, band=DEFAULT_BAND,
     targets = fault_targets(frequencies)
     fmax = 1.2 * max(targets.values()) + 2 * neighbourhood_hz
     freqs, spec = envelope_spectrum(x, fs, band, max_freq=fmax, segment=segment)
-    lines = {name: line_at(freqs, spec, f0, search_rel, neighbourhood_hz) for name, f0 in targets.items()}
-    for name, line in lines.items():
-        if np.isnan(line.prominence):
-            raise UserError(f"neighbourhood_hz = {neighbourhood_hz:g}: the {name} line at {line.expected_hz:g} Hz "
-                            f"has none to be compared with: its search window (+-{search_rel:g} of it) and two bins "
-                            f"of {freqs[1] - freqs[0]:.3g} Hz on either side fill it; give a wider neighbourhood_hz")
-    return lines
+    return {name: line_at(freqs, spec, f0, search_rel, neighbourhood_hz) for name, f0 in targets.items()}
 
 
 DETECTION_THRESHOLD = 4.0   # prominence (line over local median) that counts as a detected fault
