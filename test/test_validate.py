@@ -417,6 +417,16 @@ def test_a_line_whose_search_window_fills_its_neighbourhood_is_measured_beyond_i
         assert env.line_at(freqs, spec, f0).prominence == pytest.approx(10.0)
 
 
+def test_the_detector_says_what_frequencies_it_needs():
+    """``frequencies`` without one of its keys (a dict of the lines of interest only) or not a
+    mapping was a KeyError 'bpfi' or a TypeError from inside the detector; now one line."""
+    x = np.random.default_rng(1).standard_normal(12000)
+    for frequencies in ({"bpfo": 107.4}, [107.4, 162.2], None):
+        with pytest.raises(UserError, match=r"^frequencies = .*: expected the fault frequencies in Hz, a mapping with "
+                                            r"ftf, bpfo, bpfi, bsf \(Bearing.fault_frequencies, Scene.fault_frequencies\)$"):
+            env.diagnose(x, 12000.0, frequencies)
+
+
 def test_the_detector_calls_a_flat_signal_healthy():
     """A channel that holds a constant (a dead sensor, zeros) has no lines: prominence 0, verdict
     "healthy".  Until 2026-11-29 0 / 0 counted as an infinite prominence and the verdict was

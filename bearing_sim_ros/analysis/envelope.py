@@ -25,14 +25,16 @@ Choices, checked on the CWRU recordings (``bearing-sim validate``, README "Valid
 """
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import UserError
+from ..errors import UserError, short_repr
 
 DEFAULT_BAND = (2000.0, 5000.0)
 DEFAULT_SEGMENT = 1.0     # s: length of the averaged segments of the detector's envelope spectrum
+FAULT_KEYS = ("ftf", "bpfo", "bpfi", "bsf")   # what Bearing.fault_frequencies gives, Hz
 FAULT_LINES = {          # which envelope line marks which fault
     "outer": "bpfo",
     "inner": "bpfi",
@@ -182,6 +184,9 @@ def line_at(freqs: np.ndarray, spec: np.ndarray, f0: float, search_rel: float = 
 def fault_targets(frequencies: dict) -> dict:
     """The envelope lines to look at (Hz): "bpfo", "bpfi", "2bsf" (a ball defect strikes both
     races once per spin turn), "ftf"."""
+    if not (isinstance(frequencies, Mapping) and all(k in frequencies for k in FAULT_KEYS)):
+        raise UserError(f"frequencies = {short_repr(frequencies)}: expected the fault frequencies in Hz, a mapping "
+                        f"with {', '.join(FAULT_KEYS)} (Bearing.fault_frequencies, Scene.fault_frequencies)")
     return {"bpfo": frequencies["bpfo"], "bpfi": frequencies["bpfi"],
             "2bsf": 2.0 * frequencies["bsf"], "ftf": frequencies["ftf"]}
 
