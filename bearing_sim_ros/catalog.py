@@ -85,14 +85,16 @@ class Bearing:
         return self.ball_diameter * math.cos(self.contact_angle) / self.pitch_diameter
 
     def fault_frequencies(self, shaft_hz: float) -> dict:
-        """Kinematic (pure rolling) fault frequencies in Hz at a shaft speed in Hz.
+        """Kinematic (pure rolling) fault frequencies in Hz at a shaft speed in Hz (not rad/s).
 
         Returns ``{"ftf", "bpfo", "bpfi", "bsf"}``: cage (fundamental train), ball pass outer
         and inner race, ball spin.  The ball-defect line in an envelope spectrum sits at 2 x BSF
-        (the defect meets both races once per spin turn).
+        (the defect meets both races once per spin turn).  Rates of events, >= 0 whichever way
+        the shaft turns (a negative speed gave negative ones, where no detector finds a line).
         """
         g = self.diameter_ratio
         n = self.balls
+        shaft_hz = abs(shaft_hz)
         ftf = 0.5 * shaft_hz * (1.0 - g)
         return {
             "ftf": ftf,

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 import numbers
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
@@ -166,7 +166,17 @@ class ProfilePoint:
 
 @dataclass(frozen=True)
 class Scene:
-    """Everything a simulation needs, in SI units.  Built by :func:`load_scene`."""
+    """Everything a simulation needs, in SI units (where the YAML says rpm, mm, um or degrees).
+    Built by :func:`load_scene`; ``dataclasses.replace`` makes a changed one, checked as the YAML
+    is (a :class:`~bearing_sim_ros.errors.SceneError` of one line).
+
+    shaft_speed: rad/s (not rpm); radial_load: (x, y) N, y up; defects, waviness, profile: tuples
+    of :class:`Defect` (m, rad, s), :class:`Waviness` (m, rad) and :class:`ProfilePoint` (s,
+    rad/s, N; ``render`` follows it, a ``Simulator`` does not); random_slip: a fraction of the
+    ball spacing; fidelity: "auto" | "kinematic" | "skidding" with ``fidelity_tolerance`` (a
+    relative error); outputs: from accel, contact_forces, cage_speed, skid_ratios.
+    ``source_text`` and ``source_path``: the YAML it was loaded from (not compared).
+    """
 
     name: str
     description: str
@@ -190,7 +200,7 @@ class Scene:
     def __post_init__(self):
         # a bearing changed in Python (dataclasses.replace(scene.bearing, ...)) first: every
         # check below rests on it (a ball_mass of -1 was a math domain error inside the physics)
-        error = _bearing_error(self.bearing)
+        error = _bearing_error(self.bearing) or _lists_error(self)
         if error:
             raise SceneError(f"scene {self.name}: {error}")
         # the bearing's limits for a scene made in Python too (dataclasses.replace(scene,
@@ -230,13 +240,23 @@ class Scene:
                       f"gravity = {short_repr(self.gravity)}: expected True or False"):
             if error:
                 raise SceneError(f"scene {self.name}: {error}")
+        # held as load_scene makes them, tuples of numbers, so that scenes compare and hash: a
+        # numpy load made ``scene == other`` numpy's "truth value ... is ambiguous"
+        object.__setattr__(self, "radial_load", tuple(float(v) for v in self.radial_load))
+        knots = (ProfilePoint(p.t, p.shaft_speed, tuple(float(v) for v in p.radial_load)) for p in self.profile)
+        object.__setattr__(self, "profile", tuple(knots))
+        for name in ("defects", "waviness", "outputs"):
+            object.__setattr__(self, name, tuple(getattr(self, name)))
 
     @property
     def shaft_hz(self) -> float:
+        """The operating point's shaft speed in Hz (revolutions per second; negative: turning
+        the other way), what ``Bearing.fault_frequencies`` takes."""
         return self.shaft_speed / (2.0 * math.pi)
 
     def fault_frequencies(self, shaft_speed: float | None = None) -> dict:
-        """Fault frequencies (Hz) at ``shaft_speed`` (rad/s; default: the scene's)."""
+        """Fault frequencies (Hz, ``Bearing.fault_frequencies``) at ``shaft_speed`` (rad/s, unlike
+        the bearing's, which takes Hz; default: the scene's)."""
         w = self.shaft_speed if shaft_speed is None else shaft_speed
         return self.bearing.fault_frequencies(w / (2.0 * math.pi))
 
@@ -601,6 +621,37 @@ def _sensor_error(sensor) -> str:
     return error
 
 
+# the lists of a Scene and what they hold (their items are checked by _defect_error and so on)
+_LISTS = {"defects": "bearing_sim_ros.scene.Defect", "waviness": "bearing_sim_ros.scene.Waviness",
+          "profile": "bearing_sim_ros.scene.ProfilePoint"}
+
+
+def _lists_error(scene) -> str:
+    """"" when the defects, waviness and profile of a scene made in Python are lists, the
+    profile's knots ProfilePoints whose times increase from 0 on and the outputs known, as the
+    YAML's readers make them; else the line naming the field (a lone Defect was "'Defect' object
+    is not iterable", a knot as a plain tuple an AttributeError, a misspelt output ran without it)."""
+    for key, what in _LISTS.items():
+        items = getattr(scene, key)
+        if not isinstance(items, (tuple, list)):
+            return f"{key} = {short_repr(items)}: expected a tuple of {what}"
+    last_t = -math.inf
+    for i, knot in enumerate(scene.profile):
+        if not isinstance(knot, ProfilePoint):
+            return (f"profile[{i}] = {short_repr(knot)}: expected a {_LISTS['profile']} (t s, shaft_speed rad/s, "
+                    "radial_load (x, y) N)")
+        error = _number_error(f"profile[{i}].t", knot.t, 0.0, 1e6, "s")
+        if error:
+            return error
+        if knot.t <= last_t:
+            return f"profile[{i}].t = {knot.t:g} s: times must increase (previous {last_t:g})"
+        last_t = knot.t
+    outputs = scene.outputs
+    if isinstance(outputs, str) or not isinstance(outputs, (tuple, list)) or any(o not in OUTPUTS for o in outputs):
+        return f"outputs = {short_repr(outputs)}: expected a list from {', '.join(OUTPUTS)}"
+    return ""
+
+
 def _operating_point_type_error(speed, load, speed_key: str, load_key: str) -> str:
     """"" when ``speed`` is a finite number and ``load`` two (a bool is neither), else the line
     naming the key: a scene made in Python has not been through the YAML's readers."""
@@ -795,6 +846,17 @@ def scene_argument(scene: Scene) -> str:
     if path.suffix == ".yaml" and path == (scenes_dir() / f"{path.stem}.yaml").resolve():
         return path.stem
     return str(path)
+
+
+def changes_since_loaded(scene: Scene) -> tuple:
+    """The fields of ``scene`` that differ from the YAML it was loaded from (``source_text``):
+    a scene changed in Python (``dataclasses.replace``) keeps its file's text and path, which a
+    recording takes for how to make it again.  () for a scene as loaded, or without a text."""
+    if not scene.source_text:
+        return ()
+    name = Path(scene.source_path).stem if scene.source_path else scene.name
+    loaded = scene_from_dict(load_yaml(scene.source_text), name=name)
+    return tuple(f.name for f in fields(Scene) if f.compare and getattr(scene, f.name) != getattr(loaded, f.name))
 
 
 def resolve_scene_path(name_or_path: str | Path) -> Path:

@@ -119,7 +119,19 @@ class OversampleWithOwnStep(UserError):
 
 @dataclass
 class Batch:
-    """``n`` output samples.  Times in s, accelerations m/s^2, forces N, speeds rad/s."""
+    """``n`` output samples.  Times in s, accelerations m/s^2, forces N, speeds rad/s.
+
+    t0: time of sample 0 (s since the start); index0: its index since the start; sample_rate: Hz.
+    accel: (n, axes) m/s^2, one column per ``accel_channels`` name ("accel_x", "accel_y": the
+    scene's ``sensor.axes``).  contact_forces: (n, 2 Nb) N, each ball's inner then outer contact
+    force, named by ``contact_channels`` ("inner_00".., "outer_00"..).  cage_speed: (n,) rad/s.
+    shaft_speed (n,) rad/s and radial_load (n, 2) N (x, y; y up): the operating point in use at
+    each sample, a command's ramp included.  tier: the tier that ran ("kinematic" | "skidding").
+    extras: the skidding tier's further series (``ball_skid``, ``cage_skid`` (n,) %;
+    ``slip_inner``, ``slip_outer`` (n, Nb) m/s; ``friction_inner``, ``friction_outer`` (n, Nb) N),
+    empty for the kinematic tier; NaN in the rows of a batch that the kinematic tier computed
+    before a switch.  Every array is the batch's own.
+    """
 
     t0: float                      # time of sample 0 (s since the start of the simulation)
     index0: int                    # absolute index of sample 0
@@ -134,12 +146,33 @@ class Batch:
     tier: str
     extras: dict = field(default_factory=dict)   # e.g. ball_skid, cage_skid (n,) for the skidding tier
 
+    def __eq__(self, other):
+        """Whether ``other`` is a batch with the same samples bit for bit (NaN where this one has
+        NaN), times, channels and tier: the check of a seed's reproducibility.  The generated
+        comparison asked numpy for the truth value of whole arrays and raised a ValueError."""
+        if not isinstance(other, Batch):
+            return NotImplemented
+
+        def same(a, b) -> bool:
+            if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+                a, b = np.asarray(a), np.asarray(b)
+                floats = a.dtype.kind == "f" and b.dtype.kind == "f"
+                return a.shape == b.shape and np.array_equal(a, b, equal_nan=floats)
+            return a == b
+
+        mine, theirs = dict(vars(self)), dict(vars(other))
+        extras, other_extras = mine.pop("extras"), theirs.pop("extras")
+        return (mine.keys() == theirs.keys() and all(same(v, theirs[k]) for k, v in mine.items())
+                and extras.keys() == other_extras.keys() and all(same(v, other_extras[k]) for k, v in extras.items()))
+
     @property
     def n(self) -> int:
+        """Samples in the batch."""
         return self.accel.shape[0]
 
     @property
     def times(self) -> np.ndarray:
+        """(n,) time of each sample (s since the start)."""
         return (self.index0 + np.arange(self.n)) / self.sample_rate
 
 
@@ -193,7 +226,8 @@ class Simulator:
     kinematic tier takes 1 while its bearing mode stays below a tenth of ``physics_rate``, else
     ``physics.kinematic.DEFAULT_OVERSAMPLE`` = 2, chosen again when the load moves it; the skidding
     tier's "default" solver ``physics.skidding.DEFAULT_OVERSAMPLE`` = 2; "rk4" and "reference"
-    keep their steps).
+    keep their steps).  tolerance: the relative error allowed to the kinematic tier where
+    fidelity is auto (1e-4 - 1; default: the scene's ``fidelity.tolerance``).
 
     ``physics_rate`` (Hz) is the output rate from ``PHYSICS_RATE_MIN`` = 15 kHz on; below it, the
     smallest whole multiple of the output rate that reaches 15 kHz (``physics_per_sample`` physics
@@ -271,6 +305,14 @@ class Simulator:
         self._model = self._build_model(self.tier, self._defect_schedule.sizes(0))
         self._build_chain()
 
+    def __copy__(self):
+        """An independent simulator that continues from here bit for bit, as ``copy.deepcopy``
+        (and pickle) give: a shallow copy shared the tier's and the sensor chain's buffers, and
+        advancing one broke the other."""
+        import copy
+
+        return copy.deepcopy(self)
+
     # ---- construction ---------------------------------------------------------------------
     def _build_model(self, tier: str, defect_sizes: tuple, ellipse_ball_load: float | None = None,
                      takes_over_from=None):
@@ -319,10 +361,13 @@ class Simulator:
     # ---- stepping ---------------------------------------------------------------------------
     @property
     def shaft_speed(self) -> float:
+        """The shaft speed (rad/s) of the latest command (the scene's until an ``advance`` gives
+        one): where the latest ramp ends.  The batch's ``shaft_speed`` has what each sample had."""
         return self._shaft_speed
 
     @property
     def radial_load(self) -> tuple:
+        """The (x, y) load (N) of the latest command, as ``shaft_speed``."""
         return tuple(self._radial_load)
 
     @property
@@ -412,6 +457,12 @@ class Simulator:
             done = end
         for key, parts in extras.items():
             old = pend.get("x_" + key)
+            if old is None and p:
+                # the tier that has them took over now: the pending rows, the first of this
+                # call's output, were computed by the other one, which has no such series.  NaN
+                # keeps every row on its own sample (without it, every batch after a switch to
+                # the skidding tier carried the values of the samples ``p`` later)
+                old = np.full((p, *parts[0].shape[1:]), np.nan)
             if old is not None:
                 parts.insert(0, old)
             series["x_" + key] = parts[0] if len(parts) == 1 else np.concatenate(parts, axis=0)
@@ -432,8 +483,13 @@ class Simulator:
         return s0 + (s1 - s0) * f, (l0x + (l1x - l0x) * f, l0y + (l1y - l0y) * f)
 
     def advance(self, n: int, shaft_speed: float | None = None, radial_load=None) -> Batch:
-        """Advance by ``n`` output samples.  ``shaft_speed`` (rad/s) and ``radial_load`` (N, (x, y))
-        replace the operating point; the change is ramped over this call."""
+        """Advance by ``n`` output samples (1 - ``max_advance``) and return them as a :class:`Batch`.
+        ``shaft_speed`` (rad/s, not rpm) and ``radial_load`` (N, (x, y), y up) replace the operating
+        point; the change is ramped over this call, and shows in the samples the sensor chain's
+        lookahead later (19 samples at 15 kHz: the physics runs that far ahead of the output).
+        Chunks give the same samples as one call at the same operating point (a command ramps
+        over the call that gives it, so where it falls is part of the run).  A bad argument, or an
+        operating point beyond the bearing's limits, is a one-line UserError."""
         if not (_whole_number(n) and n > 0):
             raise UserError(f"n = {n!r}: expected a whole number of samples > 0")
         if n > self.max_advance:

@@ -235,6 +235,29 @@ def test_a_speed_ramp_down_switches_back_to_kinematic():
     assert_state_carried_over_at(tiers.index("kinematic"), angles)
 
 
+def test_skid_ratios_after_a_switch_to_the_skidding_tier_line_up_with_the_other_series():
+    """``Batch.extras`` after a kinematic -> skidding switch belong to the batch's own samples:
+    each row's cage skid is the batch's cage speed against pure rolling (skidding.py's eq. 37),
+    as from the start of a skidding run.  The rows of the switching batch that the kinematic tier
+    computed (the sensor chain's lookahead) have none: NaN.  Until 2026-11-29 every batch after
+    such a switch carried the skid ratios of the samples 19 later."""
+    scene = load_scene("er16k_outer_race")
+    g = scene.bearing.diameter_ratio
+    sim = Simulator(scene, seed=2)
+    sim.advance(300)
+    batches = [sim.advance(300, shaft_speed=10000 * RPM, radial_load=(0.0, -10.0))]
+    assert sim.tier == "skidding" and sim.tier_switches == 1
+    batches += [sim.advance(n) for n in (7, 300, 150)]
+    ahead = sim.chain.lookahead_samples
+    for k, b in enumerate(batches):
+        pure = 0.5 * b.shaft_speed * (1.0 - g)
+        skid = b.extras["cage_skid"]
+        assert skid.shape == (b.n,) and b.extras["slip_inner"].shape == (b.n, scene.bearing.balls)
+        first = ahead if k == 0 else 0          # the kinematic tier's rows of the switching batch
+        assert np.all(np.isnan(skid[:first])) and np.all(np.isnan(b.extras["slip_inner"][:first]))
+        assert np.allclose(skid[first:], 100.0 * (pure - b.cage_speed)[first:] / pure[first:], rtol=0, atol=1e-6)
+
+
 def study_estimate():
     """The README's figures on what the estimate leaves out: at 2000 N and 1000, 600, 2000 rpm,
     the estimate against the kinematic tier's measured cage, RMS and largest errors."""

@@ -85,6 +85,15 @@ def test_the_python_api_block_runs_as_written():
     assert set(sim.bearing.fault_frequencies(scope["scene"].shaft_hz)) == {"ftf", "bpfo", "bpfi", "bsf"}
 
 
+def test_the_envelope_analysis_block_runs_as_written():
+    """"Envelope analysis in Python": the lines run, and the values are what the comments say."""
+    scope = {}
+    exec(_block_containing("python", "fault_lines(y, sim.sample_rate, ff)"), scope)
+    assert scope["y"].shape == (45000,) and scope["verdict"] == "outer"
+    assert abs(scope["bpfo_hz"] - 95.25) < 0.1 and 100 < scope["bpfo_score"] < 1000
+    assert scope["freqs"].shape == scope["amp"].shape
+
+
 def test_the_skidding_outputs_block_runs_as_written():
     """"The skidding tier": the extras it names exist with the shapes it gives."""
     scope = {}

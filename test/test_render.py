@@ -887,3 +887,50 @@ def test_a_render_stopped_by_a_signal_ends_with_the_diagnostics_of_its_last_samp
                            (2_500_000_000, "2.500000", "outer")]
     s = build_report(out, tmp_path / "report")
     assert s["scene_defects"] == [{"kind": "outer", "onset_s": pytest.approx(2.2), "present": "in part of the analysed stretch"}]
+
+
+def test_period_means_leave_out_the_rows_without_skid_ratios():
+    """The batch in which fidelity auto switches to the skidding tier has no skid ratios for its
+    first rows (NaN: the kinematic tier computed them); a ``/diagnostics`` period's means are
+    those of the rows that have them, not NaN."""
+    from types import SimpleNamespace
+
+    from bearing_sim_ros.recording.render import PeriodMeans
+
+    n, balls = 150, 9
+    skid = np.full(n, 2.0)
+    skid[:19] = np.nan
+    slip = np.full((n, balls), -0.5)
+    slip[:19] = np.nan
+    batch = SimpleNamespace(n=n, extras={"cage_skid": skid, "slip_inner": slip}, cage_speed=np.full(n, 60.0),
+                            shaft_speed=np.full(n, 160.0), accel=np.zeros((n, 2)))
+    means = PeriodMeans(balls)
+    means.add(batch)
+    batch.extras = {"cage_skid": np.full(n, 4.0), "slip_inner": np.full((n, balls), 1.0)}
+    means.add(batch)
+    values = means.values()
+    # sample-weighted: 131 rows at 2 %, 150 at 4 %
+    assert float(values["cage_skid_ratio"]) == pytest.approx((131 * 2.0 + 150 * 4.0) / 281, rel=1e-3)
+    assert float(values["slip_inner_m_s"]) == pytest.approx((131 * 0.5 + 150 * 1.0) / 281, rel=1e-3)
+
+
+def test_a_scene_changed_in_python_is_not_recorded_as_its_file(tmp_path):
+    """A recording holds its scene's YAML and the command that makes it again (INTERFACE:
+    "a recording says how to reproduce it").  A scene changed in Python after loading
+    (``dataclasses.replace``) was recorded with its file's YAML and command: an inner-race pit at
+    200 N went into the file as er16k_outer_race's outer-race pit at 50 N, and ``report`` said
+    the scene's outer-race defect was "not in this recording".  Now ``render`` refuses it in one
+    line that names the fields that differ, before any work; the scene as loaded renders."""
+    import dataclasses
+
+    scene = load_scene("er16k_outer_race")
+    changed = dataclasses.replace(scene, defects=(dataclasses.replace(scene.defects[0], kind="inner"),),
+                                  radial_load=(0.0, -200.0))
+    out = tmp_path / "changed.mcap"
+    with pytest.raises(UserError, match=r"^scene er16k_outer_race: changed in Python since it was loaded from "
+                                        r"er16k_outer_race.yaml \(radial_load, defects\); .* write the changed "
+                                        r"scene to a YAML file and render that$"):
+        render(changed, 0.05, out, fidelity="kinematic", progress=False)
+    assert not out.exists()
+    render(dataclasses.replace(scene), 0.05, out, fidelity="kinematic", progress=False)    # the same scene
+    assert out.exists()

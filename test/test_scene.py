@@ -577,6 +577,51 @@ def test_a_scenes_waviness_changed_in_python_is_held_to_the_yamls_limits(wavines
     assert np.isfinite(Simulator(wavy, fidelity="kinematic").advance(150).accel).all()
 
 
+def test_a_scene_changed_in_python_holds_tuples_and_compares():
+    """A scene given a numpy load or lists (``dataclasses.replace(scene, radial_load=np.array(...),
+    defects=[...])``, which the README's Python API takes) holds them as tuples of numbers, as
+    load_scene makes them: ``scene == other`` raised numpy's "truth value of an array ... is
+    ambiguous" (and so did render's check that a scene is as loaded), and ``hash(scene)``
+    "unhashable type: 'numpy.ndarray'"."""
+    scene = load_scene("er16k_outer_race")
+    same = dataclasses.replace(scene, radial_load=np.array([0.0, -50.0]), defects=list(scene.defects),
+                               outputs=list(scene.outputs),
+                               profile=[ProfilePoint(1.0, np.float64(100.0), np.array([0.0, -60.0]))])
+    assert same.radial_load == (0.0, -50.0) and type(same.radial_load[1]) is float
+    assert isinstance(same.defects, tuple) and isinstance(same.outputs, tuple) and isinstance(same.profile, tuple)
+    assert same.profile[0].radial_load == (0.0, -60.0)
+    assert same == dataclasses.replace(scene, profile=same.profile) and hash(same) == hash(same)
+
+
+@pytest.mark.parametrize("change, line", [
+    (lambda s: {"defects": s.defects[0]},
+     r"defects = Defect\(kind='outer', .*: expected a tuple of bearing_sim_ros.scene.Defect"),
+    (lambda s: {"waviness": Waviness("inner", 3, 1e-6)},
+     r"waviness = Waviness\(race='inner', .*: expected a tuple of bearing_sim_ros.scene.Waviness"),
+    (lambda s: {"profile": ((0.5, 100.0, (0.0, -50.0)),)},
+     r"profile\[0\] = \(0.5, 100.0, \(0.0, -50.0\)\): expected a bearing_sim_ros.scene.ProfilePoint "
+     r"\(t s, shaft_speed rad/s, radial_load \(x, y\) N\)"),
+    (lambda s: {"profile": (ProfilePoint(1.0, 100.0, (0.0, -50.0)), ProfilePoint(0.5, 100.0, (0.0, -50.0)))},
+     r"profile\[1\].t = 0.5 s: times must increase \(previous 1\)"),
+    (lambda s: {"profile": (ProfilePoint(-1.0, 100.0, (0.0, -50.0)),)},
+     r"profile\[0\].t = -1 s: allowed range is \[0, 1e\+06\] s"),
+    (lambda s: {"outputs": ("accel", "skid_ratio")},
+     r"outputs = \('accel', 'skid_ratio'\): expected a list from accel, contact_forces, cage_speed, skid_ratios"),
+])
+def test_a_scenes_lists_changed_in_python_are_checked(change, line):
+    """A scene's defects, waviness, profile and outputs set in Python: a lone Defect for a tuple
+    of them was "TypeError: 'Defect' object is not iterable", a knot given as a plain tuple an
+    AttributeError, knots out of order or before 0 were taken as given (the YAML refuses them),
+    and a misspelt output ("skid_ratio") ran the kinematic tier without the skid ratios the scene
+    asked for, without a word.  Now one line each, as the YAML's keys have it."""
+    scene = load_scene("er16k_outer_race")
+    with pytest.raises(SceneError, match=rf"^scene er16k_outer_race: {line}$"):
+        dataclasses.replace(scene, **change(scene))
+    fine = dataclasses.replace(scene, defects=list(scene.defects), outputs=["accel", "skid_ratios"],
+                               profile=[ProfilePoint(0.0, 100.0, (0.0, -50.0)), ProfilePoint(1.0, 150.0, (0.0, -60.0))])
+    assert Simulator(fine).tier == "skidding"
+
+
 @pytest.mark.parametrize("change, line", [
     ({"ball_mass": -1.0}, "bearing.ball_mass_kg = -1.0: allowed range is [1e-06, 100.0]"),
     ({"elastic_modulus": 0.0}, "bearing.elastic_modulus_gpa = 0.0: allowed range is [1.0, 1000.0]"),

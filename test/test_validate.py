@@ -391,6 +391,66 @@ def test_white_noise_is_called_healthy_and_the_verdict_follows_the_threshold():
     assert d["verdict"] == max(d["scores"], key=d["scores"].get) == "inner"
 
 
+def test_the_detector_refuses_a_record_too_short_for_its_lines_neighbourhood():
+    """A record whose envelope spectrum's bins leave no line a neighbourhood to be compared with
+    (0.05 s: bins 20 Hz apart; 30 samples) is refused in one line that says how long a record
+    must be.  Until 2026-11-29 every line's prominence came out infinite and the verdict "outer"
+    on anything, white noise included (30 samples: an IndexError)."""
+    ff = BEARING.fault_frequencies(29.95)
+    rng = np.random.default_rng(3)
+    for n in (30, 600, 2100):
+        with pytest.raises(UserError, match=rf"^x = {n} samples \(.* s at 12000 Hz\): too short .*at least 0.2 s"):
+            env.diagnose(rng.standard_normal(n), 12000.0, ff)
+    scores = env.diagnose(rng.standard_normal(2400), 12000.0, ff)["scores"]       # 0.2 s: judged
+    assert all(np.isfinite(v) for v in scores.values()), scores
+
+
+def test_a_line_whose_search_window_fills_its_neighbourhood_is_measured_beyond_it():
+    """Above about 1.8 kHz (a shaft beyond some 20 000 rpm: BPFI of an ER-16K at 25 000 rpm is
+    2.26 kHz) the +-1 % search window and two bins fill the +-20 Hz neighbourhood: the line's
+    prominence was infinite, a fault on anything.  Its neighbourhood is then the next 20 Hz beyond
+    the window; below that nothing changes."""
+    freqs = np.arange(0.0, 3000.0, 1.0)
+    spec = np.ones_like(freqs)
+    for f0 in (2300.0, 300.0):
+        spec[int(f0)] = 10.0
+        assert env.line_at(freqs, spec, f0).prominence == pytest.approx(10.0)
+
+
+def test_the_detector_says_what_frequencies_it_needs():
+    """``frequencies`` without one of its keys (a dict of the lines of interest only) or not a
+    mapping was a KeyError 'bpfi' or a TypeError from inside the detector; now one line."""
+    x = np.random.default_rng(1).standard_normal(12000)
+    for frequencies in ({"bpfo": 107.4}, [107.4, 162.2], None):
+        with pytest.raises(UserError, match=r"^frequencies = .*: expected the fault frequencies in Hz, a mapping with "
+                                            r"ftf, bpfo, bpfi, bsf \(Bearing.fault_frequencies, Scene.fault_frequencies\)$"):
+            env.diagnose(x, 12000.0, frequencies)
+
+
+def test_the_detector_calls_a_flat_signal_healthy():
+    """A channel that holds a constant (a dead sensor, zeros) has no lines: prominence 0, verdict
+    "healthy".  Until 2026-11-29 0 / 0 counted as an infinite prominence and the verdict was
+    "outer"."""
+    ff = BEARING.fault_frequencies(29.95)
+    for x in (np.zeros(12000), np.full(12000, 9.81)):
+        d = env.diagnose(x, 12000.0, ff)
+        assert d["verdict"] == "healthy" and set(d["scores"].values()) == {0.0}
+
+
+def test_the_analysis_functions_take_one_channel():
+    """A batch's whole ``accel`` (n, 2) given where one channel's samples go is one line that
+    says so, not scipy's "padlen" error or statistics over both channels mixed."""
+    ff = BEARING.fault_frequencies(29.95)
+    both = np.random.default_rng(5).standard_normal((12000, 2))
+    calls = (lambda: env.diagnose(both, 12000.0, ff), lambda: env.envelope_spectrum(both, 12000.0),
+             lambda: env.statistics(both), lambda: env.band_rms(both, 12000.0))
+    for call in calls:
+        with pytest.raises(UserError, match=r"^x: an array of shape \(12000, 2\): expected one channel, a 1-D array "
+                                            r"of samples \(e.g. batch.accel\[:, 1\]\)$"):
+            call()
+    assert env.statistics(both[:, 1])["rms"] > 0
+
+
 def test_band_rms_counts_a_tone_on_a_band_edge_once():
     """Bands are [lo, hi): a 2 m/s^2 tone exactly on the 1000 Hz or 2000 Hz edge (a Welch bin at
     8192 Hz, 4096-sample segments: 2 Hz bins) is shared between the two bands it touches, never

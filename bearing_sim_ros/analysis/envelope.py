@@ -25,18 +25,33 @@ Choices, checked on the CWRU recordings (``bearing-sim validate``, README "Valid
 """
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import UserError, short_repr
+
 DEFAULT_BAND = (2000.0, 5000.0)
 DEFAULT_SEGMENT = 1.0     # s: length of the averaged segments of the detector's envelope spectrum
+FAULT_KEYS = ("ftf", "bpfo", "bpfi", "bsf")   # what Bearing.fault_frequencies gives, Hz
 FAULT_LINES = {          # which envelope line marks which fault
     "outer": "bpfo",
     "inner": "bpfi",
     "ball": "2bsf",
     "cage": "ftf",
 }
+
+
+def one_channel(x) -> np.ndarray:
+    """``x`` as a float array of one channel's samples; anything else (a batch's whole ``accel``,
+    (n, 2)) is a one-line :class:`~bearing_sim_ros.errors.UserError`: the filters ran along the
+    wrong axis (scipy's "padlen" error) and the statistics mixed both channels."""
+    x = np.asarray(x, dtype=float)
+    if x.ndim != 1:
+        raise UserError(f"x: an array of shape {x.shape}: expected one channel, a 1-D array of samples "
+                        "(e.g. batch.accel[:, 1])")
+    return x
 
 
 def _band(fs: float, band) -> tuple:
@@ -51,7 +66,7 @@ def envelope(x: np.ndarray, fs: float, band=DEFAULT_BAND) -> np.ndarray:
     """Hilbert envelope of ``x`` band-passed to ``band`` (Hz), mean removed."""
     from scipy.signal import butter, hilbert, sosfiltfilt
 
-    x = np.asarray(x, dtype=float)
+    x = one_channel(x)
     lo, hi = _band(fs, band)
     sos = butter(4, [lo, hi], btype="bandpass", fs=fs, output="sos")
     y = sosfiltfilt(sos, x - x.mean())
@@ -70,7 +85,7 @@ def envelope_spectrum(x: np.ndarray, fs: float, band=DEFAULT_BAND, max_freq: flo
     1 / segment, the floor's variance reduced by the number of segments (for decisions)."""
     env = envelope(x, fs, band)
     n = env.size
-    nseg = n if segment is None else max(16, min(n, int(round(segment * fs))))
+    nseg = _segment_samples(n, fs, segment)
     win = np.hanning(nseg)
     if nseg == n:
         spec = np.abs(np.fft.rfft(env * win))
@@ -88,6 +103,31 @@ def envelope_spectrum(x: np.ndarray, fs: float, band=DEFAULT_BAND, max_freq: flo
     return freqs[keep], spec[keep]
 
 
+def _segment_samples(n: int, fs: float, segment: float | None) -> int:
+    """Samples per FFT of :func:`envelope_spectrum` for a record of ``n`` samples."""
+    return n if segment is None else max(16, min(n, int(round(segment * fs))))
+
+
+def shortest_record_s(neighbourhood_hz: float = 20.0) -> float:
+    """The shortest record (and ``segment``), s, whose envelope spectrum leaves every line a
+    neighbourhood of +-``neighbourhood_hz`` to be compared with: bins ``neighbourhood_hz`` / 4
+    apart (0.2 s for 20 Hz).  :func:`line_at` leaves out its search window (at least 1.5 bins)
+    and two bins more on either side, so coarser bins leave none."""
+    return 4.0 / neighbourhood_hz
+
+
+def _too_short(n: int, fs: float, segment: float | None, neighbourhood_hz: float) -> str:
+    """Why a record of ``n`` samples at ``fs`` Hz is too short for the lines' neighbourhoods (with
+    ``segment``), or ""."""
+    nseg = _segment_samples(n, fs, segment)
+    shortest = shortest_record_s(neighbourhood_hz)
+    if nseg >= shortest * fs - 1e-9:
+        return ""
+    what = (f"segment = {segment:g} s" if nseg < n else f"x = {n} samples ({n / fs:g} s at {fs:g} Hz)")
+    return (f"{what}: too short for the envelope detector: its spectrum's bins {fs / nseg:.3g} Hz apart leave a "
+            f"line no +-{neighbourhood_hz:g} Hz neighbourhood to be compared with; give at least {shortest:g} s")
+
+
 @dataclass
 class Line:
     """One envelope line: where it was found, its height and its height over the local median."""
@@ -101,7 +141,10 @@ class Line:
 def line_at(freqs: np.ndarray, spec: np.ndarray, f0: float, search_rel: float = 0.01,
             neighbourhood_hz: float = 20.0) -> Line:
     """The largest line within +-``search_rel`` of ``f0`` and its prominence over the median of
-    the spectrum in +-``neighbourhood_hz`` around it (the search window excluded)."""
+    the spectrum in +-``neighbourhood_hz`` around it (the search window and two bins excluded;
+    where they fill it, the ``neighbourhood_hz`` beyond them).  The prominence is NaN where that
+    holds no bin (bins as coarse as it) and 0 where the spectrum is 0 there (a flat signal has
+    no lines)."""
     df = freqs[1] - freqs[0]
     tol = max(search_rel * f0, 1.5 * df)
     sel = np.flatnonzero(np.abs(freqs - f0) <= tol)
@@ -121,14 +164,29 @@ def line_at(freqs: np.ndarray, spec: np.ndarray, f0: float, search_rel: float = 
             fk = freqs[k] + 0.5 * (a - c) / denom * df
     near = np.abs(freqs - fk)
     ring = (near <= neighbourhood_hz) & (near > tol + 2 * df)
+    if not ring.any():
+        # a search window (+-search_rel) that fills the neighbourhood, a line above about 1.8 kHz:
+        # the neighbourhood's width beyond it (there was no bin, an infinite prominence)
+        ring = (near <= tol + 2 * df + neighbourhood_hz) & (near > tol + 2 * df)
     median = float(np.median(spec[ring])) if ring.any() else float("nan")
-    prominence = float(spec[k] / median) if median > 0 else float("inf")
+    # not a number where there is nothing to compare with (it was infinite, and every line of a
+    # record too short for its neighbourhood a fault); 0 / 0 (a flat signal: no line, no floor)
+    # is no line, where it was an infinite one
+    if median > 0:
+        prominence = float(spec[k] / median)
+    elif not ring.any():
+        prominence = float("nan")
+    else:
+        prominence = float("inf") if spec[k] > 0 else 0.0
     return Line(f0, float(fk), float(spec[k]), prominence)
 
 
 def fault_targets(frequencies: dict) -> dict:
     """The envelope lines to look at (Hz): "bpfo", "bpfi", "2bsf" (a ball defect strikes both
     races once per spin turn), "ftf"."""
+    if not (isinstance(frequencies, Mapping) and all(k in frequencies for k in FAULT_KEYS)):
+        raise UserError(f"frequencies = {short_repr(frequencies)}: expected the fault frequencies in Hz, a mapping "
+                        f"with {', '.join(FAULT_KEYS)} (Bearing.fault_frequencies, Scene.fault_frequencies)")
     return {"bpfo": frequencies["bpfo"], "bpfi": frequencies["bpfi"],
             "2bsf": 2.0 * frequencies["bsf"], "ftf": frequencies["ftf"]}
 
@@ -140,8 +198,14 @@ def fault_lines(x: np.ndarray, fs: float, frequencies: dict, band=DEFAULT_BAND,
     (``segment`` s, see :func:`envelope_spectrum`).
 
     ``frequencies``: ``{"ftf", "bpfo", "bpfi", "bsf"}`` in Hz (``Bearing.fault_frequencies``).
-    Returns ``{name: Line}`` for "bpfo", "bpfi", "2bsf", "ftf".
+    Returns ``{name: Line}`` for "bpfo", "bpfi", "2bsf", "ftf".  A record (or ``segment``)
+    shorter than :func:`shortest_record_s`, whose bins leave a line no neighbourhood, is a
+    one-line :class:`~bearing_sim_ros.errors.UserError`.
     """
+    x = one_channel(x)
+    reason = _too_short(x.size, fs, segment, neighbourhood_hz)
+    if reason:
+        raise UserError(reason)
     targets = fault_targets(frequencies)
     fmax = 1.2 * max(targets.values()) + 2 * neighbourhood_hz
     freqs, spec = envelope_spectrum(x, fs, band, max_freq=fmax, segment=segment)
@@ -182,7 +246,7 @@ def no_defect_note(verdict: dict) -> tuple | None:
 
 def statistics(x: np.ndarray) -> dict:
     """RMS, kurtosis (3 for a Gaussian), crest factor, peak-to-peak of a waveform."""
-    x = np.asarray(x, dtype=float)
+    x = one_channel(x)
     x = x - x.mean()
     rms = float(np.sqrt(np.mean(x * x)))
     kurt = float(np.mean(x ** 4) / rms ** 4) if rms > 0 else float("nan")
@@ -196,7 +260,7 @@ def band_rms(x: np.ndarray, fs: float, edges=(0.0, 1000.0, 2000.0, 3000.0, 4000.
     the mean square of the signal below the last edge."""
     from scipy.signal import welch
 
-    x = np.asarray(x, dtype=float)
+    x = one_channel(x)
     f, p = welch(x - x.mean(), fs, nperseg=min(4096, x.size))
     df = f[1] - f[0]
     return [float(np.sqrt(np.sum(p[(f >= lo) & (f < hi)]) * df)) for lo, hi in zip(edges[:-1], edges[1:])]

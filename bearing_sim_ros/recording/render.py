@@ -20,6 +20,7 @@ from __future__ import annotations
 import contextlib
 import math
 import numbers
+import os
 import shlex
 import signal
 import sys
@@ -177,7 +178,12 @@ class PeriodMeans:
         for name, val in batch.extras.items():
             if name in PERIOD_EXTRAS:
                 key, absolute = PERIOD_EXTRAS[name]
-                self._add(key, float(np.mean(np.abs(val) if absolute else val)) * n, n)
+                # the rows that have values: where fidelity auto switched to the skidding tier,
+                # the batch's first rows came from the kinematic tier and are NaN
+                rows = ~np.isnan(val).reshape(val.shape[0], -1).any(axis=1)
+                had = int(np.count_nonzero(rows))
+                if had:
+                    self._add(key, float(np.mean(np.abs(val[rows]) if absolute else val[rows])) * had, had)
         self._add("cage", float(np.sum(batch.cage_speed)), n)
         self._add("shaft", float(np.sum(batch.shaft_speed)), n)
         if self.clip_limit is not None:
@@ -336,11 +342,19 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
     bytes, wall time (s), real-time factor, tier (at the end), tier_values (``tier_values``: the
     tier switches of ``fidelity="auto"``), path, solver_unused."""
     from .. import Simulator
-    from ..scene import load_scene, scene_argument
+    from ..scene import changes_since_loaded, load_scene, scene_argument
     from .recorder import Recorder, recording_metadata
 
     if not hasattr(scene, "bearing"):
         scene = load_scene(scene)
+    # the file records the scene's YAML and a command that loads it: of a scene changed since,
+    # both would say another scene (an inner-race pit at 200 N recorded as er16k_outer_race)
+    changed = changes_since_loaded(scene)
+    if changed:
+        raise UserError(f"scene {scene.name}: changed in Python since it was loaded from "
+                        f"{os.path.basename(scene.source_path) or 'its YAML'} ({', '.join(changed)}); a recording "
+                        "holds its scene's YAML and the command that makes it again, which would be the unchanged "
+                        "scene's: write the changed scene to a YAML file and render that")
     # bool is an int to Python, but render(..., True) is a slip, not one second
     if isinstance(duration, bool) or not (isinstance(duration, numbers.Real) and math.isfinite(duration)
                                           and duration > 0):
