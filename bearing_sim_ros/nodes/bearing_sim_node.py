@@ -39,7 +39,7 @@ import rclpy
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
 
-from ..errors import UserError
+from ..errors import NODE_SETTINGS, SettingNames, UserError
 from ..limits import LOAD_MULTIPLE_C0, NDM_LIMIT, STATIC_F0, InputLimits  # noqa: F401 (names kept here)
 from ..teardown import EXIT_INTERRUPTED, SIGNAL_NAMES, command_signals, teardown_watchdog
 
@@ -206,11 +206,14 @@ def check_config(cfg: dict):
 class BearingSimNode(Node):
     """The ``bearing_sim`` node; see the module docstring.  Raises UserError for a bad
     parameter or scene (rclpy must be initialised).  ``record_argument``: how an error names the
-    ``record`` path (``bearing-sim run`` passes ``--out``, the option its user gave)."""
+    ``record`` path (``bearing-sim run`` passes ``--out``, the option its user gave);
+    ``settings``: how the advice of a solver's divergence names the settings to try
+    (``errors.SettingNames``: the node's parameters, or ``bearing-sim run``'s scene keys)."""
 
-    def __init__(self, record_argument: str = "record", **kwargs):
+    def __init__(self, record_argument: str = "record", settings: SettingNames = NODE_SETTINGS, **kwargs):
         super().__init__(NODE_NAME, **kwargs)
         self._record_argument = record_argument
+        self._settings = settings
         self.recorder = None
         try:
             self._declare_all()
@@ -316,6 +319,7 @@ class BearingSimNode(Node):
         from rclpy.qos import QoSProfile
 
         from .. import Simulator
+        from ..physics.skidding import SolverDiverged
         from ..simulator import OversampleForAuto
         from ..messages import (TOPIC_ACCEL, TOPIC_CONTACT, TOPIC_DIAGNOSTICS, TOPIC_LOAD,
                                 TOPIC_SHAFT_SPEED, TOPIC_STATE, BatchMessages, waveform_qos)
@@ -332,6 +336,8 @@ class BearingSimNode(Node):
                                  oversample=int(cfg["oversample"]) or None)
         except OversampleForAuto as exc:
             raise UserError(exc.worded("oversample", "fidelity", zero=OVERSAMPLE_ZERO)) from None
+        except SolverDiverged as exc:          # its first steps, run ahead as it is made
+            raise UserError(exc.worded(self._settings)) from None
         self.limits = InputLimits(self.scene.bearing)
         self.n_batch = int(round(cfg["sample_rate"] * cfg["batch_duration"]))
         self.batch_duration = self.n_batch / self.sim.sample_rate
@@ -364,6 +370,9 @@ class BearingSimNode(Node):
         self._repace = False
         self.finished = threading.Event()
         self.error = None
+        # the skidding solver's divergence (SolverDiverged): the batches computed before it are
+        # published, an ERROR /diagnostics says it, the recording is finalised and main exits 2
+        self.failure = None
         self.accel_peers = 0                     # other publishers on accel: _check_peers
         self.clock_peers = 0                     # other publishers on this node's /clock: _check_peers
         self.stats = _Stats(self.sim.sample_rate, self.sim.bearing, self.scene.sensor.range)
@@ -639,6 +648,7 @@ class BearingSimNode(Node):
 
         from rosgraph_msgs.msg import Clock
 
+        from ..physics.skidding import SolverDiverged
         from ..recording.render import load_message, speed_message
 
         sim, msgs, stats = self.sim, self.msgs, self.stats
@@ -700,6 +710,12 @@ class BearingSimNode(Node):
                 continue
             if stop:
                 break                          # every batch that was due is published and recorded
+            if self.failure is not None:
+                if not queue:
+                    break
+                # the batches computed before the divergence, published at their times
+                self._stop.wait(max(0.0, queue[0].due - now))
+                continue
             total = int(round(cfg["duration"] * sr)) if cfg["duration"] > 0 else 0
             if total and sim.index >= total:
                 if not queue:
@@ -734,7 +750,11 @@ class BearingSimNode(Node):
                 est[sim.tier] = max(est.get(sim.tier, 0.0), cost)
                 continue
             if may and (not queue or now + cost <= queue[0].due):
-                item = self._compute(n, cfg, Clock)
+                try:
+                    item = self._compute(n, cfg, Clock)
+                except SolverDiverged as exc:
+                    self._fail(exc)
+                    continue
                 done = time.monotonic()
                 stats.compute(done - now)
                 est[sim.tier] = max(0.9 * est.get(sim.tier, 0.0), done - now)
@@ -759,12 +779,38 @@ class BearingSimNode(Node):
         # the ground truth of the last sample published, as `render` ends: a run that ends between
         # two /diagnostics (duration 5.5 s, Ctrl-C) had none for its last part-second, and a pit
         # that appeared there was "after this recording ends" to `report`
-        if last_published is not None and last_published[0].end_index > diag_end_index:
+        if self.failure is not None:
+            self._publish_failure(last_published)
+        elif last_published is not None and last_published[0].end_index > diag_end_index:
             item, log_ns = last_published
             msg = self._diagnostics(item, time.monotonic())
             self._publish([(self.pub_diag, msg)])
             if self.recorder is not None:
                 self.recorder.write(self.pub_diag.topic_name, msg, log_ns)
+
+    def _fail(self, exc) -> None:
+        """The skidding solver diverged (``exc``, SolverDiverged): no more batches; said once in
+        the log in the node's words."""
+        self.failure = exc
+        self.get_logger().error(exc.worded(self._settings))
+
+    def _publish_failure(self, last_published) -> None:
+        """The ERROR ``/diagnostics`` of a divergence, published and recorded: with the keys of
+        the last batch published (``last_published``: (item, its log time)), or, where none was,
+        the status alone, stamped now."""
+        from ..recording.render import diagnostics_message
+
+        line = self.failure.worded(self._settings)
+        if last_published is not None:
+            item, log_ns = last_published
+            msg = self._diagnostics(item, time.monotonic())
+        else:
+            log_ns = self.get_clock().now().nanoseconds
+            msg = diagnostics_message(log_ns, {"simulated_s": "0.000000"}, 2, line,
+                                      self.get_fully_qualified_name().lstrip("/"))
+        self._publish([(self.pub_diag, msg)])
+        if self.recorder is not None:
+            self.recorder.write(self.pub_diag.topic_name, msg, log_ns)
 
     def _publish(self, out):
         """Publish each (publisher, message) of ``out`` while the context lives (a signal may end
@@ -840,6 +886,8 @@ class BearingSimNode(Node):
                 text = f"recording dropped {dropped} messages in the last second (the disk is not keeping up)"
                 message = text if level == 0 else f"{message}; {text}"
                 level = 1
+        if self.failure is not None:
+            level, message = 2, self.failure.worded(self._settings)
         return diagnostics_message(item.end_stamp, values, level, message,
                                    self.get_fully_qualified_name().lstrip("/"))
 
@@ -990,6 +1038,16 @@ def log_recording(node) -> None:
         log.info(text)
 
 
+def failure_recording_text(node) -> str:
+    """``; recorded to PATH, finalised`` after a divergence's line, or "" without a recording."""
+    from ..recording.recorder import files_text
+
+    if node.recorder is None:
+        return ""
+    st = node.recorder.status
+    return f"; recorded to {files_text(st)}, finalised" if st["ok"] else f"; recording: {st['error']}"
+
+
 def say_held(node):
     """``CommandSignals.on_held`` for the node (``node()``, None before it is built): a Ctrl-C
     (or SIGTERM) while it shuts down, said once in its log.  Such a signal once raised
@@ -1130,6 +1188,10 @@ def main(argv=None) -> int:
             rclpy.try_shutdown()
     if error is not None:
         raise error
+    if status == 0 and node is not None and node.failure is not None:
+        # said in the log as it happened; here the line a script sees, and where the file stands
+        print(f"error: {node.failure.worded(node._settings)}{failure_recording_text(node)}", file=sys.stderr)
+        status = 2
     if status == 0 and node is not None and node.recorder is not None and node.recorder.error:
         # published in full, but the file is not: a script that checks the status must know
         print(f"error: {node.recorder.error}", file=sys.stderr)

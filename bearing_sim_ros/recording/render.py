@@ -27,7 +27,7 @@ import time
 
 import numpy as np
 
-from ..errors import UserError
+from ..errors import CLI_SETTINGS, UserError
 from ..paths import output_file
 from ..teardown import EXIT_INTERRUPTED, signal_handlers
 from ..messages import BATCH_DURATION, STATE_RATE, TOPIC_ACCEL, TOPIC_CONTACT, TOPIC_DIAGNOSTICS, TOPIC_LOAD, \
@@ -326,8 +326,11 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
     ``state_rate`` (Hz) are the node's parameters of the same names, with the same ranges and
     rule (``messages.batching_error``).  Returns a summary: messages,
     bytes, wall time (s), real-time factor, tier (at the end), tier_values (``tier_values``: the
-    tier switches of ``fidelity="auto"``), path, solver_unused."""
+    tier switches of ``fidelity="auto"``), path, solver_unused.  Where the skidding solver
+    diverges, the signal up to the batch that diverged is kept at ``out``, finalised, and
+    ``SolverDiverged`` raised with ``recording``: where the file stands, in words."""
     from .. import Simulator
+    from ..physics.skidding import SolverDiverged
     from ..scene import load_scene, scene_argument
     from .recorder import Recorder, recording_metadata
 
@@ -401,8 +404,9 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
     done = 0
     diagnosed = 0               # samples up to the last /diagnostics written
 
-    def write_diagnostics(pub_ns: int) -> None:
-        """The ``/diagnostics`` of the signal up to ``pub_ns`` (the end of the last batch)."""
+    def write_diagnostics(pub_ns: int, error: str = "") -> None:
+        """The ``/diagnostics`` of the signal up to ``pub_ns`` (the end of the last batch);
+        ``error``: the line of a failure that ends the render there (level ERROR)."""
         nonlocal diagnosed
         # the live node's keys (nodes/bearing_sim_node.py); what depends on the wall clock
         # or the output path is left out so that the file stays byte-identical
@@ -416,9 +420,31 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
         values.update(means.values())
         clipped = means.clipped_text()         # a warning, as the live node gives it
         means.reset()
-        rec.write(TOPIC_DIAGNOSTICS, diagnostics_message(pub_ns, values, 1 if clipped else 0,
-                                                         clipped or "ok"), pub_ns)
+        level, message = (2, error) if error else (1 if clipped else 0, clipped or "ok")
+        rec.write(TOPIC_DIAGNOSTICS, diagnostics_message(pub_ns, values, level, message), pub_ns)
         diagnosed = done
+
+    def keep_what_was_rendered(error: str = "") -> str:
+        """End a render cut short (a signal; a divergence, whose line is ``error``): what was
+        rendered, finalised, ending in the /diagnostics of its last sample (level ERROR with
+        ``error``), as a render that ran to its end and the live node stopped by a signal end
+        (without it the ground truth of the last part-second was missing: a pit that appeared
+        there was "after this recording ends"); nothing rendered: nothing replaces what out
+        held.  Returns where the file stands, for the line that says so."""
+        with _signals_held():
+            if done:
+                if (diagnosed < done or error) and not rec.error:
+                    write_diagnostics(msgs.stamp_ns(done), error)
+                rec.close()
+            else:
+                rec.discard()
+        bar.done()
+        st = rec.status
+        if not done:
+            return f"nothing rendered, {str(out)!r} left as it was"
+        if st["ok"]:
+            return f"{str(out)!r} holds the first {done / sample_rate:g} s, finalised"
+        return st["error"]
 
     try:
         for topic in topics:
@@ -451,33 +477,19 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
                     next_diag_s += 1
                 bar.update(done / sample_rate)
     except KeyboardInterrupt as exc:
-        # Ctrl-C or SIGTERM: keep what was rendered, finalised, and say so (nothing rendered:
-        # nothing replaces what out held)
+        # Ctrl-C or SIGTERM: keep what was rendered, finalised, and say so
         how = "SIGTERM" if isinstance(exc, Terminated) else "Ctrl-C"
-        with _signals_held():
-            if done:
-                if diagnosed < done and not rec.error:
-                    # the end of the signal has its /diagnostics, as a render that ran to its end
-                    # and the live node stopped by a signal have: without it the ground truth of
-                    # the last part-second was missing (a pit that appeared there was "after
-                    # this recording ends")
-                    write_diagnostics(msgs.stamp_ns(done))
-                rec.close()
-            else:
-                rec.discard()
-        bar.done()
-        st = rec.status
-        if not done:
-            text = f"nothing rendered, {str(out)!r} left as it was"
-        elif st["ok"]:
-            text = f"{str(out)!r} holds the first {done / sample_rate:g} s, finalised"
-        else:
-            text = st["error"]
-        print(f"interrupted ({how}): {text}", file=sys.stderr)
+        print(f"interrupted ({how}): {keep_what_was_rendered()}", file=sys.stderr)
         exc.reported = True
         raise
+    except SolverDiverged as exc:
+        # the signal up to the batch that diverged is good: kept, finalised, ending in an ERROR
+        # /diagnostics with the line, as the node's recording does (until 2026-11-29 a traceback
+        # and no file); said in one line by the caller, with where the file stands
+        exc.recording = keep_what_was_rendered(exc.worded(CLI_SETTINGS))
+        raise
     except BaseException:
-        # a failed render (solver diverged, ...) must not leave a short file that looks complete:
+        # a failed render (disk full, ...) must not leave a short file that looks complete:
         # its partial file goes, and out keeps what it held
         with _signals_held():
             rec.discard()
@@ -513,7 +525,7 @@ def _terminated_on_sigterm():
 
 def render_command(args) -> int:
     """CLI entry: ``bearing-sim render S --duration SEC --out F.mcap [...]``."""
-    from ..physics.skidding import RK4Diverged
+    from ..physics.skidding import SolverDiverged
     from ..scene import load_scene
     from ..simulator import OversampleForAuto, OversampleWithOwnStep
 
@@ -529,9 +541,11 @@ def render_command(args) -> int:
         if not getattr(exc, "reported", False):
             print(f"interrupted: nothing rendered, {out!r} left as it was", file=sys.stderr)
         return EXIT_INTERRUPTED[getattr(exc, "signum", signal.SIGINT)]
-    except RK4Diverged as exc:
-        # the model words its advice for the Python API; here the knobs are options
-        raise UserError(exc.worded("--rk4-step", "--solver default")) from None
+    except SolverDiverged as exc:
+        # the model words its advice for the Python API; here the knobs are options.  Diverged
+        # as the Simulator was made (its first steps run ahead): nothing rendered
+        text = getattr(exc, "recording", f"nothing rendered, {out!r} left as it was")
+        raise UserError(f"{exc.worded(CLI_SETTINGS)}; {text}") from None
     except OversampleForAuto as exc:
         raise UserError(exc.worded("--oversample", "--fidelity")) from None
     except OversampleWithOwnStep as exc:
