@@ -214,11 +214,12 @@ class Scene:
                 if error:
                     raise SceneError(f"scene {self.name}: {error}")
         # and the knobs of a sweep that the YAML bounds (a NaN clearance ran to NaN samples)
-        lo, hi = RADIAL_CLEARANCE_RANGE_UM
+        # in m as wide as the um of the YAML and of Python alike (-50 x 1e-6 is above -50e-6, which
+        # was refused under a message that gave -5e-05 as the bound)
+        lo, hi = _um_range(*RADIAL_CLEARANCE_RANGE_UM)
         tier = ("" if isinstance(self.fidelity, str) and self.fidelity in TIERS
                 else f"fidelity = {short_repr(self.fidelity)}: allowed values are {', '.join(TIERS)}")
-        for error in (_number_error("bearing.radial_clearance", self.bearing.radial_clearance, lo * 1e-6,
-                                    hi * 1e-6, "m"),
+        for error in (_number_error("bearing.radial_clearance", self.bearing.radial_clearance, lo, hi, "m"),
                       _number_error("random_slip", self.random_slip, 0.0, RANDOM_SLIP_MAX),
                       tier, _number_error("fidelity_tolerance", self.fidelity_tolerance, *TOLERANCE_RANGE),
                       # and its structure, lubrication and sensor (a shaft_mass of 0 was a

@@ -460,6 +460,19 @@ def test_a_scenes_clearance_slip_and_tier_changed_in_python_are_held_to_the_yaml
     assert np.isfinite(Simulator(inside, fidelity="kinematic").advance(150).accel).all()
 
 
+def test_a_clearance_at_the_edges_of_its_bounds_written_in_m_is_taken():
+    """``scene.bearing.with_clearance(-50e-6)``, the preload the YAML's ``radial_clearance_um:
+    -50`` allows, was refused with "radial_clearance = -5e-05 m: allowed range is [-5e-05, 0.0005]
+    m" (the bound was -50 x 1e-6, one bit above -50e-6).  Both ends are taken, in m as in um;
+    beyond them, refused."""
+    scene = load_scene("er16k_outer_race")
+    for clearance in (-50e-6, -50 * 1e-6, 500e-6, 500 * 1e-6):
+        dataclasses.replace(scene, bearing=scene.bearing.with_clearance(clearance))
+    for clearance in (-50.001e-6, 500.001e-6):
+        with pytest.raises(SceneError, match=r"radial_clearance = .* m: allowed range is \[-5e-05, 0\.0005\] m"):
+            dataclasses.replace(scene, bearing=scene.bearing.with_clearance(clearance))
+
+
 @pytest.mark.parametrize("section, change, line", [
     ("structure", {"shaft_mass": 0.0}, "structure.shaft_mass = 0 kg: allowed range is [0.001, 100000] kg"),
     ("structure", {"pedestal_stiffness": float("nan")},
