@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .catalog import RADIAL_CLEARANCE_RANGE_UM, Bearing, bearing_from_mapping, get_bearing
+from .catalog import RADIAL_CLEARANCE_RANGE_UM, G, Bearing, bearing_from_mapping, get_bearing
 from .errors import SceneError, short_repr
 from .limits import LOAD_MULTIPLE_C0, MAX_LOAD, MAX_SPEED_RPM, NDM_LIMIT, RPM, InputLimits
 from .paths import MCAP_MAGIC, input_file, scenes_dir
@@ -231,6 +231,9 @@ class Scene:
                       f"gravity = {short_repr(self.gravity)}: expected True or False"):
             if error:
                 raise SceneError(f"scene {self.name}: {error}")
+        error = _shaft_weight_error(self.bearing, self.structure.shaft_mass, self.gravity, "structure.shaft_mass")
+        if error:
+            raise SceneError(f"scene {self.name}: {error}")
 
     @property
     def shaft_hz(self) -> float:
@@ -406,10 +409,28 @@ def _operating_point_error(bearing: Bearing, speed: float, load, speed_key: str,
                 f"(|speed| <= {limits.max_speed / RPM:.0f} rpm, n*dm <= {NDM_LIMIT:.0e} rpm mm)")
     force = math.hypot(*load)
     if force > limits.max_load:
-        bound = (f"{LOAD_MULTIPLE_C0:g} x C0 = {limits.max_load:.0f} N of bearing {bearing.name}"
-                 if limits.max_load < MAX_LOAD else f"{MAX_LOAD:g} N, the most a scene may ask for")
-        return f"{load_key} = [{load[0]:g}, {load[1]:g}] N: |F| = {force:.6g} N beyond {bound}"
+        return f"{load_key} = [{load[0]:g}, {load[1]:g}] N: |F| = {force:.6g} N beyond {_load_bound(bearing)}"
     return ""
+
+
+def _load_bound(bearing: Bearing) -> str:
+    """The most load ``bearing`` takes (InputLimits.max_load), said with where it comes from."""
+    limit = InputLimits(bearing).max_load
+    return (f"{LOAD_MULTIPLE_C0:g} x C0 = {limit:.0f} N of bearing {bearing.name}" if limit < MAX_LOAD
+            else f"{MAX_LOAD:g} N, the most a scene may ask for")
+
+
+def _shaft_weight_error(bearing: Bearing, shaft_mass: float, gravity: bool, key: str) -> str:
+    """"" when the shaft's weight (``shaft_mass`` kg, with ``gravity``) is a load the bearing takes,
+    as a radial load is held to (``_operating_point_error``: 2 x C0), else the line naming ``key``:
+    the weight rests on the bearing's balls on top of the radial load, and a 100 t shaft
+    (structure.shaft.mass goes to 1e5 kg) put 480 kN on one ball of an ER-16K, 29 x its limit,
+    in both tiers."""
+    weight = shaft_mass * G if gravity else 0.0
+    if weight <= InputLimits(bearing).max_load:
+        return ""
+    return (f"{key} = {shaft_mass:g} kg: its weight, {weight:.6g} N, is beyond {_load_bound(bearing)} "
+            f"(gravity: false leaves the weight out)")
 
 
 def _defect_bounds(bearing: Bearing) -> tuple:
@@ -758,17 +779,22 @@ def scene_from_dict(data: Any, name: str = "scene", source_text: str = "", sourc
     outputs = fid.data.get("outputs", ["accel", "contact_forces", "cage_speed"])
     if not isinstance(outputs, list) or any(o not in OUTPUTS for o in outputs):
         raise SceneError(f"fidelity.outputs = {short_repr(outputs)}: expected a list from {', '.join(OUTPUTS)}")
+    structure = _structure(top)
+    gravity = top.boolean("gravity", True)
+    error = _shaft_weight_error(bearing, structure.shaft_mass, gravity, "structure.shaft.mass")
+    if error:
+        raise SceneError(error)
     return Scene(
         name=top.string("name", name) or name,
         description=top.string("description", ""),
         bearing=bearing,
-        structure=_structure(top),
+        structure=structure,
         shaft_speed=speed,
         radial_load=load,
         defects=_defects(top, bearing),
         waviness=_waviness(top),
         random_slip=top.number("random_slip", 0.0, lo=0.0, hi=RANDOM_SLIP_MAX),
-        gravity=top.boolean("gravity", True),
+        gravity=gravity,
         lubrication=_lubrication(top),
         sensor=_sensor(top),
         fidelity=fid.choice("tier", TIERS, "auto"),

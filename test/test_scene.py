@@ -460,6 +460,29 @@ def test_a_scenes_clearance_slip_and_tier_changed_in_python_are_held_to_the_yaml
     assert np.isfinite(Simulator(inside, fidelity="kinematic").advance(150).accel).all()
 
 
+def test_a_shaft_heavier_than_the_bearing_takes_is_refused_in_one_line():
+    """structure.shaft.mass goes to 1e5 kg for every bearing, and its weight rests on the balls on
+    top of the radial load, which is held to 2 x C0: a 100 t shaft on an ER-16K put 480 kN on one
+    ball in both tiers (29 x the limit).  Now the weight is held to the same limit, the YAML naming
+    its key, a scene changed in Python its field; with gravity off, or a lighter shaft, it runs."""
+    data = load_yaml(GOOD)
+    data["structure"]["shaft"]["mass"] = 1e5
+    with pytest.raises(SceneError) as exc:
+        scene_from_dict(data, name="heavy")
+    assert str(exc.value) == ("structure.shaft.mass = 100000 kg: its weight, 980665 N, is beyond 2 x C0 = 16681 N of "
+                              "bearing ER-16K (gravity: false leaves the weight out)")
+    scene = load_scene("er16k_outer_race")
+    with pytest.raises(SceneError, match=r"^scene er16k_outer_race: structure.shaft_mass = 2000 kg: its weight, "
+                                         r"19613.3 N, is beyond 2 x C0 = 16681 N of bearing ER-16K"):
+        dataclasses.replace(scene, structure=dataclasses.replace(scene.structure, shaft_mass=2000.0))
+    heavy = dataclasses.replace(scene.structure, shaft_mass=1e5)
+    dataclasses.replace(scene, structure=heavy, gravity=False)
+    data["gravity"] = False
+    scene_from_dict(data, name="weightless")
+    light = dataclasses.replace(scene, structure=dataclasses.replace(scene.structure, shaft_mass=1000.0))
+    assert np.isfinite(Simulator(light, fidelity="kinematic").advance(150).accel).all()
+
+
 def test_a_clearance_at_the_edges_of_its_bounds_written_in_m_is_taken():
     """``scene.bearing.with_clearance(-50e-6)``, the preload the YAML's ``radial_clearance_um:
     -50`` allows, was refused with "radial_clearance = -5e-05 m: allowed range is [-5e-05, 0.0005]
