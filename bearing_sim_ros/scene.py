@@ -129,12 +129,22 @@ class Lubrication:
 
     def traction_extreme(self, slip_max: float = 100.0) -> tuple:
         """(largest |mu| of the traction curve over slip velocities 0 - ``slip_max`` m/s, the slip
-        velocity (m/s) where it is): at an end, or where the curve turns, v = 1/C - A/B."""
+        velocity (m/s) where it is)."""
+        return max((abs(mu), v) for mu, v in self._traction_turns(slip_max))
+
+    def traction_least(self, slip_max: float = 100.0) -> tuple:
+        """(smallest mu of the traction curve over slip velocities 0 - ``slip_max`` m/s, the slip
+        velocity (m/s) where it is)."""
+        return min(self._traction_turns(slip_max))
+
+    def _traction_turns(self, slip_max: float) -> list:
+        """(mu, slip velocity m/s) where the traction curve can be largest or smallest over slips
+        0 - ``slip_max``: at the ends, and where it turns, v = 1/C - A/B (its one turn)."""
         a, b, c, d = self.traction_a, self.traction_b, self.traction_c, self.traction_d
         slips = [0.0, slip_max]
         if b != 0.0 and c > 0.0 and 0.0 < 1.0 / c - a / b < slip_max:
             slips.append(1.0 / c - a / b)
-        return max((abs((a + b * v) * math.exp(-c * v) + d), v) for v in slips)
+        return [((a + b * v) * math.exp(-c * v) + d, v) for v in slips]
 
 
 @dataclass(frozen=True)
@@ -379,6 +389,11 @@ LUBRICATION_LO_OPEN = ("pressure_viscosity",)
 # at zero slip (A = 1, D = 0.5) or grow without end (C = 0), and the skidding solver diverged
 # (a curve peaking at 1.43 did at 10000 rpm / 10 N; 1.0 ran at 600-20000 rpm, 10-2000 N)
 MAX_TRACTION = 1.0
+# and never below 0: a traction that drives the slip instead of opposing it feeds the balls
+# energy (mu = -1 made the default and the reference solver diverge at every operating point
+# tried, -0.5 the default at three of four); TRACTION_ROUNDING lets a curve that starts at
+# A + D = 0 in its last bit through
+TRACTION_ROUNDING = 1e-12
 # Sensor's numeric fields (the YAML keys of the same names) -> (lo, hi, lo_open, unit)
 SENSOR_BOUNDS = {"resonance_hz": (0.0, 200000.0, False, "Hz"), "damping_ratio": (0.001, 1.0, False, ""),
                  "noise_density": (0.0, 10.0, False, "m/s^2/sqrt(Hz)"), "range": (0.0, 1e7, True, "m/s^2")}
@@ -598,15 +613,19 @@ def _lubrication_error(lubrication) -> str:
 
 
 def _traction_error(lubrication) -> str:
-    """"" when the traction curve of ``lubrication`` stays within MAX_TRACTION, else the line
+    """"" when the traction curve of ``lubrication`` stays within 0 - MAX_TRACTION, else the line
     naming its four keys."""
-    mu, slip = lubrication.traction_extreme()
-    if mu <= MAX_TRACTION:
-        return ""
     curve = ", ".join(f"{k} = {getattr(lubrication, 'traction_' + k.lower()):g}" for k in "ABCD")
-    return (f"lubrication.traction_a .. traction_d ({curve}): the traction curve (A + B v) exp(-C v) + D "
-            f"reaches |mu| = {mu:.3g} at a slip of {slip:.3g} m/s; allowed at most {MAX_TRACTION:g} "
-            "(dry steel on steel is about 0.6, lubricated contacts 0.02 - 0.1)")
+    said = f"lubrication.traction_a .. traction_d ({curve}): the traction curve (A + B v) exp(-C v) + D"
+    mu, slip = lubrication.traction_extreme()
+    if mu > MAX_TRACTION:
+        return (f"{said} reaches |mu| = {mu:.3g} at a slip of {slip:.3g} m/s; allowed at most {MAX_TRACTION:g} "
+                "(dry steel on steel is about 0.6, lubricated contacts 0.02 - 0.1)")
+    mu, slip = lubrication.traction_least()
+    if mu < -TRACTION_ROUNDING:
+        return (f"{said} falls to mu = {mu:.3g} at a slip of {slip:.3g} m/s; allowed at least 0 (traction opposes "
+                "the slip; a negative mu drives it)")
+    return ""
 
 
 def _sensor_error(sensor) -> str:

@@ -547,16 +547,25 @@ def test_a_scenes_structure_lubrication_and_sensor_within_the_limits_run():
     assert batch.accel_channels == ("accel_y",) and np.isfinite(batch.accel).all()
 
 
-@pytest.mark.parametrize("curve, mu", [
-    ({"traction_b": 10.0}, "18.5 at a slip of 5.01 m/s"),                 # each key within its own bounds
-    ({"traction_a": 1.0, "traction_d": 0.5}, "1.5 at a slip of 0 m/s"),   # 1.5 at zero slip
-    ({"traction_a": 0.0, "traction_b": 0.1, "traction_c": 0.0}, "10.1 at a slip of 100 m/s"),   # no end
+@pytest.mark.parametrize("curve, said", [
+    ({"traction_b": 10.0}, "reaches |mu| = 18.5 at a slip of 5.01 m/s; allowed at most 1"),   # each key in bounds
+    ({"traction_a": 1.0, "traction_d": 0.5}, "reaches |mu| = 1.5 at a slip of 0 m/s; allowed at most 1"),
+    ({"traction_a": 0.0, "traction_b": 0.1, "traction_c": 0.0}, "reaches |mu| = 10.1 at a slip of 100 m/s; allowed "
+                                                                "at most 1"),                       # no end
+    ({"traction_a": -1.0, "traction_b": 0.0, "traction_c": 0.0, "traction_d": 0.0},
+     "falls to mu = -1 at a slip of 0 m/s; allowed at least 0 (traction opposes the slip"),
+    ({"traction_d": 0.0}, "falls to mu = -0.1 at a slip of 0 m/s; allowed at least 0"),   # the ER-16K's less its D
+    ({"traction_a": 0.0, "traction_b": -0.05, "traction_c": 1.0, "traction_d": 0.0},
+     "falls to mu = -0.0184 at a slip of 1 m/s; allowed at least 0"),                     # below 0 where it turns
 ])
-def test_a_traction_curve_beyond_dry_friction_is_refused_in_one_line(curve, mu, tmp_path):
+def test_a_traction_curve_beyond_dry_friction_or_below_0_is_refused_in_one_line(curve, said, tmp_path):
     """Each traction key within its bounds, the curve could peak at mu = 18 (B = 10) or start at
     1.5, and the skidding solver diverged: ``SolverDiverged``, a traceback and "internal error"
     (a helper's finding).  Now the YAML (and a scene changed in Python) is refused where the
-    curve's |mu| passes 1 over slips up to 100 m/s, naming the four keys; 1 runs (below)."""
+    curve's |mu| passes 1 over slips up to 100 m/s, naming the four keys; 1 runs (below).  Nor
+    may it fall below 0 (a traction that drives the slip: at mu = -1 the default and the reference
+    solver diverged at every operating point tried, 2000 and 25 974 rpm, 10 N to 16.7 kN); the
+    shipped curves, 0 at zero slip, load."""
     data = load_yaml(GOOD)
     data.setdefault("lubrication", {}).update(curve)
     path = tmp_path / "curve.yaml"
@@ -564,7 +573,9 @@ def test_a_traction_curve_beyond_dry_friction_is_refused_in_one_line(curve, mu, 
     with pytest.raises(SceneError) as exc:
         load_scene(str(path))
     assert str(exc.value).startswith("scene curve.yaml: lubrication.traction_a .. traction_d (") and (
-        f"reaches |mu| = {mu}; allowed at most 1" in str(exc.value)), str(exc.value)
+        said in str(exc.value)), str(exc.value)
+    for name in shipped_scenes():
+        assert load_scene(name).lubrication.traction_least() == (0.0, 0.0)
 
 
 def test_a_traction_curve_at_the_limit_runs_on_the_skidding_tier():
