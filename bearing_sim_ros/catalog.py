@@ -159,6 +159,9 @@ _CATALOG_KEYS = {
 }
 _REQUIRED = ("balls", "ball_diameter_mm", "pitch_diameter_mm")
 RADIAL_CLEARANCE_RANGE_UM = (-50.0, 500.0)   # a catalog's or a scene's radial_clearance_um (negative: preload)
+# kg/m^3: the density key, and what a ball's mass may make of its volume (ball_mass_kg): from
+# polymers to tungsten carbide (steel 7850, silicon nitride 3200, WC 15 000)
+DENSITY_RANGE = (1000.0, 20000.0)
 
 
 def bearing_from_mapping(name: str, data: dict, where: str = "bearing") -> Bearing:
@@ -203,8 +206,16 @@ def bearing_from_mapping(name: str, data: dict, where: str = "bearing") -> Beari
         raise SceneError(
             f"{where}.outer_race_diameter_mm = {do / _MM:g}: outer minus inner race diameter must "
             f"be close to twice the ball diameter ({2 * d / _MM:g} mm)")
-    density = num("density", 7850.0, 1000.0, 20000.0)
+    density = num("density", 7850.0, *DENSITY_RANGE)
     mass_default = density * math.pi * d ** 3 / 6.0
+    # the ball's mass as its volume holds it at DENSITY_RANGE: a fixed [1e-6, 100] kg let a 7.94 mm
+    # ball weigh 1 mg (the skidding solver diverged at 25 700 rpm) or 100 kg (centrifugal loads of
+    # 3e5 x the radial load), and refused the default mass of every steel ball under 0.9 mm
+    lo, hi = (rho * math.pi * d ** 3 / 6.0 for rho in DENSITY_RANGE)
+    ball_mass = data.get("ball_mass_kg", mass_default)
+    if isinstance(ball_mass, bool) or not isinstance(ball_mass, (int, float)) or not lo <= ball_mass <= hi:
+        raise SceneError(f"{where}.ball_mass_kg = {short_repr(ball_mass)}: allowed range is [{lo:.4g}, {hi:.4g}] for "
+                         f"a ball of {d / _MM:g} mm (its volume at {DENSITY_RANGE[0]:g} - {DENSITY_RANGE[1]:g} kg/m^3)")
     return Bearing(
         name=name,
         balls=balls,
@@ -214,7 +225,7 @@ def bearing_from_mapping(name: str, data: dict, where: str = "bearing") -> Beari
         outer_race_diameter=do,
         radial_clearance=num("radial_clearance_um", 10.0, *RADIAL_CLEARANCE_RANGE_UM) * 1e-6,
         contact_angle=math.radians(num("contact_angle_deg", 0.0, 0.0, 45.0)),
-        ball_mass=num("ball_mass_kg", mass_default, 1e-6, 100.0),
+        ball_mass=float(ball_mass),
         width=num("width_mm", 2 * d / _MM, 0.1, 1000.0) * _MM,
         inner_groove_conformity=num("inner_groove_conformity", 0.52, 0.505, 0.6),
         outer_groove_conformity=num("outer_groove_conformity", 0.52, 0.505, 0.6),

@@ -25,3 +25,22 @@ class UserError(Exception):
 
 class SceneError(UserError):
     """A scene file that cannot be used: unknown key, wrong type, value out of range."""
+
+
+class SettingNames:
+    """How a caller names its settings in the advice of a one-line error: the Python API's
+    keyword arguments (``solver='reference'``), the command line's options (``--solver
+    reference``), the node's parameters (``-p fidelity:=kinematic``).  ``keys``: the settings the
+    caller has (the node has no ``solver``), so that the advice offers only what can be given."""
+
+    def __init__(self, name, assign, keys: tuple):
+        self.name = name            # key -> the caller's name for it
+        self.assign = assign        # (key, value) -> how the caller sets it
+        self.keys = tuple(keys)
+
+
+SIMULATOR_SETTINGS = ("solver", "rk4_step", "oversample", "fidelity")
+API_SETTINGS = SettingNames(lambda key: key, lambda key, value: f"{key}={value!r}", SIMULATOR_SETTINGS)
+CLI_SETTINGS = SettingNames(lambda key: "--" + key.replace("_", "-"),
+                            lambda key, value: f"--{key.replace('_', '-')} {value}", SIMULATOR_SETTINGS)
+NODE_SETTINGS = SettingNames(lambda key: key, lambda key, value: f"-p {key}:={value}", ("oversample", "fidelity"))

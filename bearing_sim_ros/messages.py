@@ -48,8 +48,9 @@ DISCOVERY_GRACE_S = 0.5
 RUN_KEY, RUN_RUNNING, RUN_ENDED = "run", "running", "ended"
 END_REASON_KEY, PUBLISHED_SAMPLES_KEY = "end_reason", "published_samples"
 # why a run ended: its duration reached, or a signal (the node's Ctrl-C, SIGTERM, SIGHUP; render's
-# Ctrl-C and SIGTERM), or the node's stop() called by a program that runs it in its own process
-END_REASONS = ("duration", "SIGINT", "SIGTERM", "SIGHUP", "stopped")
+# Ctrl-C and SIGTERM), or the node's stop() called by a program that runs it in its own process, or
+# the skidding solver's divergence (level ERROR, its line in the message)
+END_REASONS = ("duration", "SIGINT", "SIGTERM", "SIGHUP", "stopped", "diverged")
 # s the node waits at its end for reliable subscribers to acknowledge its last messages (the end
 # status, the last tables), and `play` for its tail: they are lost to a subscriber that has not
 # received them when the publisher is destroyed
@@ -68,6 +69,8 @@ def end_of_run(values: dict, level: int, message: str, reason: str, samples: int
         text = f"run ended: duration {duration:g} s reached, {seconds}"
     elif reason == "stopped":
         text = f"run ended: stopped by the program that runs the node, {seconds}"
+    elif reason == "diverged":
+        text = f"run ended: the solver diverged, {seconds}"
     else:
         text = f"run ended by {reason}: {seconds}"
     values = dict(values, **{RUN_KEY: RUN_ENDED, END_REASON_KEY: reason, PUBLISHED_SAMPLES_KEY: samples})

@@ -20,11 +20,14 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import UserError
+from .errors import SettingNames, UserError
 from .paths import output_file
 from .teardown import command_signals, teardown_watchdog
 
 ANALYSIS_MAX_S = 30.0       # s of signal (the end of the recording) that the summary analyses
+# what a divergence's advice offers: run has no --fidelity, the scene's fidelity.tier does it
+RUN_SETTINGS = SettingNames(lambda key: key, lambda key, value: f"{key}: {{tier: {value}}} in the scene",
+                            ("fidelity",))
 
 
 def _record_tail(paths, max_s: float) -> dict:
@@ -184,8 +187,8 @@ def run_command(args) -> int:
     from rclpy.parameter import Parameter
     from rclpy.signals import SignalHandlerOptions
 
-    from .nodes.bearing_sim_node import (DEFAULT_SAMPLE_RATE, BearingSimNode, build_node, log_recording,
-                                         say_held, spin_node, stop_reason)
+    from .nodes.bearing_sim_node import (DEFAULT_SAMPLE_RATE, BearingSimNode, build_node, failure_recording_text,
+                                         log_recording, say_held, spin_node, stop_reason)
     from .messages import BATCH_DURATION, duration_error
     from .recording.recorder import files_text, sizes_text, split_error
     from .recording.render import tier_values
@@ -214,7 +217,8 @@ def run_command(args) -> int:
     try:
         signals.check()
         rclpy.init(args=[], signal_handler_options=SignalHandlerOptions.NO)
-        node = build_node(lambda: BearingSimNode(record_argument="--out", parameter_overrides=overrides))
+        node = build_node(lambda: BearingSimNode(record_argument="--out", settings=RUN_SETTINGS,
+                                                 parameter_overrides=overrides))
         signals.check()
         print(f"bearing-sim run: {scene.name} in real time "
               f"{'until Ctrl-C' if duration == 0 else f'for {duration:g} s'}, recording to {out}", flush=True)
@@ -246,6 +250,9 @@ def run_command(args) -> int:
             rclpy.try_shutdown()
     if error is not None:
         raise error
+    if node is not None and node.failure is not None:
+        # the skidding solver diverged: the recording is finalised, the summary is not the run's
+        raise UserError(f"{node.failure.worded(RUN_SETTINGS)}{failure_recording_text(node)}")
     if figures is None:
         return 0
     if not figures["ok"]:

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
-from .catalog import RADIAL_CLEARANCE_RANGE_UM, Bearing, bearing_from_mapping, get_bearing
+from .catalog import RADIAL_CLEARANCE_RANGE_UM, G, Bearing, bearing_from_mapping, get_bearing
 from .errors import SceneError, short_repr
 from .limits import LOAD_MULTIPLE_C0, MAX_LOAD, MAX_SPEED_RPM, NDM_LIMIT, RPM, InputLimits
 from .paths import MCAP_MAGIC, input_file, scenes_dir
@@ -129,12 +129,22 @@ class Lubrication:
 
     def traction_extreme(self, slip_max: float = 100.0) -> tuple:
         """(largest |mu| of the traction curve over slip velocities 0 - ``slip_max`` m/s, the slip
-        velocity (m/s) where it is): at an end, or where the curve turns, v = 1/C - A/B."""
+        velocity (m/s) where it is)."""
+        return max((abs(mu), v) for mu, v in self._traction_turns(slip_max))
+
+    def traction_least(self, slip_max: float = 100.0) -> tuple:
+        """(smallest mu of the traction curve over slip velocities 0 - ``slip_max`` m/s, the slip
+        velocity (m/s) where it is)."""
+        return min(self._traction_turns(slip_max))
+
+    def _traction_turns(self, slip_max: float) -> list:
+        """(mu, slip velocity m/s) where the traction curve can be largest or smallest over slips
+        0 - ``slip_max``: at the ends, and where it turns, v = 1/C - A/B (its one turn)."""
         a, b, c, d = self.traction_a, self.traction_b, self.traction_c, self.traction_d
         slips = [0.0, slip_max]
         if b != 0.0 and c > 0.0 and 0.0 < 1.0 / c - a / b < slip_max:
             slips.append(1.0 / c - a / b)
-        return max((abs((a + b * v) * math.exp(-c * v) + d), v) for v in slips)
+        return [((a + b * v) * math.exp(-c * v) + d, v) for v in slips]
 
 
 @dataclass(frozen=True)
@@ -224,11 +234,12 @@ class Scene:
                 if error:
                     raise SceneError(f"scene {self.name}: {error}")
         # and the knobs of a sweep that the YAML bounds (a NaN clearance ran to NaN samples)
-        lo, hi = RADIAL_CLEARANCE_RANGE_UM
+        # in m as wide as the um of the YAML and of Python alike (-50 x 1e-6 is above -50e-6, which
+        # was refused under a message that gave -5e-05 as the bound)
+        lo, hi = _um_range(*RADIAL_CLEARANCE_RANGE_UM)
         tier = ("" if isinstance(self.fidelity, str) and self.fidelity in TIERS
                 else f"fidelity = {short_repr(self.fidelity)}: allowed values are {', '.join(TIERS)}")
-        for error in (_number_error("bearing.radial_clearance", self.bearing.radial_clearance, lo * 1e-6,
-                                    hi * 1e-6, "m"),
+        for error in (_number_error("bearing.radial_clearance", self.bearing.radial_clearance, lo, hi, "m"),
                       _number_error("random_slip", self.random_slip, 0.0, RANDOM_SLIP_MAX),
                       tier, _number_error("fidelity_tolerance", self.fidelity_tolerance, *TOLERANCE_RANGE),
                       # and its structure, lubrication and sensor (a shaft_mass of 0 was a
@@ -247,6 +258,9 @@ class Scene:
         object.__setattr__(self, "profile", tuple(knots))
         for name in ("defects", "waviness", "outputs"):
             object.__setattr__(self, name, tuple(getattr(self, name)))
+        error = _shaft_weight_error(self.bearing, self.structure.shaft_mass, self.gravity, "structure.shaft_mass")
+        if error:
+            raise SceneError(f"scene {self.name}: {error}")
 
     @property
     def shaft_hz(self) -> float:
@@ -395,6 +409,11 @@ LUBRICATION_LO_OPEN = ("pressure_viscosity",)
 # at zero slip (A = 1, D = 0.5) or grow without end (C = 0), and the skidding solver diverged
 # (a curve peaking at 1.43 did at 10000 rpm / 10 N; 1.0 ran at 600-20000 rpm, 10-2000 N)
 MAX_TRACTION = 1.0
+# and never below 0: a traction that drives the slip instead of opposing it feeds the balls
+# energy (mu = -1 made the default and the reference solver diverge at every operating point
+# tried, -0.5 the default at three of four); TRACTION_ROUNDING lets a curve that starts at
+# A + D = 0 in its last bit through
+TRACTION_ROUNDING = 1e-12
 # Sensor's numeric fields (the YAML keys of the same names) -> (lo, hi, lo_open, unit)
 SENSOR_BOUNDS = {"resonance_hz": (0.0, 200000.0, False, "Hz"), "damping_ratio": (0.001, 1.0, False, ""),
                  "noise_density": (0.0, 10.0, False, "m/s^2/sqrt(Hz)"), "range": (0.0, 1e7, True, "m/s^2")}
@@ -425,10 +444,28 @@ def _operating_point_error(bearing: Bearing, speed: float, load, speed_key: str,
                 f"(|speed| <= {limits.max_speed / RPM:.0f} rpm, n*dm <= {NDM_LIMIT:.0e} rpm mm)")
     force = math.hypot(*load)
     if force > limits.max_load:
-        bound = (f"{LOAD_MULTIPLE_C0:g} x C0 = {limits.max_load:.0f} N of bearing {bearing.name}"
-                 if limits.max_load < MAX_LOAD else f"{MAX_LOAD:g} N, the most a scene may ask for")
-        return f"{load_key} = [{load[0]:g}, {load[1]:g}] N: |F| = {force:.6g} N beyond {bound}"
+        return f"{load_key} = [{load[0]:g}, {load[1]:g}] N: |F| = {force:.6g} N beyond {_load_bound(bearing)}"
     return ""
+
+
+def _load_bound(bearing: Bearing) -> str:
+    """The most load ``bearing`` takes (InputLimits.max_load), said with where it comes from."""
+    limit = InputLimits(bearing).max_load
+    return (f"{LOAD_MULTIPLE_C0:g} x C0 = {limit:.0f} N of bearing {bearing.name}" if limit < MAX_LOAD
+            else f"{MAX_LOAD:g} N, the most a scene may ask for")
+
+
+def _shaft_weight_error(bearing: Bearing, shaft_mass: float, gravity: bool, key: str) -> str:
+    """"" when the shaft's weight (``shaft_mass`` kg, with ``gravity``) is a load the bearing takes,
+    as a radial load is held to (``_operating_point_error``: 2 x C0), else the line naming ``key``:
+    the weight rests on the bearing's balls on top of the radial load, and a 100 t shaft
+    (structure.shaft.mass goes to 1e5 kg) put 480 kN on one ball of an ER-16K, 29 x its limit,
+    in both tiers."""
+    weight = shaft_mass * G if gravity else 0.0
+    if weight <= InputLimits(bearing).max_load:
+        return ""
+    return (f"{key} = {shaft_mass:g} kg: its weight, {weight:.6g} N, is beyond {_load_bound(bearing)} "
+            f"(gravity: false leaves the weight out)")
 
 
 def _defect_bounds(bearing: Bearing) -> tuple:
@@ -596,15 +633,19 @@ def _lubrication_error(lubrication) -> str:
 
 
 def _traction_error(lubrication) -> str:
-    """"" when the traction curve of ``lubrication`` stays within MAX_TRACTION, else the line
+    """"" when the traction curve of ``lubrication`` stays within 0 - MAX_TRACTION, else the line
     naming its four keys."""
-    mu, slip = lubrication.traction_extreme()
-    if mu <= MAX_TRACTION:
-        return ""
     curve = ", ".join(f"{k} = {getattr(lubrication, 'traction_' + k.lower()):g}" for k in "ABCD")
-    return (f"lubrication.traction_a .. traction_d ({curve}): the traction curve (A + B v) exp(-C v) + D "
-            f"reaches |mu| = {mu:.3g} at a slip of {slip:.3g} m/s; allowed at most {MAX_TRACTION:g} "
-            "(dry steel on steel is about 0.6, lubricated contacts 0.02 - 0.1)")
+    said = f"lubrication.traction_a .. traction_d ({curve}): the traction curve (A + B v) exp(-C v) + D"
+    mu, slip = lubrication.traction_extreme()
+    if mu > MAX_TRACTION:
+        return (f"{said} reaches |mu| = {mu:.3g} at a slip of {slip:.3g} m/s; allowed at most {MAX_TRACTION:g} "
+                "(dry steel on steel is about 0.6, lubricated contacts 0.02 - 0.1)")
+    mu, slip = lubrication.traction_least()
+    if mu < -TRACTION_ROUNDING:
+        return (f"{said} falls to mu = {mu:.3g} at a slip of {slip:.3g} m/s; allowed at least 0 (traction opposes "
+                "the slip; a negative mu drives it)")
+    return ""
 
 
 def _sensor_error(sensor) -> str:
@@ -808,17 +849,22 @@ def scene_from_dict(data: Any, name: str = "scene", source_text: str = "", sourc
     outputs = fid.data.get("outputs", ["accel", "contact_forces", "cage_speed"])
     if not isinstance(outputs, list) or any(o not in OUTPUTS for o in outputs):
         raise SceneError(f"fidelity.outputs = {short_repr(outputs)}: expected a list from {', '.join(OUTPUTS)}")
+    structure = _structure(top)
+    gravity = top.boolean("gravity", True)
+    error = _shaft_weight_error(bearing, structure.shaft_mass, gravity, "structure.shaft.mass")
+    if error:
+        raise SceneError(error)
     return Scene(
         name=top.string("name", name) or name,
         description=top.string("description", ""),
         bearing=bearing,
-        structure=_structure(top),
+        structure=structure,
         shaft_speed=speed,
         radial_load=load,
         defects=_defects(top, bearing),
         waviness=_waviness(top),
         random_slip=top.number("random_slip", 0.0, lo=0.0, hi=RANDOM_SLIP_MAX),
-        gravity=top.boolean("gravity", True),
+        gravity=gravity,
         lubrication=_lubrication(top),
         sensor=_sensor(top),
         fidelity=fid.choice("tier", TIERS, "auto"),

@@ -115,3 +115,27 @@ def skidding_outer_race(tmp_path_factory):
     recording = folder / "fast.mcap"
     render(str(path), 2.0, recording, fidelity="skidding", progress=False)
     return path, recording
+
+
+# A scene within every bound on which the skidding tier's default solver diverges, 10 - 60 ms
+# after its pit appears (2026-11-29): er16k_skidding (2000 rpm, 200 N) with the widest and
+# deepest outer-race pit the bounds allow on an ER-16K (6.7 of 6.72 mm, 3.9 of 3.97 mm) and seed
+# 001's rectangular depth function, whose exit edge is a step of about 1.4 mm that the ball runs
+# into.  Should the bounds come to refuse it, the tests of a divergence need another such scene.
+DIVERGING_PIT = "{kind: outer, width_mm: 6.7, depth_mm: 3.9, clock: 6, profile: rectangular, onset_s: %r}"
+
+
+@pytest.fixture
+def diverging_scene(tmp_path):
+    """``diverging_scene(onset_s)``: the path of that scene with its pit appearing at ``onset_s``
+    s, in the test's folder (it asks for skid ratios: the skidding tier runs)."""
+    text = (REPO / "config" / "scenes" / "er16k_skidding.yaml").read_text()
+
+    def write(onset_s: float = 0.0):
+        pitted = text.replace("defects: []", f"defects: [{DIVERGING_PIT % float(onset_s)}]")
+        assert pitted != text, "er16k_skidding.yaml's defects line moved: update this fixture"
+        path = tmp_path / "diverging.yaml"
+        path.write_text(pitted)
+        return path
+
+    return write

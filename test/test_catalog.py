@@ -142,6 +142,27 @@ def test_custom_bearing_contact_angle_mass_and_inertia():
     assert b.ball_inertia == pytest.approx(0.4 * b.ball_mass * (0.5 * b.ball_diameter) ** 2, rel=1e-12)
 
 
+@pytest.mark.parametrize("mass", [1e-6, 100.0, 0.006, float("nan")])
+def test_a_ball_mass_its_volume_cannot_hold_is_refused_in_one_line(mass):
+    """``ball_mass_kg`` was held to [1e-6, 100] kg whatever the ball: a 7.94 mm ball of 1 mg ran
+    (the skidding solver diverged at 25 700 rpm, 10 N) and one of 100 kg (centrifugal ball loads of
+    3e5 x the radial load).  Now its volume at 1000 - 20000 kg/m^3 bounds it, the density key's
+    range: 0.26 - 5.2 g for that ball."""
+    with pytest.raises(SceneError) as exc:
+        bearing_from_mapping("custom", dict(CUSTOM, ball_mass_kg=mass))
+    assert str(exc.value) == (f"bearing.ball_mass_kg = {mass!r}: allowed range is [0.0002621, 0.005242] for a ball "
+                              f"of 7.94 mm (its volume at 1000 - 20000 kg/m^3)")
+
+
+def test_the_smallest_ball_the_catalog_allows_takes_its_own_mass():
+    """A 0.5 mm ball (the smallest ``ball_diameter_mm``) was refused for the mass it gets by default,
+    0.51 mg of steel, below the fixed 1e-6 kg: no such bearing could be given without a mass that
+    makes it 15 000 kg/m^3.  Now its default mass, and a silicon nitride one, are taken."""
+    small = {"balls": 8, "ball_diameter_mm": 0.5, "pitch_diameter_mm": 2.0}
+    assert bearing_from_mapping("small", small).ball_mass == pytest.approx(7850 * math.pi * 0.5e-3 ** 3 / 6)
+    assert bearing_from_mapping("small", dict(small, ball_mass_kg=2.1e-7)).ball_mass == 2.1e-7
+
+
 @pytest.mark.parametrize("change, words", [
     ({"balls": 20}, ["balls = 20", "do not fit", "at most 15"]),
     ({"balls": 2}, ["balls = 2", "[3, 40]"]),

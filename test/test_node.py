@@ -17,8 +17,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from test_node_support import (FIRST_TABLE_S, NS, Listener, NodeProcess, assert_one_error_line,
-                               hung_teardown_script, offered_qos, read_recording, stamps_and_widths)
+from test_node_support import (FIRST_TABLE_S, NS, Listener, NodeProcess, assert_diverged_and_recorded,
+                               assert_one_error_line, hung_teardown_script, offered_qos, read_recording, stamps_and_widths)
 
 from bearing_sim_ros.analysis.envelope import DETECTION_THRESHOLD, envelope_spectrum, fault_lines, line_at
 from bearing_sim_ros.catalog import get_bearing
@@ -1227,3 +1227,35 @@ def test_a_hung_teardown_ends_with_the_stacks_status_1_and_a_closed_recording(ro
     assert "Timeout (0:00:01)!" in r.stderr and "<lambda>" in r.stderr, r.stderr
     topics, _meta = read_recording(out)
     assert sum(m.width for _t, m in topics["/accel"]) == 7500
+
+
+def test_a_diverging_solver_ends_the_node_with_one_line_an_error_status_and_its_recording(
+        ros_env, bearing_sim_exe, diverging_scene, tmp_path):
+    """The skidding solver's divergence (a pit that appears at 0.3 s, conftest.DIVERGING_PIT)
+    ended the node with a traceback, "internal error", exit 1 and no /diagnostics saying so.
+    Now the batches computed before it are published, the error is logged and published as an
+    ERROR /diagnostics, the recording is finalised, and the node exits 2 with one line naming
+    the parameter to try."""
+    record = tmp_path / "live.mcap"
+    r = subprocess.run([bearing_sim_exe, "node", "--scene", str(diverging_scene(0.3)), "--ros-args",
+                        "-p", "real_time:=false", "-p", "duration:=2.0", "-p", f"record:={record}"],
+                       env=ros_env, capture_output=True, text=True, timeout=120)
+    assert_diverged_and_recorded(r, record, "-p fidelity:=kinematic")
+
+
+def test_a_scene_that_diverges_as_the_node_is_made_ends_it_in_one_line(ros_env, bearing_sim_exe, tmp_path):
+    """The Simulator runs its first 19 samples as it is made: a scene whose skidding solver
+    diverges there (a wide rectangular ball pit at 20000 rpm: 0.47 ms) ended the node with a
+    traceback; now one line in the node's words, exit 2, before any recording is opened."""
+    text = load_scene("er16k_skidding").source_text
+    early = text.replace("defects: []", "defects: [{kind: ball, width_mm: 3.97, depth_mm: 3.9, profile: rectangular}]")
+    early = early.replace("shaft_speed_rpm: 2000,", "shaft_speed_rpm: 20000,")
+    assert early.count("20000") == 1 and "kind: ball" in early, "er16k_skidding.yaml moved: update this test"
+    scene = tmp_path / "early.yaml"
+    scene.write_text(early)
+    r = subprocess.run([bearing_sim_exe, "node", "--scene", str(scene), "--ros-args", "-p", "duration:=1.0",
+                        "-p", f"record:={tmp_path / 'live.mcap'}"], env=ros_env, capture_output=True, text=True,
+                       timeout=120)
+    assert_one_error_line(r, ["the skidding tier's default solver diverged at t = 0.0004", "(20000 rpm, radial load "
+                              "[0, -200] N)", "try -p fidelity:=kinematic"])
+    assert not (tmp_path / "live.mcap").exists()

@@ -290,3 +290,38 @@ def signal_when(proc, ready, sig, settle_s: float, what: str, timeout_s: float =
         if proc.poll() is None:
             proc.kill()
             proc.wait()
+
+
+def assert_diverged_and_recorded(result, recording, advice: str) -> None:
+    """``result`` (a finished ``subprocess.run`` of the node or ``run`` on conftest's
+    DIVERGING_PIT) ended with exit status 2, no traceback, the divergence logged as an error
+    and said in one ``error:`` line (which solver, the time of signal, the operating point and
+    ``advice``), and ``recording`` finalised: readable, finite tables up to the divergence,
+    its last ``/diagnostics`` an ERROR with the same line."""
+    import re
+
+    import numpy as np
+
+    from bearing_sim_ros.waveform import from_pointcloud2
+
+    assert result.returncode == 2, result.stderr
+    assert "Traceback" not in result.stderr + result.stdout
+    said = [ln for ln in result.stderr.splitlines() if ln.startswith("error: ")]
+    assert len(said) == 1, result.stderr
+    found = re.fullmatch(r"error: (the skidding tier's default solver diverged at t = (0\.\d+) s of signal \(2000 rpm, "
+                         r"radial load \[0, -200\] N\): the scene is beyond what it integrates; try "
+                         + re.escape(advice) + r"); recorded to (.*), finalised", said[0])
+    assert found and found[3] == str(recording), said[0]
+    line, t = found[1], float(found[2])
+    assert any("[ERROR]" in ln and ln.endswith(line) for ln in result.stderr.splitlines()), result.stderr
+    topics, _meta = read_recording(recording)
+    tables = [from_pointcloud2(msg)[2] for _t, msg in topics["/accel"]]
+    assert tables and all(np.isfinite(a).all() for a in tables)
+    assert 0.3 <= sum(len(a) for a in tables) / 15000.0 < t < 0.4
+    # the end status: the run ended by the divergence, the signal published, the line
+    last = topics["/diagnostics"][-1][1].status[0]
+    values = {kv.key: kv.value for kv in last.values}
+    samples = sum(len(a) for a in tables)
+    assert last.level == 2 and last.message == (f"run ended: the solver diverged, {samples / 15000.0:.6f} s of "
+                                                f"signal ({samples} samples) published; {line}"), last.message
+    assert (values["run"], values["end_reason"], values["published_samples"]) == ("ended", "diverged", str(samples))

@@ -934,3 +934,39 @@ def test_a_scene_changed_in_python_is_not_recorded_as_its_file(tmp_path):
     assert not out.exists()
     render(dataclasses.replace(scene), 0.05, out, fidelity="kinematic", progress=False)    # the same scene
     assert out.exists()
+
+
+def test_a_diverging_solver_ends_a_render_in_one_line_and_keeps_what_was_rendered(diverging_scene, tmp_path,
+                                                                                    capsys):
+    """The skidding solver's divergence was "internal error: SolverDiverged: skidding solver
+    'default' diverged at t = ..." after a traceback, exit 1, and the partial file deleted.  Now
+    one line in the command's options (solver, time of signal, operating point, what to try)
+    and where the file stands, exit 2: the signal up to the batch that diverged, finalised,
+    ending in an ERROR /diagnostics with the same line; nothing rendered (it diverged in the
+    first batch): nothing written."""
+    from rclpy.serialization import deserialize_message
+
+    out = tmp_path / "d.mcap"
+    code, err = _one_line_error(capsys, ["render", str(diverging_scene(0.05)), "--duration", "0.2", "--out", str(out)])
+    found = re.fullmatch(r"error: (--solver default: the skidding tier's default solver diverged at t = (0\.\d+) s of "
+                         r"signal \(2000 rpm, radial load \[0, -200\] N\): the scene is beyond what it integrates; try "
+                         r"--solver reference \(.*\) or --fidelity kinematic); '(.*)' holds the first (0\.\d+) s, "
+                         r"finalised", err)
+    assert code == 2 and found and found[3] == str(out), err
+    line, t, kept = found[1], float(found[2]), float(found[4])
+    assert 0.05 < kept < t < 0.2
+    accel, _diag = _accel_y_and_diagnostics(out)
+    assert len(accel) == round(kept / 0.01) and all(np.isfinite(a).all() for a in accel)
+    with open_recording(out) as rec:
+        last = [deserialize_message(data, get_message(msg_type)).status[0]
+                for topic, msg_type, _t, data in rec.messages() if topic == "/diagnostics"][-1]
+    # the end status: the run ended by the divergence, the signal kept, the line
+    samples = round(kept * 15000)
+    assert (last.level, last.message) == (b"\x02", f"run ended: the solver diverged, {kept:.6f} s of signal "
+                                                    f"({samples} samples) published; {line}")
+    assert {kv.key: kv.value for kv in last.values}["end_reason"] == "diverged"
+    # diverged in the first batch: nothing rendered, nothing written
+    code, err = _one_line_error(capsys, ["render", str(diverging_scene(0.0)), "--duration", "0.2",
+                                         "--out", str(tmp_path / "none.mcap")])
+    assert code == 2 and err.endswith(f"; nothing rendered, '{tmp_path / 'none.mcap'}' left as it was"), err
+    assert len(err.splitlines()) == 1 and not (tmp_path / "none.mcap").exists()

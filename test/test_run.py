@@ -7,7 +7,7 @@ import subprocess
 import numpy as np
 import pytest
 
-from test_node_support import NS, read_recording
+from test_node_support import NS, assert_diverged_and_recorded, read_recording
 
 from bearing_sim_ros.analysis.report import build_report
 
@@ -241,3 +241,13 @@ def test_run_stopped_by_ctrl_c_states_the_signal_it_recorded(ros_env, bearing_si
     said = re.search(r"([\d.]+) s of signal in", stdout)
     assert said, stdout
     assert float(said.group(1)) == pytest.approx(recorded_s, abs=0.006), (stdout, recorded_s)
+
+
+def test_run_whose_solver_diverges_says_it_in_one_line_and_keeps_the_recording(ros_env, bearing_sim_exe,
+                                                                                diverging_scene, tmp_path):
+    """``bearing-sim run`` on a scene whose skidding solver diverges at 0.32 s was a traceback and
+    "internal error"; now one line with the scene key to try, exit 2, the recording finalised."""
+    out = tmp_path / "run.mcap"
+    r = subprocess.run([bearing_sim_exe, "run", "--scene", str(diverging_scene(0.3)), "--duration", "2",
+                        "--out", str(out)], env=ros_env, capture_output=True, text=True, timeout=120)
+    assert_diverged_and_recorded(r, out, "fidelity: {tier: kinematic} in the scene")

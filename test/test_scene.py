@@ -460,6 +460,42 @@ def test_a_scenes_clearance_slip_and_tier_changed_in_python_are_held_to_the_yaml
     assert np.isfinite(Simulator(inside, fidelity="kinematic").advance(150).accel).all()
 
 
+def test_a_shaft_heavier_than_the_bearing_takes_is_refused_in_one_line():
+    """structure.shaft.mass goes to 1e5 kg for every bearing, and its weight rests on the balls on
+    top of the radial load, which is held to 2 x C0: a 100 t shaft on an ER-16K put 480 kN on one
+    ball in both tiers (29 x the limit).  Now the weight is held to the same limit, the YAML naming
+    its key, a scene changed in Python its field; with gravity off, or a lighter shaft, it runs."""
+    data = load_yaml(GOOD)
+    data["structure"]["shaft"]["mass"] = 1e5
+    with pytest.raises(SceneError) as exc:
+        scene_from_dict(data, name="heavy")
+    assert str(exc.value) == ("structure.shaft.mass = 100000 kg: its weight, 980665 N, is beyond 2 x C0 = 16681 N of "
+                              "bearing ER-16K (gravity: false leaves the weight out)")
+    scene = load_scene("er16k_outer_race")
+    with pytest.raises(SceneError, match=r"^scene er16k_outer_race: structure.shaft_mass = 2000 kg: its weight, "
+                                         r"19613.3 N, is beyond 2 x C0 = 16681 N of bearing ER-16K"):
+        dataclasses.replace(scene, structure=dataclasses.replace(scene.structure, shaft_mass=2000.0))
+    heavy = dataclasses.replace(scene.structure, shaft_mass=1e5)
+    dataclasses.replace(scene, structure=heavy, gravity=False)
+    data["gravity"] = False
+    scene_from_dict(data, name="weightless")
+    light = dataclasses.replace(scene, structure=dataclasses.replace(scene.structure, shaft_mass=1000.0))
+    assert np.isfinite(Simulator(light, fidelity="kinematic").advance(150).accel).all()
+
+
+def test_a_clearance_at_the_edges_of_its_bounds_written_in_m_is_taken():
+    """``scene.bearing.with_clearance(-50e-6)``, the preload the YAML's ``radial_clearance_um:
+    -50`` allows, was refused with "radial_clearance = -5e-05 m: allowed range is [-5e-05, 0.0005]
+    m" (the bound was -50 x 1e-6, one bit above -50e-6).  Both ends are taken, in m as in um;
+    beyond them, refused."""
+    scene = load_scene("er16k_outer_race")
+    for clearance in (-50e-6, -50 * 1e-6, 500e-6, 500 * 1e-6):
+        dataclasses.replace(scene, bearing=scene.bearing.with_clearance(clearance))
+    for clearance in (-50.001e-6, 500.001e-6):
+        with pytest.raises(SceneError, match=r"radial_clearance = .* m: allowed range is \[-5e-05, 0\.0005\] m"):
+            dataclasses.replace(scene, bearing=scene.bearing.with_clearance(clearance))
+
+
 @pytest.mark.parametrize("section, change, line", [
     ("structure", {"shaft_mass": 0.0}, "structure.shaft_mass = 0 kg: allowed range is [0.001, 100000] kg"),
     ("structure", {"pedestal_stiffness": float("nan")},
@@ -511,16 +547,25 @@ def test_a_scenes_structure_lubrication_and_sensor_within_the_limits_run():
     assert batch.accel_channels == ("accel_y",) and np.isfinite(batch.accel).all()
 
 
-@pytest.mark.parametrize("curve, mu", [
-    ({"traction_b": 10.0}, "18.5 at a slip of 5.01 m/s"),                 # each key within its own bounds
-    ({"traction_a": 1.0, "traction_d": 0.5}, "1.5 at a slip of 0 m/s"),   # 1.5 at zero slip
-    ({"traction_a": 0.0, "traction_b": 0.1, "traction_c": 0.0}, "10.1 at a slip of 100 m/s"),   # no end
+@pytest.mark.parametrize("curve, said", [
+    ({"traction_b": 10.0}, "reaches |mu| = 18.5 at a slip of 5.01 m/s; allowed at most 1"),   # each key in bounds
+    ({"traction_a": 1.0, "traction_d": 0.5}, "reaches |mu| = 1.5 at a slip of 0 m/s; allowed at most 1"),
+    ({"traction_a": 0.0, "traction_b": 0.1, "traction_c": 0.0}, "reaches |mu| = 10.1 at a slip of 100 m/s; allowed "
+                                                                "at most 1"),                       # no end
+    ({"traction_a": -1.0, "traction_b": 0.0, "traction_c": 0.0, "traction_d": 0.0},
+     "falls to mu = -1 at a slip of 0 m/s; allowed at least 0 (traction opposes the slip"),
+    ({"traction_d": 0.0}, "falls to mu = -0.1 at a slip of 0 m/s; allowed at least 0"),   # the ER-16K's less its D
+    ({"traction_a": 0.0, "traction_b": -0.05, "traction_c": 1.0, "traction_d": 0.0},
+     "falls to mu = -0.0184 at a slip of 1 m/s; allowed at least 0"),                     # below 0 where it turns
 ])
-def test_a_traction_curve_beyond_dry_friction_is_refused_in_one_line(curve, mu, tmp_path):
+def test_a_traction_curve_beyond_dry_friction_or_below_0_is_refused_in_one_line(curve, said, tmp_path):
     """Each traction key within its bounds, the curve could peak at mu = 18 (B = 10) or start at
     1.5, and the skidding solver diverged: ``SolverDiverged``, a traceback and "internal error"
     (a helper's finding).  Now the YAML (and a scene changed in Python) is refused where the
-    curve's |mu| passes 1 over slips up to 100 m/s, naming the four keys; 1 runs (below)."""
+    curve's |mu| passes 1 over slips up to 100 m/s, naming the four keys; 1 runs (below).  Nor
+    may it fall below 0 (a traction that drives the slip: at mu = -1 the default and the reference
+    solver diverged at every operating point tried, 2000 and 25 974 rpm, 10 N to 16.7 kN); the
+    shipped curves, 0 at zero slip, load."""
     data = load_yaml(GOOD)
     data.setdefault("lubrication", {}).update(curve)
     path = tmp_path / "curve.yaml"
@@ -528,7 +573,9 @@ def test_a_traction_curve_beyond_dry_friction_is_refused_in_one_line(curve, mu, 
     with pytest.raises(SceneError) as exc:
         load_scene(str(path))
     assert str(exc.value).startswith("scene curve.yaml: lubrication.traction_a .. traction_d (") and (
-        f"reaches |mu| = {mu}; allowed at most 1" in str(exc.value)), str(exc.value)
+        said in str(exc.value)), str(exc.value)
+    for name in shipped_scenes():
+        assert load_scene(name).lubrication.traction_least() == (0.0, 0.0)
 
 
 def test_a_traction_curve_at_the_limit_runs_on_the_skidding_tier():
@@ -623,7 +670,8 @@ def test_a_scenes_lists_changed_in_python_are_checked(change, line):
 
 
 @pytest.mark.parametrize("change, line", [
-    ({"ball_mass": -1.0}, "bearing.ball_mass_kg = -1.0: allowed range is [1e-06, 100.0]"),
+    ({"ball_mass": -1.0}, "bearing.ball_mass_kg = -1.0: allowed range is [0.0002621, 0.005242] for a ball of "
+                          "7.94 mm (its volume at 1000 - 20000 kg/m^3)"),
     ({"elastic_modulus": 0.0}, "bearing.elastic_modulus_gpa = 0.0: allowed range is [1.0, 1000.0]"),
     ({"inner_groove_conformity": 0.4}, "bearing.inner_groove_conformity = 0.4: allowed range is [0.505, 0.6]"),
     ({"ball_diameter": float("nan")}, "bearing.ball_diameter_mm = nan: allowed range is [0.5, 200.0]"),
@@ -640,5 +688,5 @@ def test_a_bearing_changed_in_python_is_held_to_the_catalogs_limits(change, line
         dataclasses.replace(scene, bearing=dataclasses.replace(scene.bearing, **change))
     assert str(exc.value) in (f"scene er16k_outer_race: {line}",
                               f"scene er16k_outer_race: {line} (a Bearing checked in the catalog's units: mm, deg, GPa)")
-    other = dataclasses.replace(scene.bearing, balls=np.int64(8), contact_angle=math.radians(45.0), ball_mass=0.01)
+    other = dataclasses.replace(scene.bearing, balls=np.int64(8), contact_angle=math.radians(45.0), ball_mass=0.004)
     assert np.isfinite(Simulator(dataclasses.replace(scene, bearing=other), fidelity="kinematic").advance(150).accel).all()

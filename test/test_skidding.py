@@ -6,6 +6,7 @@ Sensor noise is off everywhere except in the envelope-line test.
 """
 from __future__ import annotations
 
+import re
 from dataclasses import replace
 
 import numpy as np
@@ -954,3 +955,54 @@ def test_a_seed_changes_only_the_sensor_noise_in_the_skidding_tier():
     assert np.all(apart > 0.5 * noise) and np.all(apart < 2.5 * noise)
     kin = [Simulator("er16k_outer_race", fidelity="kinematic", seed=seed).advance(600) for seed in (0, 1)]
     assert not np.array_equal(kin[0].contact_forces, kin[1].contact_forces)
+
+
+def test_a_diverging_solver_says_which_when_where_and_what_to_try_in_one_line(diverging_scene):
+    """``SolverDiverged`` was ``skidding solver 'default' diverged at t = 0.008333 s`` and, in every
+    command, an internal error with a traceback.  Now a UserError (still a RuntimeError) whose one
+    line names the solver, the time of signal, the operating point there and what to try: the
+    reference solver or the kinematic tier for the default (the within-bounds scene of
+    conftest.DIVERGING_PIT), the default for the reference (a structure damped at 1e8 N s/m,
+    within bounds, is beyond its explicit steps)."""
+    scene = load_scene(str(diverging_scene()))
+    with pytest.raises(sk.SolverDiverged) as exc:
+        Simulator(scene).advance(1500)
+    line = str(exc.value)
+    assert isinstance(exc.value, UserError) and isinstance(exc.value, RuntimeError) and "\n" not in line
+    assert re.fullmatch(r"solver='default': the skidding tier's default solver diverged at t = 0\.0\d+ s of signal "
+                        r"\(2000 rpm, radial load \[0, -200\] N\): the scene is beyond what it integrates; try "
+                        r"solver='reference' \(.*\) or fidelity='kinematic'", line), line
+    stiff = replace(scene, defects=(), structure=replace(scene.structure, shaft_damping=1e8, pedestal_damping=1e8))
+    with pytest.raises(sk.SolverDiverged, match=r"^solver='reference': .* diverged at t = .* try solver='default' "):
+        Simulator(stiff, solver="reference").advance(150)
+
+
+def test_a_divergence_after_a_tier_switch_is_told_at_the_signals_time(diverging_scene):
+    """A skidding model made at a tier switch counts its time from there: a divergence 9 ms after
+    a switch at 0.1 s was told at t = 0.0088 s.  Now at the signal's time, with the operating
+    point on the ramp there (fidelity auto, its tolerance between the two operating points, no
+    skid ratios asked for: the scene may start on the kinematic tier)."""
+    from bearing_sim_ros.fidelity import kinematic_error_estimate
+
+    base = replace(load_scene(str(diverging_scene())), outputs=("accel",))     # no skid ratios asked for
+    lo, hi = (kinematic_error_estimate(base, rpm * RPM, (0.0, -load))[0] for rpm, load in ((2000, 200), (10000, 10)))
+    sim = Simulator(replace(base, fidelity_tolerance=float(np.sqrt(lo * hi))))
+    sim.advance(1500)
+    assert sim.tier == "kinematic"
+    with pytest.raises(sk.SolverDiverged) as exc:
+        sim.advance(1500, shaft_speed=10000 * RPM, radial_load=(0.0, -10.0))
+    assert sim.last_tier_switch == (0.1, "kinematic", "skidding")
+    assert 0.1 < exc.value.t < 0.2 and f"at t = {exc.value.t:.4g} s of signal" in str(exc.value)
+    rpm = exc.value.shaft_speed / RPM
+    assert 2000 < rpm < 10000 and f"({rpm:.6g} rpm, radial load [0, " in str(exc.value)
+
+
+def test_a_divergence_survives_a_round_trip_through_pickle():
+    """A process pool hands a worker's exception back pickled: SolverDiverged and RK4Diverged are
+    made again from their fields, with the same line (their args are only the message)."""
+    import pickle
+
+    for exc in (sk.SolverDiverged("default", 0.0123, 209.44, (0.0, -200.0)),
+                sk.RK4Diverged(2e-5, 1e-4, 209.44, (0.0, -200.0))):
+        back = pickle.loads(pickle.dumps(exc))
+        assert type(back) is type(exc) and str(back) == str(exc) and back.t == exc.t

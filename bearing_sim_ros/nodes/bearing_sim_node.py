@@ -39,7 +39,7 @@ import rclpy
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
 
-from ..errors import UserError
+from ..errors import NODE_SETTINGS, SettingNames, UserError
 from ..limits import LOAD_MULTIPLE_C0, NDM_LIMIT, STATIC_F0, InputLimits  # noqa: F401 (names kept here)
 from ..teardown import EXIT_INTERRUPTED, SIGNAL_NAMES, command_signals, teardown_watchdog
 
@@ -206,11 +206,14 @@ def check_config(cfg: dict):
 class BearingSimNode(Node):
     """The ``bearing_sim`` node; see the module docstring.  Raises UserError for a bad
     parameter or scene (rclpy must be initialised).  ``record_argument``: how an error names the
-    ``record`` path (``bearing-sim run`` passes ``--out``, the option its user gave)."""
+    ``record`` path (``bearing-sim run`` passes ``--out``, the option its user gave);
+    ``settings``: how the advice of a solver's divergence names the settings to try
+    (``errors.SettingNames``: the node's parameters, or ``bearing-sim run``'s scene keys)."""
 
-    def __init__(self, record_argument: str = "record", **kwargs):
+    def __init__(self, record_argument: str = "record", settings: SettingNames = NODE_SETTINGS, **kwargs):
         super().__init__(NODE_NAME, **kwargs)
         self._record_argument = record_argument
+        self._settings = settings
         self.recorder = None
         try:
             self._declare_all()
@@ -316,6 +319,7 @@ class BearingSimNode(Node):
         from rclpy.qos import QoSProfile
 
         from .. import Simulator
+        from ..physics.skidding import SolverDiverged
         from ..simulator import OversampleForAuto
         from ..messages import (TOPIC_ACCEL, TOPIC_CONTACT, TOPIC_DIAGNOSTICS, TOPIC_LOAD,
                                 TOPIC_SHAFT_SPEED, TOPIC_STATE, BatchMessages, waveform_qos)
@@ -332,6 +336,8 @@ class BearingSimNode(Node):
                                  oversample=int(cfg["oversample"]) or None)
         except OversampleForAuto as exc:
             raise UserError(exc.worded("oversample", "fidelity", zero=OVERSAMPLE_ZERO)) from None
+        except SolverDiverged as exc:          # its first steps, run ahead as it is made
+            raise UserError(exc.worded(self._settings)) from None
         self.limits = InputLimits(self.scene.bearing)
         self.n_batch = int(round(cfg["sample_rate"] * cfg["batch_duration"]))
         self.batch_duration = self.n_batch / self.sim.sample_rate
@@ -366,6 +372,9 @@ class BearingSimNode(Node):
         self._repace = False
         self.finished = threading.Event()
         self.error = None
+        # the skidding solver's divergence (SolverDiverged): the batches computed before it are
+        # published, an ERROR /diagnostics says it, the recording is finalised and main exits 2
+        self.failure = None
         self.accel_peers = 0                     # other publishers on accel: _check_peers
         self.clock_peers = 0                     # other publishers on this node's /clock: _check_peers
         self.stats = _Stats(self.sim.sample_rate, self.sim.bearing, self.scene.sensor.range)
@@ -645,6 +654,7 @@ class BearingSimNode(Node):
 
         from rosgraph_msgs.msg import Clock
 
+        from ..physics.skidding import SolverDiverged
         from ..recording.render import load_message, speed_message
 
         sim, msgs, stats = self.sim, self.msgs, self.stats
@@ -716,6 +726,12 @@ class BearingSimNode(Node):
                 continue
             if stop:
                 break                          # every batch that was due is published and recorded
+            if self.failure is not None:
+                if not queue:
+                    break
+                # the batches computed before the divergence, published at their times
+                self._stop.wait(max(0.0, queue[0].due - now))
+                continue
             if total and sim.index >= total:
                 if not queue:
                     break
@@ -749,7 +765,11 @@ class BearingSimNode(Node):
                 est[sim.tier] = max(est.get(sim.tier, 0.0), cost)
                 continue
             if may and (not queue or now + cost <= queue[0].due):
-                item = self._compute(n, cfg, Clock)
+                try:
+                    item = self._compute(n, cfg, Clock)
+                except SolverDiverged as exc:
+                    self._fail(exc)
+                    continue
                 done = time.monotonic()
                 stats.compute(done - now)
                 est[sim.tier] = max(0.9 * est.get(sim.tier, 0.0), done - now)
@@ -772,11 +792,13 @@ class BearingSimNode(Node):
                 wake = min(wake, start_at)
             self._stop.wait(max(0.0, wake - now))
         # the end status with the last batch published where the loop ended after it (a stop that
-        # came just after it, a duration set below the signal published).  It is the ground truth
-        # of the last sample too, as `render` ends: a run that ended between two /diagnostics
-        # (duration 5.5 s, Ctrl-C) had none for its last part-second, and a pit that appeared
-        # there was "after this recording ends" to `report`
-        if last_published is not None and not ended:
+        # came just after it, a duration set below the signal published; a divergence).  It is the
+        # ground truth of the last sample too, as `render` ends: a run that ended between two
+        # /diagnostics (duration 5.5 s, Ctrl-C) had none for its last part-second, and a pit that
+        # appeared there was "after this recording ends" to `report`
+        if self.failure is not None:
+            self._publish_failure(last_published)
+        elif last_published is not None and not ended:
             item, log_ns = last_published
             msg = self._end_status(item, time.monotonic(), (self._stop_reason or "stopped") if stop else "duration")
             self._publish([(self.pub_diag, msg)])
@@ -784,6 +806,31 @@ class BearingSimNode(Node):
                 self.recorder.write(self.pub_diag.topic_name, msg, log_ns)
         if last_published is not None:
             self._deliver_the_end()
+
+    def _fail(self, exc) -> None:
+        """The skidding solver diverged (``exc``, SolverDiverged): no more batches; said once in
+        the log in the node's words."""
+        self.failure = exc
+        self.get_logger().error(exc.worded(self._settings))
+
+    def _publish_failure(self, last_published) -> None:
+        """The end status of a divergence (level ERROR, ``end_reason`` ``diverged``, the line),
+        published and recorded: with the keys of the last batch published (``last_published``:
+        (item, its log time)), or, where none was, the status alone, stamped now."""
+        from ..messages import end_of_run
+        from ..recording.render import diagnostics_message
+
+        if last_published is not None:
+            item, log_ns = last_published
+            msg = self._end_status(item, time.monotonic(), "diverged")
+        else:
+            log_ns = self.get_clock().now().nanoseconds
+            values, level, message = end_of_run({"simulated_s": "0.000000"}, 2, self.failure.worded(self._settings),
+                                                "diverged", 0, self.sim.sample_rate, self._cfg["duration"])
+            msg = diagnostics_message(log_ns, values, level, message, self.get_fully_qualified_name().lstrip("/"))
+        self._publish([(self.pub_diag, msg)])
+        if self.recorder is not None:
+            self.recorder.write(self.pub_diag.topic_name, msg, log_ns)
 
     def _publish(self, out):
         """Publish each (publisher, message) of ``out`` while the context lives (a signal may end
@@ -815,7 +862,7 @@ class BearingSimNode(Node):
         from ..recording.render import diagnostics_message
 
         last = self._last_status
-        if last is not None and last[0] is item:
+        if last is not None and last[0] is item and self.failure is None:
             values, level, message = last[1:]
         else:
             values, level, message = self._status(item, now)
@@ -915,8 +962,9 @@ class BearingSimNode(Node):
                 text = f"recording dropped {dropped} messages in the last second (the disk is not keeping up)"
                 message = text if level == 0 else f"{message}; {text}"
                 level = 1
+        if self.failure is not None:
+            level, message = 2, self.failure.worded(self._settings)
         return values, level, message
-
 
 
 class _Pending:
@@ -1062,6 +1110,16 @@ def log_recording(node) -> None:
         log.warning(f"{text}: the disk did not keep up, the file has gaps")
     else:
         log.info(text)
+
+
+def failure_recording_text(node) -> str:
+    """``; recorded to PATH, finalised`` after a divergence's line, or "" without a recording."""
+    from ..recording.recorder import files_text
+
+    if node.recorder is None:
+        return ""
+    st = node.recorder.status
+    return f"; recorded to {files_text(st)}, finalised" if st["ok"] else f"; recording: {st['error']}"
 
 
 def say_held(node):
@@ -1212,6 +1270,10 @@ def main(argv=None) -> int:
             rclpy.try_shutdown()
     if error is not None:
         raise error
+    if status == 0 and node is not None and node.failure is not None:
+        # said in the log as it happened; here the line a script sees, and where the file stands
+        print(f"error: {node.failure.worded(node._settings)}{failure_recording_text(node)}", file=sys.stderr)
+        status = 2
     if status == 0 and node is not None and node.recorder is not None and node.recorder.error:
         # published in full, but the file is not: a script that checks the status must know
         print(f"error: {node.recorder.error}", file=sys.stderr)

@@ -90,7 +90,8 @@ import numpy as np
 from numba import njit
 
 from ..catalog import G
-from ..errors import UserError
+from ..errors import API_SETTINGS, SettingNames, UserError
+from ..limits import RPM
 from . import KinematicSnapshot, TierOutput
 from .blas import single_threaded_blas
 from .defects import (D_ANGLE, D_BALL, D_KIND, KIND_BALL, KIND_INNER, active_defect_table,
@@ -1548,23 +1549,62 @@ def parameters(scene) -> np.ndarray:
     return np.concatenate([p, np.cos(a), np.sin(a)])       # pocket directions follow
 
 
-class SolverDiverged(RuntimeError):
-    pass
+class SolverDiverged(UserError, RuntimeError):
+    """The skidding tier's solver met a state that is not finite: a scene, or a solver step,
+    beyond what that solver integrates.  One line: the solver, the time of signal (s) where it
+    happened, the operating point there (rad/s shown in rpm; N) and what to try.  ``worded``
+    says it in a caller's own names for its settings (``errors.SettingNames``: the CLI's options,
+    the node's parameters); the Python API raises it worded in its keyword arguments.  A
+    UserError, so that a command says it in one line, and still the RuntimeError it was (up to
+    2026-11-29: an "internal error" with a traceback in every command)."""
+
+    def __init__(self, solver: str, t: float, shaft_speed: float, radial_load):
+        self.solver = solver
+        self.t = float(t)                       # s of signal
+        self.shaft_speed = float(shaft_speed)   # rad/s
+        self.radial_load = (float(radial_load[0]), float(radial_load[1]))   # N
+        super().__init__(self.worded(API_SETTINGS))
+
+    def __reduce__(self):
+        # made again from its fields (a process pool pickles it; its args are the message)
+        return (type(self), (self.solver, self.t, self.shaft_speed, self.radial_load))
+
+    def operating_point(self) -> str:
+        """Where it happened: time of signal, shaft speed and radial load."""
+        x, y = self.radial_load
+        return f"t = {self.t:.4g} s of signal ({self.shaft_speed / RPM:.6g} rpm, radial load [{x:.6g}, {y:.6g}] N)"
+
+    def worded(self, settings: SettingNames) -> str:
+        """The message in the names of ``settings``, with the advice it can follow."""
+        say = settings.assign
+        if self.solver == "reference":
+            advice = [f"{say('solver', 'default')} (it takes the structure's motion exactly, however stiff)"]
+        else:
+            # a smaller step (oversample) did not help on the cases found (2026-11-29): the
+            # reference's 0.5 us steps did
+            advice = [f"{say('solver', 'reference')} (steps of 1/32 of a sample: slower)"]
+        advice = [a for a in advice if "solver" in settings.keys] + [say("fidelity", "kinematic")]
+        head = f"{say('solver', self.solver)}: " if "solver" in settings.keys else ""
+        return (f"{head}the skidding tier's {self.solver} solver diverged at {self.operating_point()}: the "
+                f"scene is beyond what it integrates; try {' or '.join(advice)}")
 
 
-class RK4Diverged(UserError):
+class RK4Diverged(SolverDiverged):
     """The fixed-step RK4 diverged: a user's choice of step, not an internal error.  ``step`` (s)
     and ``t`` (s) let a caller word the advice in its own names (the CLI's ``--rk4-step``)."""
 
-    def __init__(self, step: float, t: float):
-        self.step, self.t = step, t
-        super().__init__(self.worded("rk4_step", "solver='default'"))
+    def __init__(self, step: float, t: float, shaft_speed: float, radial_load):
+        self.step = step
+        super().__init__("rk4", t, shaft_speed, radial_load)
 
-    def worded(self, step_name: str, default_solver: str) -> str:
-        """The message with the caller's names for the step and for the default solver."""
-        return (f"{step_name} = {self.step:g} s: the fixed-step RK4 diverged at t = {self.t:.4g} s "
-                f"(step beyond its stability limit for this load/speed); use a smaller {step_name} "
-                f"or {default_solver}")
+    def __reduce__(self):
+        return (type(self), (self.step, self.t, self.shaft_speed, self.radial_load))
+
+    def worded(self, settings: SettingNames) -> str:
+        step = settings.name("rk4_step")
+        return (f"{step} = {self.step:g} s: the fixed-step RK4 diverged at {self.operating_point()} (step beyond "
+                f"its stability limit for this load/speed); use a smaller {step} or "
+                f"{settings.assign('solver', 'default')}")
 
 
 class SkiddingModel:
@@ -1591,6 +1631,9 @@ class SkiddingModel:
         self.scene = scene
         self.seed = int(seed)
         self.sample_rate = float(sample_rate)
+        # s of signal at this model's first sample (the Simulator's: a tier switch starts a model
+        # mid-run), so that a divergence is told at the signal's time, not the model's own
+        self.start_time = 0.0
         self.internal_rate = self.sample_rate * self.decimation
         self.hs = 1.0 / self.internal_rate
         lo, hi = RK4_STEP_RANGE
@@ -1913,10 +1956,14 @@ class SkiddingModel:
                              gamma, self.p, self.dtab, self.wti, self.wto, self.film, acc, qi, qo, cage,
                              bs, cs, sli, slo, fi, fo, *work)
         if status != 0:
-            t_bad = (self.counters[1] + self.counters[2]) * hs
+            # where it happened: the signal's time and the operating point on this chunk's ramp
+            into = self.counters[2] / n
+            t_bad = self.start_time + (self.counters[1] + self.counters[2]) * hs
+            speed = speed0 + (speed1 - speed0) * into
+            load = [a + (b - a) * into for a, b in zip(load0, load1)]
             if self.solver == "rk4":
-                raise RK4Diverged(self.hstep, t_bad)
-            raise SolverDiverged(f"skidding solver {self.solver!r} diverged at t = {t_bad:.4g} s")
+                raise RK4Diverged(self.hstep, t_bad, speed, load)
+            raise SolverDiverged(self.solver, t_bad, speed, load)
         if held:
             self.shaft_angle = ramp[R_A0] + ramp[R_S1] * (self.counters[1] * hs - ramp[R_T0])
         else:

@@ -28,7 +28,7 @@ import time
 
 import numpy as np
 
-from ..errors import UserError
+from ..errors import CLI_SETTINGS, UserError
 from ..paths import output_file
 from ..teardown import EXIT_INTERRUPTED, signal_handlers
 from ..messages import BATCH_DURATION, RUN_KEY, RUN_RUNNING, STATE_RATE, TOPIC_ACCEL, TOPIC_CONTACT, \
@@ -340,8 +340,11 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
     ``state_rate`` (Hz) are the node's parameters of the same names, with the same ranges and
     rule (``messages.batching_error``).  Returns a summary: messages,
     bytes, wall time (s), real-time factor, tier (at the end), tier_values (``tier_values``: the
-    tier switches of ``fidelity="auto"``), path, solver_unused."""
+    tier switches of ``fidelity="auto"``), path, solver_unused.  Where the skidding solver
+    diverges, the signal up to the batch that diverged is kept at ``out``, finalised, and
+    ``SolverDiverged`` raised with ``recording``: where the file stands, in words."""
     from .. import Simulator
+    from ..physics.skidding import SolverDiverged
     from ..scene import changes_since_loaded, load_scene, scene_argument
     from .recorder import Recorder, recording_metadata
 
@@ -423,9 +426,10 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
     done = 0
     diagnosed = 0               # samples up to the last /diagnostics written
 
-    def write_diagnostics(pub_ns: int, ending: str | None = None) -> None:
+    def write_diagnostics(pub_ns: int, ending: str | None = None, error: str = "") -> None:
         """The ``/diagnostics`` of the signal up to ``pub_ns`` (the end of the last batch); with
-        ``ending`` (``messages.END_REASONS``) the render's last, its end status, as the node's."""
+        ``ending`` (``messages.END_REASONS``) the render's last, its end status, as the node's;
+        ``error``: the line of a failure that ends the render there (level ERROR)."""
         nonlocal diagnosed
         # the live node's keys (nodes/bearing_sim_node.py); what depends on the wall clock
         # or the output path is left out so that the file stays byte-identical
@@ -440,11 +444,34 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
         values.update(means.values())
         clipped = means.clipped_text()         # a warning, as the live node gives it
         means.reset()
-        level, message = (1, clipped) if clipped else (0, "ok")
+        level, message = (2, error) if error else (1 if clipped else 0, clipped or "ok")
         if ending is not None:
             values, level, message = end_of_run(values, level, message, ending, done, sample_rate, duration)
         rec.write(TOPIC_DIAGNOSTICS, diagnostics_message(pub_ns, values, level, message), pub_ns)
         diagnosed = done
+
+    def keep_what_was_rendered(ending: str, error: str = "") -> str:
+        """End a render cut short (a signal; a divergence, whose line is ``error``): what was
+        rendered, finalised, ending in the /diagnostics of its last sample, its end status
+        (``ending``: ``messages.END_REASONS``; level ERROR with ``error``), as a render that ran to
+        its end and the live node stopped by a signal end
+        (without it the ground truth of the last part-second was missing: a pit that appeared
+        there was "after this recording ends"); nothing rendered: nothing replaces what out
+        held.  Returns where the file stands, for the line that says so."""
+        with _signals_held():
+            if done:
+                if (diagnosed < done or error) and not rec.error:
+                    write_diagnostics(msgs.stamp_ns(done), ending, error)
+                rec.close()
+            else:
+                rec.discard()
+        bar.done()
+        st = rec.status
+        if not done:
+            return f"nothing rendered, {str(out)!r} left as it was"
+        if st["ok"]:
+            return f"{str(out)!r} holds the first {done / sample_rate:g} s, finalised"
+        return st["error"]
 
     try:
         for topic in topics:
@@ -485,33 +512,22 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
                 if stop.signum is not None and done < total:     # in the last batch: complete
                     raise Terminated() if stop.signum == signal.SIGTERM else KeyboardInterrupt()
     except KeyboardInterrupt as exc:
-        # Ctrl-C or SIGTERM: keep what was rendered, finalised, and say so (nothing rendered:
-        # nothing replaces what out held)
+        # Ctrl-C or SIGTERM: keep what was rendered, finalised, and say so
         how = "SIGTERM" if isinstance(exc, Terminated) else "Ctrl-C"
-        with _signals_held():
-            if done:
-                if diagnosed < done and not rec.error:
-                    # a KeyboardInterrupt from a caller's own handler, in the middle of the loop:
-                    # the end of the signal has its end status all the same (and the ground truth
-                    # of its last part-second: a pit that appeared there was "after this recording
-                    # ends")
-                    write_diagnostics(msgs.stamp_ns(done), signal.Signals(getattr(exc, "signum", signal.SIGINT)).name)
-                rec.close()
-            else:
-                rec.discard()
-        bar.done()
-        st = rec.status
-        if not done:
-            text = f"nothing rendered, {str(out)!r} left as it was"
-        elif st["ok"]:
-            text = f"{str(out)!r} holds the first {done / sample_rate:g} s, finalised"
-        else:
-            text = st["error"]
-        print(f"interrupted ({how}): {text}", file=sys.stderr)
+        # a KeyboardInterrupt from a caller's own handler comes in the middle of the loop: the end of
+        # the signal has its end status all the same
+        ending = signal.Signals(getattr(exc, "signum", signal.SIGINT)).name
+        print(f"interrupted ({how}): {keep_what_was_rendered(ending)}", file=sys.stderr)
         exc.reported = True
         raise
+    except SolverDiverged as exc:
+        # the signal up to the batch that diverged is good: kept, finalised, ending in an ERROR
+        # /diagnostics with the line, as the node's recording does (until 2026-11-29 a traceback
+        # and no file); said in one line by the caller, with where the file stands
+        exc.recording = keep_what_was_rendered("diverged", exc.worded(CLI_SETTINGS))
+        raise
     except BaseException:
-        # a failed render (solver diverged, ...) must not leave a short file that looks complete:
+        # a failed render (disk full, ...) must not leave a short file that looks complete:
         # its partial file goes, and out keeps what it held
         with _signals_held():
             rec.discard()
@@ -547,7 +563,7 @@ def _terminated_on_sigterm():
 
 def render_command(args) -> int:
     """CLI entry: ``bearing-sim render S --duration SEC --out F.mcap [...]``."""
-    from ..physics.skidding import RK4Diverged
+    from ..physics.skidding import SolverDiverged
     from ..scene import load_scene
     from ..simulator import OversampleForAuto, OversampleWithOwnStep
 
@@ -563,9 +579,11 @@ def render_command(args) -> int:
         if not getattr(exc, "reported", False):
             print(f"interrupted: nothing rendered, {out!r} left as it was", file=sys.stderr)
         return EXIT_INTERRUPTED[getattr(exc, "signum", signal.SIGINT)]
-    except RK4Diverged as exc:
-        # the model words its advice for the Python API; here the knobs are options
-        raise UserError(exc.worded("--rk4-step", "--solver default")) from None
+    except SolverDiverged as exc:
+        # the model words its advice for the Python API; here the knobs are options.  Diverged
+        # as the Simulator was made (its first steps run ahead): nothing rendered
+        text = getattr(exc, "recording", f"nothing rendered, {out!r} left as it was")
+        raise UserError(f"{exc.worded(CLI_SETTINGS)}; {text}") from None
     except OversampleForAuto as exc:
         raise UserError(exc.worded("--oversample", "--fidelity")) from None
     except OversampleWithOwnStep as exc:
