@@ -113,13 +113,6 @@ def check_bounded(r, sc, max_load_n):
 FLOOR = 0.01   # m/s^2: an RMS change below this is three times under the sensor's 350 ug resolution
 
 
-# m/s^2: at zero clearance the unloaded balls chatter at zero deflection, and the RMS of that
-# chatter depends on the step of every solver, the reference's included (0.067, 0.095, 0.13 m/s^2
-# at 32, 64, 128 RK4 steps per internal sample; the default 0.01-0.04): there the check is that
-# the chatter stays at that level, not that it converges
-CHATTER_FLOOR = 0.05
-
-
 def check_converged(sc, segments, skip=0.0, tol=0.01, floor=FLOOR):
     """Halving the default solver's step changes the output RMS acceleration (each axis) by less
     than ``tol`` (or less than ``floor`` where the signal itself is tiny, e.g. with preload) and
@@ -743,7 +736,11 @@ HARD = {
     "speed reversal through zero": (dict(rpm=1000), [(0.08, -1000, 200)], 200, 0.0),
     "load steps up, down, to zero": (dict(), [(0.01, 2000, 2000), (0.02, 2000, 2000), (0.01, 2000, 0),
                                              (0.02, 2000, 0), (0.01, 2000, 200)], 2000, 0.0),
-    "zero clearance": (dict(clearance=0.0, floor=CHATTER_FLOOR), [(0.05, 2000, 200)], 200, 0.01),
+    # converged like the others since each contact's film follows its Hertz load (2026-11-23):
+    # before, the unloaded balls chattered at zero deflection with an RMS that depended on the step
+    # of every solver (accel_x: RK4 at 32 / 64 steps per internal sample 0.068 / 0.107 m/s^2, the
+    # default 0.010 and 0.038 at half its step), and this case was held only within 0.05 m/s^2
+    "zero clearance": (dict(clearance=0.0), [(0.05, 2000, 200)], 200, 0.01),
     "negative clearance (preload)": (dict(clearance=-5e-6), [(0.05, 2000, 200)], 200, 0.01),
 }
 
@@ -752,11 +749,10 @@ HARD = {
 def test_hard_case(case):
     kw, segments, max_load, skip = HARD[case]
     kw = dict(kw)
-    floor = kw.pop("floor", FLOOR)
     if "clearance" in kw:
         kw["bearing"] = load_scene("er16k_skidding").bearing.with_clearance(kw.pop("clearance"))
     sc = make_scene(**kw)
-    r = check_converged(sc, segments, skip=skip, floor=floor)
+    r = check_converged(sc, segments, skip=skip)
     check_bounded(r, sc, max_load)
 
 

@@ -24,6 +24,10 @@ from the repository's root):
 
     python -m bearing_sim_ros.analysis.validate_fit --start -1.1 1.8 3.75e8 750 0.14 0.022 5.4e-3
 
+ended at the shipped values; since the 12 kHz runs have their physics at 24 kHz (2026-11-29) it
+ends at -0.9 um, 2.0 kg, 4.3e8 N/m, 340 N s/m, 0.17 kg, no better once rounded (README,
+"Validation against real recordings").
+
 ``--scan-clearance`` steps the clearance of the start values instead and says where the checks
 of ``bearing-sim validate`` hold.
 """
