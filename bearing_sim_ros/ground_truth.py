@@ -37,7 +37,7 @@ FAULTS_KEY = "faults_present"
 SIZES_KEY = "defect_sizes"
 ONSETS_KEY = "fault_onsets_s"
 TIME_KEY = "simulated_s"
-SCENE_KEY = "scene"         # the scene the simulator runs (its name: a YAML path's file name without .yaml)
+SCENE_KEY = "scene"         # the scene the simulator runs (its YAML's name:, else the file name without .yaml)
 BEARING_KEY = "bearing"     # that scene's bearing (``Bearing.name``): what the fault frequencies follow from
 STATUS_SUFFIX = ": simulator"
 

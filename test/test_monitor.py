@@ -673,6 +673,26 @@ def test_the_monitor_says_once_that_the_node_runs_another_scene(ros_env, tmp_pat
         "operating point used without `state` is --scene's"]
 
 
+def test_the_monitor_says_when_a_scene_of_its_own_name_runs_another_bearing():
+    """A scene copied from a shipped one and given another bearing keeps the shipped scene's
+    ``name:`` (its /diagnostics ``scene``), so the monitor, which compared the names alone, said
+    nothing while it looked for the ER-16K's fault lines in a 6205's signal.  It compares the
+    bearings too: a scene of its own name on another bearing is said, once; the same name and
+    bearing, or a status without a bearing (none is said), stays silent."""
+    from bearing_sim_ros.nodes.monitor_node import scene_mismatch_line
+
+    scene = load_scene("er16k_outer_race")
+    values = {"scene": "er16k_outer_race", "bearing": "6205-2RS-SKF", "shaft_speed_rad_s": "167.55",
+              "bpfo_hz": "95.9"}
+    line = scene_mismatch_line(scene, values, "bearing_sim")
+    assert line == (
+        "monitor: 'bearing_sim' runs scene er16k_outer_race (6205-2RS-SKF), not --scene er16k_outer_race "
+        "(ER-16K): the verdicts look for the fault lines of another bearing (BPFO 95.3 Hz, the signal's 95.9 Hz "
+        "at 1600 rpm); give the monitor the node's scene (--scene the path of the node's scene YAML)"), line
+    assert scene_mismatch_line(scene, dict(values, bearing="ER-16K"), "bearing_sim") is None
+    assert scene_mismatch_line(scene, {"scene": "er16k_outer_race"}, "bearing_sim") is None
+
+
 def test_the_monitor_keeps_a_few_diagnostics_and_scores_as_with_all_of_them(ros_env, tmp_path):
     """The monitor kept every 1 Hz /diagnostics message for as long as it ran, for the truth of
     its windows and the latency lines at exit: a list that grew with the run.  Now it keeps the

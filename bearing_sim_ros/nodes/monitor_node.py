@@ -226,9 +226,12 @@ def scene_mismatch_line(scene, values: dict, simulator: str):
     engineer configured; the line says whether that bearing is the signal's, and if not where the
     signal's BPFO is against the one the verdicts look at (at the simulator's shaft speed)."""
     theirs = values.get(ground_truth.SCENE_KEY)
-    if theirs is None or theirs == scene.name:
+    bearing = values.get(ground_truth.BEARING_KEY)
+    # a scene copied from a shipped one keeps its ``name:`` whatever bearing it was given: the
+    # name alone does not say that the fault lines are where the verdicts look
+    if theirs is None or (theirs == scene.name and bearing in (None, scene.bearing.name)):
         return None
-    bearing = values.get(ground_truth.BEARING_KEY, "bearing not given")
+    bearing = bearing or "bearing not given"
     said = (f"monitor: {simulator!r} runs scene {theirs} ({bearing}), not --scene {scene.name} "
             f"({scene.bearing.name})")
     if bearing == scene.bearing.name:
@@ -240,8 +243,10 @@ def scene_mismatch_line(scene, values: dict, simulator: str):
                  f"{float(values['bpfo_hz']):.1f} Hz at {shaft_hz * 60:.0f} rpm)")
     except (KeyError, ValueError):
         where = ""
+    # of the same name, the node's scene is a YAML that only its path tells from --scene's
+    node_scene = "the path of the node's scene YAML" if theirs == scene.name else theirs
     return (f"{said}: the verdicts look for the fault lines of another bearing{where}; give the monitor "
-            f"the node's scene (--scene {theirs})")
+            f"the node's scene (--scene {node_scene})")
 
 
 def source_start_line(t0_ns: int, source_start_ns: int):
@@ -292,7 +297,7 @@ class MonitorNode(Node):
         self._several_said = False
         self.truth_status = ground_truth.status_name(self.simulator)
         self.ignored = set()        # names of other simulators' statuses, said once each
-        self.scenes_said = set()    # the simulator's scenes that are not --scene, said once each
+        self.scenes_said = set()    # the simulator's (scene, bearing) that are not --scene's, said once each
         self._speeds = []
         self._t0 = None
         self._source_start = None   # stamp (ns) of the source's signal time 0, by its diagnostics
@@ -352,7 +357,7 @@ class MonitorNode(Node):
     def _check_scene(self, values: dict) -> None:
         """Say once (for each scene it runs) that the simulator runs another scene than
         ``--scene``: the verdicts may look for the fault lines of another bearing."""
-        theirs = values.get(ground_truth.SCENE_KEY)
+        theirs = (values.get(ground_truth.SCENE_KEY), values.get(ground_truth.BEARING_KEY))
         if theirs in self.scenes_said:
             return
         line = scene_mismatch_line(self.scene, values, self.simulator)
