@@ -558,6 +558,23 @@ def test_bad_inputs_are_rejected_and_a_speed_change_moves_bpfo(started, listener
     assert line_at(freqs, spec, f_old).prominence < DETECTION_THRESHOLD     # the old line is gone
 
 
+def test_a_burst_of_rejected_inputs_is_counted_in_the_log_too(started, listener):
+    """The rejections a reason's log throttle held back are logged once its period is over, even
+    when no later rejection of that reason comes: a burst of 300 NaNs was one log line, and the
+    299 behind it were only in /diagnostics (a user's live test, 1500 rejected and one line)."""
+    node = started({"scene": "er16k_outer_race", "fidelity": "kinematic"})
+    listener.wait_matched()
+    listener.wait_for(lambda: len(listener.accel) > 0, FIRST_TABLE_S, "the first accel table")
+    for _ in range(5):
+        listener.publish_speed(float("nan"))
+    listener.publish_load(0.0, -50.0, frame_id="base_link")     # one alone: its line, no more
+    node.wait_for_output("4 more inputs rejected (not_finite) since the last such line", timeout=3 * 2.0 + 5)
+    log = node.output()
+    assert log.count("input rejected (not_finite)") == 1, log
+    assert "shaft_speed = nan rad/s" in log.split("4 more inputs rejected (not_finite)")[1].splitlines()[0], log
+    assert log.count("input rejected (wrong_frame)") == 1 and "more inputs rejected (wrong_frame)" not in log, log
+
+
 def test_a_load_in_another_frame_is_rejected_and_counted(started, listener):
     """A ``load`` stamped in another frame (``base_link``, ``map``) was applied along the bearing's
     axes as if it were in theirs: the node transforms nothing.  It is rejected (``wrong_frame``),

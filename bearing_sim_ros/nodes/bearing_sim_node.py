@@ -358,7 +358,8 @@ class BearingSimNode(Node):
         self._cmd_load = tuple(float(v) for v in self.sim.radial_load)
         self._last_load_stamp = None
         self.rejected = {"not_finite": 0, "out_of_range": 0, "wrong_frame": 0, "stale": 0, "out_of_order": 0}
-        self._reject_log = {}                     # reason -> (monotonic s of its last line, since)
+        self._reject_log = {}                     # reason -> (monotonic s of its last line, since, the
+                                                  # latest held back's reason text)
 
         self.start_ns = self.get_clock().now().nanoseconds
         self.msgs = BatchMessages(self.sim, self.start_ns, cfg["frame_id"] or None)
@@ -439,14 +440,26 @@ class BearingSimNode(Node):
         how many more of that reason came since its last line."""
         self.rejected[key] += 1
         now = time.monotonic()
-        last, since = self._reject_log.get(key, (-math.inf, 0))
+        last, since, _held = self._reject_log.get(key, (-math.inf, 0, ""))
         if now - last < REJECT_LOG_PERIOD:
-            self._reject_log[key] = (last, since + 1)
+            self._reject_log[key] = (last, since + 1, reason)
             return
-        self._reject_log[key] = (now, 0)
+        self._reject_log[key] = (now, 0, "")
         more = f" ({since} more {key} since the last such line)" if since else ""
         self.get_logger().warning(f"input rejected ({key}), keeping {self._cmd_speed:.6g} rad/s, "
                                   f"load {self._cmd_load}: {reason}{more}")
+
+    def _log_held_rejections(self):
+        """Log the rejections each reason's throttle held back once its period is over (a timer
+        in the executor thread, as ``_reject``): else they waited for that reason's next line,
+        and a burst that had none (300 NaNs sent at once) was one line in the log."""
+        now = time.monotonic()
+        for key, (last, since, held) in list(self._reject_log.items()):
+            if since and now - last >= REJECT_LOG_PERIOD:
+                self._reject_log[key] = (now, 0, "")
+                self.get_logger().warning(f"{since} more inputs rejected ({key}) since the last such line, "
+                                          f"keeping {self._cmd_speed:.6g} rad/s, load {self._cmd_load}; "
+                                          f"the latest: {held}")
 
     def _on_speed(self, msg):
         value = float(msg.data)
@@ -481,6 +494,7 @@ class BearingSimNode(Node):
             f"real_time {self._cfg['real_time']}, duration {self._cfg['duration']:g} s, "
             f"recording {_recording_text(self._cfg)}; inputs accepted: {self.limits}")
         self._peer_timer = self.create_timer(PEER_CHECK_S, self._check_peers)
+        self._reject_timer = self.create_timer(REJECT_LOG_PERIOD / 4, self._log_held_rejections)
         self._thread.start()
 
     def _check_peers(self):
