@@ -369,6 +369,7 @@ class BearingSimNode(Node):
         self._stop = threading.Event()
         self._stop_reason = None                 # stop(reason): why the run ended, for its end status
         self._last_status = None                 # (item, values, level, message) of the last /diagnostics
+        self.end_status = None                   # (end_reason, level, message) of the run's end status, to log
         self._repace = False
         self.finished = threading.Event()
         self.error = None
@@ -868,6 +869,7 @@ class BearingSimNode(Node):
             values, level, message = self._status(item, now)
         values, level, message = end_of_run(values, level, message, reason, item.end_index,
                                             self.sim.sample_rate, self._cfg["duration"])
+        self.end_status = (reason, level, message)
         return diagnostics_message(item.end_stamp, values, level, message,
                                    self.get_fully_qualified_name().lstrip("/"))
 
@@ -1090,6 +1092,19 @@ def _param_text(value) -> str:
     return repr(value)
 
 
+def log_end(node) -> None:
+    """Log the message of the run's end status (``run ended: duration 30 s reached, 30.000000 s
+    of signal (450000 samples) published``) at its level: a run without a recording that reached
+    its ``duration`` left no line at all in the log.  None for a run stopped before its first
+    table (no end status) or one whose solver diverged (its error was logged when it happened).
+    Call after ``destroy_node``, like :func:`log_recording`, under the node's own logger name."""
+    if node.end_status is None or node.end_status[0] == "diverged":
+        return
+    _reason, level, message = node.end_status
+    log = rclpy.logging.get_logger(node.get_logger().name)
+    (log.info, log.warning, log.error)[min(int(level), 2)](message)
+
+
 def log_recording(node) -> None:
     """Log where the node's closed recording went.  Call after ``destroy_node``: after a signal
     the node's context is gone, and its logger's /rosout publisher with it.  Under the node's own
@@ -1266,6 +1281,7 @@ def main(argv=None) -> int:
         with teardown_watchdog():
             if node is not None:
                 node.destroy_node()
+                log_end(node)
                 log_recording(node)
             rclpy.try_shutdown()
     if error is not None:
