@@ -1,7 +1,8 @@
 """``bearing-sim``: the command line (INTERFACE.md).
 
 Exit status: 0 done; 2 a user mistake (one line naming what is wrong and what is allowed, never a
-traceback); 1 an internal error; 141 (quietly) when the reader of standard output went away.  Each subcommand's work lives in its own module; this file only
+traceback); 1 an internal error; 3 ``monitor --count N`` whose simulator's run ended before N
+verdicts; 141 (quietly) when the reader of standard output went away.  Each subcommand's work lives in its own module; this file only
 parses arguments and maps errors to exit codes.
 """
 from __future__ import annotations
@@ -14,6 +15,12 @@ from .errors import UserError
 
 EXIT_OK, EXIT_INTERNAL, EXIT_USER = 0, 1, 2
 EXIT_STDOUT_CLOSED = 141        # 128 + SIGPIPE: what the shell reports for `yes | head`
+# monitor --count N: the run it watched ended (its end status) and no table came for --end-wait
+# seconds before N verdicts; a script must tell that from N verdicts (0) without parsing lines
+EXIT_COUNT_NOT_REACHED = 3
+# monitor --end-wait (s): long enough for the tables still queued behind the end status and the
+# next pass of play --loop; a node restarted in its place takes a second or two to publish
+MONITOR_END_WAIT_S, MONITOR_END_WAIT_RANGE_S = 5.0, (0.0, 3600.0)
 # the commands that run a node: their Ctrl-C and SIGTERM are handled from the first line
 # (teardown.CommandSignals), before the imports of numpy, numba and rclpy, where one was lost
 SIGNAL_COMMANDS = ("node", "run", "monitor", "play")
@@ -220,8 +227,8 @@ def build_parser() -> argparse.ArgumentParser:
     sub.add_parser("scenes", help="list the shipped scenes")
 
     s = sub.add_parser("monitor", help="example condition-monitoring subscriber (envelope analysis)",
-                       usage="%(prog)s [-h] [--window SECONDS] [--count N] [--scene S] [--simulator NAME] "
-                             "[--ros-args ...]",
+                       usage="%(prog)s [-h] [--window SECONDS] [--count N] [--end-wait SECONDS] [--scene S] "
+                             "[--simulator NAME] [--ros-args ...]",
                        formatter_class=argparse.RawDescriptionHelpFormatter,
                        epilog="ROS arguments follow --ros-args, for example the namespace of the rig to watch:\n"
                               "  bearing-sim monitor --window 4 --ros-args -r __ns:=/rig1")
@@ -231,7 +238,12 @@ def build_parser() -> argparse.ArgumentParser:
                    help=f"seconds of signal per analysis, {WINDOW_RANGE_S[0]:g} to {WINDOW_RANGE_S[1]:g} "
                         "(default: %(default)g)")
     s.add_argument("--count", type=_nonnegative(int), default=0, metavar="N",
-                   help="stop after this many verdicts (default: %(default)s = never)")
+                   help="stop after this many verdicts (default: %(default)s = never); where the simulator's "
+                        f"run ends before, exit status {EXIT_COUNT_NOT_REACHED} after --end-wait")
+    s.add_argument("--end-wait", type=_in_range(*MONITOR_END_WAIT_RANGE_S, "s"), default=None, metavar="SECONDS",
+                   help="once the simulator's run ended (its end status), end when no table has come for this "
+                        f"long, {MONITOR_END_WAIT_RANGE_S[0]:g} to {MONITOR_END_WAIT_RANGE_S[1]:g} (default: "
+                        f"{MONITOR_END_WAIT_S:g} with --count, else wait on until Ctrl-C)")
     s.add_argument("--scene", default=None, metavar="S",
                    help="scene giving the bearing geometry (default: er16k_outer_race); the monitor says once "
                         "when the simulator's /diagnostics name another")

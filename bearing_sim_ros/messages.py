@@ -51,10 +51,14 @@ END_REASON_KEY, PUBLISHED_SAMPLES_KEY = "end_reason", "published_samples"
 # Ctrl-C and SIGTERM), or the node's stop() called by a program that runs it in its own process, or
 # the skidding solver's divergence (level ERROR, its line in the message)
 END_REASONS = ("duration", "SIGINT", "SIGTERM", "SIGHUP", "stopped", "diverged")
-# s the node waits at its end for reliable subscribers to acknowledge its last messages (the end
-# status, the last tables), and `play` for its tail: they are lost to a subscriber that has not
-# received them when the publisher is destroyed
+# s `play` waits at its end for each reliable subscriber to acknowledge its tail: lost to a
+# subscriber that has not received it when the publisher is destroyed
 END_ACK_TIMEOUT_S = 2.0
+# s the node gives reliable subscribers at its end to acknowledge its last messages (the end
+# status, the last tables), in all; short because Fast DDS often acknowledges only with its
+# periodic heartbeat, 3 s after the last write, though the subscriber has them within ms, and
+# every exit of a node with subscribers waits it out
+END_DELIVERY_GRACE_S = 0.5
 
 
 def end_of_run(values: dict, level: int, message: str, reason: str, samples: int, sample_rate: float,

@@ -188,7 +188,7 @@ def run_command(args) -> int:
     from rclpy.signals import SignalHandlerOptions
 
     from .nodes.bearing_sim_node import (DEFAULT_SAMPLE_RATE, BearingSimNode, build_node, failure_recording_text,
-                                         log_recording, say_held, spin_node, stop_reason)
+                                         log_end, log_recording, say_held, spin_node, stop_reason)
     from .messages import BATCH_DURATION, duration_error
     from .recording.recorder import files_text, sizes_text, split_error
     from .recording.render import tier_values
@@ -246,6 +246,7 @@ def run_command(args) -> int:
         with teardown_watchdog():
             if node is not None:
                 node.destroy_node()
+                log_end(node)
                 log_recording(node)
             rclpy.try_shutdown()
     if error is not None:

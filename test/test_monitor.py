@@ -426,14 +426,11 @@ def test_monitor_takes_the_ground_truth_of_the_rig_it_watches_only(ros_env, bear
     assert out.count("monitor: ground truth of 'rig2/bearing_sim: simulator' ignored") == 1, out
 
 
-def test_the_monitor_says_that_the_run_it_watches_ended_and_waits_for_more(ros_env, bearing_sim_exe, tmp_path):
-    """The node's end status (its last /diagnostics) is printed by the monitor: without it the
-    tables just stopped, as they do when a node crashes or discovery loses it.  The monitor waits
-    on (a node started again, the next pass of ``play --loop``) until Ctrl-C."""
-    import signal
-
+def _short_run_watched(ros_env, bearing_sim_exe, tmp_path, *monitor_options):
+    """A monitor in 1 s windows (and ``monitor_options``), up before a node that runs 1.5 s of
+    signal, until it printed the node's end status: (monitor, node), for the caller to close."""
     monitor = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / "monitor.log",
-                          command=("monitor", "--window", "1"))
+                          command=("monitor", "--window", "1", *monitor_options))
     node = None
     try:
         monitor.wait_for_output("envelope analysis every")
@@ -442,6 +439,22 @@ def test_the_monitor_says_that_the_run_it_watches_ended_and_waits_for_more(ros_e
         assert node.wait(90) == 0, node.output()
         monitor.wait_for_output("monitor: bearing_sim: run ended: duration 1.5 s reached, 1.500000 s of signal "
                                 "(22500 samples) published; waiting for more", timeout=5)
+    except BaseException:
+        monitor.close()
+        if node is not None:
+            node.close()
+        raise
+    return monitor, node
+
+
+def test_the_monitor_says_that_the_run_it_watches_ended_and_waits_for_more(ros_env, bearing_sim_exe, tmp_path):
+    """The node's end status (its last /diagnostics) is printed by the monitor: without it the
+    tables just stopped, as they do when a node crashes or discovery loses it.  The monitor waits
+    on (a node started again, the next pass of ``play --loop``) until Ctrl-C."""
+    import signal
+
+    monitor, node = _short_run_watched(ros_env, bearing_sim_exe, tmp_path)
+    try:
         time.sleep(1.0)
         assert monitor.proc.poll() is None, monitor.output()
         monitor.send(signal.SIGINT)
@@ -449,9 +462,52 @@ def test_the_monitor_says_that_the_run_it_watches_ended_and_waits_for_more(ros_e
         out = monitor.output()
     finally:
         monitor.close()
-        if node is not None:
-            node.close()
+        node.close()
     assert out.count("run ended") == 1 and "monitor: 1 verdicts from 150 tables, 0 gaps" in out, out
+
+
+def test_a_monitor_with_a_count_ends_when_the_run_ends_before_it(ros_env, bearing_sim_exe, tmp_path):
+    """``monitor --count 5`` beside a node whose ``duration`` gives fewer windows waited forever
+    after the node's end status: a script running both hung.  With ``--count`` the monitor now
+    waits ``--end-wait`` (default 5 s) without a table after the end status, says how many
+    verdicts it got of how many, and exits with status 3 (not 0: it did not get its count)."""
+    monitor, node = _short_run_watched(ros_env, bearing_sim_exe, tmp_path, "--count", "5")
+    ended = time.monotonic()
+    try:
+        assert monitor.wait(30) == 3, monitor.output()
+        waited = time.monotonic() - ended
+        out = monitor.output()
+    finally:
+        monitor.close()
+        node.close()
+    assert "waiting for more (a node started again, the next pass of play --loop; without a table for 5 s " \
+           "the monitor ends)" in out, out
+    assert ("monitor: 1 of --count 5 verdicts: the run of bearing_sim ended and no table came in the 5 s since "
+            "(exit status 3)") in out, out
+    assert "monitor: 1 verdicts from 150 tables, 0 gaps" in out and waited < 15, (waited, out)
+
+
+def test_a_monitor_with_a_count_goes_on_across_the_seams_of_play_loop(ros_env, bearing_sim_exe, tmp_path):
+    """``play --loop`` republishes the end status at every seam and goes on: a monitor with
+    ``--count`` (so ``--end-wait``, here 0.5 s) must not take that for the end: the tables of
+    the next pass, stamped from the end status on, cancel it."""
+    recording = tmp_path / "short.mcap"
+    render("er16k_outer_race", 1.0, recording, fidelity="kinematic", seed=3, progress=False)
+    monitor = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / "monitor.log",
+                          command=("monitor", "--window", "1", "--count", "3", "--end-wait", "0.5"))
+    play = None
+    try:
+        monitor.wait_for_output("envelope analysis every")
+        play = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / "play.log",
+                           command=("play", str(recording), "--loop", "--rate", "2", "--wait", "15"))
+        assert monitor.wait(60) == 0, monitor.output()
+        out = monitor.output()
+    finally:
+        monitor.close()
+        if play is not None:
+            play.close()
+    assert out.count("run ended: duration 1 s reached") >= 2, out
+    assert "monitor: 3 verdicts from 300 tables, 0 gaps" in out and "of --count" not in out, out
 
 
 def _wait_for_subscribers(monitor, *publishers, timeout: float = 30.0) -> None:

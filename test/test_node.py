@@ -290,8 +290,22 @@ def test_every_log_line_of_a_node_in_a_namespace_names_it(ros_env, bearing_sim_e
                        env=ros_env, capture_output=True, text=True, timeout=60)
     assert r.returncode == 0, r.stderr
     lines = [ln for ln in r.stderr.splitlines() if ln.startswith("[")]
-    assert len(lines) == 2 and f"recording {tmp_path / 'rig1.mcap'}: " in lines[-1], r.stderr
+    assert len(lines) == 3 and f"recording {tmp_path / 'rig1.mcap'}: " in lines[-1], r.stderr
+    assert lines[1].endswith("]: run ended: duration 0.1 s reached, 0.100000 s of signal (1500 samples) published")
     assert all(re.match(r"\[INFO\] \[[\d.]+\] \[rig1\.bearing_sim\]: ", ln) for ln in lines), r.stderr
+
+
+def test_the_end_of_a_run_without_a_recording_is_logged(ros_env, bearing_sim_exe):
+    """A run that reached its ``duration`` without a recording left nothing in the log after
+    its first line (with one, the recording's line): one reading the log could not tell that it
+    ended, nor why.  Its last line is now the end status's message, at info level."""
+    r = subprocess.run([bearing_sim_exe, "node", "--ros-args", "-p", "real_time:=false", "-p", "duration:=0.1"],
+                       env=ros_env, capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    lines = [ln for ln in r.stderr.splitlines() if ln.startswith("[")]
+    assert len(lines) == 2, r.stderr
+    assert re.fullmatch(r"\[INFO\] \[[\d.]+\] \[bearing_sim\]: run ended: duration 0\.1 s reached, "
+                        r"0\.100000 s of signal \(1500 samples\) published", lines[-1]), r.stderr
 
 
 def test_a_misspelt_parameter_is_named_in_a_warning(ros_env, bearing_sim_exe):

@@ -518,10 +518,11 @@ def test_fault_onset_without_onsets_is_the_first_change_from_none_and_truth_hold
     assert (inner["fault"], inner["first_detection_s"], inner["windows_since"]) == ("inner", None, 0)
 
 
-def _copy_without(src, dst, drop, metadata=lambda m: m) -> int:
+def _copy_without(src, dst, drop, metadata=lambda m: m, rewrite=lambda topic, data: data) -> int:
     """Copy the MCAP ``src`` to ``dst`` (metadata, schemas, channels, messages) leaving out the
     messages for which ``drop(topic, index on that topic)`` is true, each metadata record's
-    values through ``metadata``; how many were left out."""
+    values through ``metadata``, each message's bytes through ``rewrite(topic, data)``; how many
+    were left out."""
     from mcap.reader import make_reader
     from mcap.writer import Writer
 
@@ -542,8 +543,8 @@ def _copy_without(src, dst, drop, metadata=lambda m: m) -> int:
             if channel.id not in channels:
                 channels[channel.id] = writer.register_channel(channel.topic, channel.message_encoding,
                                                                schemas[schema.id], dict(channel.metadata))
-            writer.add_message(channels[channel.id], message.log_time, message.data, message.publish_time,
-                               message.sequence)
+            writer.add_message(channels[channel.id], message.log_time, rewrite(channel.topic, message.data),
+                               message.publish_time, message.sequence)
         writer.finish()
     return left_out
 
@@ -758,19 +759,59 @@ def test_report_without_the_bearing_sim_metadata_takes_the_fault_lines_from_the_
     assert [w["verdict"] for w in s["timeline"]] == [w["verdict"] for w in original["timeline"]]
     assert {"envelope.png", "timeline.png"} <= set(s["plots"]) and not s["plots_not_drawn"]
     assert s["expected_defects"] is None                 # no scene: no agreement claimed
+    # the scene and bearing its /diagnostics name (recordings since 2026-11-29): named, and where from
     source = ("the recording's /diagnostics (cage_hz, bpfo_hz, bpfi_hz, bsf_hz), mean over the recording, as it "
-              "has no scene to take the bearing from (the recording has no bearing_sim scene)")
+              "has no scene to take the bearing from (the recording has no bearing_sim scene; its /diagnostics "
+              "name scene er16k_outer_race (ER-16K))")
     assert s["fault_frequencies_from"] == source
+    assert s["diagnostics_scenes"] == [{"scene": "er16k_outer_race", "bearing": "ER-16K"}]
+    assert s["scene_unknown"].endswith("; its /diagnostics name scene er16k_outer_race (ER-16K)")
     assert printed[-1] == f"{out}: fault lines looked for at the frequencies of {source}"
     assert f"Expected at the fault frequencies of {source}." in (out / "summary.md").read_text()
 
     bare = _rewritten_by_rosbags(outer[0], tmp_path / "bare", exclude_topics=["/diagnostics"])
-    out = tmp_path / "bare_report"
-    assert cli.main(["report", str(bare), "--out", str(out)]) == 0
-    printed = capsys.readouterr().out.splitlines()
     why = ("no verdict: no bearing to place the fault lines on (the recording has no bearing_sim scene) and no "
            "fault frequencies in its /diagnostics (cage_hz, bpfo_hz, bpfi_hz, bsf_hz)")
-    assert printed[-1] == f"{out}: {why}"
+    _report_without_a_verdict(bare, tmp_path / "bare_report", why, capsys)
+
+
+def _report_without_a_verdict(recording, out, why: str, capsys) -> dict:
+    """``bearing-sim report`` of ``recording`` into ``out``: no verdict, and ``why`` said on the
+    command line, in summary.json and summary.md; the summary."""
+    assert cli.main(["report", str(recording), "--out", str(out)]) == 0
+    assert capsys.readouterr().out.splitlines()[-1] == f"{out}: {why}"
     s = json.loads((out / "summary.json").read_text())
     assert s["verdict"] == "unknown" and s["plots_not_drawn"]["envelope.png"] == why
     assert f"Fault frequencies: none: {why[len('no verdict: '):]}." in (out / "summary.md").read_text()
+    assert s["diagnostics_scenes"] == []
+    return s
+
+
+def _without_keys(keys):
+    """A ``_copy_without`` ``rewrite`` that takes ``keys`` out of every /diagnostics status, as
+    a recording made before them has it."""
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.serialization import deserialize_message, serialize_message
+
+    def rewrite(topic, data):
+        if topic != "/diagnostics":
+            return data
+        msg = deserialize_message(data, DiagnosticArray)
+        for status in msg.status:
+            status.values = [kv for kv in status.values if kv.key not in keys]
+        return serialize_message(msg)
+    return rewrite
+
+
+def test_no_verdict_names_the_fault_frequency_keys_the_diagnostics_lack(outer, tmp_path, capsys):
+    """A recording without the bearing_sim metadata whose /diagnostics give cage_hz, bpfo_hz and
+    bpfi_hz but not bsf_hz (made before that key): no verdict, and the line said "no fault
+    frequencies in its /diagnostics (cage_hz, bpfo_hz, bpfi_hz, bsf_hz)" though three are there.
+    It names the one missing, and the three there."""
+    old = tmp_path / "old.mcap"
+    _copy_without(outer[0], old, lambda topic, k: False,
+                  metadata=lambda m: {k: v for k, v in m.items() if k != "scene_yaml"},
+                  rewrite=_without_keys({"bsf_hz", "scene", "bearing"}))
+    why = ("no verdict: no bearing to place the fault lines on (the recording has no bearing_sim scene) and no "
+           "bsf_hz in its /diagnostics (they give cage_hz, bpfo_hz, bpfi_hz; the lines need all four)")
+    _report_without_a_verdict(old, tmp_path / "old_report", why, capsys)

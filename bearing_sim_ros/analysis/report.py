@@ -88,6 +88,10 @@ class _Data:
         diag = {}
         tiers = []
         in_signal, truth_raw = [], []
+        # how many /diagnostics carry fault frequencies, and each key's count: the keys that not
+        # all of them carry are named where the report cannot place the lines without a scene
+        frequency_messages, frequency_key_counts = 0, dict.fromkeys(RECORDED_KEYS, 0)
+        self.named_scenes = []          # (scene, bearing) the /diagnostics name, in order of appearance
         samples = 0
         fs_meta = None
         try:
@@ -136,6 +140,13 @@ class _Data:
                 if found:
                     in_signal.append((_stamp(msg.header.stamp), found))
                 values = {kv.key: kv.value for status in msg.status for kv in status.values}
+                keys_here = [key for key in RECORDED_KEYS if key in values]
+                frequency_messages += bool(keys_here)
+                for key in keys_here:
+                    frequency_key_counts[key] += 1
+                named = (values.get(ground_truth.SCENE_KEY), values.get(ground_truth.BEARING_KEY))
+                if named[0] is not None and named not in self.named_scenes:
+                    self.named_scenes.append(named)
                 if ground_truth.FAULTS_KEY in values:
                     truth_raw.append((_stamp(msg.header.stamp), values))
         if not chunks:
@@ -176,6 +187,8 @@ class _Data:
         parsed = (ground_truth.parse(values, (ns - self.t0_ns) / NS) for ns, values in truth_raw)
         self.truth = sorted((t for t in parsed if t is not None), key=lambda t: t.t)
         self.tiers = tiers
+        self.frequency_keys_missing = [key for key, count in frequency_key_counts.items()
+                                       if not frequency_messages or count < frequency_messages]
 
     @staticmethod
     def _roles(metadata: dict) -> dict:
@@ -341,7 +354,7 @@ def recorded_frequencies(periods: list, start_s: float, end_s: float) -> dict:
 
 
 LINE_KEYS = {"ftf", "bpfo", "bpfi", "bsf"}     # what envelope.diagnose places its lines by
-RECORDED_KEYS = "cage_hz, bpfo_hz, bpfi_hz, bsf_hz"
+RECORDED_KEYS = ("cage_hz", "bpfo_hz", "bpfi_hz", "bsf_hz")     # the /diagnostics keys that give them
 
 
 def line_frequencies(rolling: dict, recorded: dict) -> dict:
@@ -354,24 +367,37 @@ def line_frequencies(rolling: dict, recorded: dict) -> dict:
     return found if LINE_KEYS <= set(found) else {}
 
 
-def frequencies_source(rolling: dict, recorded: dict, scene_problem: str) -> str:
-    """Where ``line_frequencies(rolling, recorded)`` come from, in words (``fault_frequencies_from``)."""
+def frequencies_source(rolling: dict, recorded: dict, scene_problem: str, missing=RECORDED_KEYS) -> str:
+    """Where ``line_frequencies(rolling, recorded)`` come from, in words (``fault_frequencies_from``);
+    ``missing``: the keys of ``RECORDED_KEYS`` that not every recorded /diagnostics gives."""
     if not line_frequencies(rolling, recorded):
-        return f"none: {no_frequencies_reason(scene_problem)}"
+        return f"none: {no_frequencies_reason(scene_problem, missing)}"
     if not rolling:
-        return (f"the recording's /diagnostics ({RECORDED_KEYS}), mean over the recording, as it has no scene "
-                f"to take the bearing from ({scene_problem})")
+        return (f"the recording's /diagnostics ({', '.join(RECORDED_KEYS)}), mean over the recording, as it has no "
+                f"scene to take the bearing from ({scene_problem})")
     if not recorded:
         return "pure rolling at the mean shaft speed"
-    return (f"the recording's /diagnostics ({RECORDED_KEYS})" if "bsf" in recorded else
+    return (f"the recording's /diagnostics ({', '.join(RECORDED_KEYS)})" if "bsf" in recorded else
             "the recording's /diagnostics (cage_hz, bpfo_hz, bpfi_hz; bsf: pure rolling)")
 
 
-def no_frequencies_reason(scene_problem: str) -> str:
+def no_frequencies_reason(scene_problem: str, missing=RECORDED_KEYS) -> str:
     """Why there are no fault lines to look at: no scene (``scene_problem``: why) and no
-    ``/diagnostics`` that give every fault frequency."""
-    return (f"no bearing to place the fault lines on ({scene_problem}) and no fault frequencies in its "
-            f"/diagnostics ({RECORDED_KEYS})")
+    ``/diagnostics`` that give every fault frequency (``missing``: the keys they lack; a recording
+    made before ``bsf_hz`` has the other three, and a line that named all four sent its reader
+    looking for keys that are there)."""
+    if set(missing) >= set(RECORDED_KEYS):
+        return (f"no bearing to place the fault lines on ({scene_problem}) and no fault frequencies in its "
+                f"/diagnostics ({', '.join(RECORDED_KEYS)})")
+    there = [key for key in RECORDED_KEYS if key not in missing]
+    return (f"no bearing to place the fault lines on ({scene_problem}) and no {', '.join(missing)} in its "
+            f"/diagnostics (they give {', '.join(there)}; the lines need all four)")
+
+
+def named_scene_text(named: list) -> str:
+    """``scene er16k_outer_race (ER-16K)``: the scenes and bearings a recording's /diagnostics name
+    (``named``: (scene, bearing or None) pairs), for a recording whose metadata has no scene."""
+    return ", ".join(f"scene {scene} ({bearing or 'bearing not given'})" for scene, bearing in named)
 
 
 SLACK_S = 1e-6      # s: times this close count as equal (stamps rounded to the ns)
@@ -821,6 +847,10 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
         rec.close()
     out = output_folder(out)
     scene, scene_problem = _scene_from_metadata(meta)
+    if scene is None and d.named_scenes:
+        # a name, not a bearing to place lines on: a scene file's name may be anybody's YAML, so
+        # the report names it and where it came from, and takes nothing from it
+        scene_problem += f"; its /diagnostics name {named_scene_text(d.named_scenes)}"
     fs = d.sample_rate
     ch = "accel_y" if "accel_y" in d.channels else d.channels[0]
     x = d.accel[:, d.channels.index(ch)]
@@ -835,7 +865,7 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
 
     not_drawn = {}                      # plot -> why it is not drawn
     if verdict is None:
-        why = "less than 0.2 s of signal" if freqs else no_frequencies_reason(scene_problem)
+        why = "less than 0.2 s of signal" if freqs else no_frequencies_reason(scene_problem, d.frequency_keys_missing)
         not_drawn["envelope.png"] = not_drawn["timeline.png"] = f"no verdict: {why}"
     missing = operating_point_missing(d, scene)
     if missing:
@@ -886,7 +916,8 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
         "shaft_speed_variation": speed_var,
         "fault_frequencies_hz": freqs,
         "fault_frequencies_pure_rolling_hz": rolling,
-        "fault_frequencies_from": frequencies_source(rolling, d.signal_frequencies, scene_problem),
+        "fault_frequencies_from": frequencies_source(rolling, d.signal_frequencies, scene_problem,
+                                                     d.frequency_keys_missing),
         "envelope_channel": ch,
         "fault_lines": ({k: {"expected_hz": v.expected_hz, "found_hz": v.found_hz, "height": v.height,
                              "prominence": v.prominence} for k, v in verdict["lines"].items()}
@@ -899,6 +930,8 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
                          if verdict and scene is not None and not scene.defects else None),
         "scene_defects": scene_defects(scene, d.truth, d.analysed_end_s, d.signal_s),
         "scene_unknown": scene_problem or None,
+        # the scenes (and bearings) the recording's /diagnostics name: [] before those keys
+        "diagnostics_scenes": [{"scene": sc, "bearing": b} for sc, b in d.named_scenes],
         "skid_ratios_percent": {k: float(np.mean(v[:, 1])) for k, v in sorted(d.skid.items())},
         "verdict_describes_recording": (not changes) if d.truth else None,
         "ground_truth_to_the_sample": any(r.onsets is not None for r in d.truth) if d.truth else None,

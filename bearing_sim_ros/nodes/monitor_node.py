@@ -45,6 +45,12 @@ stamp it prints (``monitor: first table stamped 1764392867.120000000 s, t=0 belo
 source's first table when the monitor was up before it and discovery lost none.  On exit, with
 a simulator's diagnostics (whose ``simulated_s`` ties stamps to its signal time), a line says
 where on the source's signal that table was, and so how much of it the monitor did not receive.
+
+The simulator's end status (``run: ended`` in its last ``/diagnostics``) is printed, and the
+monitor waits on for a node started again or the next pass of ``play --loop``; with ``--count``
+(or ``--end-wait``) only until no table has come for ``end_wait`` s after it: a script that ran
+a node with a ``duration`` beside ``monitor --count N`` waited forever for verdicts that could
+not come.  Short of the count, that is exit status ``cli.EXIT_COUNT_NOT_REACHED`` (3).
 """
 from __future__ import annotations
 
@@ -271,7 +277,8 @@ class MonitorNode(Node):
     s of signal, with the ground truth the diagnostics of ``simulator`` give (its full name,
     ``rig1/bearing_sim``, or a node name in the namespace of ``accel``: :func:`simulator_name`)."""
 
-    def __init__(self, scene, window: float, count: int = 0, out=None, simulator: str | None = None, **kwargs):
+    def __init__(self, scene, window: float, count: int = 0, out=None, simulator: str | None = None,
+                 end_wait: float | None = None, **kwargs):
         from diagnostic_msgs.msg import DiagnosticArray
         from sensor_msgs.msg import JointState, PointCloud2
 
@@ -279,11 +286,18 @@ class MonitorNode(Node):
         self.scene = scene
         self.window_s = float(window)
         self.count = int(count)
+        # s without a table after the simulator's end status before the monitor ends (None: never)
+        self.end_wait = end_wait
         self.out = out or sys.stdout
         self.window = Window()
         self.tables = 0
         self.rejected = 0           # tables that were no waveform table or held non-finite samples
         self.windows_queued = 0
+        self.windows_done = 0       # analysed (printed, or failed and logged)
+        # the watched simulator's end status while no table of a later run or pass came: (its stamp,
+        # ns: the end of the run's last table; monotonic s it came); and when the last table came
+        self._ended = None
+        self._last_table_at = None
         # (window end ns, verdict, truth) of each verdict printed, for the score at the end: the
         # whole analysis (lines, scores, frequencies) kept per verdict was about 3 kB, and a
         # monitor left running grew by megabytes an hour
@@ -321,6 +335,15 @@ class MonitorNode(Node):
     def done(self) -> bool:
         return bool(self.count) and len(self.verdicts) >= self.count
 
+    def run_over(self, now: float) -> bool:
+        """Has the simulator's run ended for good, by ``end_wait``: its end status came, no table
+        for ``end_wait`` s since it or the last table (those still queued behind it, DDS orders
+        no topic against another), and every window taken is analysed.  A table stamped at or
+        after the end status (the next pass of ``play --loop``, a node started again) cancels it."""
+        if self.end_wait is None or self._ended is None or self.windows_done < self.windows_queued:
+            return False
+        return now - max(self._ended[1], self._last_table_at or 0.0) >= self.end_wait
+
     def _on_state(self, msg):
         if "shaft" in msg.name and msg.velocity:
             self._speeds.append(float(msg.velocity[list(msg.name).index("shaft")]))
@@ -346,8 +369,13 @@ class MonitorNode(Node):
             if values.get(RUN_KEY) == RUN_ENDED:
                 # the simulator's end status (its last /diagnostics): the tables stopped because the
                 # run is complete (or was stopped), not because it crashed or discovery lost it
+                self._ended = (stamp, time.monotonic())
+                if self.end_wait is None:
+                    until = "Ctrl-C ends the monitor"
+                else:
+                    until = f"without a table for {self.end_wait:g} s the monitor ends"
                 print(f"monitor: {self.simulator}: {status.message}; waiting for more (a node started "
-                      "again, the next pass of play --loop; Ctrl-C ends the monitor)", file=self.out, flush=True)
+                      f"again, the next pass of play --loop; {until})", file=self.out, flush=True)
             if self._source_start is None and ground_truth.TIME_KEY in values:
                 try:
                     self._source_start = stamp - round(float(values[ground_truth.TIME_KEY]) * NS)
@@ -366,6 +394,7 @@ class MonitorNode(Node):
             print(line, file=self.out, flush=True)
 
     def _on_accel(self, msg):
+        self._last_table_at = time.monotonic()
         if self.count and self.windows_queued >= self.count:
             return
         try:
@@ -379,6 +408,8 @@ class MonitorNode(Node):
                                       throttle_duration_sec=5.0)
             return
         self.tables += 1
+        if self._ended is not None and stamp >= self._ended[0] - SLACK_NS:
+            self._ended = None      # a table after the end: the next pass, a node started again
         if self._t0 is None:
             self._t0 = stamp
             # t= counts from here: the source's first table unless discovery or a late start
@@ -402,6 +433,13 @@ class MonitorNode(Node):
     def _analyse(self, end: int, x: np.ndarray, channels, fs: float, shaft: float, grace: float) -> None:
         """On the analysis thread: one verdict with the truth at the window's ``end`` (ns),
         printed.  ``grace``: until when (monotonic s) to wait for the diagnostics stamped there."""
+        try:
+            self._verdict_line(end, x, channels, fs, shaft, grace)
+        finally:
+            self.windows_done += 1
+
+    def _verdict_line(self, end: int, x: np.ndarray, channels, fs: float, shaft: float, grace: float) -> None:
+        """``_analyse``'s work: the verdict on the window that ends at ``end``, printed."""
         t = (end - self._t0) / NS
         try:
             result = verdict(x, channels, fs, self.scene.bearing, abs(shaft) / (2 * np.pi))
@@ -434,13 +472,18 @@ class MonitorNode(Node):
 
 
 def main(args, ros_args=()) -> int:
-    """``bearing-sim monitor --window S --count N --scene S --simulator NAME [--ros-args ...]``;
-    exit 0 after ``count`` verdicts, on Ctrl-C or SIGTERM; 2 with one line for a bad scene or ROS
-    argument.  ``ros_args``: from ``--ros-args`` on (a namespace, remaps)."""
+    """``bearing-sim monitor --window S --count N --end-wait S --scene S --simulator NAME
+    [--ros-args ...]``; exit 0 after ``count`` verdicts, on Ctrl-C or SIGTERM, or (without
+    ``count``, with ``end_wait``) after the simulator's run ended; ``cli.EXIT_COUNT_NOT_REACHED``
+    with one line where its run ended before ``count`` verdicts (``end_wait`` s without a table
+    after its end status: default ``cli.MONITOR_END_WAIT_S`` with ``count``, else never); 2 with
+    one line for a bad scene or ROS argument.  ``ros_args``: from ``--ros-args`` on (a namespace,
+    remaps)."""
     from rclpy._rclpy_pybind11 import RCLError, UnknownROSArgsError
     from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
     from rclpy.signals import SignalHandlerOptions
 
+    from ..cli import EXIT_COUNT_NOT_REACHED, EXIT_OK, MONITOR_END_WAIT_S
     from ..scene import load_scene
     from .bearing_sim_node import ros_arguments_error
 
@@ -451,11 +494,16 @@ def main(args, ros_args=()) -> int:
     # rclpy were imported went missing, and the monitor waited on for tables
     signals = command_signals()
     node = executor = None
+    status = EXIT_OK
     try:
         try:
             signals.check()
             rclpy.init(args=["bearing-sim monitor", *ros_args], signal_handler_options=SignalHandlerOptions.NO)
-            node = MonitorNode(scene, args.window, args.count, simulator=getattr(args, "simulator", None))
+            end_wait = getattr(args, "end_wait", None)
+            if end_wait is None and args.count:
+                end_wait = MONITOR_END_WAIT_S       # a script's --count N must not wait forever
+            node = MonitorNode(scene, args.window, args.count, simulator=getattr(args, "simulator", None),
+                               end_wait=end_wait)
         except (RCLError, UnknownROSArgsError) as exc:
             if isinstance(exc, RCLError) and rclpy.ok():
                 raise                   # not the arguments: rclpy.init went through
@@ -475,6 +523,13 @@ def main(args, ros_args=()) -> int:
         executor.add_node(node)
         t_start = next_look = time.monotonic()
         while rclpy.ok() and not node.done and signals.first is None:
+            if node.run_over(time.monotonic()):
+                if node.count:
+                    status = EXIT_COUNT_NOT_REACHED
+                    print(f"monitor: {len(node.verdicts)} of --count {node.count} verdicts: the run of "
+                          f"{node.simulator} ended and no table came in the {node.end_wait:g} s since "
+                          f"(exit status {status})", flush=True)
+                break
             executor.spin_once(timeout_sec=0.2)
             if time.monotonic() >= next_look:
                 next_look += PEER_CHECK_S
@@ -505,4 +560,4 @@ def main(args, ros_args=()) -> int:
                 for line in score_lines(node.verdicts, node.appeared.appearances(node._t0 or 0), node._t0 or 0):
                     print(line, flush=True)
             rclpy.try_shutdown()
-    return 0
+    return status
