@@ -130,16 +130,21 @@ def test_play_delivers_every_message_to_another_process(recording, bearing_sim_e
     # /clock: the recording's time, increasing, covering it
     clock = np.array([c[0] for c in got["/clock"]])
     assert clock[0] == 0 and np.all(np.diff(clock) > 0) and clock[-1] == 1 * NS
-    # paced by the log times / --rate: the tables' log times span 0.99 s, received over 0.495 s
-    # at --rate 2 (0.99 s if the rate were ignored, ~0 if nothing paced them)
-    _assert_paced(got["/accel"], accel[-1][0] - accel[0][0], rate=2)
+    # paced by the log times / --rate: at --rate 2 the tables come at twice their stamps' pace
+    # (at their pace if the rate were ignored, all at once if nothing paced them)
+    _assert_paced(got["/accel"], rate=2)
 
 
-def _assert_paced(received, log_span_ns, rate):
-    """The first to the last of ``received`` ([stamp, width, crc, monotonic time]) arrived over
-    the log-time span / rate, within 10 %."""
-    span = received[-1][3] - received[0][3]
-    assert span == pytest.approx(log_span_ns / NS / rate, rel=0.10), (span, log_span_ns / NS / rate)
+def _assert_paced(received, rate):
+    """The tables of ``received`` ([stamp, width, crc, monotonic time]; stamps a recording's
+    sample times, as its log times, 10 ms apart) arrived at ``rate`` x their stamps' pace, within
+    10 %: measured from the tenth to the ninetieth in ten, since discovery can hold back the first
+    few (their late arrival compressed a first-to-last span to 0.442 s of 0.495, a failure on a
+    quiet machine) and the last may wait for a reliable resend."""
+    first, last = len(received) // 10, len(received) - 1 - len(received) // 10
+    span = received[last][3] - received[first][3]
+    stamps = (received[last][0] - received[first][0]) / NS
+    assert span == pytest.approx(stamps / rate, rel=0.10), (span, stamps / rate)
 
 
 def test_loop_keeps_tables_contiguous_and_sigint_ends_cleanly(recording, bearing_sim_exe, ros_env, tmp_path):
@@ -171,7 +176,7 @@ def test_loop_keeps_tables_contiguous_and_sigint_ends_cleanly(recording, bearing
     assert [t[2] for t in tables[len(accel):2 * len(accel)]] == [t[2] for t in tables[:len(accel)]]
     # one pass (first table of pass 2 to first of pass 3: 1 s of log time) takes 0.25 s at --rate 4;
     # not pass 1, whose first tables may come in a burst behind discovery (0.20 s once, loaded)
-    _assert_paced(tables[len(accel):2 * len(accel) + 1], 1 * NS, rate=4)
+    _assert_paced(tables[len(accel):2 * len(accel) + 1], rate=4)
     # every header stamp moves on by the recording's length (1 s), not only the waveform tables':
     # /state (every 20 ms), /diagnostics (once, at the end), /contact_forces, /load
     for topic, n in counts.items():
