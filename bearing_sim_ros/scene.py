@@ -17,7 +17,7 @@ from typing import Any
 
 from .catalog import RADIAL_CLEARANCE_RANGE_UM, G, Bearing, bearing_from_mapping, get_bearing
 from .errors import SceneError, short_repr
-from .limits import LOAD_MULTIPLE_C0, MAX_LOAD, MAX_SPEED_RPM, NDM_LIMIT, RPM, InputLimits
+from .limits import LOAD_MULTIPLE_C0, MAX_LOAD, MAX_SPEED_RPM, NDM_LIMIT, RPM, InputLimits, load_on_balls
 from .paths import MCAP_MAGIC, input_file, scenes_dir
 
 DEFECT_KINDS = ("inner", "outer", "ball")
@@ -259,8 +259,17 @@ class Scene:
         for name in ("defects", "waviness", "outputs"):
             object.__setattr__(self, name, tuple(getattr(self, name)))
         error = _shaft_weight_error(self.bearing, self.structure.shaft_mass, self.gravity, "structure.shaft_mass")
+        for prefix, load in [("", self.radial_load), *((f"profile[{i}].", p.radial_load)
+                                                      for i, p in enumerate(self.profile))]:
+            error = error or _load_and_weight_error(self.bearing, load, f"{prefix}radial_load",
+                                                    self.structure.shaft_mass, self.gravity, "structure.shaft_mass")
         if error:
             raise SceneError(f"scene {self.name}: {error}")
+
+    @property
+    def shaft_weight(self) -> float:
+        """The shaft's weight that the balls carry besides the radial load, N (0 without gravity)."""
+        return self.structure.shaft_mass * G if self.gravity else 0.0
 
     @property
     def shaft_hz(self) -> float:
@@ -465,6 +474,21 @@ def _shaft_weight_error(bearing: Bearing, shaft_mass: float, gravity: bool, key:
     if weight <= InputLimits(bearing).max_load:
         return ""
     return (f"{key} = {shaft_mass:g} kg: its weight, {weight:.6g} N, is beyond {_load_bound(bearing)} "
+            f"(gravity: false leaves the weight out)")
+
+
+def _load_and_weight_error(bearing: Bearing, load, load_key: str, shaft_mass: float, gravity: bool,
+                           mass_key: str) -> str:
+    """"" when a radial load ((x, y) N) and the shaft's weight (``shaft_mass`` kg, with
+    ``gravity``) together are a load the bearing takes (``limits.load_on_balls`` within 2 x C0),
+    else the line naming both keys: each is held to that bound alone (``_operating_point_error``,
+    ``_shaft_weight_error``), and both near it put twice as much on the balls."""
+    weight = shaft_mass * G if gravity else 0.0
+    total = load_on_balls(load[0], load[1], weight)
+    if total <= InputLimits(bearing).max_load:
+        return ""
+    return (f"{load_key} = [{load[0]:g}, {load[1]:g}] N with {mass_key} = {shaft_mass:g} kg (its weight "
+            f"{weight:.6g} N downwards): |F| on the balls = {total:.6g} N beyond {_load_bound(bearing)} "
             f"(gravity: false leaves the weight out)")
 
 
@@ -852,6 +876,11 @@ def scene_from_dict(data: Any, name: str = "scene", source_text: str = "", sourc
     structure = _structure(top)
     gravity = top.boolean("gravity", True)
     error = _shaft_weight_error(bearing, structure.shaft_mass, gravity, "structure.shaft.mass")
+    profile = _profile(top, speed, load, bearing)
+    for key, knot_load in [(op.key("radial_load"), load),
+                           *((f"profile[{i}].radial_load", p.radial_load) for i, p in enumerate(profile))]:
+        error = error or _load_and_weight_error(bearing, knot_load, key, structure.shaft_mass, gravity,
+                                                "structure.shaft.mass")
     if error:
         raise SceneError(error)
     return Scene(
@@ -870,7 +899,7 @@ def scene_from_dict(data: Any, name: str = "scene", source_text: str = "", sourc
         fidelity=fid.choice("tier", TIERS, "auto"),
         fidelity_tolerance=fid.number("tolerance", 0.05, *TOLERANCE_RANGE),
         outputs=tuple(outputs),
-        profile=_profile(top, speed, load, bearing),
+        profile=profile,
         source_text=source_text,
         source_path=source_path,
     )

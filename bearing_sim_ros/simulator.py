@@ -26,7 +26,7 @@ from numba import njit
 
 from . import physics  # noqa: F401 - sets numba's cache folder before _ramp below asks for it
 from .errors import UserError
-from .scene import RPM, Scene, _operating_point_error, load_scene
+from .scene import RPM, Scene, _load_and_weight_error, _operating_point_error, load_scene
 
 SOLVERS = ("default", "rk4", "reference")
 FIDELITIES = ("auto", "kinematic", "skidding")
@@ -522,7 +522,9 @@ class Simulator:
         # the model's output is not a number); the model's pure rolling and elastic contacts do
         # not hold beyond them (until 2026-11-29 only those wide bounds: 900 kN on an ER-16K ran)
         error = _operating_point_error(self.bearing, s1, (l1x, l1y), "shaft_speed",
-                                       f"{s1:g} rad/s ({s1 / RPM:g} rpm)", "radial_load")
+                                       f"{s1:g} rad/s ({s1 / RPM:g} rpm)", "radial_load") or \
+            _load_and_weight_error(self.bearing, (l1x, l1y), "radial_load", self.scene.structure.shaft_mass,
+                                   self.scene.gravity, "the scene's structure.shaft_mass")
         if error:
             raise UserError(error)
         self.maybe_switch_tier(s1, (l1x, l1y))

@@ -89,8 +89,8 @@ def test_input_limits_never_exceed_what_the_simulator_takes():
     # the simulator holds a command to its bearing's own limits (as a scene's operating point):
     # the largest the node accepts goes through, a little more does not
     sim = Simulator("er16k_healthy", fidelity="kinematic")
-    lim = InputLimits(sim.bearing)
-    sim.advance(10, shaft_speed=lim.max_speed, radial_load=(0.0, -lim.max_load))
+    lim = InputLimits(sim.bearing, sim.scene.shaft_weight)
+    sim.advance(10, shaft_speed=lim.max_speed, radial_load=(0.0, -(lim.max_load - lim.shaft_weight)))
     with pytest.raises(UserError):
         sim.advance(10, shaft_speed=lim.max_speed * 1.001)
 
@@ -120,6 +120,22 @@ def test_wait_for_subscribers_holds_the_first_batch_until_a_consumer_matches(sta
     recorded = [m.header.stamp.sec * NS + m.header.stamp.nanosec for _t, m in topics["/accel"]]
     assert len(recorded) == 100 and stamps == recorded, (len(stamps), len(recorded))
     assert recorded[0] > came                        # the signal started when the wait ended
+
+
+def test_a_load_that_is_within_the_bound_alone_but_not_with_the_shafts_weight_is_rejected():
+    """The balls carry the shaft's weight on top of the load: a load near 2 x C0 downwards on a
+    heavy shaft was accepted, each within the bound alone.  The two together are held to it now,
+    as the scene's operating point is; upwards the weight takes some of the load off."""
+    scene = load_scene("er16k_outer_race")
+    heavy = replace(scene, structure=replace(scene.structure, shaft_mass=1000.0))
+    lim = InputLimits(heavy.bearing, heavy.shaft_weight)
+    assert "the shaft's weight (9.81e+03 N) included" in str(lim)
+    assert check_load(0.0, -10000.0, 0.0, lim) == ("out_of_range", (
+        "load = (0, -10000, 0) N with the shaft's weight 9806.65 N downwards: |F| on the balls = 19806.7 N "
+        "beyond 2 x C0 = 16681 N"))
+    assert check_load(0.0, 10000.0, 0.0, lim) is None
+    assert check_load(0.0, -6000.0, 0.0, lim) is None
+    assert check_load(0.0, -10000.0, 0.0, InputLimits(heavy.bearing)) is None     # no weight: as before
 
 
 def test_frame_checks():

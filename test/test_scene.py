@@ -10,7 +10,7 @@ import pytest
 import yaml
 
 from bearing_sim_ros import Simulator
-from bearing_sim_ros.errors import SceneError
+from bearing_sim_ros.errors import SceneError, UserError
 from bearing_sim_ros.scene import RPM, ProfilePoint, Waviness, load_scene, load_yaml, scene_from_dict, shipped_scenes
 
 CONTRACT_SCENES = {
@@ -481,6 +481,48 @@ def test_a_shaft_heavier_than_the_bearing_takes_is_refused_in_one_line():
     scene_from_dict(data, name="weightless")
     light = dataclasses.replace(scene, structure=dataclasses.replace(scene.structure, shaft_mass=1000.0))
     assert np.isfinite(Simulator(light, fidelity="kinematic").advance(150).accel).all()
+
+
+def test_a_load_and_a_shaft_weight_within_the_bound_each_but_not_together_are_refused_in_one_line():
+    """The radial load and the shaft's weight were each held to 2 x C0, not together: a 1 t
+    shaft (9.8 kN) under 10 kN downwards put 19.8 kN on the balls of an ER-16K and ran.  Their
+    vector sum, as both tiers add them, is held to the bound now: the operating point and every
+    profile knot, in the YAML (its keys) and changed in Python (the fields), and the simulator's
+    commands; upwards the weight takes load off, and without gravity the load alone counts."""
+    data = load_yaml(GOOD)
+    data["structure"]["shaft"]["mass"] = 1000.0
+    data["operating_point"]["radial_load"] = [0.0, -10000.0]
+    with pytest.raises(SceneError) as exc:
+        scene_from_dict(data, name="heavy")
+    assert str(exc.value) == (
+        "operating_point.radial_load = [0, -10000] N with structure.shaft.mass = 1000 kg (its weight 9806.65 N "
+        "downwards): |F| on the balls = 19806.7 N beyond 2 x C0 = 16681 N of bearing ER-16K "
+        "(gravity: false leaves the weight out)")
+    data["operating_point"]["radial_load"] = [0.0, -5000.0]
+    data["profile"] = [{"t": 0.0}, {"t": 1.0, "radial_load": [3000.0, -9000.0]}]
+    with pytest.raises(SceneError, match=r"^profile\[1\]\.radial_load = \[3000, -9000\] N with structure\.shaft\.mass "
+                                         r"= 1000 kg .*: \|F\| on the balls = 19044\.4 N beyond 2 x C0 = 16681 N"):
+        scene_from_dict(data, name="heavy")
+    data["profile"][1]["radial_load"] = [0.0, 10000.0]          # upwards: 197 N on the balls
+    scene_from_dict(data, name="lifted")
+    data["gravity"] = False
+    data["profile"][1]["radial_load"] = [0.0, -10000.0]
+    scene_from_dict(data, name="weightless")
+
+    scene = load_scene("er16k_outer_race")
+    heavy = dataclasses.replace(scene.structure, shaft_mass=1000.0)
+    with pytest.raises(SceneError, match=r"^scene er16k_outer_race: radial_load = \[0, -10000\] N with "
+                                         r"structure\.shaft_mass = 1000 kg \(its weight 9806\.65 N downwards\): "
+                                         r"\|F\| on the balls = 19806\.7 N beyond 2 x C0 = 16681 N of bearing ER-16K"):
+        dataclasses.replace(scene, structure=heavy, radial_load=(0.0, -10000.0))
+    knots = (ProfilePoint(0.0, scene.shaft_speed, (0.0, -50.0)), ProfilePoint(1.0, scene.shaft_speed, (0.0, -9000.0)))
+    with pytest.raises(SceneError, match=r"^scene er16k_outer_race: profile\[1\]\.radial_load = \[0, -9000\] N with "):
+        dataclasses.replace(scene, structure=heavy, profile=knots)
+    sim = Simulator(dataclasses.replace(scene, structure=heavy), fidelity="kinematic")
+    with pytest.raises(UserError, match=r"^radial_load = \[0, -10000\] N with the scene's structure\.shaft_mass = "
+                                        r"1000 kg .*: \|F\| on the balls = 19806\.7 N beyond 2 x C0"):
+        sim.advance(150, radial_load=(0.0, -10000.0))
+    assert np.isfinite(sim.advance(150, radial_load=(0.0, -5000.0)).accel).all()
 
 
 def test_a_clearance_at_the_edges_of_its_bounds_written_in_m_is_taken():

@@ -40,7 +40,7 @@ from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
 
 from ..errors import NODE_SETTINGS, SettingNames, UserError
-from ..limits import LOAD_MULTIPLE_C0, NDM_LIMIT, STATIC_F0, InputLimits  # noqa: F401 (names kept here)
+from ..limits import LOAD_MULTIPLE_C0, NDM_LIMIT, STATIC_F0, InputLimits, load_on_balls  # noqa: F401 (names kept here)
 from ..teardown import EXIT_INTERRUPTED, SIGNAL_NAMES, command_signals, teardown_watchdog
 
 NODE_NAME = "bearing_sim"
@@ -83,6 +83,12 @@ def check_load(fx: float, fy: float, fz: float, limits: InputLimits):
     mag = math.sqrt(fx * fx + fy * fy + fz * fz)
     if mag > limits.max_load:
         return "out_of_range", (f"load = ({fx:.6g}, {fy:.6g}, {fz:.6g}) N: |F| = {mag:.6g} N beyond "
+                                f"{LOAD_MULTIPLE_C0:g} x C0 = {limits.max_load:.0f} N")
+    # the balls carry the shaft's weight too: a load within the bound alone may not be with it
+    total = load_on_balls(fx, fy, limits.shaft_weight, fz)
+    if total > limits.max_load:
+        return "out_of_range", (f"load = ({fx:.6g}, {fy:.6g}, {fz:.6g}) N with the shaft's weight "
+                                f"{limits.shaft_weight:.6g} N downwards: |F| on the balls = {total:.6g} N beyond "
                                 f"{LOAD_MULTIPLE_C0:g} x C0 = {limits.max_load:.0f} N")
     return None
 
@@ -338,7 +344,7 @@ class BearingSimNode(Node):
             raise UserError(exc.worded("oversample", "fidelity", zero=OVERSAMPLE_ZERO)) from None
         except SolverDiverged as exc:          # its first steps, run ahead as it is made
             raise UserError(exc.worded(self._settings)) from None
-        self.limits = InputLimits(self.scene.bearing)
+        self.limits = InputLimits(self.scene.bearing, self.scene.shaft_weight)
         self.n_batch = int(round(cfg["sample_rate"] * cfg["batch_duration"]))
         self.batch_duration = self.n_batch / self.sim.sample_rate
         self.wave_qos = waveform_qos(self.batch_duration)
