@@ -605,6 +605,35 @@ def test_a_burst_of_rejected_inputs_is_counted_in_the_log_too(started, listener)
     assert log.count("input rejected (wrong_frame)") == 1 and "more inputs rejected (wrong_frame)" not in log, log
 
 
+@pytest.mark.parametrize("end", ["SIGINT", "duration"])
+def test_rejections_in_the_last_seconds_of_a_run_are_logged_at_its_end(started, listener, end):
+    """A burst of rejected inputs less than 2 s before the run ended (its duration reached, or
+    Ctrl-C) was counted in /diagnostics, but its summary line was to come once the throttle's
+    2 s were over, and the run ended first: one line in the log for five NaNs.  The held-back
+    summary is logged at the end, once, before the end's line."""
+    params = {"scene": "er16k_outer_race", "fidelity": "kinematic"}
+    if end == "duration":
+        params["duration"] = 4.0
+    node = started(params)
+    listener.wait_matched()
+    # with a duration, 2.5 s into the run: the run ends 1.5 s after the burst, within its 2 s
+    listener.wait_for(lambda: len(listener.accel) >= (250 if end == "duration" else 1), FIRST_TABLE_S + 3,
+                      "the tables before the burst")
+    for _ in range(5):
+        listener.publish_speed(float("nan"))
+    if end == "SIGINT":
+        node.wait_for_output("input rejected (not_finite)", timeout=5)
+        time.sleep(0.3)                   # the rest of the burst taken
+        node.send(signal.SIGINT)
+    assert node.wait(20) == 0, node.output()
+    lines = [ln.split("]: ", 1)[1] for ln in node.output().splitlines() if ln.startswith("[")]
+    assert sum("input rejected (not_finite)" in ln for ln in lines) == 1, lines
+    held = [i for i, ln in enumerate(lines) if ln.startswith("4 more inputs rejected (not_finite) since the last such")]
+    ended = [i for i, ln in enumerate(lines) if ln.startswith("run ended")]
+    assert len(held) == 1 and ended and held[0] < ended[0], lines
+    assert "the latest: shaft_speed = nan rad/s" in lines[held[0]], lines
+
+
 def test_a_load_in_another_frame_is_rejected_and_counted(started, listener):
     """A ``load`` stamped in another frame (``base_link``, ``map``) was applied along the bearing's
     axes as if it were in theirs: the node transforms nothing.  It is rejected (``wrong_frame``),

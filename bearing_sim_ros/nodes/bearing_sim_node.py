@@ -456,17 +456,20 @@ class BearingSimNode(Node):
         self.get_logger().warning(f"input rejected ({key}), keeping {self._cmd_speed:.6g} rad/s, "
                                   f"load {self._cmd_load}: {reason}{more}")
 
-    def _log_held_rejections(self):
+    def _log_held_rejections(self, logger=None, at_end: bool = False):
         """Log the rejections each reason's throttle held back once its period is over (a timer
         in the executor thread, as ``_reject``): else they waited for that reason's next line,
-        and a burst that had none (300 NaNs sent at once) was one line in the log."""
+        and a burst that had none (300 NaNs sent at once) was one line in the log.  ``at_end``:
+        the run is over and the executor stopped (``log_end``), so those of a period not over
+        yet too, with ``logger``: rejected in the last 2 s, they were counted in /diagnostics
+        and never logged."""
         now = time.monotonic()
         for key, (last, since, held) in list(self._reject_log.items()):
-            if since and now - last >= REJECT_LOG_PERIOD:
+            if since and (at_end or now - last >= REJECT_LOG_PERIOD):
                 self._reject_log[key] = (now, 0, "")
-                self.get_logger().warning(f"{since} more inputs rejected ({key}) since the last such line, "
-                                          f"keeping {self._cmd_speed:.6g} rad/s, load {self._cmd_load}; "
-                                          f"the latest: {held}")
+                (logger or self.get_logger()).warning(
+                    f"{since} more inputs rejected ({key}) since the last such line, keeping "
+                    f"{self._cmd_speed:.6g} rad/s, load {self._cmd_load}; the latest: {held}")
 
     def _on_speed(self, msg):
         value = float(msg.data)
@@ -1120,11 +1123,13 @@ def log_end(node) -> None:
     of signal (450000 samples) published``) at its level: a run without a recording that reached
     its ``duration`` left no line at all in the log.  None for a run stopped before its first
     table (no end status) or one whose solver diverged (its error was logged when it happened).
-    Call after ``destroy_node``, like :func:`log_recording`, under the node's own logger name."""
+    Call after ``destroy_node``, like :func:`log_recording`, under the node's own logger name.
+    First the input rejections that a reason's throttle still held back (``_log_held_rejections``)."""
+    log = rclpy.logging.get_logger(node.get_logger().name)
+    node._log_held_rejections(log, at_end=True)
     if node.end_status is None or node.end_status[0] == "diverged":
         return
     _reason, level, message = node.end_status
-    log = rclpy.logging.get_logger(node.get_logger().name)
     (log.info, log.warning, log.error)[min(int(level), 2)](message)
 
 
