@@ -83,8 +83,9 @@ def test_a_remapped_and_namespaced_node_records_its_topics_under_their_names(bea
 def test_a_recording_that_fails_on_the_way_is_logged_then_and_ends_with_status_2(bearing_sim_exe, ros_env, tmp_path):
     """A file-size limit of 300 kB (RLIMIT_FSIZE, SIGXFSZ ignored: writes past it fail with
     EFBIG, as on a full disk) stops the recording after about a second of a 3 s run: the node
-    logs it when it happens, publishes on to the end, says it again at exit and ends with status
-    2 and one error line, so that a script that checks the status knows the file is short."""
+    logs it when it happens, publishes on to the end, says it again at exit (once: the end of the
+    run's line repeated it before) and ends with status 2 and one error line, so that a script
+    that checks the status knows the file is short."""
     import resource
 
     def limit_file_size():
@@ -111,6 +112,12 @@ def test_a_recording_that_fails_on_the_way_is_logged_then_and_ends_with_status_2
     at_exit = [i for i, line in enumerate(lines) if "] [bearing_sim]: recording: " in line]
     assert len(failed) == 1 and "File too large" in lines[failed[0]], log
     assert len(at_exit) == 1 and failed[0] < at_exit[0], log     # said when it happened, then at exit
+    # and only there: the end's line, just before the one at exit, said it too, at ERROR level;
+    # it gives the rest of the status now, at its level (INFO, or WARN for an overrun)
+    said = [line for line in lines if line.startswith("[") and "File too large" in line]
+    assert len(said) == 2, log
+    ended = [line for line in lines if "]: run ended: duration 3 s reached" in line]
+    assert len(ended) == 1 and not ended[0].startswith("[ERROR]"), log
     assert lines[-1] == f"error: recording to {out} stopped: OSError: [Errno 27] File too large", log
     assert 100_000 < out.stat().st_size <= 300_000
 

@@ -377,6 +377,9 @@ class BearingSimNode(Node):
         self._stop_reason = None                 # stop(reason): why the run ended, for its end status
         self._last_status = None                 # (item, values, level, message) of the last /diagnostics
         self.end_status = None                   # (end_reason, level, message) of the run's end status, to log
+                                                 # (without a recording failure, which has its own line)
+        self._status_apart_from_recording = (0, "ok")   # (level, message) of the last status but
+                                                        # for the recording's failure
         self._repace = False
         self.finished = threading.Event()
         self.error = None
@@ -890,9 +893,12 @@ class BearingSimNode(Node):
             values, level, message = last[1:]
         else:
             values, level, message = self._status(item, now)
-        values, level, message = end_of_run(values, level, message, reason, item.end_index,
-                                            self.sim.sample_rate, self._cfg["duration"])
-        self.end_status = (reason, level, message)
+        ended = (reason, item.end_index, self.sim.sample_rate, self._cfg["duration"])
+        # the log says a recording's failure in its own line after the end's (log_recording): the
+        # end's line gives the rest of the status, at its level (it said the failure twice)
+        logged = self._status_apart_from_recording if values.get("recording") == "error" else (level, message)
+        self.end_status = (reason, *end_of_run(values, *logged, *ended)[1:])
+        values, level, message = end_of_run(values, level, message, *ended)
         return diagnostics_message(item.end_stamp, values, level, message,
                                    self.get_fully_qualified_name().lstrip("/"))
 
@@ -984,6 +990,8 @@ class BearingSimNode(Node):
             dropped, self._dropped_reported = rs["dropped"] - self._dropped_reported, rs["dropped"]
             if not rs["ok"]:
                 values["recording_error"] = rs["error"]
+                # for the end of the run's log line, which the recording's own line follows
+                self._status_apart_from_recording = (level, message)
                 level, message = 2, "recording failed: " + rs["error"]
             elif dropped:
                 # the file has gaps: a warning, as overruns are (the stream itself is whole)
