@@ -1252,23 +1252,30 @@ def test_sim_time_from_another_clock_waits_for_it(started, listener, tmp_path):
     assert t0 - BATCH_NS <= first.sec * NS + first.nanosec <= now, (first, now)
 
 
-def test_a_node_slower_than_real_time_counts_its_overruns_and_stays_contiguous(ros_env, tmp_path):
-    """Every batch takes 15 ms to compute (a patched ``Simulator.advance``) against 10 ms of
-    signal: /diagnostics counts the overruns and warns, the real-time factor falls below 1, and
-    the tables stay contiguous (late, none lost)."""
-    out = tmp_path / "slow.mcap"
+def _node_with_slow_batches(tmp_path, factor: float):
+    """A script that runs the node with ``Simulator.advance`` patched to sleep ``factor`` times the
+    signal time of the samples it computes (at 15 kHz) first: a node certainly slower than real time."""
     script = tmp_path / "slow.py"
     script.write_text("\n".join([
         "import sys, time",
         "from bearing_sim_ros import simulator",
         "advance = simulator.Simulator.advance",
         "def slow(self, n, *args, **kwargs):",
-        "    time.sleep(0.015 * n / 150)           # 1.5x the signal time of the samples",
+        f"    time.sleep({factor!r} * n / 15000.0)",
         "    return advance(self, n, *args, **kwargs)",
         "simulator.Simulator.advance = slow",
         "from bearing_sim_ros.nodes.bearing_sim_node import main",
         "sys.exit(main(sys.argv[1:]))",
         ""]))
+    return script
+
+
+def test_a_node_slower_than_real_time_counts_its_overruns_and_stays_contiguous(ros_env, tmp_path):
+    """Every batch takes 15 ms to compute (a patched ``Simulator.advance``) against 10 ms of
+    signal: /diagnostics counts the overruns and warns, the real-time factor falls below 1, and
+    the tables stay contiguous (late, none lost)."""
+    out = tmp_path / "slow.mcap"
+    script = _node_with_slow_batches(tmp_path, 1.5)
     args = ["--ros-args", "-p", "scene:=er16k_outer_race", "-p", "duration:=3.0", "-p", f"record:={out}"]
     r = subprocess.run([sys.executable, str(script), *args], env=ros_env, capture_output=True,
                        text=True, timeout=120)
@@ -1285,6 +1292,66 @@ def test_a_node_slower_than_real_time_counts_its_overruns_and_stays_contiguous(r
     assert warned and level == [1] * len(warned)
     assert all("overruns in the last second" in st.message for st in warned)
     assert float(values[-1]["real_time_factor"]) < 0.9
+
+
+def test_falling_behind_is_a_real_time_factor_below_1_for_seconds_not_a_stall():
+    """The rule of the warning: a node at x0.5 falls behind from its fifth second on; one that
+    stalls for 1.5 s and then catches up (x1.5 while it does) never does; nor one on time whose
+    periods jitter around 1 s, nor one only a little behind (under FALLING_BEHIND_MIN_S)."""
+    from bearing_sim_ros.nodes.bearing_sim_node import _FallingBehind
+
+    slow = _FallingBehind()
+    for k in range(1, 8):
+        slow.add(0.5, 1.0, 0.5 * k)
+        assert slow.falling == (k >= 5), k
+    assert slow.factor == pytest.approx(0.5) and slow.behind_s == 3.5
+    slow.reset()
+    assert not slow.falling
+
+    stall = _FallingBehind()
+    periods = [(1.0, 1.0, 0.0)] * 3 + [(0.0, 1.5, 1.5)] + [(1.5, 1.0, 1.0), (1.5, 1.0, 0.5)] + [(1.0, 1.0, 0.0)] * 5
+    for period in periods:
+        stall.add(*period)
+        assert not stall.falling, period
+
+    on_time = _FallingBehind()
+    for k in range(20):
+        on_time.add(1.0, 1.0 + (0.009 if k % 2 else -0.009), 0.002)
+        assert not on_time.falling
+
+    a_little = _FallingBehind()
+    for k in range(1, 20):
+        a_little.add(0.99, 1.0, 0.01 * k)
+        assert a_little.falling == (k >= 50), k
+
+
+def test_a_node_that_cannot_keep_up_with_real_time_says_so_once_with_what_to_change(ros_env, tmp_path):
+    """Every batch takes twice its signal time (a patched ``Simulator.advance``): the node falls
+    further behind for ever.  It said nothing in its log, and its /diagnostics only 'N overruns
+    in the last second' each second, as for a moment's stall.  Now, from its fifth second, the
+    log warns once (not per batch, not per second) and /diagnostics say it at WARN with
+    ``falling_behind: true``: x0.5 real time, how far behind, and the setting to change
+    (``-p oversample:=1``, 4 here); the seconds before are not called falling behind."""
+    out = tmp_path / "slow.mcap"
+    script = _node_with_slow_batches(tmp_path, 2.0)
+    args = ["--ros-args", "-p", "scene:=er16k_outer_race", "-p", "fidelity:=kinematic", "-p", "oversample:=4",
+            "-p", "duration:=4.0", "-p", f"record:={out}"]
+    r = subprocess.run([sys.executable, str(script), *args], env=ros_env, capture_output=True,
+                       text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    warned = [ln for ln in r.stderr.splitlines() if "]: falling behind real time" in ln]
+    assert len(warned) == 1 and warned[0].startswith("[WARN]"), r.stderr
+    assert re.search(r"falling behind real time: x0\.[3-5]\d over the last 5 s, [\d.]+ s behind and further each "
+                     r"second; it cannot catch up: try -p oversample:=1 \(now 4 steps per sample; less accurate\)",
+                     warned[0]), warned[0]
+    topics, _meta = read_recording(out)
+    status = [m.status[0] for _t, m in topics["/diagnostics"]]
+    values = [{kv.key: kv.value for kv in st.values} for st in status]
+    falling = [v["falling_behind"] == "true" for v in values]
+    assert not any(falling[:4]) and all(falling[5:]), falling
+    for st, fell in zip(status, falling):
+        level = st.level[0] if isinstance(st.level, (bytes, bytearray)) else int(st.level)
+        assert not fell or (level == 1 and "falling behind real time: x0." in st.message), st.message
 
 
 def test_a_hung_teardown_ends_with_the_stacks_status_1_and_a_closed_recording(ros_env, tmp_path):

@@ -63,6 +63,14 @@ WAIT_FOR_SUBSCRIBERS_MAX = 1000    # the parameter's range: 0 - this many subscr
 PEER_CHECK_S = 2.0             # s between looks at the graph for another publisher on accel
 SWITCH_COST_GUESS_S = 0.02     # s: a tier switch's batch before the first is measured (8 ms for
                                # kinematic -> skidding on the AMD host; more on a loaded machine)
+# A node that cannot keep up with real time falls further behind for ever (each batch an overrun,
+# published at once, and the next one later still).  It says so where its real-time factor was
+# below 1 in each of the last FALLING_BEHIND_PERIODS one-second periods and it is at least
+# FALLING_BEHIND_MIN_S behind, further than at their start: a short stall (a GC pause, a busy
+# machine for a moment) is followed by seconds above 1, in which it catches up.
+FALLING_BEHIND_PERIODS = 5
+FALLING_BEHIND_MIN_S = 0.5     # s behind the schedule: not a stall of a few batches
+FALLING_BEHIND_LOG_S = 60.0    # s between the log's warnings while it goes on falling behind
 
 
 def check_speed(value: float, limits: InputLimits):
@@ -389,6 +397,7 @@ class BearingSimNode(Node):
         self.accel_peers = 0                     # other publishers on accel: _check_peers
         self.clock_peers = 0                     # other publishers on this node's /clock: _check_peers
         self.stats = _Stats(self.sim.sample_rate, self.sim.bearing, self.scene.sensor.range)
+        self._behind = _FallingBehind()
         self._thread = threading.Thread(target=self._run, name="bearing-sim", daemon=True)
 
     def _open_recorder(self, cfg):
@@ -967,6 +976,11 @@ class BearingSimNode(Node):
         level, message = 0, "ok"
         if period["overruns"]:
             level, message = 1, f"{period['overruns']} overruns in the last second"
+        behind = self._falling_behind(period)
+        values["falling_behind"] = str(bool(behind)).lower()
+        if behind:
+            message = behind if level == 0 else f"{behind}; {message}"
+            level = 1
         if period["clipped"]:
             message = period["clipped"] if level == 0 else f"{message}; {period['clipped']}"
             level = 1
@@ -1003,6 +1017,48 @@ class BearingSimNode(Node):
         return values, level, message
 
 
+    def _falling_behind(self, period) -> str:
+        """"" where the node keeps up with real time, else the words of a node that falls behind
+        for good (``_FallingBehind``) with what to change, for /diagnostics (WARN); said in the log
+        too, once every ``FALLING_BEHIND_LOG_S`` while it lasts, and once when it has caught up.
+        Such a node said nothing in its log, and its /diagnostics only 'N overruns in the last
+        second', each second alike, whether it was a moment's stall or for ever."""
+        behind = self._behind
+        if not self._cfg["real_time"] or self._repace:
+            behind.reset()
+            return ""
+        behind.add(period["signal_s"], period["wall_s"], self.stats.last_lag)
+        log = self.get_logger()
+        if not behind.falling:
+            if behind.said_at is not None and behind.behind_s < 2 * self.batch_duration:
+                log.info(f"caught up with real time again (it had fallen {behind.worst_s:.3g} s behind)")
+                behind.said_at = None
+            return ""
+        text = (f"falling behind real time: x{behind.factor:.2f} over the last {FALLING_BEHIND_PERIODS} s, "
+                f"{behind.behind_s:.3g} s behind and further each second; it cannot catch up: "
+                f"{self._cheaper_settings()}")
+        now = time.monotonic()
+        if behind.said_at is None or now - behind.said_at >= FALLING_BEHIND_LOG_S:
+            if behind.said_at is None:
+                behind.worst_s = behind.behind_s
+            behind.said_at = now
+            log.warning(text)
+        return text
+
+    def _cheaper_settings(self) -> str:
+        """What the user can change for a cheaper model, in the caller's words (``SettingNames``):
+        the kinematic tier instead of the skidding one, fewer integration steps per sample."""
+        sim, names = self.sim, self._settings
+        offers = []
+        if sim.tier == "skidding" and "fidelity" in names.keys:
+            offers.append(f"{names.assign('fidelity', 'kinematic')} (the cheaper tier)")
+        if (sim.oversample or 0) > 1 and "oversample" in names.keys:
+            offers.append(f"{names.assign('oversample', 1)} (now {sim.oversample} steps per sample; less accurate)")
+        if not offers:
+            return "no cheaper setting is left; the machine is too slow or too busy for this scene in real time"
+        return "try " + " or ".join(offers) + ", or a less busy machine"
+
+
 class _Pending:
     """A computed batch waiting for its due time (steady clock, s)."""
 
@@ -1028,6 +1084,7 @@ class _Stats:
         self.batches = 0
         self.samples = 0
         self.busy_worst = 0.0
+        self.last_lag = 0.0
         self.started = self.last = time.monotonic()   # steady-clock start and last batch (s)
 
     @property
@@ -1054,6 +1111,7 @@ class _Stats:
         self._means.reset()
 
     def batch(self, lag, batch, now):
+        self.last_lag = lag                 # s: how late the latest batch went out
         self.batches += 1
         self.samples += batch.n
         self.last = now
@@ -1071,6 +1129,46 @@ class _Stats:
                "means": self._means.values(), "clipped": self._means.clipped_text()}
         self.period_start(now, index)
         return out
+
+
+class _FallingBehind:
+    """Whether the node falls behind real time for good, from its one-second periods (the sim
+    thread's, at each /diagnostics in real time): its real-time factor below 1 in each of the last
+    ``FALLING_BEHIND_PERIODS`` and at least ``FALLING_BEHIND_MIN_S`` behind its schedule, further
+    than at their start.  ``said_at``: when the log last warned of it (monotonic s), None once it
+    caught up again; ``worst_s``: how far behind it fell since then."""
+
+    def __init__(self):
+        from collections import deque
+
+        self._periods = deque(maxlen=FALLING_BEHIND_PERIODS)     # (signal s, steady-clock s, s behind at its end)
+        self.said_at = None
+        self.worst_s = 0.0
+
+    def add(self, signal_s: float, wall_s: float, behind_s: float) -> None:
+        self._periods.append((signal_s, wall_s, behind_s))
+        if self.said_at is not None:
+            self.worst_s = max(self.worst_s, behind_s)
+
+    def reset(self) -> None:
+        """Not paced (``real_time:=false``), or paced anew from now: nothing to fall behind."""
+        self._periods.clear()
+
+    @property
+    def falling(self) -> bool:
+        periods = self._periods
+        return (len(periods) == periods.maxlen and all(sig < wall for sig, wall, _ in periods)
+                and periods[-1][2] >= FALLING_BEHIND_MIN_S and periods[-1][2] > periods[0][2])
+
+    @property
+    def factor(self) -> float:
+        """The real-time factor over the periods held (signal s per steady-clock s)."""
+        wall = sum(p[1] for p in self._periods)
+        return sum(p[0] for p in self._periods) / wall if wall > 0 else float("nan")
+
+    @property
+    def behind_s(self) -> float:
+        return self._periods[-1][2] if self._periods else 0.0
 
 
 _KINDS = {bool: "true or false", int: "a whole number", float: "a floating-point number such as 1.0",
