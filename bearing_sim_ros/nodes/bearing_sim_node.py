@@ -1016,7 +1016,6 @@ class BearingSimNode(Node):
             level, message = 2, self.failure.worded(self._settings)
         return values, level, message
 
-
     def _falling_behind(self, period) -> str:
         """"" where the node keeps up with real time, else the words of a node that falls behind
         for good (``_FallingBehind``) with what to change, for /diagnostics (WARN); said in the log
