@@ -26,6 +26,14 @@ for _sig, _default in ((signal.SIGINT, signal.default_int_handler), (signal.SIGH
     if signal.getsignal(_sig) == signal.SIG_IGN:
         signal.signal(_sig, _default)
 SHARED = REPO.parent / "shared"
+
+
+def pytest_configure(config):
+    # `make test` runs the suite in two workers (pytest-xdist) and then these tests alone: with
+    # another test's processes on the other core, a play paced to 10 % over 0.2 s arrived 10 %
+    # late and a process sent SIGTERM 0.1 s after launch had not reached its first line yet
+    config.addinivalue_line("markers", "wall_clock: measures against the steady clock (pacing, a signal "
+                                       "in a process's first moments); `make test` runs these alone")
 VENV_BIN = Path(sys.executable).parent
 
 # domain ids 1..101 are valid for Fast DDS on localhost; start from the pid to keep parallel

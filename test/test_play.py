@@ -110,6 +110,7 @@ def _play_to(sub, args, env):
     return play
 
 
+@pytest.mark.wall_clock
 def test_play_delivers_every_message_to_another_process(recording, bearing_sim_exe, ros_env, tmp_path):
     from rclpy.serialization import deserialize_message
     from sensor_msgs.msg import PointCloud2
@@ -147,6 +148,7 @@ def _assert_paced(received, rate):
     assert span == pytest.approx(stamps / rate, rel=0.10), (span, stamps / rate)
 
 
+@pytest.mark.wall_clock
 def test_loop_keeps_tables_contiguous_and_sigint_ends_cleanly(recording, bearing_sim_exe, ros_env, tmp_path):
     path, counts, accel = recording
     want = int(2.5 * len(accel))
