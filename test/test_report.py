@@ -434,6 +434,80 @@ def test_report_says_when_auto_switched_tiers(tmp_path):
     assert "kinematic tier (" in md and "at the start, then skidding: 1 tier switch, the last kinematic -> skidding at" in md
 
 
+def _profiled(tmp_path, name, operating_point, profile, duration=3.0):
+    """A render of er16k_outer_race at ``operating_point`` (its YAML line) with ``profile`` (YAML
+    list items), ``duration`` s, ``fidelity: auto``."""
+    text = load_scene("er16k_outer_race").source_text
+    old = "operating_point: {shaft_speed_rpm: 1600, radial_load: [0.0, -50.0]}"
+    assert old in text, "er16k_outer_race.yaml's operating point moved: update this test"
+    scene = tmp_path / f"{name}.yaml"
+    scene.write_text(text.replace(old, f"operating_point: {operating_point}") + "profile:\n"
+                     + "".join(f"  - {item}\n" for item in profile))
+    rec = tmp_path / f"{name}.mcap"
+    render(str(scene), duration, rec, progress=False)
+    return rec
+
+
+def _verdicts(s):
+    return [w["verdict"] for w in s["timeline"]]
+
+
+def test_a_recording_whose_speed_steps_gets_the_verdict_of_its_windows(tmp_path, capsys):
+    """er16k_outer_race stepped from 1600 to 3000 rpm at 1.5 s (the kinematic tier throughout).
+    One envelope spectrum of the whole recording looked for the lines at the mean speed, where
+    neither speed has them, and called it a ball fault (2xBSF x11), as did the window that holds
+    the step; with --window 0.5 the windows at 1600 and 3000 rpm by the step took the fault
+    frequencies of the /diagnostics period that holds it (a mean of both speeds): "healthy", and
+    "ball" at x325.  Now the window that holds the step is not scored ("unknown", the lines move
+    61 % in it), every other window looks at its own lines (outer), and the one verdict is theirs."""
+    rec = _profiled(tmp_path, "step", "{shaft_speed_rpm: 1600, radial_load: [0.0, -50.0]}",
+                    ["{t: 1.5, shaft_speed_rpm: 1600}", "{t: 1.51, shaft_speed_rpm: 3000}"])
+    assert cli.main(["report", str(rec), "--out", str(tmp_path / "out")]) == 0
+    said = capsys.readouterr().out
+    s = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert _verdicts(s) == ["outer", "unknown", "outer"]
+    assert s["timeline"][1]["line_spread"] > 0.5 and s["timeline"][1]["prominences"] == {}
+    assert s["verdict"] == "outer" and s["verdict_faults"] == ["outer"]
+    assert s["fault_line_variation"] > 0.5 and "windows" in s["verdict_from"]
+    assert "verdict outer (scene defects: outer" in said and "the verdict is that of the windows" in said
+    md = (tmp_path / "out" / "summary.md").read_text()
+    assert "**Verdict (envelope analysis of accel_y): OUTER**" in md and "(the verdict agrees with the scene)" in md
+    assert "| fault lines | move by 61 % over the analysed stretch" in md
+    half = build_report(rec, tmp_path / "half", window_s=0.5)
+    assert _verdicts(half) == ["outer"] * 6
+    assert [round(w["shaft_speed_rpm"]) for w in half["timeline"]] == [1600] * 3 + [3000] * 3
+
+
+def test_a_recording_whose_speed_ramps_has_no_confident_verdict(tmp_path):
+    """A ramp from 1600 to 3000 rpm over the whole recording moves the lines in every window: the
+    whole recording and each window were called "healthy" (an outer-race pit of x300).  Now no
+    window is scored and the verdict is unknown, and the summary says why."""
+    rec = _profiled(tmp_path, "ramp", "{shaft_speed_rpm: 1600, radial_load: [0.0, -50.0]}",
+                    ["{t: 2.0, shaft_speed_rpm: 3000}"], duration=2.0)
+    s = build_report(rec, tmp_path / "out")
+    assert _verdicts(s) == ["unknown"] * 2 and s["verdict"] == "unknown" and s["verdict_faults"] == []
+    md = (tmp_path / "out" / "summary.md").read_text()
+    assert "**Verdict (envelope analysis of accel_y): UNKNOWN**" in md and "no verdict to check against the scene" in md
+
+
+def test_a_load_step_that_moves_the_cages_skid_is_a_moving_line_too(tmp_path):
+    """At a steady 10000 rpm the load goes from 50 to 10 N at 1.5 s: fidelity auto switches to the
+    skidding tier, whose cage skids, and BPFO moves from 595 to 552 Hz (7 %).  The shaft speed
+    did not vary, so the report said nothing, and its one spectrum looked at the mean of both:
+    "healthy".  With --window 0.5 the steady window before the switch took the lines of the
+    /diagnostics period that holds it: "healthy".  Now the cage speed of ``state`` places each
+    window's lines and tells where they move; the verdict is outer."""
+    pytest.importorskip("bearing_sim_ros.physics.skidding")
+    rec = _profiled(tmp_path, "load", "{shaft_speed_rpm: 10000, radial_load: [0.0, -50.0]}",
+                    ["{t: 1.5, radial_load: [0.0, -50.0]}", "{t: 1.51, radial_load: [0.0, -10.0]}"])
+    s = build_report(rec, tmp_path / "out", window_s=0.5)
+    verdicts = _verdicts(s)
+    assert verdicts[:3] == ["outer"] * 3 and verdicts[3] == "unknown" and set(verdicts[4:]) == {"outer"}
+    assert s["verdict"] == "outer"
+    assert s["tiers"] == ["kinematic", "skidding"] and s["shaft_speed_variation"] == 0.0
+    assert s["fault_line_variation"] > 0.05
+
+
 def test_ground_truth_parse_reads_several_faults_sizes_and_onsets():
     """Several faults present are comma-separated (read as a sorted tuple), sizes
     space-separated, onsets ``kind=s`` in signal time, which ``simulated_s`` ties to the stamp:
