@@ -496,14 +496,13 @@ def test_a_load_step_that_moves_the_cages_skid_is_a_moving_line_too(tmp_path):
     did not vary, so the report said nothing, and its one spectrum looked at the mean of both:
     "healthy".  With --window 0.5 the steady window before the switch took the lines of the
     /diagnostics period that holds it: "healthy".  Now the cage speed of ``state`` places each
-    window's lines and tells where they move; the verdict is outer."""
+    window's lines and tells where they move (here in no window more than its first 20 ms, as
+    the cage settles after the switch); every verdict is outer."""
     pytest.importorskip("bearing_sim_ros.physics.skidding")
     rec = _profiled(tmp_path, "load", "{shaft_speed_rpm: 10000, radial_load: [0.0, -50.0]}",
                     ["{t: 1.5, radial_load: [0.0, -50.0]}", "{t: 1.51, radial_load: [0.0, -10.0]}"])
     s = build_report(rec, tmp_path / "out", window_s=0.5)
-    verdicts = _verdicts(s)
-    assert verdicts[:3] == ["outer"] * 3 and verdicts[3] == "unknown" and set(verdicts[4:]) == {"outer"}
-    assert s["verdict"] == "outer"
+    assert _verdicts(s) == ["outer"] * 6 and s["verdict"] == "outer"
     assert s["tiers"] == ["kinematic", "skidding"] and s["shaft_speed_variation"] == 0.0
     assert s["fault_line_variation"] > 0.05
 

@@ -50,8 +50,8 @@ from ..errors import UserError
 from ..paths import output_folder, writing_into
 from ..recording.reader import open_recording
 from ..waveform import NS, from_pointcloud2
-from .envelope import (DEFAULT_BAND, DETECTION_THRESHOLD, FAULT_LINES, Line, diagnose, envelope_spectrum,
-                       no_defect_note, statistics)
+from .envelope import (DEFAULT_BAND, DETECTION_THRESHOLD, FAULT_LINES, STEADY_LINES, Line, diagnose,
+                       envelope_spectrum, no_defect_note, spread, statistics, with_cage)
 
 MAX_ANALYSIS_S = 120.0
 DEFAULT_WINDOW_S = 1.0        # s: the verdict timeline's windows (the detector's own segment length)
@@ -336,19 +336,6 @@ def mean_in_window(t_s, values, start_s: float, end_s: float):
     return float(values[before[-1]]) if before.size else None
 
 
-STEADY_LINES = 0.01     # relative spread of the fault lines' frequencies (= of the shaft and cage speeds)
-#                         beyond which a line leaves the detector's +-1 % search (envelope.line_at's
-#                         search_rel) in part of the record: one envelope spectrum of it smears the line
-
-
-def spread(values) -> float:
-    """(largest - smallest) / |mean| of ``values`` (dimensionless); 0 for none or a mean of 0."""
-    values = np.asarray(values, dtype=float)
-    if not values.size or not np.all(np.isfinite(values)) or values.mean() == 0.0:
-        return 0.0
-    return float(np.ptp(values) / abs(values.mean()))
-
-
 def commands_in_effect(t_s, values, start_s: float, end_s: float) -> np.ndarray:
     """The commands (``values`` logged at ``t_s``, s) in effect during [start_s, end_s): those
     logged within it, and the last one before it unless one is logged at its start (``render``
@@ -369,15 +356,20 @@ def states_in(t_s, values, start_s: float, end_s: float) -> np.ndarray:
 
 
 def line_spread(d: "_Data", start_s: float, end_s: float) -> float:
-    """How far the fault lines move over [start_s, end_s) of signal (s), relative: the spread of the
-    ``shaft_speed`` commands in effect, of the shaft and cage speeds ``state`` gives (the cage's
-    skid moves BPFO and BPFI at a steady shaft speed: a load step, a tier switch) and of the BPFO
-    of the recorded ``/diagnostics`` periods it overlaps, the largest (``spread``)."""
+    """How far the fault lines move over [start_s, end_s) of signal (s), relative (``spread``):
+    by the shaft and cage speeds ``state`` gives there (50 Hz; the cage's skid moves BPFO and BPFI
+    at a steady shaft speed: a load step, a tier switch), the larger; without ``state``, by the
+    ``shaft_speed`` commands in effect (the live node applies one 50-70 ms after it logs it), or
+    else by the BPFO of the recorded ``/diagnostics`` periods it overlaps (1 Hz)."""
     cmd_t, state_t = d.cmd_t - d.t0_ns / NS, d.state_t - d.t0_ns / NS
-    bpfo = [f["bpfo"] for p0, p1, f in d.signal_frequency_periods if p1 > start_s + SLACK_S and p0 < end_s - SLACK_S]
-    return max(spread(commands_in_effect(cmd_t, d.cmd_speed, start_s, end_s)),
-               spread(states_in(state_t, d.shaft_w, start_s, end_s)),
-               spread(states_in(state_t, d.cage_w, start_s, end_s)), spread(bpfo))
+    shaft = states_in(state_t, d.shaft_w, start_s, end_s)
+    if shaft.size:
+        return max(spread(shaft), spread(states_in(state_t, d.cage_w, start_s, end_s)))
+    commands = commands_in_effect(cmd_t, d.cmd_speed, start_s, end_s)
+    if commands.size:
+        return spread(commands)
+    return spread([f["bpfo"] for p0, p1, f in d.signal_frequency_periods
+                   if p1 > start_s + SLACK_S and p0 < end_s - SLACK_S])
 
 
 def at_shaft_speed(periods: list, shaft_hz: float) -> list:
@@ -680,8 +672,7 @@ def with_state_cage(recorded: dict, d: "_Data", scene, start_s: float, end_s: fl
         round(recorded["bpfo"] / recorded["ftf"]) if recorded.get("ftf", 0) > 0 else 0)
     if not (cage.size and balls and recorded):
         return recorded
-    ftf, shaft_hz = abs(cage.mean()) / (2 * math.pi), abs(shaft.mean()) / (2 * math.pi)
-    return {**recorded, "ftf": ftf, "bpfo": balls * ftf, "bpfi": balls * abs(shaft_hz - ftf)}
+    return with_cage(recorded, balls, shaft.mean() / (2 * math.pi), cage.mean() / (2 * math.pi))
 
 
 def _windows_read_again(path, topic: str, channel: str, widths, bounds: list):
