@@ -507,6 +507,26 @@ def test_a_load_step_that_moves_the_cages_skid_is_a_moving_line_too(tmp_path):
     assert s["fault_line_variation"] > 0.05
 
 
+def test_the_speed_commands_tell_a_step_that_a_low_state_rate_does_not():
+    """A node with ``state_rate:=1.0`` gives one ``state`` a second: a window with one sample
+    looked steady by it, though the recorded commands stepped from 1600 to 3000 rpm in it (the
+    window was scored at lines that neither half has).  With fewer than ``STATES_TO_TELL`` state
+    samples the commands count too; with enough, ``state`` alone (the live node applies a
+    command 50-70 ms after it logs it)."""
+    from types import SimpleNamespace
+
+    rpm = 2 * np.pi / 60
+    one_state = SimpleNamespace(t0_ns=0, cmd_t=np.array([0.0, 0.5]), cmd_speed=np.array([1600, 3000]) * rpm,
+                                state_t=np.array([0.9]), shaft_w=np.array([3000 * rpm]),
+                                cage_w=np.array([1000 * rpm]), signal_frequency_periods=[])
+    assert report.line_spread(one_state, 0.0, 1.0) > 0.5
+    # 50 Hz, all at 3000 rpm: the command logged at 0.98 s took effect after the window
+    many = SimpleNamespace(**{**vars(one_state), "state_t": np.arange(1, 51) / 50.0,
+                              "shaft_w": np.full(50, 3000 * rpm), "cage_w": np.full(50, 1000 * rpm),
+                              "cmd_t": np.array([0.0, 0.98]), "cmd_speed": np.array([3000, 6000]) * rpm})
+    assert report.line_spread(many, 0.0, 1.0) == 0.0
+
+
 def test_ground_truth_parse_reads_several_faults_sizes_and_onsets():
     """Several faults present are comma-separated (read as a sorted tuple), sizes
     space-separated, onsets ``kind=s`` in signal time, which ``simulated_s`` ties to the stamp:

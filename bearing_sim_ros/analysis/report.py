@@ -355,19 +355,25 @@ def states_in(t_s, values, start_s: float, end_s: float) -> np.ndarray:
     return values[(t_s > start_s + SLACK_S) & (t_s <= end_s + SLACK_S)]
 
 
+STATES_TO_TELL = 5     # state samples that tell how a stretch's speeds moved (0.1 s at the default 50 Hz)
+
+
 def line_spread(d: "_Data", start_s: float, end_s: float) -> float:
     """How far the fault lines move over [start_s, end_s) of signal (s), relative (``spread``):
-    by the shaft and cage speeds ``state`` gives there (50 Hz; the cage's skid moves BPFO and BPFI
-    at a steady shaft speed: a load step, a tier switch), the larger; without ``state``, by the
-    ``shaft_speed`` commands in effect (the live node applies one 50-70 ms after it logs it), or
-    else by the BPFO of the recorded ``/diagnostics`` periods it overlaps (1 Hz)."""
+    by the shaft and cage speeds ``state`` gives there (50 Hz by default; the cage's skid moves
+    BPFO and BPFI at a steady shaft speed: a load step, a tier switch), the larger; where it gives
+    fewer than ``STATES_TO_TELL`` (a low ``state_rate``), by those and the ``shaft_speed``
+    commands in effect (the live node applies one 50-70 ms after it logs it, so with ``state``
+    enough they are not asked), the largest; with neither, by the BPFO of the recorded
+    ``/diagnostics`` periods it overlaps (1 Hz)."""
     cmd_t, state_t = d.cmd_t - d.t0_ns / NS, d.state_t - d.t0_ns / NS
     shaft = states_in(state_t, d.shaft_w, start_s, end_s)
-    if shaft.size:
-        return max(spread(shaft), spread(states_in(state_t, d.cage_w, start_s, end_s)))
+    moved = max(spread(shaft), spread(states_in(state_t, d.cage_w, start_s, end_s)))
+    if shaft.size >= STATES_TO_TELL:
+        return moved
     commands = commands_in_effect(cmd_t, d.cmd_speed, start_s, end_s)
-    if commands.size:
-        return spread(commands)
+    if shaft.size or commands.size:
+        return max(moved, spread(commands))
     return spread([f["bpfo"] for p0, p1, f in d.signal_frequency_periods
                    if p1 > start_s + SLACK_S and p0 < end_s - SLACK_S])
 
