@@ -527,6 +527,26 @@ def test_the_speed_commands_tell_a_step_that_a_low_state_rate_does_not():
     assert report.line_spread(many, 0.0, 1.0) == 0.0
 
 
+def test_the_verdict_of_windows_names_one_fault_healthy_mixed_or_unknown():
+    """``one_verdict`` where the lines move: the fault the scored windows name (healthy ones
+    beside it: a fault that appeared, or a speed where its line is weak), "healthy" where they
+    name none, "mixed" (both listed) where they name two, "unknown" where none is scored; the
+    windows after the analysed stretch do not count; a steady stretch keeps its own verdict."""
+    whole = {"verdict": "inner"}
+
+    def of(*verdicts, end_s=10.0, moved=0.5):
+        timeline = [{"end_s": k + 1.0, "verdict": v} for k, v in enumerate(verdicts)]
+        return report.one_verdict(whole, timeline, moved, end_s)[:2]
+
+    assert of("healthy", "outer", "unknown", "outer") == ("outer", ["outer"])
+    assert of("healthy", "unknown") == ("healthy", [])
+    assert of("outer", "ball", "outer") == ("mixed", ["ball", "outer"])
+    assert of("unknown", "unknown") == ("unknown", [])
+    assert of("outer", "ball", end_s=1.0) == ("outer", ["outer"])
+    assert of("outer", "ball", moved=0.005) == ("inner", ["inner"])
+    assert report.one_verdict(None, [], 0.5, 1.0)[0] == "unknown"
+
+
 def test_ground_truth_parse_reads_several_faults_sizes_and_onsets():
     """Several faults present are comma-separated (read as a sorted tuple), sizes
     space-separated, onsets ``kind=s`` in signal time, which ``simulated_s`` ties to the stamp:

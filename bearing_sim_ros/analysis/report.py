@@ -620,9 +620,10 @@ def one_verdict(whole, timeline: list, moved: float, end_s: float) -> tuple:
     verdict = ("mixed" if len(faults) > 1 else faults[0] if faults else
                "healthy" if counts.get("healthy") else "unknown")
     tally = ", ".join(f"{v} in {n}" for v, n in sorted(counts.items(), key=lambda c: -c[1]))
-    return verdict, faults, (f"the windows of the verdict over time ({tally}; \"unknown\": the lines move within "
-                             f"it): the fault lines move by {100 * moved:.0f} % over the analysed stretch (shaft "
-                             "speed, cage skid), which one envelope spectrum of it smears")
+    why = '; "unknown": the lines move within it' if counts.get("unknown") else ""
+    return verdict, faults, (f"the windows of the verdict over time ({tally}{why}): the fault lines move by "
+                             f"{100 * moved:.0f} % over the analysed stretch (shaft speed, cage skid), which one "
+                             "envelope spectrum of it smears")
 
 
 def first_detection(timeline: list):
