@@ -749,14 +749,10 @@ def test_the_monitor_says_when_a_scene_of_its_own_name_runs_another_bearing():
     assert scene_mismatch_line(scene, {"scene": "er16k_outer_race"}, "bearing_sim") is None
 
 
-def test_the_monitor_keeps_a_few_diagnostics_and_scores_as_with_all_of_them(ros_env, tmp_path):
-    """The monitor kept every 1 Hz /diagnostics message for as long as it ran, for the truth of
-    its windows and the latency lines at exit: a list that grew with the run.  Now it keeps the
-    messages that windows still to come may ask about (``ground_truth.forget_before`` after each
-    verdict) and what the latency lines need of them all (``ground_truth.AppearanceLog``).  A 12 s
-    recording whose pit appears at 2.5 s, fed to the monitor's callbacks in log-time order (no
-    DDS between): it holds at most 2 messages at any time (the old code all 12 at the end), and
-    every truth= and exit line is what all the messages give."""
+def _fed_monitor(recording, scene, window=1.0, after=None):
+    """(a ``MonitorNode`` on ``scene``, what it printed) once ``recording``'s /accel, /state and
+    /diagnostics were fed to its callbacks in log-time order (no DDS between), each message
+    followed by ``after(node, topic, msg)``, and its windows analysed; the node destroyed."""
     import io
 
     import rclpy
@@ -766,16 +762,10 @@ def test_the_monitor_keeps_a_few_diagnostics_and_scores_as_with_all_of_them(ros_
 
     from bearing_sim_ros.recording.reader import open_recording
 
-    scene = tmp_path / "or_onset.yaml"
-    scene.write_text(load_scene("cwru_6205_or007_6").source_text.replace(
-        "clock: 6, profile: geometric}", "clock: 6, profile: geometric, onset_s: 2.5}"))
-    recording = tmp_path / "onset.mcap"
-    render(str(scene), 12.0, recording, fidelity="kinematic", seed=1, progress=False)
     ctx = rclpy.Context()
     rclpy.init(context=ctx)
     out = io.StringIO()
-    node = MonitorNode(load_scene(str(scene)), window=1.0, out=out, context=ctx)
-    every, held = [], []
+    node = MonitorNode(scene, window=window, out=out, context=ctx)
     feed = {"/accel": (PointCloud2, node._on_accel), "/state": (JointState, node._on_state),
             "/diagnostics": (DiagnosticArray, node._on_diagnostics)}
     try:
@@ -784,17 +774,51 @@ def test_the_monitor_keeps_a_few_diagnostics_and_scores_as_with_all_of_them(ros_
                 cls, callback = feed[topic]
                 msg = deserialize_message(data, cls)
                 callback(msg)
-                if topic == "/diagnostics":
-                    stamp = msg.header.stamp.sec * NS + msg.header.stamp.nanosec
-                    every.append(ground_truth.parse({kv.key: kv.value for kv in msg.status[0].values}, stamp, NS))
-                    # as in real time: the window that ended here is judged before the next second comes
-                    deadline = time.monotonic() + 30.0
-                    while len(node.verdicts) < node.windows_queued and time.monotonic() < deadline:
-                        time.sleep(0.005)
-                held.append(len(node.reports))
+                if after is not None:
+                    after(node, topic, msg)
+        deadline = time.monotonic() + 60.0
+        while node.windows_done < node.windows_queued and time.monotonic() < deadline:
+            time.sleep(0.01)            # destroy_node drops the windows still queued
     finally:
-        node.destroy_node()             # the analyses queued finish first
+        node.destroy_node()
         rclpy.shutdown(context=ctx)
+    return node, out
+
+
+def _verdicts_of_a_recording(recording, scene, window=1.0):
+    """The verdict lines the monitor prints for ``recording`` (``_fed_monitor``) and its exit
+    score line."""
+    node, out = _fed_monitor(recording, scene, window)
+    lines = [line for line in out.getvalue().splitlines() if " verdict=" in line]
+    return lines, score_lines(node.verdicts, [], node._t0)[0]
+
+
+def test_the_monitor_keeps_a_few_diagnostics_and_scores_as_with_all_of_them(ros_env, tmp_path):
+    """The monitor kept every 1 Hz /diagnostics message for as long as it ran, for the truth of
+    its windows and the latency lines at exit: a list that grew with the run.  Now it keeps the
+    messages that windows still to come may ask about (``ground_truth.forget_before`` after each
+    verdict) and what the latency lines need of them all (``ground_truth.AppearanceLog``).  A 12 s
+    recording whose pit appears at 2.5 s, fed to the monitor's callbacks in log-time order (no
+    DDS between): it holds at most 2 messages at any time (the old code all 12 at the end), and
+    every truth= and exit line is what all the messages give."""
+    scene = tmp_path / "or_onset.yaml"
+    scene.write_text(load_scene("cwru_6205_or007_6").source_text.replace(
+        "clock: 6, profile: geometric}", "clock: 6, profile: geometric, onset_s: 2.5}"))
+    recording = tmp_path / "onset.mcap"
+    render(str(scene), 12.0, recording, fidelity="kinematic", seed=1, progress=False)
+    every, held = [], []
+
+    def after(node, topic, msg):
+        if topic == "/diagnostics":
+            stamp = msg.header.stamp.sec * NS + msg.header.stamp.nanosec
+            every.append(ground_truth.parse({kv.key: kv.value for kv in msg.status[0].values}, stamp, NS))
+            # as in real time: the window that ended here is judged before the next second comes
+            deadline = time.monotonic() + 30.0
+            while len(node.verdicts) < node.windows_queued and time.monotonic() < deadline:
+                time.sleep(0.005)
+        held.append(len(node.reports))
+
+    node, out = _fed_monitor(recording, load_scene(str(scene)), after=after)
     assert len(every) == 12 and len(node.verdicts) == 12 and max(held) <= 2, (len(every), max(held))
     printed = [line.split(" truth=")[1].split()[0] for line in out.getvalue().splitlines() if " truth=" in line]
     assert printed == [truth_text(truth_at(every, end)) for end, _v, _truth in node.verdicts]
@@ -803,6 +827,35 @@ def test_the_monitor_keeps_a_few_diagnostics_and_scores_as_with_all_of_them(ros_
     lines = score_lines(node.verdicts, node.appeared.appearances(t0), t0)
     assert lines == score_lines(node.verdicts, _appeared(every, t0), t0)
     assert lines[1].startswith("monitor: latency ") and lines[1].endswith("outer appeared at t=2.50s, first called at t=3.00s"), lines
+
+
+def test_the_monitor_gives_no_verdict_where_the_speed_steps_in_its_window(ros_env, tmp_path):
+    """er16k_outer_race stepped from 1600 to 3000 rpm at 1.5 s: the window that holds the step
+    was judged at the lines of its mean speed, where neither half has them ("ball" of an
+    outer-race pit x300).  Now the monitor sees the shaft speed of ``state`` move 61 % in it and
+    says so instead of a verdict; the score leaves it out."""
+    scene = tmp_path / "step.yaml"
+    text = load_scene("er16k_outer_race").source_text
+    scene.write_text(text + "profile:\n  - {t: 1.5, shaft_speed_rpm: 1600}\n  - {t: 1.51, shaft_speed_rpm: 3000}\n")
+    recording = tmp_path / "step.mcap"
+    render(str(scene), 3.0, recording, progress=False)
+    lines, score = _verdicts_of_a_recording(recording, load_scene(str(scene)))
+    assert [line.split(" verdict=")[1].split()[0] for line in lines] == ["outer", "unknown", "outer"], lines
+    assert "moved by 61 % in the window" in lines[1] and "shaft=3000rpm" in lines[2], lines
+    assert score == ("monitor: score 2 of 2 verdicts agree with the truth, 0 truth=unknown, "
+                     "1 verdict=unknown (the lines moved in the window)")
+
+
+def test_the_monitor_looks_for_the_lines_where_the_cage_of_state_puts_them(ros_env, skidding_outer_race):
+    """At 10000 rpm / 10 N the ER-16K's cage skids 7 %: the outer-race line is at 552 Hz, not at
+    pure rolling's 595, and looking there the monitor called this outer-race pit a ball fault.
+    Now it takes the cage's speed from ``state`` (BPFO = Z x cage): outer, the line where it
+    looks."""
+    scene, recording = skidding_outer_race
+    lines, _score = _verdicts_of_a_recording(recording, load_scene(str(scene)))
+    assert len(lines) == 2 and all(" verdict=outer truth=outer " in line for line in lines), lines
+    found, expected = map(float, re.search(r"bpfo ([\d.]+)/([\d.]+)Hz", lines[0]).groups())
+    assert abs(found - expected) < 1.0 and expected < 0.95 * load_scene(str(scene)).fault_frequencies()["bpfo"], lines
 
 
 def test_the_monitor_says_no_tables_only_before_the_first(ros_env, bearing_sim_exe, tmp_path):

@@ -434,6 +434,119 @@ def test_report_says_when_auto_switched_tiers(tmp_path):
     assert "kinematic tier (" in md and "at the start, then skidding: 1 tier switch, the last kinematic -> skidding at" in md
 
 
+def _profiled(tmp_path, name, operating_point, profile, duration=3.0):
+    """A render of er16k_outer_race at ``operating_point`` (its YAML line) with ``profile`` (YAML
+    list items), ``duration`` s, ``fidelity: auto``."""
+    text = load_scene("er16k_outer_race").source_text
+    old = "operating_point: {shaft_speed_rpm: 1600, radial_load: [0.0, -50.0]}"
+    assert old in text, "er16k_outer_race.yaml's operating point moved: update this test"
+    scene = tmp_path / f"{name}.yaml"
+    scene.write_text(text.replace(old, f"operating_point: {operating_point}") + "profile:\n"
+                     + "".join(f"  - {item}\n" for item in profile))
+    rec = tmp_path / f"{name}.mcap"
+    render(str(scene), duration, rec, progress=False)
+    return rec
+
+
+def _verdicts(s):
+    return [w["verdict"] for w in s["timeline"]]
+
+
+def test_a_recording_whose_speed_steps_gets_the_verdict_of_its_windows(tmp_path, capsys):
+    """er16k_outer_race stepped from 1600 to 3000 rpm at 1.5 s (the kinematic tier throughout).
+    One envelope spectrum of the whole recording looked for the lines at the mean speed, where
+    neither speed has them, and called it a ball fault (2xBSF x11), as did the window that holds
+    the step; with --window 0.5 the windows at 1600 and 3000 rpm by the step took the fault
+    frequencies of the /diagnostics period that holds it (a mean of both speeds): "healthy", and
+    "ball" at x325.  Now the window that holds the step is not scored ("unknown", the lines move
+    61 % in it), every other window looks at its own lines (outer), and the one verdict is theirs."""
+    rec = _profiled(tmp_path, "step", "{shaft_speed_rpm: 1600, radial_load: [0.0, -50.0]}",
+                    ["{t: 1.5, shaft_speed_rpm: 1600}", "{t: 1.51, shaft_speed_rpm: 3000}"])
+    assert cli.main(["report", str(rec), "--out", str(tmp_path / "out")]) == 0
+    said = capsys.readouterr().out
+    s = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert _verdicts(s) == ["outer", "unknown", "outer"]
+    assert s["timeline"][1]["line_spread"] > 0.5 and s["timeline"][1]["prominences"] == {}
+    assert s["verdict"] == "outer" and s["verdict_faults"] == ["outer"]
+    assert s["fault_line_variation"] > 0.5 and "windows" in s["verdict_from"]
+    assert "verdict outer (scene defects: outer" in said and "the verdict is that of the windows" in said
+    md = (tmp_path / "out" / "summary.md").read_text()
+    assert "**Verdict (envelope analysis of accel_y): OUTER**" in md and "(the verdict agrees with the scene)" in md
+    assert "| fault lines | move by 61 % over the analysed stretch" in md
+    half = build_report(rec, tmp_path / "half", window_s=0.5)
+    assert _verdicts(half) == ["outer"] * 6
+    assert [round(w["shaft_speed_rpm"]) for w in half["timeline"]] == [1600] * 3 + [3000] * 3
+
+
+def test_a_recording_whose_speed_ramps_has_no_confident_verdict(tmp_path):
+    """A ramp from 1600 to 3000 rpm over the whole recording moves the lines in every window: the
+    whole recording and each window were called "healthy" (an outer-race pit of x300).  Now no
+    window is scored and the verdict is unknown, and the summary says why."""
+    rec = _profiled(tmp_path, "ramp", "{shaft_speed_rpm: 1600, radial_load: [0.0, -50.0]}",
+                    ["{t: 2.0, shaft_speed_rpm: 3000}"], duration=2.0)
+    s = build_report(rec, tmp_path / "out")
+    assert _verdicts(s) == ["unknown"] * 2 and s["verdict"] == "unknown" and s["verdict_faults"] == []
+    md = (tmp_path / "out" / "summary.md").read_text()
+    assert "**Verdict (envelope analysis of accel_y): UNKNOWN**" in md and "no verdict to check against the scene" in md
+
+
+def test_a_load_step_that_moves_the_cages_skid_is_a_moving_line_too(tmp_path):
+    """At a steady 10000 rpm the load goes from 50 to 10 N at 1.5 s: fidelity auto switches to the
+    skidding tier, whose cage skids, and BPFO moves from 595 to 552 Hz (7 %).  The shaft speed
+    did not vary, so the report said nothing, and its one spectrum looked at the mean of both:
+    "healthy".  With --window 0.5 the steady window before the switch took the lines of the
+    /diagnostics period that holds it: "healthy".  Now the cage speed of ``state`` places each
+    window's lines and tells where they move (here in no window more than its first 20 ms, as
+    the cage settles after the switch); every verdict is outer."""
+    pytest.importorskip("bearing_sim_ros.physics.skidding")
+    rec = _profiled(tmp_path, "load", "{shaft_speed_rpm: 10000, radial_load: [0.0, -50.0]}",
+                    ["{t: 1.5, radial_load: [0.0, -50.0]}", "{t: 1.51, radial_load: [0.0, -10.0]}"])
+    s = build_report(rec, tmp_path / "out", window_s=0.5)
+    assert _verdicts(s) == ["outer"] * 6 and s["verdict"] == "outer"
+    assert s["tiers"] == ["kinematic", "skidding"] and s["shaft_speed_variation"] == 0.0
+    assert s["fault_line_variation"] > 0.05
+
+
+def test_the_speed_commands_tell_a_step_that_a_low_state_rate_does_not():
+    """A node with ``state_rate:=1.0`` gives one ``state`` a second: a window with one sample
+    looked steady by it, though the recorded commands stepped from 1600 to 3000 rpm in it (the
+    window was scored at lines that neither half has).  With fewer than ``STATES_TO_TELL`` state
+    samples the commands count too; with enough, ``state`` alone (the live node applies a
+    command 50-70 ms after it logs it)."""
+    from types import SimpleNamespace
+
+    rpm = 2 * np.pi / 60
+    one_state = SimpleNamespace(t0_ns=0, cmd_t=np.array([0.0, 0.5]), cmd_speed=np.array([1600, 3000]) * rpm,
+                                state_t=np.array([0.9]), shaft_w=np.array([3000 * rpm]),
+                                cage_w=np.array([1000 * rpm]), signal_frequency_periods=[])
+    assert report.line_spread(one_state, 0.0, 1.0) > 0.5
+    # 50 Hz, all at 3000 rpm: the command logged at 0.98 s took effect after the window
+    many = SimpleNamespace(**{**vars(one_state), "state_t": np.arange(1, 51) / 50.0,
+                              "shaft_w": np.full(50, 3000 * rpm), "cage_w": np.full(50, 1000 * rpm),
+                              "cmd_t": np.array([0.0, 0.98]), "cmd_speed": np.array([3000, 6000]) * rpm})
+    assert report.line_spread(many, 0.0, 1.0) == 0.0
+
+
+def test_the_verdict_of_windows_names_one_fault_healthy_mixed_or_unknown():
+    """``one_verdict`` where the lines move: the fault the scored windows name (healthy ones
+    beside it: a fault that appeared, or a speed where its line is weak), "healthy" where they
+    name none, "mixed" (both listed) where they name two, "unknown" where none is scored; the
+    windows after the analysed stretch do not count; a steady stretch keeps its own verdict."""
+    whole = {"verdict": "inner"}
+
+    def of(*verdicts, end_s=10.0, moved=0.5):
+        timeline = [{"end_s": k + 1.0, "verdict": v} for k, v in enumerate(verdicts)]
+        return report.one_verdict(whole, timeline, moved, end_s)[:2]
+
+    assert of("healthy", "outer", "unknown", "outer") == ("outer", ["outer"])
+    assert of("healthy", "unknown") == ("healthy", [])
+    assert of("outer", "ball", "outer") == ("mixed", ["ball", "outer"])
+    assert of("unknown", "unknown") == ("unknown", [])
+    assert of("outer", "ball", end_s=1.0) == ("outer", ["outer"])
+    assert of("outer", "ball", moved=0.005) == ("inner", ["inner"])
+    assert report.one_verdict(None, [], 0.5, 1.0)[0] == "unknown"
+
+
 def test_ground_truth_parse_reads_several_faults_sizes_and_onsets():
     """Several faults present are comma-separated (read as a sorted tuple), sizes
     space-separated, onsets ``kind=s`` in signal time, which ``simulated_s`` ties to the stamp:

@@ -251,3 +251,44 @@ def test_run_whose_solver_diverges_says_it_in_one_line_and_keeps_the_recording(r
     r = subprocess.run([bearing_sim_exe, "run", "--scene", str(diverging_scene(0.3)), "--duration", "2",
                         "--out", str(out)], env=ros_env, capture_output=True, text=True, timeout=120)
     assert_diverged_and_recorded(r, out, "fidelity: {tier: kinematic} in the scene")
+
+
+def _summary_of(recording, scene) -> str:
+    """``bearing-sim run``'s summary of ``recording`` (a render standing in for the node's: the
+    same topics), with made-up figures of the node."""
+    from bearing_sim_ros.run import ANALYSIS_MAX_S, _record_tail, summarise
+
+    figures = {"signal_s": 3.0, "wall_s": 3.0, "rtf": 1.0, "overruns": 0, "worst_lag": 0.0, "files": str(recording),
+               "sizes": "-", "dropped": 0, "tier_values": {"tier": "kinematic", "tier_switches": 0}}
+    return summarise(scene, _record_tail([recording], ANALYSIS_MAX_S), figures, str(recording))
+
+
+def test_the_summary_looks_for_the_lines_where_the_cage_of_state_puts_them(skidding_outer_race):
+    """At 10000 rpm / 10 N the ER-16K's cage skids 7 %: the summary looked for the lines at pure
+    rolling (BPFO 595 Hz, the line at 552) and said "ball fault" (2xBSF x294) of this outer-race
+    pit, as the live ``bearing-sim run`` of this scene did.  Now it takes the cage's speed from
+    ``state``: an outer-race fault, BPFO expected within 1 Hz of where it is found."""
+    from bearing_sim_ros import load_scene
+
+    scene, recording = skidding_outer_race
+    text = _summary_of(recording, load_scene(str(scene)))
+    assert "verdict: outer-race fault" in text, text
+    expected, found = map(float, re.search(r"BPFO +([\d.]+) +([\d.]+)", text).groups())
+    assert abs(expected - found) < 1.0 and expected < 560, text
+
+
+def test_the_summary_gives_no_verdict_where_the_speed_stepped_in_the_stretch(tmp_path):
+    """A speed command from 1600 to 3000 rpm in the analysed stretch smears every envelope line;
+    the summary judged it at the lines of the mean speed, where neither half has them, and called
+    this outer-race pit a ball fault.  Now it says that there is no verdict, and why."""
+    from bearing_sim_ros import load_scene
+    from bearing_sim_ros.recording.render import render
+
+    scene = tmp_path / "step.yaml"
+    scene.write_text(load_scene("er16k_outer_race").source_text
+                     + "profile:\n  - {t: 1.5, shaft_speed_rpm: 1600}\n  - {t: 1.51, shaft_speed_rpm: 3000}\n")
+    recording = tmp_path / "step.mcap"
+    render(str(scene), 3.0, recording, progress=False)
+    text = _summary_of(recording, load_scene(str(scene)))
+    assert ("envelope analysis of the last 3.0 s: no verdict: the shaft and cage speeds moved by 61 % in it"
+            in text and "\nverdict:" not in text), text

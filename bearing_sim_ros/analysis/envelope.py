@@ -213,6 +213,33 @@ def fault_lines(x: np.ndarray, fs: float, frequencies: dict, band=DEFAULT_BAND,
 
 
 DETECTION_THRESHOLD = 4.0   # prominence (line over local median) that counts as a detected fault
+# relative spread of the fault lines' frequencies (= of the shaft and cage speeds) over a record
+# beyond which a line leaves the +-1 % search of line_at (search_rel) in part of it: its envelope
+# spectrum smears the line, and a verdict on it is no verdict (a speed step, a ramp, a load step
+# that changes the cage's skid)
+STEADY_LINES = 0.01
+
+
+def spread(values) -> float:
+    """How far ``values`` (speeds sampled evenly over a record) move, relative: the width of
+    their middle 90 % (5th to 95th percentile) over |mean| (dimensionless); 0 for none or a mean
+    of 0.  The middle: a transient of a few tens of ms smears no line (the skidding tier's cage
+    settles from pure rolling, 1 %, in its first 20 ms), and the largest minus the smallest
+    made a steady record's first second "unknown"."""
+    values = np.asarray(values, dtype=float)
+    if not values.size or not np.all(np.isfinite(values)) or values.mean() == 0.0:
+        return 0.0
+    low, high = np.percentile(values, [5.0, 95.0])
+    return float((high - low) / abs(values.mean()))
+
+
+def with_cage(frequencies: dict, balls: int, shaft_hz: float, cage_hz: float) -> dict:
+    """``frequencies`` (``Bearing.fault_frequencies``, Hz) with the cage, BPFO and BPFI of the
+    cage speed ``cage_hz`` (Hz) as it ran: FTF = cage_hz, BPFO = Z cage_hz, BPFI = Z (shaft_hz -
+    cage_hz), Z = ``balls``.  Where the cage skids (7 % at 10000 rpm / 10 N on the ER-16K) the
+    lines are there, not at pure rolling; BSF (the balls' spin) stays as given."""
+    ftf = abs(cage_hz)
+    return {**frequencies, "ftf": ftf, "bpfo": balls * ftf, "bpfi": balls * abs(abs(shaft_hz) - ftf)}
 
 
 def diagnose(x: np.ndarray, fs: float, frequencies: dict, band=DEFAULT_BAND,

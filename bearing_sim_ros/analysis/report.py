@@ -50,8 +50,8 @@ from ..errors import UserError
 from ..paths import output_folder, writing_into
 from ..recording.reader import open_recording
 from ..waveform import NS, from_pointcloud2
-from .envelope import (DEFAULT_BAND, DETECTION_THRESHOLD, FAULT_LINES, diagnose, envelope_spectrum, no_defect_note,
-                       statistics)
+from .envelope import (DEFAULT_BAND, DETECTION_THRESHOLD, FAULT_LINES, STEADY_LINES, Line, diagnose,
+                       envelope_spectrum, no_defect_note, spread, statistics, with_cage)
 
 MAX_ANALYSIS_S = 120.0
 DEFAULT_WINDOW_S = 1.0        # s: the verdict timeline's windows (the detector's own segment length)
@@ -336,6 +336,67 @@ def mean_in_window(t_s, values, start_s: float, end_s: float):
     return float(values[before[-1]]) if before.size else None
 
 
+def commands_in_effect(t_s, values, start_s: float, end_s: float) -> np.ndarray:
+    """The commands (``values`` logged at ``t_s``, s) in effect during [start_s, end_s): those
+    logged within it, and the last one before it unless one is logged at its start (``render``
+    logs the command of a batch at the batch's first sample, and the one before held only until then)."""
+    t_s, values = np.asarray(t_s, dtype=float), np.asarray(values, dtype=float)
+    inside = (t_s >= start_s - SLACK_S) & (t_s < end_s - SLACK_S)
+    before = np.flatnonzero(t_s < start_s - SLACK_S)
+    at_start = bool(np.any(np.abs(t_s - start_s) <= SLACK_S))
+    held = values[before[-1:]] if before.size and not at_start else values[:0]
+    return np.concatenate((held, values[inside]))
+
+
+def states_in(t_s, values, start_s: float, end_s: float) -> np.ndarray:
+    """The ``state`` values (stamped ``t_s``, s) of the signal in [start_s, end_s): a ``state`` gives
+    the speeds at its stamp, the end of its batch, so those stamped in (start_s, end_s]."""
+    t_s, values = np.asarray(t_s, dtype=float), np.asarray(values, dtype=float)
+    return values[(t_s > start_s + SLACK_S) & (t_s <= end_s + SLACK_S)]
+
+
+STATES_TO_TELL = 5     # state samples that tell how a stretch's speeds moved (0.1 s at the default 50 Hz)
+
+
+def line_spread(d: "_Data", start_s: float, end_s: float) -> float:
+    """How far the fault lines move over [start_s, end_s) of signal (s), relative (``spread``):
+    by the shaft and cage speeds ``state`` gives there (50 Hz by default; the cage's skid moves
+    BPFO and BPFI at a steady shaft speed: a load step, a tier switch), the larger; where it gives
+    fewer than ``STATES_TO_TELL`` (a low ``state_rate``), by those and the ``shaft_speed``
+    commands in effect (the live node applies one 50-70 ms after it logs it, so with ``state``
+    enough they are not asked), the largest; with neither, by the BPFO of the recorded
+    ``/diagnostics`` periods it overlaps (1 Hz)."""
+    cmd_t, state_t = d.cmd_t - d.t0_ns / NS, d.state_t - d.t0_ns / NS
+    shaft = states_in(state_t, d.shaft_w, start_s, end_s)
+    moved = max(spread(shaft), spread(states_in(state_t, d.cage_w, start_s, end_s)))
+    if shaft.size >= STATES_TO_TELL:
+        return moved
+    commands = commands_in_effect(cmd_t, d.cmd_speed, start_s, end_s)
+    if shaft.size or commands.size:
+        return max(moved, spread(commands))
+    return spread([f["bpfo"] for p0, p1, f in d.signal_frequency_periods
+                   if p1 > start_s + SLACK_S and p0 < end_s - SLACK_S])
+
+
+def at_shaft_speed(periods: list, shaft_hz: float) -> list:
+    """The recorded ``/diagnostics`` periods (``recorded_frequencies``) with their frequencies
+    moved to the shaft speed ``shaft_hz`` (Hz) at their own cage skid and ball skid: every line is
+    the shaft speed times a ratio that the skids set (cage_hz, BPFO = Z cage_hz, BPFI = Z (shaft -
+    cage), BSF), and a period's mean shaft speed is cage_hz + BPFI / Z, Z = BPFO / cage_hz.  A
+    period that holds a speed step gives the lines of neither speed; moved, those at the
+    window's (a 0.5 s window at 3000 rpm in a period half at 1600 had its lines 23 % low, and
+    its 2xBSF fell on the outer race's BPFO: "ball", x325).  Unchanged where ``shaft_hz`` is not
+    a speed or a period has no cage."""
+    if not (math.isfinite(shaft_hz) and shaft_hz > 0):
+        return periods
+    moved = []
+    for p0, p1, f in periods:
+        period_hz = f["ftf"] + f["bpfi"] * f["ftf"] / f["bpfo"] if f["ftf"] > 0 and f["bpfo"] > 0 else 0.0
+        scale = shaft_hz / period_hz if period_hz > 0 else 1.0
+        moved.append((p0, p1, {k: v * scale for k, v in f.items()}))
+    return moved
+
+
 def recorded_frequencies(periods: list, start_s: float, end_s: float) -> dict:
     """{"ftf", "bpfo", "bpfi"[, "bsf"]: Hz} as the recording's ``/diagnostics`` give them over
     [start_s, end_s): the mean of the periods' values weighted by their overlap with the window
@@ -501,34 +562,68 @@ def truth_changes(truth: list) -> list:
 
 
 def score_windows(windows, sample_rate_hz: float, times_s: list, frequencies: list,
-                  truth: list, speeds_rad_s: list) -> list:
+                  truth: list, speeds_rad_s: list, spreads: list | None = None) -> list:
     """The envelope detector (``envelope.diagnose``, as for the whole recording) in each window:
     the samples of each of ``windows`` (an iterable of arrays), spanning ``times_s`` (start s,
     end s) of signal, looking at ``frequencies`` ({"ftf", "bpfo", "bpfi", "bsf": Hz} per window, {}
     when unknown) at the window's shaft speed (``speeds_rad_s``); verdict "unknown" without
-    frequencies or in less than 0.2 s of signal.  One dict per window: start_s,
-    end_s, shaft_speed_rpm, verdict, prominences ({fault: line height over local median}), and
+    frequencies, in less than 0.2 s of signal, or where the lines move within the window by more
+    than ``STEADY_LINES`` (``spreads``, ``line_spread`` of each window; None: steady): a speed
+    step or ramp in it smeared them, and its verdict was "healthy", or "ball" where 2xBSF of one
+    speed fell on BPFO of the other.  One dict per window: start_s, end_s, shaft_speed_rpm,
+    line_spread, verdict, prominences ({fault: line height over local median}; {} unscored), and
     the ground truth at its end: faults_present, those in its last sample
     (``ground_truth.faults_at``: to the sample where the recording has ``fault_onsets_s``), and
     defect_sizes with truth_t_s, the sizes of the latest ``/diagnostics`` at or before the end
     with those faults (else the first after it) and that message's time (None each without
     ground truth)."""
     rows = []
-    for xw, (t0, t1), freqs, speed in zip(windows, times_s, frequencies, speeds_rad_s):
-        usable = freqs and freqs["bpfo"] > 0 and xw.size > 0.2 * sample_rate_hz   # as for the whole
+    spreads = [0.0] * len(times_s) if spreads is None else spreads
+    for xw, (t0, t1), freqs, speed, moved in zip(windows, times_s, frequencies, speeds_rad_s, spreads):
+        usable = (freqs and freqs["bpfo"] > 0 and xw.size > 0.2 * sample_rate_hz     # as for the whole
+                  and moved <= STEADY_LINES)
         verdict = diagnose(xw, sample_rate_hz, freqs) if usable else None
         faults = ground_truth.faults_at(truth, t1, SLACK_S)
         sizes = ground_truth.truth_before(truth, t1, SLACK_S)
         if sizes is not None and faults is not None and sizes.faults != faults:
             # the fault appeared after that message: the sizes of the first one that has it
             sizes = next((r for r in truth if r.t >= t1 - SLACK_S and r.faults == faults), sizes)
-        rows.append({"start_s": t0, "end_s": t1, "shaft_speed_rpm": speed * RPM,
+        rows.append({"start_s": t0, "end_s": t1, "shaft_speed_rpm": speed * RPM, "line_spread": moved,
                      "verdict": verdict["verdict"] if verdict else "unknown",
                      "prominences": verdict["scores"] if verdict else {},
                      "faults_present": list(faults) if faults is not None else None,
                      "defect_sizes": list(sizes.sizes) if sizes else None,
                      "truth_t_s": sizes.t if sizes else None})
     return rows
+
+
+def one_verdict(whole, timeline: list, moved: float, end_s: float) -> tuple:
+    """(the recording's one verdict, the fault kinds it names, where it comes from in words).
+    ``whole``: ``diagnose`` of the analysed stretch (None: no verdict); ``moved``: its
+    ``line_spread``; ``end_s``: its end (s).  Where the lines hold still (``STEADY_LINES``) that
+    is ``whole``'s.  Where they move (speed steps or a ramp, a load step or tier switch that moves
+    the cage's skid), one envelope spectrum smears every line, and ``whole`` said "inner" of an
+    outer-race recording stepped 1600 -> 10000 rpm (its lines at the mean speed's) and "healthy"
+    of one ramped: then the verdict is that of ``timeline``'s windows in the analysed stretch,
+    each at its own lines, those whose lines move within them unscored ("unknown"): the fault
+    they name, "healthy" where they name none, "mixed" where they name several, "unknown"
+    where none is scored."""
+    if whole is None:
+        return "unknown", [], "no verdict"
+    if moved <= STEADY_LINES:
+        return whole["verdict"], [] if whole["verdict"] == "healthy" else [whole["verdict"]], "the analysed stretch"
+    counts = {}
+    for w in timeline:
+        if w["end_s"] <= end_s + SLACK_S:
+            counts[w["verdict"]] = counts.get(w["verdict"], 0) + 1
+    faults = sorted(k for k in counts if k not in ("healthy", "unknown"))
+    verdict = ("mixed" if len(faults) > 1 else faults[0] if faults else
+               "healthy" if counts.get("healthy") else "unknown")
+    tally = ", ".join(f"{v} in {n}" for v, n in sorted(counts.items(), key=lambda c: -c[1]))
+    why = '; "unknown": the lines move within it' if counts.get("unknown") else ""
+    return verdict, faults, (f"the windows of the verdict over time ({tally}{why}): the fault lines move by "
+                             f"{100 * moved:.0f} % over the analysed stretch (shaft speed, cage skid), which one "
+                             "envelope spectrum of it smears")
 
 
 def first_detection(timeline: list):
@@ -542,7 +637,9 @@ def verdict_timeline(d: "_Data", x, scene, window_s: float, mean_speed_rad_s: fl
     """``score_windows`` over the whole recording's channel ``x`` of ``d`` in windows of
     ``window_s`` s, each at its own speed (the ``shaft_speed`` commands in the window, else
     ``state``, else ``mean_speed_rad_s``) and fault frequencies (pure rolling at that speed, with
-    the cage, BPFO and BPFI of the recorded ``/diagnostics`` over the window where present).
+    those of the recorded ``/diagnostics`` over the window moved to it, ``at_shaft_speed``, and the
+    cage of ``state`` in it, ``with_state_cage``), those whose lines move within it unscored
+    (``line_spread``).
     ``x`` holds the first samples (``MAX_ANALYSIS_S``); the windows beyond it come from
     ``reread(bounds)`` (``_windows_read_again``).  Without a scene, the recorded ``/diagnostics``
     alone (``line_frequencies``); [] where they do not give all four lines either."""
@@ -553,7 +650,7 @@ def verdict_timeline(d: "_Data", x, scene, window_s: float, mean_speed_rad_s: fl
     edges = sample_times_s([i for b in bounds for i in b], d.stamps, d.widths, fs, d.t0_ns)
     times = [(float(edges[2 * k]), float(edges[2 * k + 1])) for k in range(len(bounds))]
     cmd_t, state_t = d.cmd_t - d.t0_ns / NS, d.state_t - d.t0_ns / NS
-    speeds, freqs = [], []
+    speeds, freqs, spreads = [], [], []
     for t0, t1 in times:
         speed = mean_in_window(cmd_t, d.cmd_speed, t0, t1)
         if speed is None:
@@ -561,11 +658,28 @@ def verdict_timeline(d: "_Data", x, scene, window_s: float, mean_speed_rad_s: fl
         speed = mean_speed_rad_s if speed is None else speed
         speeds.append(speed)
         rolling = scene.bearing.fault_frequencies(speed / (2 * math.pi)) if scene is not None else {}
-        freqs.append(line_frequencies(rolling, recorded_frequencies(d.signal_frequency_periods, t0, t1)))
+        recorded = recorded_frequencies(at_shaft_speed(d.signal_frequency_periods, abs(speed) / (2 * math.pi)), t0, t1)
+        freqs.append(line_frequencies(rolling, with_state_cage(recorded, d, scene, t0, t1)))
+        spreads.append(line_spread(d, t0, t1))
     held = [b for b in bounds if b[1] <= x.size]          # the windows in memory; the rest read again
     rest = bounds[len(held):]
     windows = itertools.chain((x[i0:i1] for i0, i1 in held), reread(rest) if rest else ())
-    return score_windows(windows, fs, times, freqs, d.truth, speeds)
+    return score_windows(windows, fs, times, freqs, d.truth, speeds, spreads)
+
+
+def with_state_cage(recorded: dict, d: "_Data", scene, start_s: float, end_s: float) -> dict:
+    """``recorded`` ({"ftf", "bpfo", "bpfi"[, "bsf"]: Hz} of the ``/diagnostics`` periods over
+    [start_s, end_s)) with the cage, BPFO and BPFI of the mean shaft and cage speeds that
+    ``state`` gives in that stretch, where it does (50 Hz, so a period that holds a tier switch
+    or a load step, whose cage skid is neither side's, does not place the lines of a window on
+    one side); Z the scene's balls, else BPFO / cage_hz of ``recorded``; unchanged without either."""
+    state_t = d.state_t - d.t0_ns / NS
+    shaft, cage = states_in(state_t, d.shaft_w, start_s, end_s), states_in(state_t, d.cage_w, start_s, end_s)
+    balls = scene.bearing.balls if scene is not None else (
+        round(recorded["bpfo"] / recorded["ftf"]) if recorded.get("ftf", 0) > 0 else 0)
+    if not (cage.size and balls and recorded):
+        return recorded
+    return with_cage(recorded, balls, shaft.mean() / (2 * math.pi), cage.mean() / (2 * math.pi))
 
 
 def _windows_read_again(path, topic: str, channel: str, widths, bounds: list):
@@ -673,7 +787,10 @@ def plot_spectrum(d: _Data, out: Path, meta: dict) -> str:
 
 
 def plot_envelope(x: np.ndarray, fs: float, freqs: dict, verdict: dict, channel: str,
-                  out: Path, meta: dict) -> str:
+                  out: Path, meta: dict, instead: str = "") -> str:
+    """The envelope spectrum of ``x`` with the lines of ``freqs`` and ``verdict``'s prominences;
+    ``instead``: the title's words in place of ``verdict``'s where the recording's verdict is
+    not this spectrum's (its lines move: ``one_verdict``)."""
     plt, fig, (ax,) = _figure(1, 4.2)
     targets = {"bpfo": freqs["bpfo"], "bpfi": freqs["bpfi"], "2bsf": 2 * freqs["bsf"], "ftf": freqs["ftf"]}
     fmax = min(0.45 * fs, 3.3 * max(targets.values()))
@@ -695,7 +812,7 @@ def plot_envelope(x: np.ndarray, fs: float, freqs: dict, verdict: dict, channel:
     ax.set(xlabel="frequency (Hz)", ylabel="envelope amplitude (m/s²)", xlim=(0, fmax),
            ylim=(0, 1.25 * top if top > 0 else 1),
            title=(f"Envelope spectrum of {channel} ({DEFAULT_BAND[0] / 1e3:g}-{DEFAULT_BAND[1] / 1e3:g} kHz band) "
-                  f"- verdict: {verdict['verdict'].upper()}   (×N: line height over local median)"))
+                  f"- {instead or 'verdict: ' + verdict['verdict'].upper()}   (×N: line height over local median)"))
     ax.legend(loc="upper right", fontsize=8, ncol=2)
     ax.grid(alpha=0.3)
     return _save(plt, fig, out / "envelope.png")
@@ -871,23 +988,34 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
     if missing:
         not_drawn["operating_point.png"] = missing
     with writing_into(out):             # a full disk: one line, not a traceback
+        timeline = (verdict_timeline(d, x, scene, window_s, speed,
+                                     lambda bounds: _windows_read_again(path, d.accel_topic, ch, d.widths, bounds))
+                    if verdict is not None else [])
+        moved = line_spread(d, 0.0, d.analysed_end_s)
+        overall, named, verdict_from = one_verdict(verdict, timeline, moved, d.analysed_end_s)
         plots = [plot_waveform(d, freqs, out, meta), plot_spectrum(d, out, meta)]
         if verdict is not None:
-            plots.append(plot_envelope(x, fs, freqs, verdict, ch, out, meta))
+            plots.append(plot_envelope(x, fs, freqs, verdict, ch, out, meta,
+                                       "" if overall == verdict["verdict"] else
+                                       f"verdict {overall.upper()} of the windows: the lines move by "
+                                       f"{100 * moved:.0f} % and smear here"))
         if "operating_point.png" not in not_drawn:
             plots.append(plot_operating_point(d, scene, out, meta))
         cage = plot_cage(d, scene, out, meta)
         if cage:
             plots.append(cage)
-        timeline = (verdict_timeline(d, x, scene, window_s, speed,
-                                     lambda bounds: _windows_read_again(path, d.accel_topic, ch, d.widths, bounds))
-                    if verdict is not None else [])
         onset = fault_onset(d.truth)
         detected = first_detection(timeline)
         if timeline:
             plots.append(plot_timeline(timeline, d.truth, [df.kind for df in scene.defects] if scene else [],
                                        onset, detected, out, meta))
     changes = truth_changes(d.truth)
+    if verdict is not None and overall != verdict["verdict"]:
+        # the notes below read the verdict's lines: the windows' highest BPFO stands for them
+        best = max((w["prominences"].get("outer", 0.0) for w in timeline), default=0.0)
+        note_verdict = {"verdict": overall, "lines": {"bpfo": Line(math.nan, math.nan, math.nan, best)}}
+    else:
+        note_verdict = verdict
 
     expected, expected_from = expected_defects(scene, d.truth, d.analysed_end_s)
     speed_var = (float(np.ptp(d.cmd_speed) / abs(speed)) if d.cmd_speed.size and speed else 0.0)
@@ -922,11 +1050,14 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
         "fault_lines": ({k: {"expected_hz": v.expected_hz, "found_hz": v.found_hz, "height": v.height,
                              "prominence": v.prominence} for k, v in verdict["lines"].items()}
                         if verdict else {}),
-        "verdict": verdict["verdict"] if verdict else "unknown",
+        "verdict": overall,
+        "verdict_faults": named,         # the fault kinds the verdict names (several where "mixed")
+        "verdict_from": verdict_from,    # the analysed stretch, or its windows where the lines move
+        "fault_line_variation": moved,   # line_spread of the analysed stretch
         "expected_defects": expected,
         "expected_defects_from": expected_from,
         # a fault verdict on a scene without a defect (the healthy ER-16K's ball-pass line at BPFO)
-        "verdict_note": (", ".join(no_defect_note(verdict) or ()) or None
+        "verdict_note": (", ".join(no_defect_note(note_verdict) or ()) or None
                          if verdict and scene is not None and not scene.defects else None),
         "scene_defects": scene_defects(scene, d.truth, d.analysed_end_s, d.signal_s),
         "scene_unknown": scene_problem or None,
@@ -985,20 +1116,23 @@ def _markdown(s: dict) -> str:
     lines = [f"# Recording report: {s['scene'] or Path(s['file']).name}", ""]
     if s["description"]:
         lines += [s["description"], ""]
-    verdict = s["verdict"].upper()
+    verdict = s["verdict"].upper() + (f" ({', '.join(s['verdict_faults'])})" if s["verdict"] == "mixed" else "")
     if s["expected_defects"] is None:      # no agreement to claim without the scene
         lines += [f"**Verdict (envelope analysis of {s['envelope_channel']}): {verdict}**; the scene's defects: "
                   f"unknown ({s['scene_unknown']}).", ""]
     else:
-        found = set() if s["verdict"] in ("healthy", "unknown") else {s["verdict"]}
+        found = set(s["verdict_faults"])
         agree = ("agrees with" if found <= set(s["expected_defects"])
                  and (found or not s["expected_defects"]) else "differs from")
+        checked = "no verdict to check against" if s["verdict"] == "unknown" else f"the verdict {agree}"
         scene_part, present = _expected_texts(s)
         against = (f"; present in the analysed {s['analysed_s']:.2f} s (by `/diagnostics`): {present} "
-                   f"(the verdict {agree} the faults present)" if present is not None
-                   else f" (the verdict {agree} the scene)")
+                   f"({checked} the faults present)" if present is not None
+                   else f" ({checked} the scene)")
         lines += [f"**Verdict (envelope analysis of {s['envelope_channel']}): {verdict}**; the scene's defects: "
                   f"{scene_part or 'none (healthy)'}{against}.", ""]
+    if _from_windows(s):
+        lines += [f"The verdict is that of {s['verdict_from']}; see \"Verdict over time\".", ""]
     if s["verdict_note"]:
         lines += [f"The verdict on a scene without a defect: {s['verdict_note']}.", ""]
     if s["scene_unknown"] and not s["fault_lines"]:     # (with them, the lines' section says where from)
@@ -1017,12 +1151,19 @@ def _markdown(s: dict) -> str:
               f"| waveform | {s['sample_rate_hz']:g} Hz, {', '.join(s['channels'])}; "
               f"{'contiguous' if s['waveform_gaps'] == 0 else _count(s['waveform_gaps'], 'gap') + ' (lost tables)'} |",
               f"| shaft speed | {s['shaft_speed_rpm']:.1f} rpm (mean"
-              + (f"; varies by {100 * s['shaft_speed_variation']:.0f} %: envelope lines smear and the "
-                 "verdict is not reliable" if s["shaft_speed_variation"] > 0.01 else "")
-              + ") |", ""]
+              + (f"; varies by {100 * s['shaft_speed_variation']:.0f} %" if s["shaft_speed_variation"] > 0.01 else "")
+              + ") |"]
+    if _from_windows(s):
+        lines.append(f"| fault lines | move by {100 * s['fault_line_variation']:.0f} % over the analysed stretch "
+                     "(shaft speed, cage skid): one envelope spectrum of it smears them; the verdict is the "
+                     "windows' |")
+    lines.append("")
     if s["fault_lines"]:
         lines += ["## Fault lines in the envelope spectrum", "",
-                  f"Expected at the fault frequencies of {s['fault_frequencies_from']}.", "",
+                  f"Expected at the fault frequencies of {s['fault_frequencies_from']}."
+                  + (" The lines move over the analysed stretch: this spectrum of all of it smears them, and "
+                     "these prominences are not the verdict (\"Verdict over time\" has each window's)."
+                     if _from_windows(s) else ""), "",
                   "| line | expected (Hz) | found (Hz) | prominence (x local median) |", "| --- | --- | --- | --- |"]
         for key, line in s["fault_lines"].items():
             lines.append(f"| {LINE_LABELS[key]} | {line['expected_hz']:.2f} | {_num(line['found_hz'])} | "
@@ -1042,6 +1183,11 @@ def _markdown(s: dict) -> str:
     if s["plots_not_drawn"]:
         lines += ["Not drawn:", ""] + [f"- `{p}`: {why}" for p, why in s["plots_not_drawn"].items()] + [""]
     return "\n".join(lines)
+
+
+def _from_windows(s: dict) -> bool:
+    """Whether the summary's verdict is that of the timeline's windows (``one_verdict``)."""
+    return s["verdict_from"] not in ("the analysed stretch", "no verdict")
 
 
 def _count(n: int, noun: str) -> str:
@@ -1196,8 +1342,11 @@ def report_command(args) -> int:
     timing = "".join(f", {label} {s[key]:.2f} s" for key, label in (
         ("fault_onset_s", "fault onset"), ("first_detection_s", "first detection"),
         ("detection_latency_s", "latency")) if s[key] is not None)
-    print(f"{args.out}: {', '.join(s['plots'])}, summary.md, summary.json; verdict {s['verdict']} "
-          f"(scene defects: {_defects_text(s)}{timing})")
+    print(f"{args.out}: {', '.join(s['plots'])}, summary.md, summary.json; verdict {s['verdict']}"
+          + (f" ({', '.join(s['verdict_faults'])})" if s["verdict"] == "mixed" else "")
+          + f" (scene defects: {_defects_text(s)}{timing})")
+    if _from_windows(s):
+        print(f"{args.out}: the verdict is that of {s['verdict_from']}")
     if s["verdict_note"]:
         print(f"{args.out}: {s['verdict_note']}")
     if s["scene_unknown"]:              # the fault lines without a scene: where from, or why none

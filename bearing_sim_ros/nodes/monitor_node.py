@@ -10,7 +10,9 @@ into a float32 array (no per-sample objects), and checks that the tables are con
 (a lost table, a restarted node) starts the window again, because envelope analysis of a signal
 with a hole in it would smear the lines.  Every ``window`` seconds of signal it runs the shared
 envelope detector (:func:`bearing_sim_ros.analysis.envelope.diagnose`) on each accelerometer axis
-at the fault frequencies of the scene's bearing at the measured shaft speed, and prints one line:
+at the fault frequencies of the scene's bearing at the measured shaft speed (cage, BPFO and BPFI
+from the cage's speed in ``state``, where a skidding cage puts them), and prints one line
+(``verdict=unknown`` and why, where those speeds moved by more than 1 % in the window):
 
     t=4.00s shaft=1600rpm verdict=outer truth=outer | bpfo 95.2/95.3Hz x266 | bpfi 144.8/144.7Hz x1.0 | ...
 
@@ -63,7 +65,7 @@ import rclpy
 from rclpy.node import Node
 
 from .. import ground_truth
-from ..analysis.envelope import DETECTION_THRESHOLD, FAULT_LINES, diagnose
+from ..analysis.envelope import DETECTION_THRESHOLD, FAULT_LINES, STEADY_LINES, diagnose, spread, with_cage
 from ..messages import RUN_ENDED, RUN_KEY, TOPIC_ACCEL, TOPIC_DIAGNOSTICS, TOPIC_STATE, waveform_qos
 from ..teardown import command_signals, teardown_watchdog
 from .bearing_sim_node import NODE_NAME as SIMULATOR_NODE, PEER_CHECK_S
@@ -71,7 +73,7 @@ from ..waveform import NS, from_pointcloud2
 
 DEFAULT_SCENE = "er16k_outer_race"
 FAULT_NAMES = {"outer": "outer-race fault", "inner": "inner-race fault", "ball": "ball fault",
-               "healthy": "healthy"}
+               "healthy": "healthy", "unknown": "no verdict"}
 WARM_UP_RATE, WARM_UP_SAMPLES = 15000.0, 15000    # Hz and samples: the window analysed at start
 TRUTH_GRACE_S = 0.25        # wall s a verdict waits for the diagnostics stamped at its window's end
 SLACK_NS = 1000             # stamps this close count as the same instant (rounding to the ns)
@@ -128,10 +130,17 @@ class Window:
         return data
 
 
-def verdict(data: np.ndarray, channels, sample_rate: float, bearing, shaft_hz: float) -> dict:
+def verdict(data: np.ndarray, channels, sample_rate: float, bearing, shaft_hz: float,
+            cage_hz: float | None = None) -> dict:
     """Envelope verdict over the axes of ``data`` (n, channels): for each fault the highest
-    prominence over the axes wins.  Returns {"verdict", "axis", "scores", "lines", "theory"}."""
+    prominence over the axes wins.  Returns {"verdict", "axis", "scores", "lines", "theory"}.
+    The lines at pure rolling at ``shaft_hz`` (Hz), or with ``cage_hz`` (the cage's speed in
+    ``state``, Hz) the cage, BPFO and BPFI where the cage put them (``envelope.with_cage``): at
+    10000 rpm / 10 N the ER-16K's cage skids 7 %, and looking at pure rolling's BPFO the monitor
+    called an outer-race pit a ball fault (2xBSF x215)."""
     freqs = bearing.fault_frequencies(shaft_hz)
+    if cage_hz:
+        freqs = with_cage(freqs, bearing.balls, shaft_hz, cage_hz)
     per_fault = {}          # fault -> (score, axis, lines of that axis)
     for k, name in enumerate(channels):
         d = diagnose(data[:, k].astype(float), sample_rate, freqs)
@@ -149,6 +158,10 @@ def format_verdict(t: float, result: dict) -> str:
     """One line per verdict (see the module docstring)."""
     parts = [f"t={t:.2f}s shaft={result['shaft_hz'] * 60:.0f}rpm verdict={result['verdict']} "
              f"truth={truth_text(result.get('truth'))}"]
+    if result["verdict"] == "unknown":
+        return " | ".join(parts + [f"the shaft and cage speeds in state moved by {100 * result['moved']:.0f} % in "
+                                   "the window (a speed step or ramp, a load step that changed the cage's skid): "
+                                   "its envelope lines smear, no verdict"])
     for fault, key in FAULT_LINES.items():
         if fault == "cage":
             continue
@@ -188,8 +201,8 @@ def simulator_name(accel_topic: str, name: str | None = None) -> str:
 
 def agrees(verdict: str, truth):
     """Does a verdict agree with the truth?  ``healthy`` with no fault, a fault verdict when
-    that kind is present; None when the truth is unknown."""
-    if truth is None:
+    that kind is present; None when the truth is unknown or there is no verdict (``unknown``)."""
+    if truth is None or verdict == "unknown":
         return None
     return not truth if verdict == "healthy" else verdict in truth
 
@@ -203,8 +216,10 @@ def score_lines(scored, appeared, t0_ns: int) -> list:
     latency line per appearance.  Times as in the verdict lines: s from ``t0_ns``."""
     marks = [agrees(verdict, truth) for _end, verdict, truth in scored]
     known = [m for m in marks if m is not None]
+    none = sum(verdict == "unknown" for _end, verdict, _truth in scored)
     lines = [f"monitor: score {sum(known)} of {len(known)} verdicts agree with the truth, "
-             f"{len(marks) - len(known)} truth=unknown"]
+             f"{len(marks) - len(known) - none} truth=unknown"
+             + (f", {none} verdict=unknown (the lines moved in the window)" if none else "")]
     if not scored:
         return lines
     calls = [(end, verdict) for end, verdict, _truth in scored]
@@ -345,8 +360,11 @@ class MonitorNode(Node):
         return now - max(self._ended[1], self._last_table_at or 0.0) >= self.end_wait
 
     def _on_state(self, msg):
-        if "shaft" in msg.name and msg.velocity:
-            self._speeds.append(float(msg.velocity[list(msg.name).index("shaft")]))
+        names = list(msg.name)
+        if "shaft" in names and len(msg.velocity) == len(names):
+            cage = float(msg.velocity[names.index("cage")]) if "cage" in names else None
+            stamp = msg.header.stamp.sec * NS + msg.header.stamp.nanosec
+            self._speeds.append((stamp, float(msg.velocity[names.index("shaft")]), cage))
 
     def _on_diagnostics(self, msg):
         stamp = msg.header.stamp.sec * NS + msg.header.stamp.nanosec
@@ -422,27 +440,45 @@ class MonitorNode(Node):
             self._speeds = []
         if self.window.sample_rate and self.window.seconds() >= self.window_s:
             fs = self.window.sample_rate
-            speeds, self._speeds = self._speeds, []
-            # the speed in use comes from `state`; without it, the scene's operating point
-            shaft = float(np.mean(speeds)) if speeds else float(self.scene.shaft_speed)
             end = stamp + round(data.shape[0] * NS / fs)
+            # the states of this window's signal, by their stamps (the end of their batch): the
+            # state of its last batch may come after its table, and then goes uncounted
+            start = self.window.first_stamp
+            speeds = [s for s in self._speeds if start + SLACK_NS < s[0] <= end + SLACK_NS]
+            self._speeds = [s for s in self._speeds if s[0] > end + SLACK_NS]
+            # the speed in use comes from `state`; without it, the scene's operating point
+            shaft = float(np.mean([s[1] for s in speeds])) if speeds else float(self.scene.shaft_speed)
+            cages = [s[2] for s in speeds if s[2] is not None]
+            cage = float(np.mean(cages)) if cages else None
+            moved = max(spread([s[1] for s in speeds]), spread(cages))
             self.windows_queued += 1
             self._analysis.submit(self._analyse, end, self.window.take(), channels, fs, shaft,
-                                  time.monotonic() + TRUTH_GRACE_S)
+                                  time.monotonic() + TRUTH_GRACE_S, cage, moved)
 
-    def _analyse(self, end: int, x: np.ndarray, channels, fs: float, shaft: float, grace: float) -> None:
+    def _analyse(self, end: int, x: np.ndarray, channels, fs: float, shaft: float, grace: float,
+                 cage: float | None = None, moved: float = 0.0) -> None:
         """On the analysis thread: one verdict with the truth at the window's ``end`` (ns),
-        printed.  ``grace``: until when (monotonic s) to wait for the diagnostics stamped there."""
+        printed.  ``grace``: until when (monotonic s) to wait for the diagnostics stamped there.
+        ``shaft``, ``cage``: their mean speeds in the window (rad/s; ``cage`` None without it in
+        ``state``); ``moved``: how far they moved in it (``envelope.spread``), beyond
+        ``STEADY_LINES`` no verdict (``unknown``)."""
         try:
-            self._verdict_line(end, x, channels, fs, shaft, grace)
+            self._verdict_line(end, x, channels, fs, shaft, grace, cage, moved)
         finally:
             self.windows_done += 1
 
-    def _verdict_line(self, end: int, x: np.ndarray, channels, fs: float, shaft: float, grace: float) -> None:
+    def _verdict_line(self, end: int, x: np.ndarray, channels, fs: float, shaft: float, grace: float,
+                      cage: float | None = None, moved: float = 0.0) -> None:
         """``_analyse``'s work: the verdict on the window that ends at ``end``, printed."""
         t = (end - self._t0) / NS
+        shaft_hz = abs(shaft) / (2 * np.pi)
         try:
-            result = verdict(x, channels, fs, self.scene.bearing, abs(shaft) / (2 * np.pi))
+            if moved > STEADY_LINES:
+                # a step or ramp in the window smeared its lines: "healthy" of an outer-race pit
+                result = {"verdict": "unknown", "shaft_hz": shaft_hz, "moved": moved}
+            else:
+                result = verdict(x, channels, fs, self.scene.bearing, shaft_hz,
+                                 None if cage is None else abs(cage) / (2 * np.pi))
         except Exception as exc:  # noqa: BLE001 - a failed analysis must not end the monitor silently
             self.get_logger().error(f"envelope analysis at t={t:.2f}s failed: {exc}")
             return
