@@ -510,6 +510,37 @@ def test_a_monitor_with_a_count_goes_on_across_the_seams_of_play_loop(ros_env, b
     assert "monitor: 3 verdicts from 300 tables, 0 gaps" in out and "of --count" not in out, out
 
 
+def test_a_monitor_with_a_count_ends_when_its_node_is_killed(ros_env, bearing_sim_exe, tmp_path):
+    """A node killed (SIGKILL: a crash, its machine off) sends no end status, and ``monitor
+    --count N`` waited forever: a CI script running both hung.  Now the monitor sees no publisher
+    left on ``accel`` (DDS drops a dead one when its lease runs out, about 20 s with Fast DDS),
+    says so, waits ``--end-wait`` for one to come back, and exits with status 4 and one line that
+    says how many verdicts it got of N."""
+    monitor = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / "monitor.log",
+                          command=("monitor", "--window", "1", "--count", "50", "--end-wait", "1"))
+    node = None
+    try:
+        monitor.wait_for_output("envelope analysis every")
+        node = NodeProcess(bearing_sim_exe, ros_env, {"fidelity": "kinematic", "wait_for_subscribers": 1},
+                           tmp_path / "node.log")
+        monitor.wait_for_output("t=1.00s", timeout=90)
+        node.kill()
+        assert monitor.wait(60) == 4, monitor.output()
+        out = monitor.output()
+    finally:
+        monitor.close()
+        if node is not None:
+            node.close()
+    assert "run ended" not in out, out
+    assert ("monitor: no publisher on /accel any more and no end status from bearing_sim (killed, crashed or "
+            "lost to discovery); waiting for one (a node started again; without one for 1 s the monitor ends)") in out, out
+    verdicts = len(VERDICT.findall(out))
+    assert 1 <= verdicts < 50, out
+    assert (f"monitor: {verdicts} of --count 50 verdicts: no publisher on /accel for 1 s and no end status from "
+            "bearing_sim (killed, crashed or lost to discovery; exit status 4)") in out, out
+    assert f"monitor: {verdicts} verdicts from " in out, out
+
+
 def _wait_for_subscribers(monitor, *publishers, timeout: float = 30.0) -> None:
     """Wait until the monitor's subscriptions match each of ``publishers`` (DDS discovery)."""
     deadline = time.monotonic() + timeout

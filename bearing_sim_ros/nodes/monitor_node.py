@@ -50,7 +50,13 @@ The simulator's end status (``run: ended`` in its last ``/diagnostics``) is prin
 monitor waits on for a node started again or the next pass of ``play --loop``; with ``--count``
 (or ``--end-wait``) only until no table has come for ``end_wait`` s after it: a script that ran
 a node with a ``duration`` beside ``monitor --count N`` waited forever for verdicts that could
-not come.  Short of the count, that is exit status ``cli.EXIT_COUNT_NOT_REACHED`` (3).
+not come.  Short of the count, that is exit status ``cli.EXIT_COUNT_NOT_REACHED`` (3).  A node
+killed or crashed (or its machine off) sends no end status: the tables just stop, as they do while a
+node with ``use_sim_time`` waits for ``/clock``.  What tells the two apart is the ROS graph: a node
+gone leaves no publisher on ``accel`` (DDS drops one that died when its lease runs out: about 20 s
+with Fast DDS).  The monitor says so in one line when it sees none left after tables came, waits on
+for one to come back (a node restarted in its place), and with ``--count`` (or ``--end-wait``) ends
+after ``end_wait`` s without one, exit status ``cli.EXIT_SOURCE_LOST`` (4).
 """
 from __future__ import annotations
 
@@ -298,6 +304,9 @@ class MonitorNode(Node):
         # ns: the end of the run's last table; monotonic s it came); and when the last table came
         self._ended = None
         self._last_table_at = None
+        # monotonic s since when every look at the graph found no publisher on accel, after tables
+        # came and without an end status (None: one is there, or none is expected)
+        self._gone_since = None
         # (window end ns, verdict, truth) of each verdict printed, for the score at the end: the
         # whole analysis (lines, scores, frequencies) kept per verdict was about 3 kB, and a
         # monitor left running grew by megabytes an hour
@@ -343,6 +352,15 @@ class MonitorNode(Node):
         if self.end_wait is None or self._ended is None or self.windows_done < self.windows_queued:
             return False
         return now - max(self._ended[1], self._last_table_at or 0.0) >= self.end_wait
+
+    def source_lost(self, now: float) -> bool:
+        """Has the source gone away without an end status, by ``end_wait``: tables came, then every
+        look at the graph for ``end_wait`` s found no publisher on ``accel`` (``check_sources``)
+        and no table came, and every window taken is analysed.  Tables that merely stop (a node
+        waiting for ``/clock``, a stalled one) leave its publisher: that is no loss."""
+        if self.end_wait is None or self._gone_since is None or self.windows_done < self.windows_queued:
+            return False
+        return now - max(self._gone_since, self._last_table_at) >= self.end_wait
 
     def _on_state(self, msg):
         if "shaft" in msg.name and msg.velocity:
@@ -456,9 +474,21 @@ class MonitorNode(Node):
     def check_sources(self) -> None:
         """Several publishers on ``accel`` (two simulators in one namespace, a ``play`` beside a
         node): their tables interleave, each switch reads as a gap or a restarted source, and the
-        verdicts (and their t=) are of no one signal.  Said once."""
+        verdicts (and their t=) are of no one signal.  Said once.  And none left after tables came,
+        without an end status (a node killed or crashed): said once each time, for ``source_lost``."""
         topic = self.resolve_topic_name(TOPIC_ACCEL)
         n = self.count_publishers(topic)
+        if n or self._ended is not None or self._last_table_at is None:
+            self._gone_since = None
+        elif self._gone_since is None:
+            self._gone_since = time.monotonic()
+            if self.end_wait is None:
+                until = "Ctrl-C ends the monitor"
+            else:
+                until = f"without one for {self.end_wait:g} s the monitor ends"
+            print(f"monitor: no publisher on {topic} any more and no end status from {self.simulator} (killed, "
+                  f"crashed or lost to discovery); waiting for one (a node started again; {until})",
+                  file=self.out, flush=True)
         if n > 1 and not self._several_said:
             self._several_said = True
             print(f"monitor: {n} publishers on {topic}: their tables interleave and the verdicts are not of "
@@ -476,14 +506,16 @@ def main(args, ros_args=()) -> int:
     [--ros-args ...]``; exit 0 after ``count`` verdicts, on Ctrl-C or SIGTERM, or (without
     ``count``, with ``end_wait``) after the simulator's run ended; ``cli.EXIT_COUNT_NOT_REACHED``
     with one line where its run ended before ``count`` verdicts (``end_wait`` s without a table
-    after its end status: default ``cli.MONITOR_END_WAIT_S`` with ``count``, else never); 2 with
+    after its end status: default ``cli.MONITOR_END_WAIT_S`` with ``count``, else never);
+    ``cli.EXIT_SOURCE_LOST`` with one line where, with ``end_wait``, the tables' publisher went
+    away without an end status and none came back for ``end_wait`` s; 2 with
     one line for a bad scene or ROS argument.  ``ros_args``: from ``--ros-args`` on (a namespace,
     remaps)."""
     from rclpy._rclpy_pybind11 import RCLError, UnknownROSArgsError
     from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
     from rclpy.signals import SignalHandlerOptions
 
-    from ..cli import EXIT_COUNT_NOT_REACHED, EXIT_OK, MONITOR_END_WAIT_S
+    from ..cli import EXIT_COUNT_NOT_REACHED, EXIT_OK, EXIT_SOURCE_LOST, MONITOR_END_WAIT_S
     from ..scene import load_scene
     from .bearing_sim_node import ros_arguments_error
 
@@ -523,6 +555,13 @@ def main(args, ros_args=()) -> int:
         executor.add_node(node)
         t_start = next_look = time.monotonic()
         while rclpy.ok() and not node.done and signals.first is None:
+            if node.source_lost(time.monotonic()):
+                status = EXIT_SOURCE_LOST
+                of = f" of --count {node.count}" if node.count else ""
+                print(f"monitor: {len(node.verdicts)}{of} verdicts: no publisher on "
+                      f"{node.resolve_topic_name(TOPIC_ACCEL)} for {node.end_wait:g} s and no end status from "
+                      f"{node.simulator} (killed, crashed or lost to discovery; exit status {status})", flush=True)
+                break
             if node.run_over(time.monotonic()):
                 if node.count:
                     status = EXIT_COUNT_NOT_REACHED
