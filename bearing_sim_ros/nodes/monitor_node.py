@@ -57,6 +57,13 @@ gone leaves no publisher on ``accel`` (DDS drops one that died when its lease ru
 with Fast DDS).  The monitor says so in one line when it sees none left after tables came, waits on
 for one to come back (a node restarted in its place), and with ``--count`` (or ``--end-wait``) ends
 after ``end_wait`` s without one, exit status ``cli.EXIT_SOURCE_LOST`` (4).
+
+Stamps that go back start a new run (:class:`SourceRun`): another recording played after the
+first (``render`` stamps from 0), a node started again with sim time from 0.  The ground truth is
+kept by stamp, and the diagnostics of the run before, stamped later than the new run's windows,
+answered for them (a healthy recording played after an outer-race one scored ``truth=outer``).
+One line says so; ``t=`` and the ground truth start afresh, and the exit lines take each run on its
+own.  Stamps that jump on (a node started again on the wall clock) need none of that.
 """
 from __future__ import annotations
 
@@ -278,6 +285,45 @@ def source_start_line(t0_ns: int, source_start_ns: int):
             f"discovery lost them)")
 
 
+class SourceRun:
+    """What the monitor knows of one run of its source, along which stamps only go on: a node from
+    its start (a node started again on the wall clock, the passes of ``play --loop``: their stamps
+    go on too), one recording played.  Its own ``t=`` clock, ground truth and verdicts."""
+
+    def __init__(self, number: int):
+        self.number = number        # 1, 2, ... in the order the monitor saw them
+        self.t0 = None              # stamp (ns) of its first table taken: its t= counts from there
+        self.source_start = None    # stamp (ns) of the source's signal time 0, by its diagnostics
+        # ground_truth.Truth of the /diagnostics that the windows still to come may ask about
+        # (stamps in ns; ground_truth.forget_before after each verdict), and what the latency lines
+        # need of them all: a monitor kept every 1 Hz message for those, about 1 kB an hour
+        self.reports = []
+        self.appeared = ground_truth.AppearanceLog(SLACK_NS)
+        self.verdicts = []          # (window end ns, verdict, truth) of its own verdicts
+        self.windows = 0            # its windows queued for analysis
+        self.last_table = None      # stamp (ns) of its latest table
+        self.last_report = None     # stamp (ns) of its simulator's latest /diagnostics
+
+    def exit_lines(self) -> list:
+        """Where its first table was on the source's signal (where the diagnostics say), then the
+        score and latency lines of its verdicts (``score_lines``)."""
+        t0 = self.t0 or 0
+        lines = []
+        if self.t0 is not None and self.source_start is not None:
+            line = source_start_line(self.t0, self.source_start)
+            if line:
+                lines.append(line)
+        return lines + score_lines(self.verdicts, self.appeared.appearances(t0), t0)
+
+
+def went_back_line(what: str, stamp_ns: int, last_ns: int, number: int) -> str:
+    """The line that says a ``what`` (``table``, ``/diagnostics``) stamped ``stamp_ns`` came after
+    one of ``last_ns`` on the same topic, and so that run ``number`` starts."""
+    return (f"monitor: run {number}: a {what} stamped {stamp_ns / NS:.9f} s after one stamped {last_ns / NS:.9f} s: "
+            "the stamps went back (another recording played, a node started again with sim time from 0); "
+            "t= and the ground truth start afresh")
+
+
 class MonitorNode(Node):
     """Subscribes to ``accel``, ``state`` and ``/diagnostics``; prints a verdict every ``window``
     s of signal, with the ground truth the diagnostics of ``simulator`` give (its full name,
@@ -311,19 +357,17 @@ class MonitorNode(Node):
         # whole analysis (lines, scores, frequencies) kept per verdict was about 3 kB, and a
         # monitor left running grew by megabytes an hour
         self.verdicts = []
-        # ground_truth.Truth of the /diagnostics that the windows still to come may ask about
-        # (stamps in ns; ground_truth.forget_before after each verdict), and what the latency lines
-        # need of them all: a monitor kept every 1 Hz message for those, about 1 kB an hour
-        self.reports = []
-        self.appeared = ground_truth.AppearanceLog(SLACK_NS)
+        # the run of the source the tables now come from, and the runs before it that have windows
+        # (their verdicts, some maybe still in the analysis queue, and the lines they give at exit)
+        self.run = SourceRun(1)
+        self.runs_before = []
+        self._went_back_said_at = None  # monotonic s of the last run-started line (throttled)
         self.simulator = simulator_name(self.resolve_topic_name(TOPIC_ACCEL), simulator)
         self._several_said = False
         self.truth_status = ground_truth.status_name(self.simulator)
         self.ignored = set()        # names of other simulators' statuses, said once each
         self.scenes_said = set()    # the simulator's (scene, bearing) that are not --scene's, said once each
         self._speeds = []
-        self._t0 = None
-        self._source_start = None   # stamp (ns) of the source's signal time 0, by its diagnostics
         self._warned = False
         # one worker: verdicts come out in signal order; the windows wait in its queue, so an
         # analysis slower than the signal would grow it (8 ms per 3 s window here, no danger)
@@ -381,8 +425,11 @@ class MonitorNode(Node):
                     print(f"monitor: ground truth of {status.name!r} ignored: truth= is "
                           f"{self.truth_status!r}'s (--simulator names another)", file=self.out, flush=True)
                 continue
-            self.reports.append(truth)
-            self.appeared.add(truth)
+            if self.run.last_report is not None and stamp < self.run.last_report - SLACK_NS:
+                self._start_run("/diagnostics", stamp, self.run.last_report)
+            self.run.last_report = stamp
+            self.run.reports.append(truth)
+            self.run.appeared.add(truth)
             self._check_scene(values)
             if values.get(RUN_KEY) == RUN_ENDED:
                 # the simulator's end status (its last /diagnostics): the tables stopped because the
@@ -394,9 +441,9 @@ class MonitorNode(Node):
                     until = f"without a table for {self.end_wait:g} s the monitor ends"
                 print(f"monitor: {self.simulator}: {status.message}; waiting for more (a node started "
                       f"again, the next pass of play --loop; {until})", file=self.out, flush=True)
-            if self._source_start is None and ground_truth.TIME_KEY in values:
+            if self.run.source_start is None and ground_truth.TIME_KEY in values:
                 try:
-                    self._source_start = stamp - round(float(values[ground_truth.TIME_KEY]) * NS)
+                    self.run.source_start = stamp - round(float(values[ground_truth.TIME_KEY]) * NS)
                 except ValueError:
                     pass
 
@@ -426,15 +473,19 @@ class MonitorNode(Node):
                                       throttle_duration_sec=5.0)
             return
         self.tables += 1
+        if self.run.last_table is not None and stamp < self.run.last_table - SLACK_NS:
+            self._start_run("table", stamp, self.run.last_table)
+        first_of_run = self.run.last_table is None      # of a new run (said), or the monitor's first
+        self.run.last_table = stamp
         if self._ended is not None and stamp >= self._ended[0] - SLACK_NS:
             self._ended = None      # a table after the end: the next pass, a node started again
-        if self._t0 is None:
-            self._t0 = stamp
+        if self.run.t0 is None:
+            self.run.t0 = stamp
             # t= counts from here: the source's first table unless discovery or a late start
             # lost some, which this stamp (against a recording's first) tells
             print(f"monitor: first table stamped {stamp // NS}.{stamp % NS:09d} s, t=0 below",
                   file=self.out, flush=True)
-        if not self.window.add(stamp, channels, data):
+        if not self.window.add(stamp, channels, data) and not first_of_run:
             self.get_logger().warning("accel tables not contiguous (a table was lost or the source "
                                       "restarted): starting the window again", throttle_duration_sec=5.0)
             self._speeds = []
@@ -445,31 +496,68 @@ class MonitorNode(Node):
             shaft = float(np.mean(speeds)) if speeds else float(self.scene.shaft_speed)
             end = stamp + round(data.shape[0] * NS / fs)
             self.windows_queued += 1
+            self.run.windows += 1
             self._analysis.submit(self._analyse, end, self.window.take(), channels, fs, shaft,
-                                  time.monotonic() + TRUTH_GRACE_S)
+                                  time.monotonic() + TRUTH_GRACE_S, self.run)
 
-    def _analyse(self, end: int, x: np.ndarray, channels, fs: float, shaft: float, grace: float) -> None:
+    def _analyse(self, end: int, x: np.ndarray, channels, fs: float, shaft: float, grace: float,
+                 run: SourceRun | None = None) -> None:
         """On the analysis thread: one verdict with the truth at the window's ``end`` (ns),
-        printed.  ``grace``: until when (monotonic s) to wait for the diagnostics stamped there."""
+        printed.  ``grace``: until when (monotonic s) to wait for the diagnostics stamped there;
+        ``run``: the run of the source the window is of (default the current one), whose clock
+        and ground truth it takes: a new run may start while the window waits in the queue."""
         try:
-            self._verdict_line(end, x, channels, fs, shaft, grace)
+            self._verdict_line(end, x, channels, fs, shaft, grace, run or self.run)
         finally:
             self.windows_done += 1
 
-    def _verdict_line(self, end: int, x: np.ndarray, channels, fs: float, shaft: float, grace: float) -> None:
-        """``_analyse``'s work: the verdict on the window that ends at ``end``, printed."""
-        t = (end - self._t0) / NS
+    def _verdict_line(self, end: int, x: np.ndarray, channels, fs: float, shaft: float, grace: float,
+                      run: SourceRun) -> None:
+        """``_analyse``'s work: the verdict on the window of ``run`` that ends at ``end``, printed."""
+        t = (end - run.t0) / NS
         try:
             result = verdict(x, channels, fs, self.scene.bearing, abs(shaft) / (2 * np.pi))
         except Exception as exc:  # noqa: BLE001 - a failed analysis must not end the monitor silently
             self.get_logger().error(f"envelope analysis at t={t:.2f}s failed: {exc}")
             return
-        while time.monotonic() < grace and not (self.reports and self.reports[-1].t >= end - SLACK_NS):
+        reports = run.reports
+        while time.monotonic() < grace and not (reports and reports[-1].t >= end - SLACK_NS):
             time.sleep(0.01)        # the diagnostics stamped at ``end`` (if any) are not in yet
-        result.update(end_ns=end, truth=truth_at(self.reports, end))
-        self.verdicts.append((end, result["verdict"], result["truth"]))
+        result.update(end_ns=end, truth=truth_at(reports, end))
+        scored = (end, result["verdict"], result["truth"])
+        self.verdicts.append(scored)
+        run.verdicts.append(scored)
         print(format_verdict(t, result), file=self.out, flush=True)
-        ground_truth.forget_before(self.reports, end, SLACK_NS)      # the next windows end later
+        ground_truth.forget_before(reports, end, SLACK_NS)      # the next windows end later
+
+    def _start_run(self, what: str, stamp: int, last: int) -> None:
+        """A ``what`` stamped ``stamp`` (ns) came after one stamped ``last`` on its topic: a new run
+        of the source (another recording, a node started again with sim time from 0).  The run
+        before keeps its clock and truth for its windows still queued; said in one line, at most
+        every 5 s (two sources whose tables interleave would start one at every switch)."""
+        if self.run.windows:
+            self.runs_before.append(self.run)
+        self.run = SourceRun(self.run.number + 1)
+        self._ended = None          # the end status was the run before's
+        self._speeds = []
+        now = time.monotonic()
+        if self._went_back_said_at is None or now - self._went_back_said_at >= 5.0:
+            self._went_back_said_at = now
+            print(went_back_line(what, stamp, last, self.run.number), file=self.out, flush=True)
+
+    def exit_lines(self) -> list:
+        """The lines after the verdict count at exit: those of the run (``SourceRun.exit_lines``);
+        after stamps went back, the score over all verdicts, then each run's with its number (its
+        latency lines' t= are on its own clock, as its verdict lines were)."""
+        runs = [run for run in self.runs_before if run.windows]
+        if self.run.windows or not runs:
+            runs.append(self.run)
+        if len(runs) == 1:
+            return runs[0].exit_lines()
+        lines = score_lines(self.verdicts, [], 0)[:1]
+        for run in runs:
+            lines += [line.replace("monitor: ", f"monitor: run {run.number}: ", 1) for line in run.exit_lines()]
+        return lines
 
     def check_sources(self) -> None:
         """Several publishers on ``accel`` (two simulators in one namespace, a ``play`` beside a
@@ -592,11 +680,7 @@ def main(args, ros_args=()) -> int:
                 print(f"monitor: {len(node.verdicts)} verdicts from {node.tables} tables, "
                       f"{node.window.gaps} gaps (lost tables or a restarted source), "
                       f"{node.rejected} rejected", flush=True)
-                if node._t0 is not None and node._source_start is not None:
-                    line = source_start_line(node._t0, node._source_start)
-                    if line:
-                        print(line, flush=True)
-                for line in score_lines(node.verdicts, node.appeared.appearances(node._t0 or 0), node._t0 or 0):
+                for line in node.exit_lines():
                     print(line, flush=True)
             rclpy.try_shutdown()
     return status
