@@ -532,12 +532,12 @@ def test_a_monitor_with_a_count_ends_when_its_node_is_killed(ros_env, bearing_si
         if node is not None:
             node.close()
     assert "run ended" not in out, out
-    assert ("monitor: no publisher on /accel any more and no end status from bearing_sim (killed, crashed or "
-            "lost to discovery); waiting for one (a node started again; without one for 1 s the monitor ends)") in out, out
+    assert ("monitor: no publisher on /accel any more and no end status from bearing_sim (killed, crashed, a play "
+            "stopped, or lost to discovery); waiting for one (a node started again; without one for 1 s the monitor ends)") in out, out
     verdicts = len(VERDICT.findall(out))
     assert 1 <= verdicts < 50, out
     assert (f"monitor: {verdicts} of --count 50 verdicts: no publisher on /accel for 1 s and no end status from "
-            "bearing_sim (killed, crashed or lost to discovery; exit status 4)") in out, out
+            "bearing_sim (killed, crashed, a play stopped, or lost to discovery; exit status 4)") in out, out
     assert f"monitor: {verdicts} verdicts from " in out, out
 
 

@@ -88,6 +88,8 @@ FAULT_NAMES = {"outer": "outer-race fault", "inner": "inner-race fault", "ball":
 WARM_UP_RATE, WARM_UP_SAMPLES = 15000.0, 15000    # Hz and samples: the window analysed at start
 TRUTH_GRACE_S = 0.25        # wall s a verdict waits for the diagnostics stamped at its window's end
 SLACK_NS = 1000             # stamps this close count as the same instant (rounding to the ns)
+# what leaves no publisher on accel and no end status (a play stopped by a signal sends none either)
+SOURCE_LOST_CAUSES = "killed, crashed, a play stopped, or lost to discovery"
 
 
 class Window:
@@ -574,8 +576,8 @@ class MonitorNode(Node):
                 until = "Ctrl-C ends the monitor"
             else:
                 until = f"without one for {self.end_wait:g} s the monitor ends"
-            print(f"monitor: no publisher on {topic} any more and no end status from {self.simulator} (killed, "
-                  f"crashed or lost to discovery); waiting for one (a node started again; {until})",
+            print(f"monitor: no publisher on {topic} any more and no end status from {self.simulator} "
+                  f"({SOURCE_LOST_CAUSES}); waiting for one (a node started again; {until})",
                   file=self.out, flush=True)
         if n > 1 and not self._several_said:
             self._several_said = True
@@ -648,7 +650,7 @@ def main(args, ros_args=()) -> int:
                 of = f" of --count {node.count}" if node.count else ""
                 print(f"monitor: {len(node.verdicts)}{of} verdicts: no publisher on "
                       f"{node.resolve_topic_name(TOPIC_ACCEL)} for {node.end_wait:g} s and no end status from "
-                      f"{node.simulator} (killed, crashed or lost to discovery; exit status {status})", flush=True)
+                      f"{node.simulator} ({SOURCE_LOST_CAUSES}; exit status {status})", flush=True)
                 break
             if node.run_over(time.monotonic()):
                 if node.count:
