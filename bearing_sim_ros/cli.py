@@ -247,8 +247,8 @@ def build_parser() -> argparse.ArgumentParser:
                         f"source goes away without an end status, {EXIT_SOURCE_LOST}")
     s.add_argument("--end-wait", type=_in_range(*MONITOR_END_WAIT_RANGE_S, "s"), default=None, metavar="SECONDS",
                    help="once the simulator's run ended (its end status), end when no table has come for this "
-                        "long, and once no publisher of the tables is left (a node killed: DDS notices in "
-                        "about 20 s) when none came back for this long, {MONITOR_END_WAIT_RANGE_S[0]:g} to {MONITOR_END_WAIT_RANGE_S[1]:g} (default: "
+                        "long; once no publisher of the tables is left without one (a node killed: DDS notices "
+                        f"in about 20 s), when none came back for this long; {MONITOR_END_WAIT_RANGE_S[0]:g} to {MONITOR_END_WAIT_RANGE_S[1]:g} (default: "
                         f"{MONITOR_END_WAIT_S:g} with --count, else wait on until Ctrl-C)")
     s.add_argument("--scene", default=None, metavar="S",
                    help="scene giving the bearing geometry (default: er16k_outer_race); the monitor says once "
