@@ -508,6 +508,7 @@ def test_a_monitor_with_a_count_goes_on_across_the_seams_of_play_loop(ros_env, b
             play.close()
     assert out.count("run ended: duration 1 s reached") >= 2, out
     assert "monitor: 3 verdicts from 300 tables, 0 gaps" in out and "of --count" not in out, out
+    assert "monitor: run " not in out, out      # the passes of one recording are one run
 
 
 def test_a_monitor_with_a_count_ends_when_its_node_is_killed(ros_env, bearing_sim_exe, tmp_path):
@@ -539,6 +540,60 @@ def test_a_monitor_with_a_count_ends_when_its_node_is_killed(ros_env, bearing_si
     assert (f"monitor: {verdicts} of --count 50 verdicts: no publisher on /accel for 1 s and no end status from "
             "bearing_sim (killed, crashed, a play stopped, or lost to discovery; exit status 4)") in out, out
     assert f"monitor: {verdicts} verdicts from " in out, out
+
+
+def test_a_node_started_again_after_an_end_or_a_kill_starts_a_new_run(ros_env, bearing_sim_exe, tmp_path):
+    """Nodes started one after another (on the wall clock: their stamps jump on) beside one
+    monitor in 0.5 s windows: an outer-race one that ends (its end status), a healthy one, killed
+    (its publisher seen gone), a healthy one again.  A new node's first window ends before its
+    first diagnostics (at 1 s), and the run before's last truth answered for it: the healthy
+    node's first line said ``truth=outer``.  Now a table or diagnostics that do not continue the
+    run after its end status, or after its publisher was seen gone, start a new run: its first
+    window's truth is unknown, never the run before's."""
+    import signal
+
+    monitor = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / "monitor.log",
+                          command=("monitor", "--window", "0.5", "--scene", "cwru_6205_normal"))
+    nodes = []
+
+    def start(scene, **params):
+        nodes.append(NodeProcess(bearing_sim_exe, ros_env, {"fidelity": "kinematic", "wait_for_subscribers": 1,
+                                                            **params},
+                                 tmp_path / f"node{len(nodes)}.log", command=("node", "--scene", scene)))
+        return nodes[-1]
+
+    try:
+        monitor.wait_for_output("envelope analysis every")
+        assert start("cwru_6205_or007_6", duration=1.5).wait(90) == 0
+        monitor.wait_for_output("run ended", timeout=10)
+        healthy = start("cwru_6205_normal")
+        deadline = time.monotonic() + 90
+        while len(VERDICT.findall(monitor.output())) < 5 and time.monotonic() < deadline:
+            time.sleep(0.1)
+        healthy.kill()
+        monitor.wait_for_output("monitor: no publisher on /accel any more", timeout=60)
+        assert start("cwru_6205_normal", duration=1.5).wait(90) == 0
+        deadline = time.monotonic() + 10            # its last window and end status, as queued
+        while monitor.output().count("run ended") < 2 and time.monotonic() < deadline:
+            time.sleep(0.1)
+        time.sleep(1.0)
+        monitor.send(signal.SIGINT)
+        assert monitor.wait(20) == 0, monitor.output()
+        out = monitor.output()
+    finally:
+        monitor.close()
+        for node in nodes:
+            node.close()
+    runs = re.findall(r"^monitor: run (\d): a (?:table|/diagnostics) stamped [\d.]+ s not continuing the run "
+                      r"before, after (its end status|its publisher was gone): a node started again; t= and the "
+                      r"ground truth start afresh$", out, re.M)
+    assert runs == [("2", "its end status"), ("3", "its publisher was gone")], out
+    parts = re.split(r"^monitor: run \d: .*$", out, flags=re.M)
+    truths = [[truth for _t, _v, truth in VERDICT.findall(part)] for part in parts[:3]]
+    assert "outer" in truths[0] and all(truths[1:]), out
+    assert all(set(run) <= {"unknown", "none"} for run in truths[1:]), out
+    for run in (1, 2, 3):
+        assert f"monitor: run {run}: score " in out, out
 
 
 def _wait_for_subscribers(monitor, *publishers, timeout: float = 30.0) -> None:

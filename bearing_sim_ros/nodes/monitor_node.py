@@ -62,8 +62,11 @@ Stamps that go back start a new run (:class:`SourceRun`): another recording play
 first (``render`` stamps from 0), a node started again with sim time from 0.  The ground truth is
 kept by stamp, and the diagnostics of the run before, stamped later than the new run's windows,
 answered for them (a healthy recording played after an outer-race one scored ``truth=outer``).
-One line says so; ``t=`` and the ground truth start afresh, and the exit lines take each run on its
-own.  Stamps that jump on (a node started again on the wall clock) need none of that.
+So does a node started again on the wall clock after the end status (or once the publisher was
+seen gone): its tables do not continue the last, its diagnostics' signal does not start where the
+last run ended (the next pass of ``play --loop`` does both), and the end status of the run before
+answered for its windows before its own first diagnostics.  One line says so; ``t=`` and the
+ground truth start afresh, and the exit lines take each run on its own.
 """
 from __future__ import annotations
 
@@ -111,17 +114,23 @@ class Window:
         self.samples = 0
         self.first_stamp = None
 
+    def continues(self, stamp_ns: int, channels) -> bool:
+        """Would a table stamped ``stamp_ns`` with ``channels`` continue the last one added: stamped
+        where its samples end (1 us of rounding allowed), the same channels?  Any later stamp where
+        the rate is not known yet (one table since a gap): that pair fixes it."""
+        if self._prev_stamp is None:
+            return True
+        if self.sample_rate is None:
+            return stamp_ns > self._prev_stamp
+        expected = self._prev_stamp + round(self._prev_width * NS / self.sample_rate)
+        # > 1 us off: a table is missing or time jumped
+        return abs(stamp_ns - expected) <= 1000 and list(channels) == self.channels
+
     def add(self, stamp_ns: int, channels, data: np.ndarray) -> bool:
-        contiguous = True
-        if self._prev_stamp is not None:
-            step = stamp_ns - self._prev_stamp
-            rate = self._prev_width * NS / step if step > 0 else None
-            expected = (self._prev_stamp + round(self._prev_width * NS / self.sample_rate)
-                        if self.sample_rate else None)
-            if self.sample_rate is None and rate is not None:
-                self.sample_rate = rate          # the first pair of tables fixes the rate
-            elif expected is None or abs(stamp_ns - expected) > 1000 or list(channels) != self.channels:
-                contiguous = False               # > 1 us off: a table is missing or time jumped
+        contiguous = self.continues(stamp_ns, channels)
+        if contiguous and self.sample_rate is None and self._prev_stamp is not None:
+            # the first pair of tables fixes the rate
+            self.sample_rate = self._prev_width * NS / (stamp_ns - self._prev_stamp)
         if not contiguous:
             self.gaps += 1
             self.clear()
@@ -318,12 +327,27 @@ class SourceRun:
         return lines + score_lines(self.verdicts, self.appeared.appearances(t0), t0)
 
 
-def went_back_line(what: str, stamp_ns: int, last_ns: int, number: int) -> str:
-    """The line that says a ``what`` (``table``, ``/diagnostics``) stamped ``stamp_ns`` came after
-    one of ``last_ns`` on the same topic, and so that run ``number`` starts."""
-    return (f"monitor: run {number}: a {what} stamped {stamp_ns / NS:.9f} s after one stamped {last_ns / NS:.9f} s: "
-            "the stamps went back (another recording played, a node started again with sim time from 0); "
-            "t= and the ground truth start afresh")
+def stamp_text(stamp_ns: int) -> str:
+    """A stamp (ns) in s to the ns: ``1764392867.120000000`` (a float of it is 0.2 us off)."""
+    return f"{stamp_ns // NS}.{stamp_ns % NS:09d}"
+
+
+def went_back(what: str, stamp_ns: int, last_ns: int) -> str:
+    """Why a run starts where a ``what`` (``table``, ``/diagnostics``) stamped ``stamp_ns`` came
+    after one of ``last_ns`` on the same topic (``new_run_line``)."""
+    return (f"a {what} stamped {stamp_text(stamp_ns)} s after one stamped {stamp_text(last_ns)} s: the stamps went back "
+            "(another recording played, a node started again with sim time from 0)")
+
+
+def started_again(what: str, stamp_ns: int, after: str) -> str:
+    """Why a run starts where a ``what`` stamped ``stamp_ns`` does not continue the run that ended
+    or was lost (``after``: ``its end status``, ``its publisher was gone``; ``new_run_line``)."""
+    return f"a {what} stamped {stamp_text(stamp_ns)} s not continuing the run before, after {after}: a node started again"
+
+
+def new_run_line(number: int, why: str) -> str:
+    """The line that says run ``number`` starts, and ``why``."""
+    return f"monitor: run {number}: {why}; t= and the ground truth start afresh"
 
 
 class MonitorNode(Node):
@@ -355,6 +379,9 @@ class MonitorNode(Node):
         # monotonic s since when every look at the graph found no publisher on accel, after tables
         # came and without an end status (None: one is there, or none is expected)
         self._gone_since = None
+        # the source was seen gone (no publisher, no end status) and nothing of it came since: what
+        # comes next that does not continue its run is a new run
+        self._lost = False
         # (window end ns, verdict, truth) of each verdict printed, for the score at the end: the
         # whole analysis (lines, scores, frequencies) kept per verdict was about 3 kB, and a
         # monitor left running grew by megabytes an hour
@@ -428,7 +455,12 @@ class MonitorNode(Node):
                           f"{self.truth_status!r}'s (--simulator names another)", file=self.out, flush=True)
                 continue
             if self.run.last_report is not None and stamp < self.run.last_report - SLACK_NS:
-                self._start_run("/diagnostics", stamp, self.run.last_report)
+                self._start_run(went_back("/diagnostics", stamp, self.run.last_report))
+            else:
+                after = self._started_again_after(values, stamp)
+                if after:
+                    self._start_run(started_again("/diagnostics", stamp, after))
+            self._lost = False
             self.run.last_report = stamp
             self.run.reports.append(truth)
             self.run.appeared.add(truth)
@@ -448,6 +480,27 @@ class MonitorNode(Node):
                     self.run.source_start = stamp - round(float(values[ground_truth.TIME_KEY]) * NS)
                 except ValueError:
                     pass
+
+    def _started_again_after(self, values: dict, stamp: int):
+        """After what (``its end status``, ``its publisher was gone``) a diagnostics of the watched
+        simulator stamped ``stamp`` with ``values`` begins a run of its own, or None where it goes
+        on with the run, or cannot tell (no ``simulated_s``).  Its signal's start (``stamp -
+        simulated_s``) tells: the next pass of ``play --loop`` starts where the end status said the
+        last ended; the same node back after it was seen gone (a pause longer than DDS's lease)
+        keeps its start."""
+        if self._ended is None and not self._lost:
+            return None
+        try:
+            start = stamp - round(float(values[ground_truth.TIME_KEY]) * NS)
+        except (KeyError, ValueError):
+            return None
+        if self._ended is not None:
+            if stamp < self._ended[0] - SLACK_NS or abs(start - self._ended[0]) <= 2 * SLACK_NS:
+                return None
+            return "its end status"
+        if self.run.source_start is not None and abs(start - self.run.source_start) <= 2 * SLACK_NS:
+            return None
+        return "its publisher was gone"
 
     def _check_scene(self, values: dict) -> None:
         """Say once (for each scene it runs) that the simulator runs another scene than
@@ -476,7 +529,12 @@ class MonitorNode(Node):
             return
         self.tables += 1
         if self.run.last_table is not None and stamp < self.run.last_table - SLACK_NS:
-            self._start_run("table", stamp, self.run.last_table)
+            self._start_run(went_back("table", stamp, self.run.last_table))
+        elif not self.window.continues(stamp, channels):
+            ended = self._ended is not None and stamp >= self._ended[0] - SLACK_NS
+            if ended or self._lost:
+                self._start_run(started_again("table", stamp, "its end status" if ended else "its publisher was gone"))
+        self._lost = False
         first_of_run = self.run.last_table is None      # of a new run (said), or the monitor's first
         self.run.last_table = stamp
         if self._ended is not None and stamp >= self._ended[0] - SLACK_NS:
@@ -485,7 +543,7 @@ class MonitorNode(Node):
             self.run.t0 = stamp
             # t= counts from here: the source's first table unless discovery or a late start
             # lost some, which this stamp (against a recording's first) tells
-            print(f"monitor: first table stamped {stamp // NS}.{stamp % NS:09d} s, t=0 below",
+            print(f"monitor: first table stamped {stamp_text(stamp)} s, t=0 below",
                   file=self.out, flush=True)
         if not self.window.add(stamp, channels, data) and not first_of_run:
             self.get_logger().warning("accel tables not contiguous (a table was lost or the source "
@@ -532,20 +590,20 @@ class MonitorNode(Node):
         print(format_verdict(t, result), file=self.out, flush=True)
         ground_truth.forget_before(reports, end, SLACK_NS)      # the next windows end later
 
-    def _start_run(self, what: str, stamp: int, last: int) -> None:
-        """A ``what`` stamped ``stamp`` (ns) came after one stamped ``last`` on its topic: a new run
-        of the source (another recording, a node started again with sim time from 0).  The run
-        before keeps its clock and truth for its windows still queued; said in one line, at most
-        every 5 s (two sources whose tables interleave would start one at every switch)."""
+    def _start_run(self, why: str) -> None:
+        """A new run of the source, for ``why`` (``went_back``, ``started_again``).  The run before
+        keeps its clock and truth for its windows still queued; said in one line, at most every
+        5 s (two sources whose tables interleave would start one at every switch)."""
         if self.run.windows:
             self.runs_before.append(self.run)
         self.run = SourceRun(self.run.number + 1)
         self._ended = None          # the end status was the run before's
+        self._lost = False
         self._speeds = []
         now = time.monotonic()
         if self._went_back_said_at is None or now - self._went_back_said_at >= 5.0:
             self._went_back_said_at = now
-            print(went_back_line(what, stamp, last, self.run.number), file=self.out, flush=True)
+            print(new_run_line(self.run.number, why), file=self.out, flush=True)
 
     def exit_lines(self) -> list:
         """The lines after the verdict count at exit: those of the run (``SourceRun.exit_lines``);
@@ -572,6 +630,7 @@ class MonitorNode(Node):
             self._gone_since = None
         elif self._gone_since is None:
             self._gone_since = time.monotonic()
+            self._lost = True
             if self.end_wait is None:
                 until = "Ctrl-C ends the monitor"
             else:
