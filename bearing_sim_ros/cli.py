@@ -2,7 +2,8 @@
 
 Exit status: 0 done; 2 a user mistake (one line naming what is wrong and what is allowed, never a
 traceback); 1 an internal error; 3 ``monitor --count N`` whose simulator's run ended before N
-verdicts; 141 (quietly) when the reader of standard output went away.  Each subcommand's work lives in its own module; this file only
+verdicts; 4 ``monitor`` with ``--count`` or ``--end-wait`` whose source went away without an end
+status (killed, crashed, lost to discovery); 141 (quietly) when the reader of standard output went away.  Each subcommand's work lives in its own module; this file only
 parses arguments and maps errors to exit codes.
 """
 from __future__ import annotations
@@ -18,6 +19,9 @@ EXIT_STDOUT_CLOSED = 141        # 128 + SIGPIPE: what the shell reports for `yes
 # monitor --count N: the run it watched ended (its end status) and no table came for --end-wait
 # seconds before N verdicts; a script must tell that from N verdicts (0) without parsing lines
 EXIT_COUNT_NOT_REACHED = 3
+# monitor with --count or --end-wait: the publisher of the tables went away without the simulator's
+# end status (a node killed or crashed, its machine off) and none came back for --end-wait seconds
+EXIT_SOURCE_LOST = 4
 # monitor --end-wait (s): long enough for the tables still queued behind the end status and the
 # next pass of play --loop; a node restarted in its place takes a second or two to publish
 MONITOR_END_WAIT_S, MONITOR_END_WAIT_RANGE_S = 5.0, (0.0, 3600.0)
@@ -239,10 +243,12 @@ def build_parser() -> argparse.ArgumentParser:
                         "(default: %(default)g)")
     s.add_argument("--count", type=_nonnegative(int), default=0, metavar="N",
                    help="stop after this many verdicts (default: %(default)s = never); where the simulator's "
-                        f"run ends before, exit status {EXIT_COUNT_NOT_REACHED} after --end-wait")
+                        f"run ends before, exit status {EXIT_COUNT_NOT_REACHED} after --end-wait; where its "
+                        f"source goes away without an end status, {EXIT_SOURCE_LOST}")
     s.add_argument("--end-wait", type=_in_range(*MONITOR_END_WAIT_RANGE_S, "s"), default=None, metavar="SECONDS",
                    help="once the simulator's run ended (its end status), end when no table has come for this "
-                        f"long, {MONITOR_END_WAIT_RANGE_S[0]:g} to {MONITOR_END_WAIT_RANGE_S[1]:g} (default: "
+                        "long; once no publisher of the tables is left without one (a node killed: DDS notices "
+                        f"in about 20 s), when none came back for this long; {MONITOR_END_WAIT_RANGE_S[0]:g} to {MONITOR_END_WAIT_RANGE_S[1]:g} (default: "
                         f"{MONITOR_END_WAIT_S:g} with --count, else wait on until Ctrl-C)")
     s.add_argument("--scene", default=None, metavar="S",
                    help="scene giving the bearing geometry (default: er16k_outer_race); the monitor says once "

@@ -42,6 +42,7 @@ def test_every_option_has_help_with_its_default():
     ("play", "--rate", ["real time", "1"]),
     ("run", "--duration", ["seconds", "10"]),
     ("monitor", "--window", ["seconds", "4"]),
+    ("monitor", "--end-wait", ["0 to 3600", "default: 5 with --count"]),
     ("report", "--window", ["seconds", "default: 1)", "0.5 to 120"]),
 ])
 def test_numeric_options_give_unit_and_default(command, option, words):

@@ -223,10 +223,10 @@ def test_a_verdict_waits_for_the_diagnostics_stamped_at_its_window_end(ros_env):
         x = np.random.default_rng(0).normal(size=(15000, 2))
         shaft = 1600 * 2 * np.pi / 60
         verdict(x, ["accel_x", "accel_y"], 15000.0, node.scene.bearing, shaft / (2 * np.pi))   # imports scipy
-        node._t0 = NS
-        node.reports.extend(_reports(((1, "none"),), onsets={}))
+        node.run.t0 = NS
+        node.run.reports.extend(_reports(((1, "none"),), onsets={}))
         late = _reports(((2, "outer"),), onsets={"outer": 1.5})
-        threading.Timer(0.15, node.reports.extend, (late,)).start()
+        threading.Timer(0.15, node.run.reports.extend, (late,)).start()
         t = time.monotonic()
         node._analyse(2 * NS, x, ["accel_x", "accel_y"], 15000.0, shaft, time.monotonic() + TRUTH_GRACE_S)
         waited = time.monotonic() - t
@@ -259,8 +259,8 @@ def test_a_monitor_left_running_keeps_little_per_verdict(ros_env):
     node = MonitorNode(load_scene("er16k_outer_race"), window=1.0, out=Discard(), context=ctx)
     x = np.random.default_rng(0).normal(size=(15000, 2))
     shaft = 1600 * 2 * np.pi / 60
-    node._t0 = NS
-    node.reports.extend(_reports(((1000, "none"),), onsets={}))
+    node.run.t0 = NS
+    node.run.reports.extend(_reports(((1000, "none"),), onsets={}))
 
     def analyse(k):
         node._analyse((2 + k) * NS, x, ["accel_x", "accel_y"], 15000.0, shaft, 0.0)
@@ -508,6 +508,92 @@ def test_a_monitor_with_a_count_goes_on_across_the_seams_of_play_loop(ros_env, b
             play.close()
     assert out.count("run ended: duration 1 s reached") >= 2, out
     assert "monitor: 3 verdicts from 300 tables, 0 gaps" in out and "of --count" not in out, out
+    assert "monitor: run " not in out, out      # the passes of one recording are one run
+
+
+def test_a_monitor_with_a_count_ends_when_its_node_is_killed(ros_env, bearing_sim_exe, tmp_path):
+    """A node killed (SIGKILL: a crash, its machine off) sends no end status, and ``monitor
+    --count N`` waited forever: a CI script running both hung.  Now the monitor sees no publisher
+    left on ``accel`` (DDS drops a dead one when its lease runs out, about 20 s with Fast DDS),
+    says so, waits ``--end-wait`` for one to come back, and exits with status 4 and one line that
+    says how many verdicts it got of N."""
+    monitor = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / "monitor.log",
+                          command=("monitor", "--window", "1", "--count", "50", "--end-wait", "1"))
+    node = None
+    try:
+        monitor.wait_for_output("envelope analysis every")
+        node = NodeProcess(bearing_sim_exe, ros_env, {"fidelity": "kinematic", "wait_for_subscribers": 1},
+                           tmp_path / "node.log")
+        monitor.wait_for_output("t=1.00s", timeout=90)
+        node.kill()
+        assert monitor.wait(60) == 4, monitor.output()
+        out = monitor.output()
+    finally:
+        monitor.close()
+        if node is not None:
+            node.close()
+    assert "run ended" not in out, out
+    assert ("monitor: no publisher on /accel any more and no end status from bearing_sim (killed, crashed, a play "
+            "stopped, or lost to discovery); waiting for one (a node started again; without one for 1 s the monitor ends)") in out, out
+    verdicts = len(VERDICT.findall(out))
+    assert 1 <= verdicts < 50, out
+    assert (f"monitor: {verdicts} of --count 50 verdicts: no publisher on /accel for 1 s and no end status from "
+            "bearing_sim (killed, crashed, a play stopped, or lost to discovery; exit status 4)") in out, out
+    assert f"monitor: {verdicts} verdicts from " in out, out
+
+
+def test_a_node_started_again_after_an_end_or_a_kill_starts_a_new_run(ros_env, bearing_sim_exe, tmp_path):
+    """Nodes started one after another (on the wall clock: their stamps jump on) beside one
+    monitor in 0.5 s windows: an outer-race one that ends (its end status), a healthy one, killed
+    (its publisher seen gone), a healthy one again.  A new node's first window ends before its
+    first diagnostics (at 1 s), and the run before's last truth answered for it: the healthy
+    node's first line said ``truth=outer``.  Now a table or diagnostics that do not continue the
+    run after its end status, or after its publisher was seen gone, start a new run: its first
+    window's truth is unknown, never the run before's."""
+    import signal
+
+    monitor = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / "monitor.log",
+                          command=("monitor", "--window", "0.5", "--scene", "cwru_6205_normal"))
+    nodes = []
+
+    def start(scene, **params):
+        nodes.append(NodeProcess(bearing_sim_exe, ros_env, {"fidelity": "kinematic", "wait_for_subscribers": 1,
+                                                            **params},
+                                 tmp_path / f"node{len(nodes)}.log", command=("node", "--scene", scene)))
+        return nodes[-1]
+
+    try:
+        monitor.wait_for_output("envelope analysis every")
+        assert start("cwru_6205_or007_6", duration=1.5).wait(90) == 0
+        monitor.wait_for_output("run ended", timeout=10)
+        healthy = start("cwru_6205_normal")
+        deadline = time.monotonic() + 90
+        while len(VERDICT.findall(monitor.output())) < 5 and time.monotonic() < deadline:
+            time.sleep(0.1)
+        healthy.kill()
+        monitor.wait_for_output("monitor: no publisher on /accel any more", timeout=60)
+        assert start("cwru_6205_normal", duration=1.5).wait(90) == 0
+        deadline = time.monotonic() + 10            # its last window and end status, as queued
+        while monitor.output().count("run ended") < 2 and time.monotonic() < deadline:
+            time.sleep(0.1)
+        time.sleep(1.0)
+        monitor.send(signal.SIGINT)
+        assert monitor.wait(20) == 0, monitor.output()
+        out = monitor.output()
+    finally:
+        monitor.close()
+        for node in nodes:
+            node.close()
+    runs = re.findall(r"^monitor: run (\d): a (?:table|/diagnostics) stamped [\d.]+ s not continuing the run "
+                      r"before, after (its end status|its publisher was gone): a node started again; t= and the "
+                      r"ground truth start afresh$", out, re.M)
+    assert runs == [("2", "its end status"), ("3", "its publisher was gone")], out
+    parts = re.split(r"^monitor: run \d: .*$", out, flags=re.M)
+    truths = [[truth for _t, _v, truth in VERDICT.findall(part)] for part in parts[:3]]
+    assert "outer" in truths[0] and all(truths[1:]), out
+    assert all(set(run) <= {"unknown", "none"} for run in truths[1:]), out
+    for run in (1, 2, 3):
+        assert f"monitor: run {run}: score " in out, out
 
 
 def _wait_for_subscribers(monitor, *publishers, timeout: float = 30.0) -> None:
@@ -585,6 +671,41 @@ def _play_into(monitor, bearing_sim_exe, recording, env, *options) -> str:
     assert play.returncode == 0, play.stderr
     assert monitor.wait(30) == 0, monitor.output()
     return monitor.output()
+
+
+def test_a_recording_played_after_another_starts_a_new_run_of_its_own(ros_env, bearing_sim_exe, tmp_path):
+    """Two recordings played one after the other to one monitor (render stamps each from 0): an
+    outer-race one, then a healthy one.  The ground truth is kept by stamp, and the outer one's
+    diagnostics, stamped later than the healthy one's first window, answered for it: its line said
+    ``truth=outer`` and the score counted a healthy verdict wrong.  Now stamps that go back start
+    a new run, said in one line: t= and the truth start afresh, and the exit lines give the score
+    over all verdicts, then each run's."""
+    outer, healthy = tmp_path / "outer.mcap", tmp_path / "healthy.mcap"
+    render("cwru_6205_or007_6", 2.0, outer, fidelity="kinematic", seed=1, progress=False)
+    render("cwru_6205_normal", 2.0, healthy, fidelity="kinematic", seed=1, progress=False)
+    monitor = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / "monitor.log",
+                          command=("monitor", "--window", "1", "--count", "4", "--end-wait", "60",
+                                   "--scene", "cwru_6205_normal"))
+    try:
+        for recording in (outer, healthy):
+            play = subprocess.run([bearing_sim_exe, "play", str(recording), "--wait", "15"],
+                                  env=ros_env, capture_output=True, text=True, timeout=60)
+            assert play.returncode == 0, play.stderr
+        assert monitor.wait(30) == 0, monitor.output()
+        out = monitor.output()
+    finally:
+        monitor.close()
+    lines = [(t, v, truth) for t, v, truth in VERDICT.findall(out)]
+    assert lines == [("1.00", "outer", "outer"), ("2.00", "outer", "outer"),
+                     ("1.00", "healthy", "none"), ("2.00", "healthy", "none")], out
+    assert len(re.findall(r"^monitor: run 2: a (table|/diagnostics) stamped [\d.]+ s after one stamped [\d.]+ s: "
+                          r"the stamps went back .*; t= and the ground truth start afresh$", out, re.M)) == 1, out
+    assert out.count("monitor: first table stamped 0.000000000 s, t=0 below") == 2, out
+    assert ("monitor: score 4 of 4 verdicts agree with the truth, 0 truth=unknown\n"
+            "monitor: run 1: first table at 0.000 s of the source's signal (by its diagnostics): none lost\n"
+            "monitor: run 1: score 2 of 2 verdicts agree with the truth, 0 truth=unknown\n"
+            "monitor: run 2: first table at 0.000 s of the source's signal (by its diagnostics): none lost\n"
+            "monitor: run 2: score 2 of 2 verdicts agree with the truth, 0 truth=unknown") in out, out
 
 
 def test_monitor_loses_no_table_of_a_recording_played_at_4x(ros_env, bearing_sim_exe, tmp_path):
@@ -790,7 +911,7 @@ def _verdicts_of_a_recording(recording, scene, window=1.0):
     score line."""
     node, out = _fed_monitor(recording, scene, window)
     lines = [line for line in out.getvalue().splitlines() if " verdict=" in line]
-    return lines, score_lines(node.verdicts, [], node._t0)[0]
+    return lines, score_lines(node.verdicts, [], node.run.t0)[0]
 
 
 def test_the_monitor_keeps_a_few_diagnostics_and_scores_as_with_all_of_them(ros_env, tmp_path):
@@ -816,15 +937,15 @@ def test_the_monitor_keeps_a_few_diagnostics_and_scores_as_with_all_of_them(ros_
             deadline = time.monotonic() + 30.0
             while len(node.verdicts) < node.windows_queued and time.monotonic() < deadline:
                 time.sleep(0.005)
-        held.append(len(node.reports))
+        held.append(len(node.run.reports))
 
     node, out = _fed_monitor(recording, load_scene(str(scene)), after=after)
     assert len(every) == 12 and len(node.verdicts) == 12 and max(held) <= 2, (len(every), max(held))
     printed = [line.split(" truth=")[1].split()[0] for line in out.getvalue().splitlines() if " truth=" in line]
     assert printed == [truth_text(truth_at(every, end)) for end, _v, _truth in node.verdicts]
     assert printed[:2] == ["none", "none"] and set(printed[3:]) == {"outer"}
-    t0 = node._t0
-    lines = score_lines(node.verdicts, node.appeared.appearances(t0), t0)
+    t0 = node.run.t0
+    lines = score_lines(node.verdicts, node.run.appeared.appearances(t0), t0)
     assert lines == score_lines(node.verdicts, _appeared(every, t0), t0)
     assert lines[1].startswith("monitor: latency ") and lines[1].endswith("outer appeared at t=2.50s, first called at t=3.00s"), lines
 
@@ -856,6 +977,58 @@ def test_the_monitor_looks_for_the_lines_where_the_cage_of_state_puts_them(ros_e
     assert len(lines) == 2 and all(" verdict=outer truth=outer " in line for line in lines), lines
     found, expected = map(float, re.search(r"bpfo ([\d.]+)/([\d.]+)Hz", lines[0]).groups())
     assert abs(found - expected) < 1.0 and expected < 0.95 * load_scene(str(scene)).fault_frequencies()["bpfo"], lines
+
+
+def test_a_run_started_by_diagnostics_that_go_back_keeps_each_runs_latency(ros_env, tmp_path):
+    """One recording whose pit appears at 0.5 s, fed to the monitor's callbacks twice in a row (a
+    recording played again; stamps from 0 each time), the second time with its first /diagnostics
+    before its tables (DDS orders no topic against another).  The diagnostics going back start the
+    new run (one line), its tables then do not start another, and each run has its own latency
+    line on its own t= clock; before, the second appearance at the same stamps was no appearance
+    at all (one latency line), and the first run's diagnostics answered for the second's windows."""
+    import io
+
+    import rclpy
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.serialization import deserialize_message
+    from sensor_msgs.msg import PointCloud2
+
+    from bearing_sim_ros.recording.reader import open_recording
+
+    scene = tmp_path / "or_onset.yaml"
+    scene.write_text(load_scene("cwru_6205_or007_6").source_text.replace(
+        "clock: 6, profile: geometric}", "clock: 6, profile: geometric, onset_s: 0.5}"))
+    recording = tmp_path / "onset.mcap"
+    render(str(scene), 2.0, recording, fidelity="kinematic", seed=1, progress=False)
+    with open_recording(recording) as rec:
+        messages = [(topic, data) for topic, _type, _log_ns, data in rec.messages(["/accel", "/diagnostics"])]
+    first_diagnostics = next(k for k, (topic, _data) in enumerate(messages) if topic == "/diagnostics")
+    again = [messages[first_diagnostics]] + messages[:first_diagnostics] + messages[first_diagnostics + 1:]
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx)
+    out = io.StringIO()
+    node = MonitorNode(load_scene(str(scene)), window=1.0, out=out, context=ctx)
+    feed = {"/accel": (PointCloud2, node._on_accel), "/diagnostics": (DiagnosticArray, node._on_diagnostics)}
+    try:
+        for fed in (messages, again):
+            for topic, data in fed:
+                cls, callback = feed[topic]
+                callback(deserialize_message(data, cls))
+            deadline = time.monotonic() + 30.0      # as in real time: each recording judged as it plays
+            while len(node.verdicts) < node.windows_queued and time.monotonic() < deadline:
+                time.sleep(0.005)
+    finally:
+        node.destroy_node()             # the analyses queued finish first
+        rclpy.shutdown(context=ctx)
+    text = out.getvalue()
+    assert len(re.findall(r"^monitor: run \d+: ", text, re.M)) == 1, text
+    assert re.search(r"^monitor: run 2: a /diagnostics stamped 1\.000000000 s after one stamped 2\.000000000 s: "
+                     r"the stamps went back", text, re.M), text
+    assert [truth for _t, _v, truth in VERDICT.findall(text)] == ["outer"] * 4, text
+    lines = node.exit_lines()
+    assert lines[0] == "monitor: score 4 of 4 verdicts agree with the truth, 0 truth=unknown", lines
+    for run in (1, 2):
+        assert f"monitor: run {run}: latency 0.50s: outer appeared at t=0.50s, first called at t=1.00s" in lines, lines
 
 
 def test_the_monitor_says_no_tables_only_before_the_first(ros_env, bearing_sim_exe, tmp_path):

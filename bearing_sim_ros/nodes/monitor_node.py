@@ -52,7 +52,23 @@ The simulator's end status (``run: ended`` in its last ``/diagnostics``) is prin
 monitor waits on for a node started again or the next pass of ``play --loop``; with ``--count``
 (or ``--end-wait``) only until no table has come for ``end_wait`` s after it: a script that ran
 a node with a ``duration`` beside ``monitor --count N`` waited forever for verdicts that could
-not come.  Short of the count, that is exit status ``cli.EXIT_COUNT_NOT_REACHED`` (3).
+not come.  Short of the count, that is exit status ``cli.EXIT_COUNT_NOT_REACHED`` (3).  A node
+killed or crashed (or its machine off) sends no end status: the tables just stop, as they do while a
+node with ``use_sim_time`` waits for ``/clock``.  What tells the two apart is the ROS graph: a node
+gone leaves no publisher on ``accel`` (DDS drops one that died when its lease runs out: about 20 s
+with Fast DDS).  The monitor says so in one line when it sees none left after tables came, waits on
+for one to come back (a node restarted in its place), and with ``--count`` (or ``--end-wait``) ends
+after ``end_wait`` s without one, exit status ``cli.EXIT_SOURCE_LOST`` (4).
+
+Stamps that go back start a new run (:class:`SourceRun`): another recording played after the
+first (``render`` stamps from 0), a node started again with sim time from 0.  The ground truth is
+kept by stamp, and the diagnostics of the run before, stamped later than the new run's windows,
+answered for them (a healthy recording played after an outer-race one scored ``truth=outer``).
+So does a node started again on the wall clock after the end status (or once the publisher was
+seen gone): its tables do not continue the last, its diagnostics' signal does not start where the
+last run ended (the next pass of ``play --loop`` does both), and the end status of the run before
+answered for its windows before its own first diagnostics.  One line says so; ``t=`` and the
+ground truth start afresh, and the exit lines take each run on its own.
 """
 from __future__ import annotations
 
@@ -77,6 +93,8 @@ FAULT_NAMES = {"outer": "outer-race fault", "inner": "inner-race fault", "ball":
 WARM_UP_RATE, WARM_UP_SAMPLES = 15000.0, 15000    # Hz and samples: the window analysed at start
 TRUTH_GRACE_S = 0.25        # wall s a verdict waits for the diagnostics stamped at its window's end
 SLACK_NS = 1000             # stamps this close count as the same instant (rounding to the ns)
+# what leaves no publisher on accel and no end status (a play stopped by a signal sends none either)
+SOURCE_LOST_CAUSES = "killed, crashed, a play stopped, or lost to discovery"
 
 
 class Window:
@@ -98,17 +116,23 @@ class Window:
         self.samples = 0
         self.first_stamp = None
 
+    def continues(self, stamp_ns: int, channels) -> bool:
+        """Would a table stamped ``stamp_ns`` with ``channels`` continue the last one added: stamped
+        where its samples end (1 us of rounding allowed), the same channels?  Any later stamp where
+        the rate is not known yet (one table since a gap): that pair fixes it."""
+        if self._prev_stamp is None:
+            return True
+        if self.sample_rate is None:
+            return stamp_ns > self._prev_stamp
+        expected = self._prev_stamp + round(self._prev_width * NS / self.sample_rate)
+        # > 1 us off: a table is missing or time jumped
+        return abs(stamp_ns - expected) <= 1000 and list(channels) == self.channels
+
     def add(self, stamp_ns: int, channels, data: np.ndarray) -> bool:
-        contiguous = True
-        if self._prev_stamp is not None:
-            step = stamp_ns - self._prev_stamp
-            rate = self._prev_width * NS / step if step > 0 else None
-            expected = (self._prev_stamp + round(self._prev_width * NS / self.sample_rate)
-                        if self.sample_rate else None)
-            if self.sample_rate is None and rate is not None:
-                self.sample_rate = rate          # the first pair of tables fixes the rate
-            elif expected is None or abs(stamp_ns - expected) > 1000 or list(channels) != self.channels:
-                contiguous = False               # > 1 us off: a table is missing or time jumped
+        contiguous = self.continues(stamp_ns, channels)
+        if contiguous and self.sample_rate is None and self._prev_stamp is not None:
+            # the first pair of tables fixes the rate
+            self.sample_rate = self._prev_width * NS / (stamp_ns - self._prev_stamp)
         if not contiguous:
             self.gaps += 1
             self.clear()
@@ -287,6 +311,60 @@ def source_start_line(t0_ns: int, source_start_ns: int):
             f"discovery lost them)")
 
 
+class SourceRun:
+    """What the monitor knows of one run of its source, along which stamps only go on: a node from
+    its start (a node started again on the wall clock, the passes of ``play --loop``: their stamps
+    go on too), one recording played.  Its own ``t=`` clock, ground truth and verdicts."""
+
+    def __init__(self, number: int):
+        self.number = number        # 1, 2, ... in the order the monitor saw them
+        self.t0 = None              # stamp (ns) of its first table taken: its t= counts from there
+        self.source_start = None    # stamp (ns) of the source's signal time 0, by its diagnostics
+        # ground_truth.Truth of the /diagnostics that the windows still to come may ask about
+        # (stamps in ns; ground_truth.forget_before after each verdict), and what the latency lines
+        # need of them all: a monitor kept every 1 Hz message for those, about 1 kB an hour
+        self.reports = []
+        self.appeared = ground_truth.AppearanceLog(SLACK_NS)
+        self.verdicts = []          # (window end ns, verdict, truth) of its own verdicts
+        self.windows = 0            # its windows queued for analysis
+        self.last_table = None      # stamp (ns) of its latest table
+        self.last_report = None     # stamp (ns) of its simulator's latest /diagnostics
+
+    def exit_lines(self) -> list:
+        """Where its first table was on the source's signal (where the diagnostics say), then the
+        score and latency lines of its verdicts (``score_lines``)."""
+        t0 = self.t0 or 0
+        lines = []
+        if self.t0 is not None and self.source_start is not None:
+            line = source_start_line(self.t0, self.source_start)
+            if line:
+                lines.append(line)
+        return lines + score_lines(self.verdicts, self.appeared.appearances(t0), t0)
+
+
+def stamp_text(stamp_ns: int) -> str:
+    """A stamp (ns) in s to the ns: ``1764392867.120000000`` (a float of it is 0.2 us off)."""
+    return f"{stamp_ns // NS}.{stamp_ns % NS:09d}"
+
+
+def went_back(what: str, stamp_ns: int, last_ns: int) -> str:
+    """Why a run starts where a ``what`` (``table``, ``/diagnostics``) stamped ``stamp_ns`` came
+    after one of ``last_ns`` on the same topic (``new_run_line``)."""
+    return (f"a {what} stamped {stamp_text(stamp_ns)} s after one stamped {stamp_text(last_ns)} s: the stamps went back "
+            "(another recording played, a node started again with sim time from 0)")
+
+
+def started_again(what: str, stamp_ns: int, after: str) -> str:
+    """Why a run starts where a ``what`` stamped ``stamp_ns`` does not continue the run that ended
+    or was lost (``after``: ``its end status``, ``its publisher was gone``; ``new_run_line``)."""
+    return f"a {what} stamped {stamp_text(stamp_ns)} s not continuing the run before, after {after}: a node started again"
+
+
+def new_run_line(number: int, why: str) -> str:
+    """The line that says run ``number`` starts, and ``why``."""
+    return f"monitor: run {number}: {why}; t= and the ground truth start afresh"
+
+
 class MonitorNode(Node):
     """Subscribes to ``accel``, ``state`` and ``/diagnostics``; prints a verdict every ``window``
     s of signal, with the ground truth the diagnostics of ``simulator`` give (its full name,
@@ -313,23 +391,27 @@ class MonitorNode(Node):
         # ns: the end of the run's last table; monotonic s it came); and when the last table came
         self._ended = None
         self._last_table_at = None
+        # monotonic s since when every look at the graph found no publisher on accel, after tables
+        # came and without an end status (None: one is there, or none is expected)
+        self._gone_since = None
+        # the source was seen gone (no publisher, no end status) and nothing of it came since: what
+        # comes next that does not continue its run is a new run
+        self._lost = False
         # (window end ns, verdict, truth) of each verdict printed, for the score at the end: the
         # whole analysis (lines, scores, frequencies) kept per verdict was about 3 kB, and a
         # monitor left running grew by megabytes an hour
         self.verdicts = []
-        # ground_truth.Truth of the /diagnostics that the windows still to come may ask about
-        # (stamps in ns; ground_truth.forget_before after each verdict), and what the latency lines
-        # need of them all: a monitor kept every 1 Hz message for those, about 1 kB an hour
-        self.reports = []
-        self.appeared = ground_truth.AppearanceLog(SLACK_NS)
+        # the run of the source the tables now come from, and the runs before it that have windows
+        # (their verdicts, some maybe still in the analysis queue, and the lines they give at exit)
+        self.run = SourceRun(1)
+        self.runs_before = []
+        self._went_back_said_at = None  # monotonic s of the last run-started line (throttled)
         self.simulator = simulator_name(self.resolve_topic_name(TOPIC_ACCEL), simulator)
         self._several_said = False
         self.truth_status = ground_truth.status_name(self.simulator)
         self.ignored = set()        # names of other simulators' statuses, said once each
         self.scenes_said = set()    # the simulator's (scene, bearing) that are not --scene's, said once each
         self._speeds = []
-        self._t0 = None
-        self._source_start = None   # stamp (ns) of the source's signal time 0, by its diagnostics
         self._warned = False
         # one worker: verdicts come out in signal order; the windows wait in its queue, so an
         # analysis slower than the signal would grow it (8 ms per 3 s window here, no danger)
@@ -359,6 +441,15 @@ class MonitorNode(Node):
             return False
         return now - max(self._ended[1], self._last_table_at or 0.0) >= self.end_wait
 
+    def source_lost(self, now: float) -> bool:
+        """Has the source gone away without an end status, by ``end_wait``: tables came, then every
+        look at the graph for ``end_wait`` s found no publisher on ``accel`` (``check_sources``)
+        and no table came, and every window taken is analysed.  Tables that merely stop (a node
+        waiting for ``/clock``, a stalled one) leave its publisher: that is no loss."""
+        if self.end_wait is None or self._gone_since is None or self.windows_done < self.windows_queued:
+            return False
+        return now - max(self._gone_since, self._last_table_at) >= self.end_wait
+
     def _on_state(self, msg):
         names = list(msg.name)
         if "shaft" in names and len(msg.velocity) == len(names):
@@ -381,8 +472,16 @@ class MonitorNode(Node):
                     print(f"monitor: ground truth of {status.name!r} ignored: truth= is "
                           f"{self.truth_status!r}'s (--simulator names another)", file=self.out, flush=True)
                 continue
-            self.reports.append(truth)
-            self.appeared.add(truth)
+            if self.run.last_report is not None and stamp < self.run.last_report - SLACK_NS:
+                self._start_run(went_back("/diagnostics", stamp, self.run.last_report))
+            else:
+                after = self._started_again_after(values, stamp)
+                if after:
+                    self._start_run(started_again("/diagnostics", stamp, after))
+            self._lost = False
+            self.run.last_report = stamp
+            self.run.reports.append(truth)
+            self.run.appeared.add(truth)
             self._check_scene(values)
             if values.get(RUN_KEY) == RUN_ENDED:
                 # the simulator's end status (its last /diagnostics): the tables stopped because the
@@ -394,11 +493,32 @@ class MonitorNode(Node):
                     until = f"without a table for {self.end_wait:g} s the monitor ends"
                 print(f"monitor: {self.simulator}: {status.message}; waiting for more (a node started "
                       f"again, the next pass of play --loop; {until})", file=self.out, flush=True)
-            if self._source_start is None and ground_truth.TIME_KEY in values:
+            if self.run.source_start is None and ground_truth.TIME_KEY in values:
                 try:
-                    self._source_start = stamp - round(float(values[ground_truth.TIME_KEY]) * NS)
+                    self.run.source_start = stamp - round(float(values[ground_truth.TIME_KEY]) * NS)
                 except ValueError:
                     pass
+
+    def _started_again_after(self, values: dict, stamp: int):
+        """After what (``its end status``, ``its publisher was gone``) a diagnostics of the watched
+        simulator stamped ``stamp`` with ``values`` begins a run of its own, or None where it goes
+        on with the run, or cannot tell (no ``simulated_s``).  Its signal's start (``stamp -
+        simulated_s``) tells: the next pass of ``play --loop`` starts where the end status said the
+        last ended; the same node back after it was seen gone (a pause longer than DDS's lease)
+        keeps its start."""
+        if self._ended is None and not self._lost:
+            return None
+        try:
+            start = stamp - round(float(values[ground_truth.TIME_KEY]) * NS)
+        except (KeyError, ValueError):
+            return None
+        if self._ended is not None:
+            if stamp < self._ended[0] - SLACK_NS or abs(start - self._ended[0]) <= 2 * SLACK_NS:
+                return None
+            return "its end status"
+        if self.run.source_start is not None and abs(start - self.run.source_start) <= 2 * SLACK_NS:
+            return None
+        return "its publisher was gone"
 
     def _check_scene(self, values: dict) -> None:
         """Say once (for each scene it runs) that the simulator runs another scene than
@@ -426,15 +546,24 @@ class MonitorNode(Node):
                                       throttle_duration_sec=5.0)
             return
         self.tables += 1
+        if self.run.last_table is not None and stamp < self.run.last_table - SLACK_NS:
+            self._start_run(went_back("table", stamp, self.run.last_table))
+        elif not self.window.continues(stamp, channels):
+            ended = self._ended is not None and stamp >= self._ended[0] - SLACK_NS
+            if ended or self._lost:
+                self._start_run(started_again("table", stamp, "its end status" if ended else "its publisher was gone"))
+        self._lost = False
+        first_of_run = self.run.last_table is None      # of a new run (said), or the monitor's first
+        self.run.last_table = stamp
         if self._ended is not None and stamp >= self._ended[0] - SLACK_NS:
             self._ended = None      # a table after the end: the next pass, a node started again
-        if self._t0 is None:
-            self._t0 = stamp
+        if self.run.t0 is None:
+            self.run.t0 = stamp
             # t= counts from here: the source's first table unless discovery or a late start
             # lost some, which this stamp (against a recording's first) tells
-            print(f"monitor: first table stamped {stamp // NS}.{stamp % NS:09d} s, t=0 below",
+            print(f"monitor: first table stamped {stamp_text(stamp)} s, t=0 below",
                   file=self.out, flush=True)
-        if not self.window.add(stamp, channels, data):
+        if not self.window.add(stamp, channels, data) and not first_of_run:
             self.get_logger().warning("accel tables not contiguous (a table was lost or the source "
                                       "restarted): starting the window again", throttle_duration_sec=5.0)
             self._speeds = []
@@ -452,25 +581,28 @@ class MonitorNode(Node):
             cage = float(np.mean(cages)) if cages else None
             moved = max(spread([s[1] for s in speeds]), spread(cages))
             self.windows_queued += 1
+            self.run.windows += 1
             self._analysis.submit(self._analyse, end, self.window.take(), channels, fs, shaft,
-                                  time.monotonic() + TRUTH_GRACE_S, cage, moved)
+                                  time.monotonic() + TRUTH_GRACE_S, self.run, cage, moved)
 
     def _analyse(self, end: int, x: np.ndarray, channels, fs: float, shaft: float, grace: float,
-                 cage: float | None = None, moved: float = 0.0) -> None:
+                 run: SourceRun | None = None, cage: float | None = None, moved: float = 0.0) -> None:
         """On the analysis thread: one verdict with the truth at the window's ``end`` (ns),
-        printed.  ``grace``: until when (monotonic s) to wait for the diagnostics stamped there.
+        printed.  ``grace``: until when (monotonic s) to wait for the diagnostics stamped there;
+        ``run``: the run of the source the window is of (default the current one), whose clock
+        and ground truth it takes: a new run may start while the window waits in the queue.
         ``shaft``, ``cage``: their mean speeds in the window (rad/s; ``cage`` None without it in
         ``state``); ``moved``: how far they moved in it (``envelope.spread``), beyond
         ``STEADY_LINES`` no verdict (``unknown``)."""
         try:
-            self._verdict_line(end, x, channels, fs, shaft, grace, cage, moved)
+            self._verdict_line(end, x, channels, fs, shaft, grace, run or self.run, cage, moved)
         finally:
             self.windows_done += 1
 
     def _verdict_line(self, end: int, x: np.ndarray, channels, fs: float, shaft: float, grace: float,
-                      cage: float | None = None, moved: float = 0.0) -> None:
-        """``_analyse``'s work: the verdict on the window that ends at ``end``, printed."""
-        t = (end - self._t0) / NS
+                      run: SourceRun, cage: float | None = None, moved: float = 0.0) -> None:
+        """``_analyse``'s work: the verdict on the window of ``run`` that ends at ``end``, printed."""
+        t = (end - run.t0) / NS
         shaft_hz = abs(shaft) / (2 * np.pi)
         try:
             if moved > STEADY_LINES:
@@ -482,19 +614,64 @@ class MonitorNode(Node):
         except Exception as exc:  # noqa: BLE001 - a failed analysis must not end the monitor silently
             self.get_logger().error(f"envelope analysis at t={t:.2f}s failed: {exc}")
             return
-        while time.monotonic() < grace and not (self.reports and self.reports[-1].t >= end - SLACK_NS):
+        reports = run.reports
+        while time.monotonic() < grace and not (reports and reports[-1].t >= end - SLACK_NS):
             time.sleep(0.01)        # the diagnostics stamped at ``end`` (if any) are not in yet
-        result.update(end_ns=end, truth=truth_at(self.reports, end))
-        self.verdicts.append((end, result["verdict"], result["truth"]))
+        result.update(end_ns=end, truth=truth_at(reports, end))
+        scored = (end, result["verdict"], result["truth"])
+        self.verdicts.append(scored)
+        run.verdicts.append(scored)
         print(format_verdict(t, result), file=self.out, flush=True)
-        ground_truth.forget_before(self.reports, end, SLACK_NS)      # the next windows end later
+        ground_truth.forget_before(reports, end, SLACK_NS)      # the next windows end later
+
+    def _start_run(self, why: str) -> None:
+        """A new run of the source, for ``why`` (``went_back``, ``started_again``).  The run before
+        keeps its clock and truth for its windows still queued; said in one line, at most every
+        5 s (two sources whose tables interleave would start one at every switch)."""
+        if self.run.windows:
+            self.runs_before.append(self.run)
+        self.run = SourceRun(self.run.number + 1)
+        self._ended = None          # the end status was the run before's
+        self._lost = False
+        self._speeds = []
+        now = time.monotonic()
+        if self._went_back_said_at is None or now - self._went_back_said_at >= 5.0:
+            self._went_back_said_at = now
+            print(new_run_line(self.run.number, why), file=self.out, flush=True)
+
+    def exit_lines(self) -> list:
+        """The lines after the verdict count at exit: those of the run (``SourceRun.exit_lines``);
+        after stamps went back, the score over all verdicts, then each run's with its number (its
+        latency lines' t= are on its own clock, as its verdict lines were)."""
+        runs = [run for run in self.runs_before if run.windows]
+        if self.run.windows or not runs:
+            runs.append(self.run)
+        if len(runs) == 1:
+            return runs[0].exit_lines()
+        lines = score_lines(self.verdicts, [], 0)[:1]
+        for run in runs:
+            lines += [line.replace("monitor: ", f"monitor: run {run.number}: ", 1) for line in run.exit_lines()]
+        return lines
 
     def check_sources(self) -> None:
         """Several publishers on ``accel`` (two simulators in one namespace, a ``play`` beside a
         node): their tables interleave, each switch reads as a gap or a restarted source, and the
-        verdicts (and their t=) are of no one signal.  Said once."""
+        verdicts (and their t=) are of no one signal.  Said once.  And none left after tables came,
+        without an end status (a node killed or crashed): said once each time, for ``source_lost``."""
         topic = self.resolve_topic_name(TOPIC_ACCEL)
         n = self.count_publishers(topic)
+        if n or self._ended is not None or self._last_table_at is None:
+            self._gone_since = None
+        elif self._gone_since is None:
+            self._gone_since = time.monotonic()
+            self._lost = True
+            if self.end_wait is None:
+                until = "Ctrl-C ends the monitor"
+            else:
+                until = f"without one for {self.end_wait:g} s the monitor ends"
+            print(f"monitor: no publisher on {topic} any more and no end status from {self.simulator} "
+                  f"({SOURCE_LOST_CAUSES}); waiting for one (a node started again; {until})",
+                  file=self.out, flush=True)
         if n > 1 and not self._several_said:
             self._several_said = True
             print(f"monitor: {n} publishers on {topic}: their tables interleave and the verdicts are not of "
@@ -512,14 +689,16 @@ def main(args, ros_args=()) -> int:
     [--ros-args ...]``; exit 0 after ``count`` verdicts, on Ctrl-C or SIGTERM, or (without
     ``count``, with ``end_wait``) after the simulator's run ended; ``cli.EXIT_COUNT_NOT_REACHED``
     with one line where its run ended before ``count`` verdicts (``end_wait`` s without a table
-    after its end status: default ``cli.MONITOR_END_WAIT_S`` with ``count``, else never); 2 with
+    after its end status: default ``cli.MONITOR_END_WAIT_S`` with ``count``, else never);
+    ``cli.EXIT_SOURCE_LOST`` with one line where, with ``end_wait``, the tables' publisher went
+    away without an end status and none came back for ``end_wait`` s; 2 with
     one line for a bad scene or ROS argument.  ``ros_args``: from ``--ros-args`` on (a namespace,
     remaps)."""
     from rclpy._rclpy_pybind11 import RCLError, UnknownROSArgsError
     from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
     from rclpy.signals import SignalHandlerOptions
 
-    from ..cli import EXIT_COUNT_NOT_REACHED, EXIT_OK, MONITOR_END_WAIT_S
+    from ..cli import EXIT_COUNT_NOT_REACHED, EXIT_OK, EXIT_SOURCE_LOST, MONITOR_END_WAIT_S
     from ..scene import load_scene
     from .bearing_sim_node import ros_arguments_error
 
@@ -559,6 +738,13 @@ def main(args, ros_args=()) -> int:
         executor.add_node(node)
         t_start = next_look = time.monotonic()
         while rclpy.ok() and not node.done and signals.first is None:
+            if node.source_lost(time.monotonic()):
+                status = EXIT_SOURCE_LOST
+                of = f" of --count {node.count}" if node.count else ""
+                print(f"monitor: {len(node.verdicts)}{of} verdicts: no publisher on "
+                      f"{node.resolve_topic_name(TOPIC_ACCEL)} for {node.end_wait:g} s and no end status from "
+                      f"{node.simulator} ({SOURCE_LOST_CAUSES}; exit status {status})", flush=True)
+                break
             if node.run_over(time.monotonic()):
                 if node.count:
                     status = EXIT_COUNT_NOT_REACHED
@@ -589,11 +775,7 @@ def main(args, ros_args=()) -> int:
                 print(f"monitor: {len(node.verdicts)} verdicts from {node.tables} tables, "
                       f"{node.window.gaps} gaps (lost tables or a restarted source), "
                       f"{node.rejected} rejected", flush=True)
-                if node._t0 is not None and node._source_start is not None:
-                    line = source_start_line(node._t0, node._source_start)
-                    if line:
-                        print(line, flush=True)
-                for line in score_lines(node.verdicts, node.appeared.appearances(node._t0 or 0), node._t0 or 0):
+                for line in node.exit_lines():
                     print(line, flush=True)
             rclpy.try_shutdown()
     return status
