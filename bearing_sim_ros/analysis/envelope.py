@@ -83,9 +83,16 @@ def envelope_spectrum(x: np.ndarray, fs: float, band=DEFAULT_BAND, max_freq: flo
     segment: None = one FFT of the whole record (finest resolution, for plots); a duration (s)
     = the RMS average of Hann segments of that length with 50 % overlap (Welch), resolution
     1 / segment, the floor's variance reduced by the number of segments (for decisions)."""
-    env = envelope(x, fs, band)
+    return averaged_spectrum(envelope(x, fs, band), fs, max_freq, segment)
+
+
+def averaged_spectrum(env: np.ndarray, rate: float, max_freq: float, segment: float | None = None):
+    """(freqs, amplitude) of ``env`` (an envelope, sampled ``rate`` times per unit: per second,
+    or per shaft revolution for order tracking, ``analysis.orders``) up to ``max_freq`` (per
+    unit: Hz, or orders), as :func:`envelope_spectrum` computes it (``segment``: in the same
+    unit, s or revolutions)."""
     n = env.size
-    nseg = _segment_samples(n, fs, segment)
+    nseg = _segment_samples(n, rate, segment)
     win = np.hanning(nseg)
     if nseg == n:
         spec = np.abs(np.fft.rfft(env * win))
@@ -98,7 +105,7 @@ def envelope_spectrum(x: np.ndarray, fs: float, band=DEFAULT_BAND, max_freq: flo
             power += np.abs(np.fft.rfft((seg - seg.mean()) * win)) ** 2
         spec = np.sqrt(power / len(starts))
     spec *= 2.0 / win.sum()
-    freqs = np.fft.rfftfreq(nseg, 1.0 / fs)
+    freqs = np.fft.rfftfreq(nseg, 1.0 / rate)
     keep = freqs <= max_freq
     return freqs[keep], spec[keep]
 
@@ -247,7 +254,12 @@ def diagnose(x: np.ndarray, fs: float, frequencies: dict, band=DEFAULT_BAND,
     """Envelope verdict: ``{"verdict": "healthy" | "outer" | "inner" | "ball", "lines": {...},
     "scores": {fault: prominence}}``.  The fault whose line stands highest above ``threshold``
     wins; none above it is "healthy".  ``segment``: see :func:`fault_lines`."""
-    lines = fault_lines(x, fs, frequencies, band, segment=segment)
+    return verdict_of(fault_lines(x, fs, frequencies, band, segment=segment), threshold)
+
+
+def verdict_of(lines: dict, threshold: float = DETECTION_THRESHOLD) -> dict:
+    """:func:`diagnose`'s result from the fault ``lines`` ({"bpfo", "bpfi", "2bsf", "ftf": Line},
+    in Hz or in orders alike)."""
     scores = {fault: lines[key].prominence for fault, key in FAULT_LINES.items() if fault != "cage"}
     best = max(scores, key=scores.get)
     verdict = best if scores[best] >= threshold else "healthy"

@@ -1,0 +1,105 @@
+"""Order tracking of the envelope (``analysis.orders``) on synthetic signals whose speed ramps."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from bearing_sim_ros.analysis import orders
+from bearing_sim_ros.analysis.envelope import diagnose
+
+FS = 15000.0
+CAGE_RATIO = 0.397          # cage speed over shaft speed (ER-16K at pure rolling)
+BALLS = 9
+# fault frequencies at a shaft speed of 1 Hz: FTF, BPFO = Z FTF, BPFI = Z (1 - FTF), BSF
+PER_SHAFT_HZ = {"ftf": CAGE_RATIO, "bpfo": BALLS * CAGE_RATIO, "bpfi": BALLS * (1 - CAGE_RATIO), "bsf": 2.32}
+
+
+def _ramp(f0_hz: float, f1_hz: float, duration_s: float):
+    """(shaft angle rad, shaft speed rad/s) as functions of t (s) of a linear ramp f0 -> f1."""
+    rate = (f1_hz - f0_hz) / duration_s
+    return (lambda t: 2 * math.pi * (f0_hz * t + 0.5 * rate * t * t),
+            lambda t: 2 * math.pi * (f0_hz + rate * t))
+
+
+def _impacts(angle, duration_s: float, per_rev: float, seed: int = 0) -> np.ndarray:
+    """A signal at FS Hz: a 3.8 kHz ring (decaying in 1 ms) at every 1/``per_rev`` of a shaft
+    revolution along ``angle`` (t), plus white noise."""
+    t = np.arange(int(duration_s * FS)) / FS
+    theta = angle(t)
+    hits = np.flatnonzero(np.diff(np.floor(theta / (2 * math.pi) * per_rev)) > 0) + 1
+    train = np.zeros(t.size)
+    train[hits] = 1.0
+    k = np.arange(int(0.005 * FS)) / FS
+    ring = np.exp(-k / 1e-3) * np.sin(2 * math.pi * 3800.0 * k)
+    noise = np.random.default_rng(seed).normal(0.0, 0.05, t.size)
+    return np.convolve(train, ring)[:t.size] + noise, t
+
+
+def _state(angle, speed, duration_s: float, rate_hz: float = 50.0):
+    """``state`` at ``rate_hz`` as the node gives it: stamps s, shaft and cage angles wrapped to
+    [0, 2 pi) (as a JointState may), their speeds."""
+    t = np.arange(1, int(duration_s * rate_hz) + 1) / rate_hz
+    return (t, np.mod(angle(t), 2 * math.pi), speed(t), np.mod(CAGE_RATIO * angle(t), 2 * math.pi),
+            CAGE_RATIO * speed(t))
+
+
+def test_the_angle_is_unwrapped_with_the_speeds_where_the_shaft_turns_several_times_between_states():
+    """At 10000 rpm the shaft turns 3.3 times between two 50 Hz states: ``np.unwrap`` cannot tell
+    those turns, the speeds can; a linear ramp's angle (a parabola) is exact on the Hermite curve."""
+    angle, speed = _ramp(100.0, 200.0, 2.0)
+    t, shaft, shaft_w, _, _ = _state(angle, speed, 2.0)
+    assert np.max(np.abs(np.unwrap(shaft) - angle(t))) > 100.0
+    unwrapped = orders.unwrapped_angles(t, shaft, shaft_w)
+    assert np.allclose(unwrapped - unwrapped[0], angle(t) - angle(t[0]), atol=1e-9)
+    between = np.linspace(t[0], t[-1], 5001)
+    assert np.allclose(orders.angle_at(between, t, unwrapped, shaft_w) - unwrapped[0],
+                       angle(between) - angle(t[0]), atol=1e-8)
+    # without recorded angles (another tool's JointState): the speeds' integral
+    assert np.allclose(orders.unwrapped_angles(t, np.full(t.size, np.nan), shaft_w), angle(t) - angle(t[0]))
+
+
+@pytest.mark.parametrize("fault, per_rev", [("outer", PER_SHAFT_HZ["bpfo"]), ("inner", PER_SHAFT_HZ["bpfi"])])
+def test_a_fault_line_smeared_by_a_ramp_in_hz_stands_in_orders(fault, per_rev):
+    """Impacts at BPFO (or BPFI) of a shaft ramped from 1000 to 3000 rpm over 4 s: the envelope
+    spectrum in Hz smears the line over 120 Hz and finds none; in orders it stands at its order,
+    far above the threshold, the other lines at the floor."""
+    angle, speed = _ramp(1000 / 60, 3000 / 60, 4.0)
+    x, t = _impacts(angle, 4.0, per_rev)
+    mean_hz = {k: v * 2000 / 60 for k, v in PER_SHAFT_HZ.items()}
+    assert diagnose(x, FS, mean_hz)["verdict"] == "healthy"
+    state_t, shaft, shaft_w, cage, cage_w = _state(angle, speed, 4.0)
+    result, why = orders.order_diagnose(x, FS, t, state_t, shaft, shaft_w, cage, cage_w, PER_SHAFT_HZ, BALLS)
+    assert why == "" and result["verdict"] == fault, result["scores"]
+    key = {"outer": "bpfo", "inner": "bpfi"}[fault]
+    assert result["lines"][key].found_hz == pytest.approx(per_rev, rel=2e-3)
+    assert result["scores"][fault] > 50 and max(v for k, v in result["scores"].items() if k != fault) < 4
+    assert result["shaft_rpm"] == (pytest.approx(1010), pytest.approx(3000))      # the states at 0.02 .. 4 s
+    assert result["start_s"] == pytest.approx(0.02) and result["revolutions"] == pytest.approx(133.3 - 0.3, abs=0.2)
+
+
+def test_noise_alone_is_healthy_in_orders():
+    angle, speed = _ramp(1000 / 60, 3000 / 60, 4.0)
+    x = np.random.default_rng(3).normal(0.0, 1.0, int(4.0 * FS))
+    t = np.arange(x.size) / FS
+    result, why = orders.order_diagnose(x, FS, t, *_state(angle, speed, 4.0), PER_SHAFT_HZ, BALLS)
+    assert why == "" and result["verdict"] == "healthy", result["scores"]
+
+
+def test_what_cannot_be_order_tracked_says_why():
+    """Too few or too sparse states (a low state_rate), a shaft that slows to a stop, a cage
+    whose skid changes (the lines move in orders too): no result, one line saying why."""
+    angle, speed = _ramp(1000 / 60, 3000 / 60, 4.0)
+    t, _, shaft_w, _, cage_w = _state(angle, speed, 4.0)
+    assert orders.untrackable(t, shaft_w, cage_w, 0.0, 4.0) == ""
+    assert "0 state samples" in orders.untrackable(t[:0], shaft_w[:0], cage_w[:0], 0.0, 4.0)
+    sparse = slice(None, None, 10)       # 5 Hz
+    assert "state samples up to 0.2 s apart" in orders.untrackable(t[sparse], shaft_w[sparse], cage_w[sparse], 0.0, 4.0)
+    stopping = shaft_w[::-1] - shaft_w.min() + 1.0
+    assert "order tracking needs it to turn one way" in orders.untrackable(t, stopping, CAGE_RATIO * stopping, 0.0, 4.0)
+    skidding = cage_w * np.linspace(1.0, 0.93, t.size)
+    assert "the cage-to-shaft speed ratio moves by 6.5 %" in orders.untrackable(t, shaft_w, skidding, 0.0, 4.0)
+    x, times = _impacts(angle, 4.0, PER_SHAFT_HZ["bpfo"])
+    assert orders.order_diagnose(x, FS, times, t[sparse], np.full(t[sparse].size, np.nan), shaft_w[sparse],
+                                 np.full(t[sparse].size, np.nan), cage_w[sparse], PER_SHAFT_HZ, BALLS)[0] is None
