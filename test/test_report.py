@@ -452,24 +452,27 @@ def _verdicts(s):
     return [w["verdict"] for w in s["timeline"]]
 
 
-def test_a_recording_whose_speed_steps_gets_the_verdict_of_its_windows(tmp_path, capsys):
+def test_a_recording_whose_speed_steps_gets_the_verdict_of_order_tracking(tmp_path, capsys):
     """er16k_outer_race stepped from 1600 to 3000 rpm at 1.5 s (the kinematic tier throughout).
     One envelope spectrum of the whole recording looked for the lines at the mean speed, where
     neither speed has them, and called it a ball fault (2xBSF x11), as did the window that holds
     the step; with --window 0.5 the windows at 1600 and 3000 rpm by the step took the fault
     frequencies of the /diagnostics period that holds it (a mean of both speeds): "healthy", and
-    "ball" at x325.  Now the window that holds the step is not scored ("unknown", the lines move
-    61 % in it), every other window looks at its own lines (outer), and the one verdict is theirs."""
+    "ball" at x325.  Then the window that holds the step was not scored ("unknown", the lines
+    move 61 % in it), and the one verdict was that of the others.  Now that window, and the
+    whole recording, are judged in orders of the shaft (order tracking): outer; every other
+    window looks at its own lines in Hz (outer)."""
     rec = _profiled(tmp_path, "step", "{shaft_speed_rpm: 1600, radial_load: [0.0, -50.0]}",
                     ["{t: 1.5, shaft_speed_rpm: 1600}", "{t: 1.51, shaft_speed_rpm: 3000}"])
     assert cli.main(["report", str(rec), "--out", str(tmp_path / "out")]) == 0
     said = capsys.readouterr().out
     s = json.loads((tmp_path / "out" / "summary.json").read_text())
-    assert _verdicts(s) == ["outer", "unknown", "outer"]
-    assert s["timeline"][1]["line_spread"] > 0.5 and s["timeline"][1]["prominences"] == {}
+    assert _verdicts(s) == ["outer", "outer", "outer"]
+    assert [w.get("order_tracked", False) for w in s["timeline"]] == [False, True, False]
+    assert s["timeline"][1]["line_spread"] > 0.5 and s["timeline"][1]["prominences"]["outer"] > 20      # x55
     assert s["verdict"] == "outer" and s["verdict_faults"] == ["outer"]
-    assert s["fault_line_variation"] > 0.5 and "windows" in s["verdict_from"]
-    assert "verdict outer (scene defects: outer" in said and "the verdict is that of the windows" in said
+    assert s["fault_line_variation"] > 0.5 and s["verdict_from"].startswith("order tracking over the analysed stretch")
+    assert "verdict outer (scene defects: outer" in said and "the verdict is that of order tracking" in said
     md = (tmp_path / "out" / "summary.md").read_text()
     assert "**Verdict (envelope analysis of accel_y): OUTER**" in md and "(the verdict agrees with the scene)" in md
     assert "| fault lines | move by 61 % over the analysed stretch" in md
@@ -478,16 +481,81 @@ def test_a_recording_whose_speed_steps_gets_the_verdict_of_its_windows(tmp_path,
     assert [round(w["shaft_speed_rpm"]) for w in half["timeline"]] == [1600] * 3 + [3000] * 3
 
 
-def test_a_recording_whose_speed_ramps_has_no_confident_verdict(tmp_path):
-    """A ramp from 1600 to 3000 rpm over the whole recording moves the lines in every window: the
-    whole recording and each window were called "healthy" (an outer-race pit of x300).  Now no
-    window is scored and the verdict is unknown, and the summary says why."""
-    rec = _profiled(tmp_path, "ramp", "{shaft_speed_rpm: 1600, radial_load: [0.0, -50.0]}",
-                    ["{t: 2.0, shaft_speed_rpm: 3000}"], duration=2.0)
+def _run_up(folder, scene_name: str, duration: float = 4.0):
+    """A kinematic render of ``scene_name`` whose shaft runs up from 1000 to 3000 rpm over
+    ``duration`` s (its operating point at 1000 rpm and a ``profile`` knot at the end)."""
+    text = load_scene(scene_name).source_text
+    text, found = re.subn(r"operating_point: \{shaft_speed_rpm: \d+", "operating_point: {shaft_speed_rpm: 1000", text)
+    assert found == 1, f"{scene_name}.yaml's operating point moved: update this test"
+    scene = folder / f"{scene_name}_run_up.yaml"
+    scene.write_text(text + f"profile:\n  - {{t: {duration:g}, shaft_speed_rpm: 3000}}\n")
+    rec = folder / f"{scene_name}_run_up.mcap"
+    render(str(scene), duration, rec, fidelity="kinematic", progress=False)
+    return rec
+
+
+@pytest.fixture(scope="module")
+def outer_run_up(tmp_path_factory):
+    return _run_up(tmp_path_factory.mktemp("run_up"), "er16k_outer_race")
+
+
+def test_an_outer_race_run_up_gets_its_verdict_from_order_tracking(outer_run_up, tmp_path, capsys, figures):
+    """er16k_outer_race run up from 1000 to 3000 rpm over 4 s: its lines move by 89 % in Hz, so
+    the report said "unknown" of the recording and of every window (each ramps 500 rpm), an
+    outer-race pit it could not see.  Now the envelope is resampled at equal steps of shaft angle
+    (``state``) and its spectrum in orders has BPFO where the bearing puts it: "outer", of the
+    recording and of every window, and the summary says how it got there."""
+    out = tmp_path / "out"
+    assert cli.main(["report", str(outer_run_up), "--out", str(out)]) == 0
+    said = capsys.readouterr().out
+    s = json.loads((out / "summary.json").read_text())
+    assert s["verdict"] == "outer" and s["verdict_faults"] == ["outer"] and s["fault_line_variation"] > 0.8
+    assert s["verdict_from"].startswith("order tracking over the analysed stretch (0.02-4.00 s, 1009-2999 rpm, "
+                                        "133 revolutions)"), s["verdict_from"]
+    assert f"the verdict is that of {s['verdict_from']}" in said
+    tracked = s["order_tracking"]
+    assert tracked["verdict"] == "outer" and tracked["why_not"] is None
+    assert tracked["lines"]["bpfo"]["found_order"] == pytest.approx(tracked["lines"]["bpfo"]["expected_order"], rel=1e-3)
+    assert tracked["lines"]["bpfo"]["prominence"] > 50
+    assert all(line["prominence"] < 4 for key, line in tracked["lines"].items() if key != "bpfo")
+    assert [(w["verdict"], w.get("order_tracked")) for w in s["timeline"]] == [("outer", True)] * 4
+    (orders_ax,) = figures["orders.png"].axes
+    assert "orders.png" in s["plots"] and orders_ax.get_xlabel() == "order (events per shaft revolution)"
+    bpfo = tracked["lines"]["bpfo"]["expected_order"]
+    assert any(list(ln.get_xdata()) == [bpfo, bpfo] for ln in orders_ax.get_lines())      # BPFO marked
+    md = (out / "summary.md").read_text()
+    assert "**Verdict (envelope analysis of accel_y): OUTER**" in md and "(the verdict agrees with the scene)" in md
+    assert "## Order tracking" in md and "| BPFO | 3.5719 | 3.572 |" in md
+    assert "| 0.00-4.00 | 4 | outer (in orders) | outer |" in md
+
+
+@pytest.mark.parametrize("scene_name, verdict", [("er16k_inner_race", "inner"), ("cwru_6205_normal", "healthy")])
+def test_an_inner_race_or_healthy_run_up_gets_its_own_verdict(tmp_path, scene_name, verdict):
+    """The same run-up of an inner-race pit is "inner" and of a healthy bearing "healthy" (the
+    CWRU 6205: the healthy ER-16K rings at BPFO by varying compliance, README "Scenes"); the old
+    report said "unknown" of both."""
+    s = build_report(_run_up(tmp_path, scene_name), tmp_path / "out")
+    assert s["verdict"] == verdict and s["order_tracking"]["verdict"] == verdict, s.get("order_tracking")
+    assert s["verdict_from"].startswith("order tracking")
+    assert s["expected_defects"] == ([] if verdict == "healthy" else [verdict])
+    assert [w["verdict"] for w in s["timeline"]] == [verdict] * 4
+    assert "(the verdict agrees with the scene)" in (tmp_path / "out" / "summary.md").read_text()
+
+
+@pytest.mark.parametrize("kept, why", [
+    (lambda k: False, "the recording has no state (JointState of shaft and cage) to take the shaft angle from"),
+    (lambda k: k % 10 == 9, "state samples up to 0.2 s apart: order tracking needs them at most 0.1 s apart"),
+])
+def test_a_run_up_without_state_enough_to_track_stays_unknown_and_says_why(outer_run_up, tmp_path, kept, why):
+    """Without ``state`` (or with 5 Hz of it, too sparse to draw the shaft angle through a
+    change) there is no order tracking: the verdict stays "unknown", and the summary says why."""
+    rec = tmp_path / "less_state.mcap"
+    _copy_without(outer_run_up, rec, lambda topic, k: topic == "/state" and not kept(k))
     s = build_report(rec, tmp_path / "out")
-    assert _verdicts(s) == ["unknown"] * 2 and s["verdict"] == "unknown" and s["verdict_faults"] == []
-    md = (tmp_path / "out" / "summary.md").read_text()
-    assert "**Verdict (envelope analysis of accel_y): UNKNOWN**" in md and "no verdict to check against the scene" in md
+    assert s["verdict"] == "unknown" and s["order_tracking"] == {"verdict": None, "why_not": s["order_tracking"]["why_not"]}
+    assert s["order_tracking"]["why_not"].startswith(why) and f"no order tracking: {why}" in s["verdict_from"]
+    assert _verdicts(s) == ["unknown"] * 4
+    assert f"## Order tracking\n\nNot done: {s['order_tracking']['why_not']}." in (tmp_path / "out" / "summary.md").read_text()
 
 
 def test_a_load_step_that_moves_the_cages_skid_is_a_moving_line_too(tmp_path):

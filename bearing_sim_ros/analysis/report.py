@@ -6,6 +6,8 @@ Writes to DIR:
 - ``spectrum.png``: power spectral density of each channel (Welch);
 - ``envelope.png``: envelope spectrum (``analysis.envelope``) with the fault frequencies of the
   recorded bearing marked, and the verdict;
+- ``orders.png`` (where the fault lines move and ``state`` tracks the shaft): the envelope
+  spectrum in orders of the shaft (``analysis.orders``), the verdict's spectrum then;
 - ``operating_point.png``: shaft speed and radial load over time (not drawn when neither is
   recorded and there is no scene: ``plots_not_drawn`` in the summary says why);
 - ``cage.png`` (when ``state`` was recorded): cage speed against pure rolling and the cage slip
@@ -52,6 +54,7 @@ from ..recording.reader import open_recording
 from ..waveform import NS, from_pointcloud2
 from .envelope import (DEFAULT_BAND, DETECTION_THRESHOLD, FAULT_LINES, STEADY_LINES, Line, diagnose,
                        envelope_spectrum, no_defect_note, spread, statistics, with_cage)
+from .orders import order_diagnose
 
 MAX_ANALYSIS_S = 120.0
 DEFAULT_WINDOW_S = 1.0        # s: the verdict timeline's windows (the detector's own segment length)
@@ -83,7 +86,7 @@ class _Data:
         chunks, stamps, widths = [], [], []
         self.channels = ()
         self.truncated_analysis = False
-        state_t, shaft_w, cage_w = [], [], []
+        state_t, shaft_w, cage_w, shaft_angle, cage_angle = [], [], [], [], []
         cmd_t, cmd_speed, load_t, load_xy = [], [], [], []
         diag = {}
         tiers = []
@@ -124,6 +127,10 @@ class _Data:
                     state_t.append(_stamp(msg.header.stamp))
                     shaft_w.append(msg.velocity[0])
                     cage_w.append(msg.velocity[1])
+                    # the angles for order tracking (NaN where another tool left them out)
+                    angles = msg.position[:2] if len(msg.position) >= 2 else (math.nan, math.nan)
+                    shaft_angle.append(angles[0])
+                    cage_angle.append(angles[1])
             elif topic == speed_topic:
                 cmd_t.append(log_ns)
                 cmd_speed.append(msg.data)
@@ -171,6 +178,8 @@ class _Data:
         self.state_t = np.array(state_t, dtype=float) / NS
         self.shaft_w = np.array(shaft_w, dtype=float)
         self.cage_w = np.array(cage_w, dtype=float)
+        self.shaft_angle = np.array(shaft_angle, dtype=float)
+        self.cage_angle = np.array(cage_angle, dtype=float)
         self.cmd_t = np.array(cmd_t, dtype=float) / NS
         self.cmd_speed = np.array(cmd_speed, dtype=float)
         self.load_t = np.array(load_t, dtype=float) / NS
@@ -562,7 +571,7 @@ def truth_changes(truth: list) -> list:
 
 
 def score_windows(windows, sample_rate_hz: float, times_s: list, frequencies: list,
-                  truth: list, speeds_rad_s: list, spreads: list | None = None) -> list:
+                  truth: list, speeds_rad_s: list, spreads: list | None = None, track=None) -> list:
     """The envelope detector (``envelope.diagnose``, as for the whole recording) in each window:
     the samples of each of ``windows`` (an iterable of arrays), spanning ``times_s`` (start s,
     end s) of signal, looking at ``frequencies`` ({"ftf", "bpfo", "bpfi", "bsf": Hz} per window, {}
@@ -570,7 +579,9 @@ def score_windows(windows, sample_rate_hz: float, times_s: list, frequencies: li
     frequencies, in less than 0.2 s of signal, or where the lines move within the window by more
     than ``STEADY_LINES`` (``spreads``, ``line_spread`` of each window; None: steady): a speed
     step or ramp in it smeared them, and its verdict was "healthy", or "ball" where 2xBSF of one
-    speed fell on BPFO of the other.  One dict per window: start_s, end_s, shaft_speed_rpm,
+    speed fell on BPFO of the other.  Those are scored in orders of the shaft instead where
+    ``track`` (``track(samples, times_s)``: ``order_tracked``'s (result, why)) gives a result; their
+    rows have ``order_tracked``: True.  One dict per window: start_s, end_s, shaft_speed_rpm,
     line_spread, verdict, prominences ({fault: line height over local median}; {} unscored), and
     the ground truth at its end: faults_present, those in its last sample
     (``ground_truth.faults_at``: to the sample where the recording has ``fault_onsets_s``), and
@@ -580,9 +591,11 @@ def score_windows(windows, sample_rate_hz: float, times_s: list, frequencies: li
     rows = []
     spreads = [0.0] * len(times_s) if spreads is None else spreads
     for xw, (t0, t1), freqs, speed, moved in zip(windows, times_s, frequencies, speeds_rad_s, spreads):
-        usable = (freqs and freqs["bpfo"] > 0 and xw.size > 0.2 * sample_rate_hz     # as for the whole
-                  and moved <= STEADY_LINES)
-        verdict = diagnose(xw, sample_rate_hz, freqs) if usable else None
+        usable = freqs and freqs["bpfo"] > 0 and xw.size > 0.2 * sample_rate_hz     # as for the whole
+        verdict = diagnose(xw, sample_rate_hz, freqs) if usable and moved <= STEADY_LINES else None
+        tracked = (track(xw, t0 + np.arange(xw.size) / sample_rate_hz)[0]
+                   if usable and moved > STEADY_LINES and track is not None else None)
+        verdict = verdict or tracked
         faults = ground_truth.faults_at(truth, t1, SLACK_S)
         sizes = ground_truth.truth_before(truth, t1, SLACK_S)
         if sizes is not None and faults is not None and sizes.faults != faults:
@@ -593,25 +606,35 @@ def score_windows(windows, sample_rate_hz: float, times_s: list, frequencies: li
                      "prominences": verdict["scores"] if verdict else {},
                      "faults_present": list(faults) if faults is not None else None,
                      "defect_sizes": list(sizes.sizes) if sizes else None,
-                     "truth_t_s": sizes.t if sizes else None})
+                     "truth_t_s": sizes.t if sizes else None,
+                     **({"order_tracked": True} if tracked else {})})
     return rows
 
 
-def one_verdict(whole, timeline: list, moved: float, end_s: float) -> tuple:
+def one_verdict(whole, timeline: list, moved: float, end_s: float, tracked=None, untracked: str = "") -> tuple:
     """(the recording's one verdict, the fault kinds it names, where it comes from in words).
     ``whole``: ``diagnose`` of the analysed stretch (None: no verdict); ``moved``: its
     ``line_spread``; ``end_s``: its end (s).  Where the lines hold still (``STEADY_LINES``) that
     is ``whole``'s.  Where they move (speed steps or a ramp, a load step or tier switch that moves
     the cage's skid), one envelope spectrum smears every line, and ``whole`` said "inner" of an
     outer-race recording stepped 1600 -> 10000 rpm (its lines at the mean speed's) and "healthy"
-    of one ramped: then the verdict is that of ``timeline``'s windows in the analysed stretch,
-    each at its own lines, those whose lines move within them unscored ("unknown"): the fault
-    they name, "healthy" where they name none, "mixed" where they name several, "unknown"
-    where none is scored."""
+    of one ramped: then the verdict is that of ``tracked``, the analysed stretch's envelope
+    spectrum in orders of the shaft (``order_tracked``), where the lines hold still in orders.
+    Where it could not be tracked (``untracked``: why) it is that of ``timeline``'s windows in the
+    analysed stretch, each at its own lines, those whose lines move within them order tracked
+    or else unscored ("unknown"): the fault they name, "healthy" where they name none, "mixed"
+    where they name several, "unknown" where none is scored."""
     if whole is None:
         return "unknown", [], "no verdict"
     if moved <= STEADY_LINES:
         return whole["verdict"], [] if whole["verdict"] == "healthy" else [whole["verdict"]], "the analysed stretch"
+    if tracked is not None:
+        slowest, fastest = tracked["shaft_rpm"]
+        return tracked["verdict"], [] if tracked["verdict"] == "healthy" else [tracked["verdict"]], (
+            f"order tracking over the analysed stretch ({tracked['start_s']:.2f}-{tracked['end_s']:.2f} s, "
+            f"{slowest:.0f}-{fastest:.0f} rpm, {tracked['revolutions']:.0f} revolutions): the fault lines move by "
+            f"{100 * moved:.0f} % in Hz (shaft speed), which one envelope spectrum smears; in orders of the shaft "
+            "they hold still")
     counts = {}
     for w in timeline:
         if w["end_s"] <= end_s + SLACK_S:
@@ -623,7 +646,7 @@ def one_verdict(whole, timeline: list, moved: float, end_s: float) -> tuple:
     why = '; "unknown": the lines move within it' if counts.get("unknown") else ""
     return verdict, faults, (f"the windows of the verdict over time ({tally}{why}): the fault lines move by "
                              f"{100 * moved:.0f} % over the analysed stretch (shaft speed, cage skid), which one "
-                             "envelope spectrum of it smears")
+                             "envelope spectrum of it smears" + (f"; no order tracking: {untracked}" if untracked else ""))
 
 
 def first_detection(timeline: list):
@@ -638,8 +661,8 @@ def verdict_timeline(d: "_Data", x, scene, window_s: float, mean_speed_rad_s: fl
     ``window_s`` s, each at its own speed (the ``shaft_speed`` commands in the window, else
     ``state``, else ``mean_speed_rad_s``) and fault frequencies (pure rolling at that speed, with
     those of the recorded ``/diagnostics`` over the window moved to it, ``at_shaft_speed``, and the
-    cage of ``state`` in it, ``with_state_cage``), those whose lines move within it unscored
-    (``line_spread``).
+    cage of ``state`` in it, ``with_state_cage``), those whose lines move within it
+    (``line_spread``) in orders of the shaft (``order_tracked``) where they can be, else unscored.
     ``x`` holds the first samples (``MAX_ANALYSIS_S``); the windows beyond it come from
     ``reread(bounds)`` (``_windows_read_again``).  Without a scene, the recorded ``/diagnostics``
     alone (``line_frequencies``); [] where they do not give all four lines either."""
@@ -664,7 +687,8 @@ def verdict_timeline(d: "_Data", x, scene, window_s: float, mean_speed_rad_s: fl
     held = [b for b in bounds if b[1] <= x.size]          # the windows in memory; the rest read again
     rest = bounds[len(held):]
     windows = itertools.chain((x[i0:i1] for i0, i1 in held), reread(rest) if rest else ())
-    return score_windows(windows, fs, times, freqs, d.truth, speeds, spreads)
+    return score_windows(windows, fs, times, freqs, d.truth, speeds, spreads,
+                         lambda xw, times_s: order_tracked(d, xw, times_s, scene))
 
 
 def with_state_cage(recorded: dict, d: "_Data", scene, start_s: float, end_s: float) -> dict:
@@ -680,6 +704,26 @@ def with_state_cage(recorded: dict, d: "_Data", scene, start_s: float, end_s: fl
     if not (cage.size and balls and recorded):
         return recorded
     return with_cage(recorded, balls, shaft.mean() / (2 * math.pi), cage.mean() / (2 * math.pi))
+
+
+def order_tracked(d: "_Data", x, times_s, scene):
+    """``orders.order_diagnose`` of the samples ``x`` of ``d``'s envelope channel at signal times
+    ``times_s`` (s), with the shaft and cage angles of its ``state``: ``(result, "")``, or
+    ``(None, why not)`` (no ``state``, too sparse, a cage skid that changes, ...).  The fault
+    frequencies per shaft hertz are the scene's bearing's at pure rolling with those of the
+    recorded ``/diagnostics`` over the stretch moved to 1 Hz (``at_shaft_speed``: the ball's spin
+    where the balls skid); the cage's lines come from ``state``."""
+    start_s, end_s = float(times_s[0]), float(times_s[-1])
+    if not d.state_t.size:
+        return None, "the recording has no state (JointState of shaft and cage) to take the shaft angle from"
+    rolling = scene.bearing.fault_frequencies(1.0) if scene is not None else {}
+    per_shaft_hz = line_frequencies(rolling, recorded_frequencies(at_shaft_speed(d.signal_frequency_periods, 1.0),
+                                                                  start_s, end_s))
+    if not per_shaft_hz or per_shaft_hz["ftf"] <= 0:
+        return None, "no fault frequencies to take the fault orders from"
+    balls = scene.bearing.balls if scene is not None else round(per_shaft_hz["bpfo"] / per_shaft_hz["ftf"])
+    return order_diagnose(x, d.sample_rate, times_s, d.state_t - d.t0_ns / NS, d.shaft_angle, d.shaft_w,
+                          d.cage_angle, d.cage_w, per_shaft_hz, balls)
 
 
 def _windows_read_again(path, topic: str, channel: str, widths, bounds: list):
@@ -795,27 +839,51 @@ def plot_envelope(x: np.ndarray, fs: float, freqs: dict, verdict: dict, channel:
     targets = {"bpfo": freqs["bpfo"], "bpfi": freqs["bpfi"], "2bsf": 2 * freqs["bsf"], "ftf": freqs["ftf"]}
     fmax = min(0.45 * fs, 3.3 * max(targets.values()))
     f, s = envelope_spectrum(x, fs, max_freq=fmax)
+    _draw_lines(ax, f, s, targets, verdict["lines"], fmax, "Hz", 2.0)
+    ax.set(xlabel="frequency (Hz)",
+           title=(f"Envelope spectrum of {channel} ({DEFAULT_BAND[0] / 1e3:g}-{DEFAULT_BAND[1] / 1e3:g} kHz band) "
+                  f"- {instead or 'verdict: ' + verdict['verdict'].upper()}   (×N: line height over local median)"))
+    return _save(plt, fig, out / "envelope.png")
+
+
+def _draw_lines(ax, f, s, targets: dict, lines: dict, fmax: float, unit: str, floor: float) -> None:
+    """The spectrum ``s`` at ``f`` (Hz or orders, ``unit``) up to ``fmax`` on ``ax``, the fault
+    lines ``targets`` ({key: where}) and their harmonics marked, and each of ``lines`` (``Line``)
+    whose prominence is 2 or more labelled with it; the y axis above the tallest peak beyond
+    ``floor`` (the envelope's mean leaks into the first bins)."""
     ax.plot(f, s, color="0.2", lw=0.7)
-    top = float(s[f > 2.0].max()) if np.any(f > 2.0) else float(s.max())
+    top = float(s[f > floor].max()) if np.any(f > floor) else float(s.max())
     for key, f0 in targets.items():
         for h in (1, 2, 3):
             if h * f0 > fmax:
                 continue
             ax.axvline(h * f0, color=LINE_COLOURS[key], lw=1.2 if h == 1 else 0.7,
                        ls="--" if h == 1 else ":", alpha=0.9 if h == 1 else 0.5,
-                       label=f"{LINE_LABELS[key]} {f0:.1f} Hz" if h == 1 else None)
-    for key, line in verdict["lines"].items():
+                       label=f"{LINE_LABELS[key]} {f0:.{1 if unit == 'Hz' else 3}f} {unit}" if h == 1 else None)
+    for key, line in lines.items():
         if math.isfinite(line.found_hz) and line.prominence >= 2.0:
             ax.annotate(f"{LINE_LABELS[key]} ×{line.prominence:.0f}", (line.found_hz, line.height),
                         xytext=(5, -2), textcoords="offset points", ha="left", va="top", fontsize=9,
                         color=LINE_COLOURS[key], fontweight="bold")
-    ax.set(xlabel="frequency (Hz)", ylabel="envelope amplitude (m/s²)", xlim=(0, fmax),
-           ylim=(0, 1.25 * top if top > 0 else 1),
-           title=(f"Envelope spectrum of {channel} ({DEFAULT_BAND[0] / 1e3:g}-{DEFAULT_BAND[1] / 1e3:g} kHz band) "
-                  f"- {instead or 'verdict: ' + verdict['verdict'].upper()}   (×N: line height over local median)"))
+    ax.set(ylabel="envelope amplitude (m/s²)", xlim=(0, fmax), ylim=(0, 1.25 * top if top > 0 else 1))
     ax.legend(loc="upper right", fontsize=8, ncol=2)
     ax.grid(alpha=0.3)
-    return _save(plt, fig, out / "envelope.png")
+
+
+def plot_orders(tracked: dict, channel: str, out: Path, meta: dict) -> str:
+    """``orders.png``: the envelope spectrum of ``channel`` in orders of the shaft
+    (``order_tracked``'s result ``tracked``) with its fault orders and their prominences."""
+    plt, fig, (ax,) = _figure(1, 4.2)
+    orders, spec = tracked["spectrum"]
+    fmax = min(float(orders[-1]), 3.3 * max(tracked["orders"].values()))
+    keep = orders <= fmax
+    slowest, fastest = tracked["shaft_rpm"]
+    _draw_lines(ax, orders[keep], spec[keep], tracked["orders"], tracked["lines"], fmax, "orders", 3 * orders[1])
+    ax.set(xlabel="order (events per shaft revolution)",
+           title=(f"Envelope spectrum of {channel} in orders, {tracked['start_s']:.2f}-{tracked['end_s']:.2f} s, "
+                  f"{slowest:.0f}-{fastest:.0f} rpm - verdict: {tracked['verdict'].upper()}   (×N: line height over "
+                  "local median)"))
+    return _save(plt, fig, out / "orders.png")
 
 
 def _legend_or_note(ax, note: str) -> None:
@@ -992,13 +1060,21 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
                                      lambda bounds: _windows_read_again(path, d.accel_topic, ch, d.widths, bounds))
                     if verdict is not None else [])
         moved = line_spread(d, 0.0, d.analysed_end_s)
-        overall, named, verdict_from = one_verdict(verdict, timeline, moved, d.analysed_end_s)
+        tracked, untracked = None, ""
+        if verdict is not None and moved > STEADY_LINES:
+            # the lines move in Hz: in orders of the shaft they may hold still
+            tracked, untracked = order_tracked(
+                d, x, sample_times_s(np.arange(x.size), d.stamps, d.widths, fs, d.t0_ns), scene)
+        overall, named, verdict_from = one_verdict(verdict, timeline, moved, d.analysed_end_s, tracked, untracked)
         plots = [plot_waveform(d, freqs, out, meta), plot_spectrum(d, out, meta)]
         if verdict is not None:
             plots.append(plot_envelope(x, fs, freqs, verdict, ch, out, meta,
-                                       "" if overall == verdict["verdict"] else
-                                       f"verdict {overall.upper()} of the windows: the lines move by "
+                                       "" if moved <= STEADY_LINES else
+                                       f"verdict {overall.upper()} "
+                                       f"{'by order tracking' if tracked else 'of the windows'}: the lines move by "
                                        f"{100 * moved:.0f} % and smear here"))
+        if tracked:
+            plots.append(plot_orders(tracked, ch, out, meta))
         if "operating_point.png" not in not_drawn:
             plots.append(plot_operating_point(d, scene, out, meta))
         cage = plot_cage(d, scene, out, meta)
@@ -1010,7 +1086,9 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
             plots.append(plot_timeline(timeline, d.truth, [df.kind for df in scene.defects] if scene else [],
                                        onset, detected, out, meta))
     changes = truth_changes(d.truth)
-    if verdict is not None and overall != verdict["verdict"]:
+    if tracked:
+        note_verdict = tracked
+    elif verdict is not None and overall != verdict["verdict"]:
         # the notes below read the verdict's lines: the windows' highest BPFO stands for them
         best = max((w["prominences"].get("outer", 0.0) for w in timeline), default=0.0)
         note_verdict = {"verdict": overall, "lines": {"bpfo": Line(math.nan, math.nan, math.nan, best)}}
@@ -1054,6 +1132,8 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
         "verdict_faults": named,         # the fault kinds the verdict names (several where "mixed")
         "verdict_from": verdict_from,    # the analysed stretch, or its windows where the lines move
         "fault_line_variation": moved,   # line_spread of the analysed stretch
+        # where the lines move: the envelope spectrum in orders of the shaft, or why there is none
+        "order_tracking": None if verdict is None or moved <= STEADY_LINES else _order_summary(tracked, untracked),
         "expected_defects": expected,
         "expected_defects_from": expected_from,
         # a fault verdict on a scene without a defect (the healthy ER-16K's ball-pass line at BPFO)
@@ -1083,6 +1163,17 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
         (out / "summary.json").write_text(json.dumps(summary, indent=2, default=_json_default) + "\n")
         (out / "summary.md").write_text(_markdown(summary))
     return summary
+
+
+def _order_summary(tracked, untracked: str) -> dict:
+    """``summary.json``'s ``order_tracking``: the stretch, speeds, verdict and the lines in orders
+    of ``tracked`` (``order_tracked``'s result), or its ``why_not``."""
+    if tracked is None:
+        return {"verdict": None, "why_not": untracked}
+    return {"verdict": tracked["verdict"], "why_not": None, "start_s": tracked["start_s"], "end_s": tracked["end_s"],
+            "shaft_rpm": list(tracked["shaft_rpm"]), "revolutions": tracked["revolutions"],
+            "lines": {k: {"expected_order": v.expected_hz, "found_order": v.found_hz, "height": v.height,
+                          "prominence": v.prominence} for k, v in tracked["lines"].items()}}
 
 
 def _json_or_text(text: str):
@@ -1133,6 +1224,8 @@ def _markdown(s: dict) -> str:
                   f"{scene_part or 'none (healthy)'}{against}.", ""]
     if _from_windows(s):
         lines += [f"The verdict is that of {s['verdict_from']}; see \"Verdict over time\".", ""]
+    elif _from_orders(s):
+        lines += [f"The verdict is that of {s['verdict_from']}; see \"Order tracking\".", ""]
     if s["verdict_note"]:
         lines += [f"The verdict on a scene without a defect: {s['verdict_note']}.", ""]
     if s["scene_unknown"] and not s["fault_lines"]:     # (with them, the lines' section says where from)
@@ -1157,19 +1250,26 @@ def _markdown(s: dict) -> str:
         lines.append(f"| fault lines | move by {100 * s['fault_line_variation']:.0f} % over the analysed stretch "
                      "(shaft speed, cage skid): one envelope spectrum of it smears them; the verdict is the "
                      "windows' |")
+    elif _from_orders(s):
+        lines.append(f"| fault lines | move by {100 * s['fault_line_variation']:.0f} % over the analysed stretch "
+                     "(shaft speed): one envelope spectrum of it in Hz smears them; the verdict is that of its "
+                     "envelope spectrum in orders of the shaft |")
     lines.append("")
     if s["fault_lines"]:
         lines += ["## Fault lines in the envelope spectrum", "",
                   f"Expected at the fault frequencies of {s['fault_frequencies_from']}."
                   + (" The lines move over the analysed stretch: this spectrum of all of it smears them, and "
-                     "these prominences are not the verdict (\"Verdict over time\" has each window's)."
-                     if _from_windows(s) else ""), "",
+                     "these prominences are not the verdict ("
+                     + ("\"Order tracking\" has the lines in orders)." if _from_orders(s) else
+                        "\"Verdict over time\" has each window's).")
+                     if _from_windows(s) or _from_orders(s) else ""), "",
                   "| line | expected (Hz) | found (Hz) | prominence (x local median) |", "| --- | --- | --- | --- |"]
         for key, line in s["fault_lines"].items():
             lines.append(f"| {LINE_LABELS[key]} | {line['expected_hz']:.2f} | {_num(line['found_hz'])} | "
                          f"{_num(line['prominence'])} |")
         lines += ["", f"A line counts as a fault above a prominence of 4 (`analysis.envelope.DETECTION_THRESHOLD`); "
                   f"which line marks which fault: {', '.join(f'{k} -> {LINE_LABELS[v]}' for k, v in FAULT_LINES.items())}.", ""]
+    lines += _orders_markdown(s)
     lines += _timeline_markdown(s)
     if s["skid_ratios_percent"]:
         lines += ["## Skidding", "", "Mean over the recording (`/diagnostics`): "
@@ -1187,7 +1287,32 @@ def _markdown(s: dict) -> str:
 
 def _from_windows(s: dict) -> bool:
     """Whether the summary's verdict is that of the timeline's windows (``one_verdict``)."""
-    return s["verdict_from"] not in ("the analysed stretch", "no verdict")
+    return s["verdict_from"] not in ("the analysed stretch", "no verdict") and not _from_orders(s)
+
+
+def _from_orders(s: dict) -> bool:
+    """Whether the summary's verdict is that of order tracking (``one_verdict``)."""
+    return s["verdict_from"].startswith("order tracking")
+
+
+def _orders_markdown(s: dict) -> list:
+    """The "Order tracking" section where the lines move: the lines in orders, or why there are none."""
+    tracked = s["order_tracking"]
+    if tracked is None:
+        return []
+    if tracked["verdict"] is None:
+        return ["## Order tracking", "", f"Not done: {tracked['why_not']}.", ""]
+    slowest, fastest = tracked["shaft_rpm"]
+    lines = ["## Order tracking", "",
+             f"The envelope ({s['envelope_channel']}, band-passed in Hz) resampled at equal steps of shaft angle "
+             f"(`state`) over {tracked['start_s']:.2f}-{tracked['end_s']:.2f} s, {slowest:.0f}-{fastest:.0f} rpm, "
+             f"{tracked['revolutions']:.0f} revolutions; its spectrum in orders (events per shaft revolution), "
+             f"where the fault lines hold still: `orders.png`.  Verdict: {tracked['verdict'].upper()}.", "",
+             "| line | expected (order) | found (order) | prominence (x local median) |", "| --- | --- | --- | --- |"]
+    for key, line in tracked["lines"].items():
+        lines.append(f"| {LINE_LABELS[key]} | {line['expected_order']:.4f} | {_num(line['found_order'])} | "
+                     f"{_num(line['prominence'])} |")
+    return lines + [""]
 
 
 def _count(n: int, noun: str) -> str:
@@ -1213,12 +1338,16 @@ def _changes_text(s: dict) -> str:
 MAX_TIMELINE_ROWS = 40
 
 
+def _run_key(window: dict) -> tuple:
+    return window["verdict"], window["faults_present"], window.get("order_tracked", False)
+
+
 def _timeline_runs(timeline: list) -> list:
     """The timeline as runs of consecutive windows with the same verdict and faults present, each
     the list of its windows."""
     runs = []
     for w in timeline:
-        if runs and (w["verdict"], w["faults_present"]) == (runs[-1][0]["verdict"], runs[-1][0]["faults_present"]):
+        if runs and _run_key(w) == _run_key(runs[-1][0]):
             runs[-1].append(w)
         else:
             runs.append([w])
@@ -1283,14 +1412,17 @@ def _timeline_markdown(s: dict) -> list:
         sizes = sorted({v for w in run for v in (w["defect_sizes"] or [])})
         tops = [max((w["prominences"].get(fault, float("nan")) for w in run), default=float("nan"))
                 for fault, _ in TIMELINE_LINES]
-        lines.append(f"| {run[0]['start_s']:.2f}-{run[-1]['end_s']:.2f} | {len(run)} | {run[0]['verdict']} | "
+        lines.append(f"| {run[0]['start_s']:.2f}-{run[-1]['end_s']:.2f} | {len(run)} | {run[0]['verdict']}"
+                     f"{' (in orders)' if run[0].get('order_tracked') else ''} | "
                      f"{_faults_text(run[0]['faults_present'])} | "
                      f"{(_num(sizes[0]) + ('-' + _num(sizes[-1]) if len(sizes) > 1 else '')) if sizes else 'n/a'} | "
                      f"{' / '.join(_num(v) for v in tops)} |")
     if len(runs) > MAX_TIMELINE_ROWS:
         lines.append(f"| ... | {sum(map(len, runs[MAX_TIMELINE_ROWS:]))} more windows in "
                      f"{len(runs) - MAX_TIMELINE_ROWS} more runs: `summary.json` | | | | |")
-    lines += ["", "A row is a run of consecutive windows with the same verdict and faults present."]
+    lines += ["", "A row is a run of consecutive windows with the same verdict and faults present."
+              + (" \"(in orders)\": the window's lines move, and its verdict is that of its envelope spectrum in orders "
+                 "of the shaft (order tracking)." if any(w.get("order_tracked") for w in timeline) else "")]
     if s["fault_onset_s"] is not None:
         t1, t0 = s["fault_onset_s"], s["fault_onset_s"] - s["fault_onset_resolution_s"]
         pending = [w for w in timeline if t0 + 1e-6 < w["end_s"] < t1 - 1e-6]
@@ -1345,7 +1477,7 @@ def report_command(args) -> int:
     print(f"{args.out}: {', '.join(s['plots'])}, summary.md, summary.json; verdict {s['verdict']}"
           + (f" ({', '.join(s['verdict_faults'])})" if s["verdict"] == "mixed" else "")
           + f" (scene defects: {_defects_text(s)}{timing})")
-    if _from_windows(s):
+    if _from_windows(s) or _from_orders(s):
         print(f"{args.out}: the verdict is that of {s['verdict_from']}")
     if s["verdict_note"]:
         print(f"{args.out}: {s['verdict_note']}")
