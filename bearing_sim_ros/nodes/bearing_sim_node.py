@@ -1006,7 +1006,11 @@ class BearingSimNode(Node):
                 values["recording_error"] = rs["error"]
                 # for the end of the run's log line, which the recording's own line follows
                 self._status_apart_from_recording = (level, message)
-                level, message = 2, "recording failed: " + rs["error"]
+                # the failure first, and after it the rest of the second's words (overruns, falling
+                # behind, saturation, other publishers): replaced by it, they were lost for as long
+                # as the node ran on
+                failed = "recording failed: " + rs["error"]
+                level, message = 2, failed if message == "ok" else f"{failed}; {message}"
             elif dropped:
                 # the file has gaps: a warning, as overruns are (the stream itself is whole)
                 text = f"recording dropped {dropped} messages in the last second (the disk is not keeping up)"
