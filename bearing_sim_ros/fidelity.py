@@ -175,6 +175,10 @@ def support_carries_all(scene, radial_load, margin: float = 1.0) -> bool:
     play = scene.bearing.radial_clearance
     if play <= 0.0:
         return False
+    # the line bearing_load's table holds too (its share is exactly 0 up to k_s C_r; the two agree
+    # on every shipped scene: test_fidelity), in closed form: the hysteresis raises the line, and
+    # through bearing_load it would be a load divided by the margin, no load of the scene, and an
+    # interpolation where one product is exact
     return _load_with_weight(scene, radial_load) <= margin * scene.structure.shaft_stiffness * play
 
 

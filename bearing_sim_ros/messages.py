@@ -51,14 +51,41 @@ END_REASON_KEY, PUBLISHED_SAMPLES_KEY = "end_reason", "published_samples"
 # Ctrl-C and SIGTERM), or the node's stop() called by a program that runs it in its own process, or
 # the skidding solver's divergence (level ERROR, its line in the message)
 END_REASONS = ("duration", "SIGINT", "SIGTERM", "SIGHUP", "stopped", "diverged")
-# s `play` waits at its end for each reliable subscriber to acknowledge its tail: lost to a
-# subscriber that has not received it when the publisher is destroyed
-END_ACK_TIMEOUT_S = 2.0
-# s the node gives reliable subscribers at its end to acknowledge its last messages (the end
-# status, the last tables), in all; short because Fast DDS often acknowledges only with its
-# periodic heartbeat, 3 s after the last write, though the subscriber has them within ms, and
-# every exit of a node with subscribers waits it out
+# s the node and `play` give reliable subscribers at their end to acknowledge their last messages
+# (the end status, the last tables), in all (``deliver_the_end``); short because Fast DDS often
+# acknowledges only with its periodic heartbeat, 3 s after the last write, though the subscriber
+# has them within ms, and every exit with subscribers waits it out.  `play` waited up to 2 s per
+# topic: about 3 s at the end of every play of a 1 s recording whose subscriber in another
+# process had every message 2 ms after the last was published, 12 s with a stalled subscriber
+# (6 topics); a subscriber stopped (SIGSTOP) for 1 s across the end of a play that did not wait
+# at all still got every message
 END_DELIVERY_GRACE_S = 0.5
+
+
+def deliver_the_end(publishers, grace_s: float, going_on) -> list:
+    """Give reliable subscribers up to ``grace_s`` (s) in all to acknowledge what ``publishers``
+    published last, before they are destroyed, which takes away what is still on its way; the
+    topics not acknowledged in time (no sign of a lost message: Fast DDS learns of a receipt from
+    a reader's answer to a heartbeat, often the periodic one).  ``publishers`` the frequent topics
+    first: their heartbeats come with their messages, so they take little of the grace.  Stops
+    once ``going_on()`` is false (the context shut down, a stop asked for)."""
+    import time
+
+    from rclpy.duration import Duration
+
+    deadline = time.monotonic() + grace_s
+    late = []
+    for pub in publishers:
+        if not going_on():
+            break
+        try:
+            if not pub.wait_for_all_acked(Duration(seconds=max(0.0, deadline - time.monotonic()))):
+                late.append(pub.topic_name)
+        except Exception:  # noqa: BLE001 - the context went away while it waited
+            if going_on():
+                raise
+            break
+    return late
 
 
 def end_of_run(values: dict, level: int, message: str, reason: str, samples: int, sample_rate: float,

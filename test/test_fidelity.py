@@ -374,6 +374,26 @@ def test_the_skid_index_takes_the_balls_share_of_the_load():
     assert 2.5 < total_over_share(scene, 200.0) < 3.0
 
 
+def test_no_ball_loaded_is_where_the_balls_share_is_zero():
+    """``support_carries_all`` (the tier choice's line, k_s C_r in closed form) and
+    ``bearing_load`` (the balls' share, from a table of the load-deflection law) hold the same
+    line: on every shipped scene, just below, at and above it, the support carries all exactly
+    where the balls' share is 0 (and never for a preloaded bearing, whose balls always carry)."""
+    from bearing_sim_ros.fidelity import bearing_load, support_carries_all
+    from bearing_sim_ros.scene import shipped_scenes
+
+    for name in shipped_scenes():
+        scene = load_scene(name)
+        weight = scene.structure.shaft_mass * 9.80665 if scene.gravity else 0.0
+        line = scene.structure.shaft_stiffness * max(scene.bearing.radial_clearance, 0.0)
+        for factor in (0.5, 1.0 - 1e-9, 1.0, 1.0 + 1e-9, 1.0 + 1e-6, 1.2, 3.0):
+            total = max(factor * line, 1.0 if line == 0.0 else 0.0)
+            load = (0.0, weight - total)                 # |load + weight| = total
+            carries = support_carries_all(scene, load)
+            assert carries == (bearing_load(scene, load) == 0.0), (name, factor)
+            assert carries == (line > 0.0 and factor <= 1.0), (name, factor)
+
+
 def total_over_share(scene, load):
     """|load + weight| over the balls' share of it (N/N)."""
     from bearing_sim_ros.fidelity import bearing_load

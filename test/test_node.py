@@ -1127,6 +1127,30 @@ def test_a_split_recording_whose_folder_goes_away_stops_at_the_next_piece_and_sa
     assert sorted(p.name for p in moved.iterdir()) == ["run_000.mcap", "run_001.mcap"]
 
 
+def test_a_failed_recording_says_itself_first_and_the_seconds_warnings_after(started, listener, tmp_path):
+    """A sensor whose range (+-20 m/s^2) the outer race's impacts exceed: each second's
+    ``/diagnostics`` warns ``accelerometer saturated: ...``.  Once the recording fails (its file
+    deleted while the node runs), the message was only ``recording failed: ...``, and the
+    saturation of those seconds was lost from it (its count stayed in the values).  Now the
+    failure comes first and the warning after it, at ERROR level."""
+    scene = tmp_path / "clipped.yaml"
+    scene.write_text(load_scene("er16k_outer_race").source_text.replace("range: 490.3", "range: 20.0"))
+    out = tmp_path / "run.mcap"
+    node = started({"scene": str(scene), "fidelity": "kinematic", "duration": 10.0, "record": str(out)})
+    listener.wait_for(lambda: out.exists() and out.stat().st_size > 200_000, FIRST_TABLE_S, "the recording")
+    out.unlink()
+    failed = listener.wait_for(lambda: [d for d in listener.diagnostics if d[3].get("recording") == "error"],
+                               10, "recording: error in /diagnostics")
+    _t, level, message, values, _stamp = failed[0]
+    error = f"recording to {out} stopped: the file was deleted while it was written"
+    assert values["recording_error"] == error and int(values["accel_clipped_samples"]) > 0, values
+    # (overruns of a loaded machine would come between them)
+    assert level == 2 and message.startswith(f"recording failed: {error}; "), message
+    assert "accelerometer saturated: " in message, message
+    node.send(signal.SIGINT)
+    assert node.wait(20) == 2, node.output()
+
+
 def test_fast_mode_runs_duration_and_ends(started, tmp_path):
     """real_time:=false with duration 3 s: the node ends by itself with exactly 3 s recorded,
     log time = the end of each table (the file replays at the signal's pace), and a

@@ -136,6 +136,71 @@ def test_play_delivers_every_message_to_another_process(recording, bearing_sim_e
     _assert_paced(got["/accel"], rate=2)
 
 
+STALLS = textwrap.dedent('''
+    import sys, time
+    import rclpy
+    from rclpy.qos import QoSProfile
+    from sensor_msgs.msg import PointCloud2, JointState
+    from diagnostic_msgs.msg import DiagnosticArray
+    from std_msgs.msg import Float64
+    from geometry_msgs.msg import WrenchStamped
+
+    rclpy.init()
+    node = rclpy.create_node("stalled")
+    got = []
+    node.create_subscription(PointCloud2, "/accel", got.append, QoSProfile(depth=1000))
+    for topic, cls in [("/contact_forces", PointCloud2), ("/state", JointState), ("/diagnostics", DiagnosticArray),
+                       ("/shaft_speed", Float64), ("/load", WrenchStamped)]:
+        node.create_subscription(cls, topic, lambda msg: None, QoSProfile(depth=1000))
+    print("ready", flush=True)
+    while not got:
+        rclpy.spin_once(node, timeout_sec=0.05)
+    received = time.monotonic()               # the system's steady clock, the test's too
+    print(f"first table {received!r}", flush=True)      # the test stops this process here (SIGSTOP)
+    time.sleep(60)
+''')
+
+
+@pytest.mark.wall_clock
+def test_play_gives_a_stalled_subscriber_one_grace_at_its_end(recording, ros_env, tmp_path):
+    """A reliable subscriber of every topic that stops (SIGSTOP) after its first table never
+    acknowledges the rest: play waited up to 2 s for each of its 6 topics, 12 s after its last message.  Now it
+    gives the end one grace in all, as the node does (``END_DELIVERY_GRACE_S``): the 1 s
+    recording and the grace, not less (it waits: a subscriber in another process gets the tail
+    it has not acknowledged yet), nor seconds more.  In this process, so that its return is
+    timed without the interpreter's start and end."""
+    import threading
+    import time
+
+    from bearing_sim_ros.recording.play import play
+
+    path, counts, _accel = recording
+    sub, _result = _subscriber(tmp_path, ros_env, 0, 0, source=STALLS)
+    first = []
+
+    def stall():
+        said = sub.stdout.readline().split()
+        if said[:2] == ["first", "table"]:
+            sub.send_signal(signal.SIGSTOP)
+            first.append(float(said[2]))
+
+    staller = threading.Thread(target=stall, daemon=True)
+    staller.start()
+    try:
+        assert play(path, wait_for_subscribers=15.0, log=lambda text: None) == sum(counts.values())
+        ended = time.monotonic()
+        staller.join(5)
+    finally:
+        sub.send_signal(signal.SIGCONT)
+        sub.kill()
+        sub.wait()
+    assert first, "the subscriber never got a table"
+    # from the subscriber's first table (logged 10 ms into the recording, 0.99 s before the last
+    # message; received a little after it was published) to play's return: 0.99 s and the grace,
+    # 0.5 s (0.95 s without a wait; 13 s with 2 s a topic)
+    assert 0.99 + 0.5 - 0.15 <= ended - first[0] <= 0.99 + 0.5 + 3.0, ended - first[0]
+
+
 def _assert_paced(received, rate):
     """The tables of ``received`` ([stamp, width, crc, monotonic time]; stamps a recording's
     sample times, as its log times, 10 ms apart) arrived at ``rate`` x their stamps' pace, within

@@ -165,16 +165,21 @@ def test_files_that_are_not_the_consecutive_pieces_of_one_recording_are_refused(
     assert _refusal(tmp_path / "nothing.mcap").startswith(f"{tmp_path / 'nothing.mcap'}: no such file")
 
 
+def _copied(whole, folder) -> tuple:
+    """The split recording of ``whole`` copied into ``folder``, to be broken there: (its name,
+    its pieces)."""
+    _src, _base, pieces = whole
+    copies = [folder / p.name for p in pieces]
+    for p, copy in zip(pieces, copies):
+        copy.write_bytes(p.read_bytes())
+    return folder / "run.mcap", copies
+
+
 def test_a_hard_kills_last_piece_is_left_out_and_said_when_found_by_name(whole, tmp_path):
     """What a kill leaves of the file being written (no footer): from the split's name, the
     pieces before it are reported and the note says which was left out and why; given
     explicitly, the broken piece is an error, as a single file is."""
-    _src, _base, pieces = whole
-    base = tmp_path / "run.mcap"
-    copies = []
-    for p in pieces:
-        copies.append(tmp_path / p.name)
-        copies[-1].write_bytes(p.read_bytes())
+    base, copies = _copied(whole, tmp_path)
     data = copies[-1].read_bytes()
     copies[-1].write_bytes(data[: len(data) // 2])           # cut: no footer, no summary
     s = build_report(base, tmp_path / "report")
@@ -188,6 +193,29 @@ def test_a_hard_kills_last_piece_is_left_out_and_said_when_found_by_name(whole, 
     copies[0].write_bytes(b"")                               # a broken first piece is not left out
     assert _refusal(base) == f"{copies[0]}: empty file (0 bytes): its writer wrote nothing to it before it " \
                              "stopped, e.g. the last file of a recording killed hard (kill -9)"
+
+
+def test_a_hard_kills_last_piece_given_by_hand_says_how_to_read_the_pieces_before_it(whole, tmp_path):
+    """``report runs/run_*.mcap`` after a ``kill -9``: the last piece (no footer, or empty) is an
+    error, and it said only that `mcap recover` (another tool, not installed with this one) could
+    salvage it.  Now the line says that it is the last piece of ``runs/run.mcap`` and how to read
+    the pieces before it; a truncated file that is no such piece is said as before."""
+    base, copies = _copied(whole, tmp_path)
+    hint = f"; it is the last piece of {base}: give the pieces before it, or {base}, which reads all 3 of them and " \
+           "leaves it out"
+    data = copies[-1].read_bytes()
+    for broken in (data[: len(data) // 2], b""):
+        copies[-1].write_bytes(broken)
+        for given in (copies, [copies[3], copies[2]], [copies[2], copies[3]]):
+            text = _refusal(given)
+            assert text.startswith(f"{copies[3]}: ") and text.endswith(hint), text
+            assert ("truncated MCAP recording" if broken else "empty file (0 bytes)") in text, text
+    # not the last piece: a piece in the middle, a file of another name
+    copies[1].write_bytes(data[: len(data) // 2])
+    assert not _refusal([copies[0], copies[1]]).endswith(hint)
+    lone = tmp_path / "lone.mcap"
+    lone.write_bytes(data[: len(data) // 2])
+    assert _refusal([lone, copies[0]]).endswith("`mcap recover` can salvage its complete chunks")
 
 
 def test_report_and_play_take_several_files_on_the_command_line(whole, bearing_sim_exe, ros_env, tmp_path):

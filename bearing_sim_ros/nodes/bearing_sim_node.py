@@ -913,30 +913,15 @@ class BearingSimNode(Node):
 
     def _deliver_the_end(self) -> None:
         """Give reliable subscribers up to ``END_DELIVERY_GRACE_S`` to acknowledge what the node
-        published last (its end status, its last tables) before it is destroyed, which takes
-        away what is still on its way.  Best effort and silent: Fast DDS learns of a receipt from
-        a reader's answer to a heartbeat, which often comes only with the periodic one, 3 s after
-        the last write, so an unacknowledged topic is no sign of a lost message (a warning of
-        them, after a 2 s wait, was a false alarm in 7 of 10 live runs whose subscriber had
-        everything).  The frequent topics first: their heartbeats come with their messages."""
-        from rclpy.duration import Duration
+        published last (its end status, its last tables) before it is destroyed
+        (``messages.deliver_the_end``).  Best effort and silent: an unacknowledged topic is no
+        sign of a lost message (a warning of them, after a 2 s wait, was a false alarm in 7 of 10
+        live runs whose subscriber had everything)."""
+        from ..messages import END_DELIVERY_GRACE_S, deliver_the_end
 
-        from ..messages import END_DELIVERY_GRACE_S
-
-        deadline = time.monotonic() + END_DELIVERY_GRACE_S
-        late = []
-        for pub in (self.pub_accel, self.pub_contact, self.pub_state, self.pub_diag):
-            if not self.context.ok():
-                return
-            left = max(0.0, deadline - time.monotonic())
-            try:
-                if not pub.wait_for_all_acked(Duration(seconds=left)):
-                    late.append(pub.topic_name)
-            except Exception:  # noqa: BLE001 - the context went away while it waited
-                if self.context.ok():
-                    raise
-                return
-        if late:
+        late = deliver_the_end((self.pub_accel, self.pub_contact, self.pub_state, self.pub_diag),
+                               END_DELIVERY_GRACE_S, self.context.ok)
+        if late and self.context.ok():
             self.get_logger().debug(f"not acknowledged within {END_DELIVERY_GRACE_S:g} s at the end of the run: "
                                     f"{', '.join(late)}")
 
@@ -1006,7 +991,11 @@ class BearingSimNode(Node):
                 values["recording_error"] = rs["error"]
                 # for the end of the run's log line, which the recording's own line follows
                 self._status_apart_from_recording = (level, message)
-                level, message = 2, "recording failed: " + rs["error"]
+                # the failure first, and after it the rest of the second's words (overruns, falling
+                # behind, saturation, other publishers): replaced by it, they were lost for as long
+                # as the node ran on
+                failed = "recording failed: " + rs["error"]
+                level, message = 2, failed if message == "ok" else f"{failed}; {message}"
             elif dropped:
                 # the file has gaps: a warning, as overruns are (the stream itself is whole)
                 text = f"recording dropped {dropped} messages in the last second (the disk is not keeping up)"

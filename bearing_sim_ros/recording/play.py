@@ -40,7 +40,7 @@ import threading
 import time
 
 from ..errors import UserError
-from ..messages import DISCOVERY_GRACE_S, END_ACK_TIMEOUT_S
+from ..messages import DISCOVERY_GRACE_S, END_DELIVERY_GRACE_S, deliver_the_end
 from ..teardown import teardown_watchdog
 from ..waveform import NS
 from .reader import deserialize, get_message, open_recording
@@ -208,12 +208,11 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
                 if length <= 0:
                     raise UserError(_no_length(path, published))
                 offset += length
-            if not stop.is_set():          # let reliable subscribers receive the tail
-                for pub in pubs.values():
-                    try:
-                        pub.wait_for_all_acked(rclpy.duration.Duration(seconds=END_ACK_TIMEOUT_S))
-                    except Exception:  # noqa: BLE001 - best effort at the end
-                        pass
+            # let reliable subscribers receive the tail: the node's grace, the frequent topics
+            # first (/clock, then by their recorded messages)
+            frequent_first = sorted(pubs, key=lambda topic: -topics[topic].count)
+            deliver_the_end(([clock_pub] if clock_pub is not None else []) + [pubs[t] for t in frequent_first],
+                            END_DELIVERY_GRACE_S, running)
             log(f"play {path}: {'stopped after' if stop.is_set() else 'published'} {published} messages")
             return published
         finally:

@@ -219,7 +219,9 @@ class SplitRecording:
                 try:
                     self._pieces.append(Recording(p))
                 except UserError as exc:
-                    if named is None or k != len(given) - 1 or k == 0:
+                    if named is None:
+                        raise UserError(f"{exc}{_without_the_last_piece(p)}") from None
+                    if k != len(given) - 1 or k == 0:
                         raise
                     self.notes.append(f"{p} left out: {str(exc).split(': ', 1)[-1]}")
             self._check_and_order()
@@ -303,6 +305,26 @@ class SplitRecording:
 
     def __exit__(self, *exc):
         self.close()
+
+
+def _without_the_last_piece(piece) -> str:
+    """Where ``piece``, given by hand with other files and unreadable, is the last piece of a
+    split recording (what a hard kill leaves of the file being written: ``run_*.mcap`` after a
+    ``kill -9``), how to read the pieces before it: "" otherwise.  The error alone pointed to
+    ``mcap recover``, a tool of its own, where the recording's name reads them."""
+    import re
+    from pathlib import Path
+
+    piece = Path(piece)
+    split = re.fullmatch(r"(.+)_\d{3,}(\.mcap)", piece.name)
+    if split is None:
+        return ""
+    named = piece.with_name(split.group(1) + split.group(2))
+    pieces = existing_pieces(named)
+    if len(pieces) < 2 or os.path.lexists(named) or os.path.realpath(pieces[-1]) != os.path.realpath(piece):
+        return ""
+    return (f"; it is the last piece of {named}: give the pieces before it, or {named}, which reads all "
+            f"{len(pieces) - 1} of them and leaves it out")
 
 
 def _without_index(metadata: dict) -> dict:
