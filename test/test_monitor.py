@@ -850,6 +850,42 @@ def test_the_monitor_says_once_that_the_node_runs_another_scene(ros_env, tmp_pat
         "operating point used without `state` is --scene's"]
 
 
+def test_the_line_on_another_simulators_ground_truth_says_whose_truth_is_taken(ros_env, tmp_path):
+    """A monitor in /rig1 beside a simulator in the root said of the root's /diagnostics "truth= is
+    'rig1/bearing_sim: simulator''s (--simulator names another)", as if the user had given
+    ``--simulator``; it had given none, and the default resolves in the namespace of the accel
+    topic.  The line now says whose truth is taken and why: the simulator of /rig1/accel, or the
+    one ``--simulator`` names where it was given; and that ``--simulator NAME`` takes another."""
+    import io
+
+    import rclpy
+
+    recording = tmp_path / "root.mcap"
+    render("er16k_outer_race", 1.0, recording, fidelity="kinematic", seed=1, progress=False)
+    diagnostics = _recorded_diagnostics(recording)
+    said = {}
+    for given in (None, "sim"):
+        ctx = rclpy.Context()
+        rclpy.init(args=["--ros-args", "-r", "__ns:=/rig1"], context=ctx)
+        try:
+            out = io.StringIO()
+            node = MonitorNode(load_scene("er16k_outer_race"), window=1.0, out=out, context=ctx, simulator=given)
+            try:
+                for msg in diagnostics:
+                    node._on_diagnostics(msg)
+            finally:
+                node.destroy_node()
+        finally:
+            rclpy.shutdown(context=ctx)
+        said[given] = out.getvalue().splitlines()
+    assert said[None] == [
+        "monitor: ground truth of 'bearing_sim: simulator' ignored: truth= is that of 'rig1/bearing_sim: "
+        "simulator', the simulator of /rig1/accel (--simulator NAME takes another's)"], said[None]
+    assert said["sim"] == [
+        "monitor: ground truth of 'bearing_sim: simulator' ignored: truth= is that of 'rig1/sim: simulator', "
+        "the simulator --simulator sim names"], said["sim"]
+
+
 def test_the_monitor_says_when_a_scene_of_its_own_name_runs_another_bearing():
     """A scene copied from a shipped one and given another bearing keeps the shipped scene's
     ``name:`` (its /diagnostics ``scene``), so the monitor, which compared the names alone, said

@@ -407,6 +407,7 @@ class MonitorNode(Node):
         self.runs_before = []
         self._went_back_said_at = None  # monotonic s of the last run-started line (throttled)
         self.simulator = simulator_name(self.resolve_topic_name(TOPIC_ACCEL), simulator)
+        self.simulator_given = simulator    # --simulator as given (None: the default, resolved)
         self._several_said = False
         self.truth_status = ground_truth.status_name(self.simulator)
         self.ignored = set()        # names of other simulators' statuses, said once each
@@ -450,6 +451,15 @@ class MonitorNode(Node):
             return False
         return now - max(self._gone_since, self._last_table_at) >= self.end_wait
 
+    def _whose_truth(self) -> str:
+        """Why the truth is that simulator's, for the line on another one's: the default is the
+        simulator of the watched accel topic, which a user who gave no --simulator did not choose
+        (the line said "--simulator names another" to them)."""
+        if self.simulator_given is None:
+            return (f"the simulator of {self.resolve_topic_name(TOPIC_ACCEL)} "
+                    "(--simulator NAME takes another's)")
+        return f"the simulator --simulator {self.simulator_given} names"
+
     def _on_state(self, msg):
         names = list(msg.name)
         if "shaft" in names and len(msg.velocity) == len(names):
@@ -469,8 +479,8 @@ class MonitorNode(Node):
                 # not in this waveform
                 if status.name not in self.ignored:
                     self.ignored.add(status.name)
-                    print(f"monitor: ground truth of {status.name!r} ignored: truth= is "
-                          f"{self.truth_status!r}'s (--simulator names another)", file=self.out, flush=True)
+                    print(f"monitor: ground truth of {status.name!r} ignored: truth= is that of "
+                          f"{self.truth_status!r}, {self._whose_truth()}", file=self.out, flush=True)
                 continue
             if self.run.last_report is not None and stamp < self.run.last_report - SLACK_NS:
                 self._start_run(went_back("/diagnostics", stamp, self.run.last_report))
