@@ -66,11 +66,13 @@ run: $(VENV)/.installed
 # wall_clock alone, which measure pacing or send a signal in a process's first 0.1 s and would
 # be skewed by another test's load.  Either part failing fails the target, after both ran;
 # PYTEST_ARGS that select no test of one part (pytest's status 5) leave it to the other.
+# TESTS: the files or folders to run (`make test TESTS=test/test_play.py`).
 TEST_WORKERS ?= 2
+TESTS ?= test
 test: $(VENV)/.installed
 	@parallel=0; alone=0; \
-	$(PY) -m pytest -q -n $(TEST_WORKERS) --dist worksteal -m "not wall_clock" $(PYTEST_ARGS) test || parallel=$$?; \
-	$(PY) -m pytest -q -m wall_clock $(PYTEST_ARGS) test || alone=$$?; \
+	$(PY) -m pytest -q -n $(TEST_WORKERS) --dist worksteal -m "not wall_clock" $(PYTEST_ARGS) $(TESTS) || parallel=$$?; \
+	$(PY) -m pytest -q -m wall_clock $(PYTEST_ARGS) $(TESTS) || alone=$$?; \
 	if [ $$parallel -eq 5 ] && [ $$alone -eq 5 ]; then exit 5; fi; \
 	for s in $$parallel $$alone; do if [ $$s -ne 0 ] && [ $$s -ne 5 ]; then exit $$s; fi; done
 
