@@ -107,6 +107,15 @@ def cwru_dir():
 
 
 @pytest.fixture(scope="session")
+def outer_run_up(tmp_path_factory):
+    """er16k_outer_race run up from 1000 to 3000 rpm over 4 s, kinematic (``render_run_up``):
+    rendered once for test_report, test_monitor and test_run."""
+    from test_node_support import render_run_up
+
+    return render_run_up(tmp_path_factory.mktemp("run_up"), "er16k_outer_race")
+
+
+@pytest.fixture(scope="session")
 def skidding_outer_race(tmp_path_factory):
     """(scene path, recording path): er16k_outer_race moved to 10000 rpm / 10 N, where its cage
     skids about 7 % (the outer-race line sits 7 % below the catalog's pure-rolling BPFO, 552

@@ -325,3 +325,23 @@ def assert_diverged_and_recorded(result, recording, advice: str) -> None:
     assert last.level == 2 and last.message == (f"run ended: the solver diverged, {samples / 15000.0:.6f} s of "
                                                 f"signal ({samples} samples) published; {line}"), last.message
     assert (values["run"], values["end_reason"], values["published_samples"]) == ("ended", "diverged", str(samples))
+
+
+def render_run_up(folder, scene_name: str, duration: float = 4.0, **options):
+    """A kinematic render of ``scene_name`` whose shaft runs up from 1000 to 3000 rpm over
+    ``duration`` s (its operating point at 1000 rpm and a ``profile`` knot at the end), to
+    ``folder``, with ``render``'s ``options`` (``state_rate``); its path.  Its lines move 89 % in Hz: the order tracking of report, monitor and
+    run (test_report, test_monitor, test_run)."""
+    import re
+
+    from bearing_sim_ros import load_scene
+    from bearing_sim_ros.recording.render import render
+
+    text = load_scene(scene_name).source_text
+    text, found = re.subn(r"operating_point: \{shaft_speed_rpm: \d+", "operating_point: {shaft_speed_rpm: 1000", text)
+    assert found == 1, f"{scene_name}.yaml's operating point moved: update this test"
+    scene = folder / f"{scene_name}_run_up.yaml"
+    scene.write_text(text + f"profile:\n  - {{t: {duration:g}, shaft_speed_rpm: 3000}}\n")
+    rec = folder / f"{scene_name}_run_up.mcap"
+    render(str(scene), duration, rec, fidelity="kinematic", progress=False, **options)
+    return rec

@@ -19,6 +19,8 @@ from bearing_sim_ros.recording.render import render
 from bearing_sim_ros.waveform import NS
 from bearing_sim_ros.waveform import NS, from_pointcloud2
 
+from test_node_support import render_run_up
+
 
 @pytest.fixture(scope="module")
 def outer(tmp_path_factory):
@@ -481,24 +483,6 @@ def test_a_recording_whose_speed_steps_gets_the_verdict_of_order_tracking(tmp_pa
     assert [round(w["shaft_speed_rpm"]) for w in half["timeline"]] == [1600] * 3 + [3000] * 3
 
 
-def _run_up(folder, scene_name: str, duration: float = 4.0):
-    """A kinematic render of ``scene_name`` whose shaft runs up from 1000 to 3000 rpm over
-    ``duration`` s (its operating point at 1000 rpm and a ``profile`` knot at the end)."""
-    text = load_scene(scene_name).source_text
-    text, found = re.subn(r"operating_point: \{shaft_speed_rpm: \d+", "operating_point: {shaft_speed_rpm: 1000", text)
-    assert found == 1, f"{scene_name}.yaml's operating point moved: update this test"
-    scene = folder / f"{scene_name}_run_up.yaml"
-    scene.write_text(text + f"profile:\n  - {{t: {duration:g}, shaft_speed_rpm: 3000}}\n")
-    rec = folder / f"{scene_name}_run_up.mcap"
-    render(str(scene), duration, rec, fidelity="kinematic", progress=False)
-    return rec
-
-
-@pytest.fixture(scope="module")
-def outer_run_up(tmp_path_factory):
-    return _run_up(tmp_path_factory.mktemp("run_up"), "er16k_outer_race")
-
-
 def test_an_outer_race_run_up_gets_its_verdict_from_order_tracking(outer_run_up, tmp_path, capsys, figures):
     """er16k_outer_race run up from 1000 to 3000 rpm over 4 s: its lines move by 89 % in Hz, so
     the report said "unknown" of the recording and of every window (each ramps 500 rpm), an
@@ -534,7 +518,7 @@ def test_an_inner_race_or_healthy_run_up_gets_its_own_verdict(tmp_path, scene_na
     """The same run-up of an inner-race pit is "inner" and of a healthy bearing "healthy" (the
     CWRU 6205: the healthy ER-16K rings at BPFO by varying compliance, README "Scenes"); the old
     report said "unknown" of both."""
-    s = build_report(_run_up(tmp_path, scene_name), tmp_path / "out")
+    s = build_report(render_run_up(tmp_path, scene_name), tmp_path / "out")
     assert s["verdict"] == verdict and s["order_tracking"]["verdict"] == verdict, s.get("order_tracking")
     assert s["verdict_from"].startswith("order tracking")
     assert s["expected_defects"] == ([] if verdict == "healthy" else [verdict])
