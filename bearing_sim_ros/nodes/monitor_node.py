@@ -11,13 +11,21 @@ into a float32 array (no per-sample objects), and checks that the tables are con
 with a hole in it would smear the lines.  Every ``window`` seconds of signal it runs the shared
 envelope detector (:func:`bearing_sim_ros.analysis.envelope.diagnose`) on each accelerometer axis
 at the fault frequencies of the scene's bearing at the measured shaft speed (cage, BPFO and BPFI
-from the cage's speed in ``state``, where a skidding cage puts them), and prints one line
-(``verdict=unknown`` and why, where those speeds moved by more than 1 % in the window):
+from the cage's speed in ``state``, where a skidding cage puts them), and prints one line:
 
     t=4.00s shaft=1600rpm verdict=outer truth=outer | bpfo 95.2/95.3Hz x266 | bpfi 144.8/144.7Hz x1.0 | ...
 
 ``found/theory Hz`` and ``x`` the height of the line over the median of its neighbourhood
 (threshold x4, ``envelope.DETECTION_THRESHOLD``).  The axis where a line stands highest counts.
+Where those speeds moved by more than 1 % in the window (a speed step or ramp), its lines smear
+in Hz: it is judged in orders of the shaft instead (``order_verdict``: ``orders.order_diagnose``
+with the shaft and cage angles of the window's ``state`` samples, which go with it into the
+analysis queue), and the line says so in its first field after ``truth=``:
+
+    t=2.00s shaft=1749rpm verdict=outer truth=outer | in orders (order tracking over 1499-1989 rpm, ...) | bpfo 3.571/3.572 orders x309.7 | ...
+
+and where it cannot be order tracked (``orders.untrackable``: ``state`` too sparse, a cage skid
+that changes, ...) ``verdict=unknown`` and why.
 The bearing is ``--scene``'s; where the simulator's ``/diagnostics`` name another scene, one line
 says so and whether its bearing differs (:func:`scene_mismatch_line`).
 
@@ -82,6 +90,7 @@ from rclpy.node import Node
 
 from .. import ground_truth
 from ..analysis.envelope import DETECTION_THRESHOLD, FAULT_LINES, STEADY_LINES, diagnose, spread, with_cage
+from ..analysis.orders import order_diagnose
 from ..messages import RUN_ENDED, RUN_KEY, TOPIC_ACCEL, TOPIC_DIAGNOSTICS, TOPIC_STATE, waveform_qos
 from ..teardown import command_signals, teardown_watchdog
 from .bearing_sim_node import NODE_NAME as SIMULATOR_NODE, PEER_CHECK_S
@@ -165,17 +174,59 @@ def verdict(data: np.ndarray, channels, sample_rate: float, bearing, shaft_hz: f
     freqs = bearing.fault_frequencies(shaft_hz)
     if cage_hz:
         freqs = with_cage(freqs, bearing.balls, shaft_hz, cage_hz)
+    result = _highest_over_axes(channels, lambda k: diagnose(data[:, k].astype(float), sample_rate, freqs))
+    return {**result, "theory": freqs, "shaft_hz": shaft_hz}
+
+
+def _highest_over_axes(channels, diagnose_axis) -> dict:
+    """{"verdict", "scores", "axis", "lines"} over ``channels`` from ``diagnose_axis(k)`` (an
+    ``envelope.diagnose``-like result of axis ``k``): for each fault the highest prominence over
+    the axes, the axis and lines of the fault that stands highest."""
     per_fault = {}          # fault -> (score, axis, lines of that axis)
     for k, name in enumerate(channels):
-        d = diagnose(data[:, k].astype(float), sample_rate, freqs)
+        d = diagnose_axis(k)
         for fault, score in d["scores"].items():
             if fault not in per_fault or score > per_fault[fault][0]:
                 per_fault[fault] = (score, name, d["lines"])
     scores = {fault: s for fault, (s, _axis, _lines) in per_fault.items()}
     top = max(scores, key=scores.get)
     return {"verdict": top if scores[top] >= DETECTION_THRESHOLD else "healthy",
-            "scores": scores, "axis": per_fault[top][1], "lines": per_fault[top][2],
-            "theory": freqs, "shaft_hz": shaft_hz}
+            "scores": scores, "axis": per_fault[top][1], "lines": per_fault[top][2]}
+
+
+def order_verdict(data: np.ndarray, channels, sample_rate: float, times_s, bearing, states) -> tuple:
+    """The envelope verdict over the axes of ``data`` (n, channels; sample ``k`` at signal time
+    ``times_s[k]``, s) in orders of the shaft (``orders.order_diagnose``), for a stretch whose
+    speeds moved, where one spectrum in Hz smears every line: ``(result, "")`` with ``verdict``'s
+    keys (``lines`` in orders) and ``shaft_rpm`` (slowest, fastest) and ``revolutions`` of the
+    stretch tracked, or ``(None, why not)`` (``orders.untrackable``).  ``states``: the ``state``
+    samples that span the stretch, (stamp s on ``times_s``' clock, shaft angle rad, shaft speed
+    rad/s, cage angle rad, cage speed rad/s) arrays, NaN for an angle not given; a cage speed of
+    NaN (a ``state`` without the cage) is pure rolling's, as ``verdict`` takes then."""
+    state_t, shaft_angle, shaft_w, cage_angle, cage_w = (np.asarray(a, dtype=float) for a in states)
+    per_shaft_hz = bearing.fault_frequencies(1.0)
+    if not np.all(np.isfinite(cage_w)):
+        cage_w, cage_angle = shaft_w * per_shaft_hz["ftf"], np.full_like(shaft_w, np.nan)
+    tracked = []            # order_diagnose's result of each axis
+    for k in range(len(channels)):
+        # why not is the same on every axis: it depends on the states and times alone
+        result, why = order_diagnose(data[:, k].astype(float), sample_rate, times_s, state_t, shaft_angle, shaft_w,
+                                     cage_angle, cage_w, per_shaft_hz, bearing.balls)
+        if result is None:
+            return None, why
+        tracked.append(result)
+    first = tracked[0]          # the stretch, speeds and orders are the same on every axis
+    return {**_highest_over_axes(channels, tracked.__getitem__), "theory": first["orders"],
+            "shaft_rpm": first["shaft_rpm"], "revolutions": first["revolutions"]}, ""
+
+
+def window_states(states, start_ns: int) -> tuple:
+    """``order_verdict``'s ``states`` from the monitor's ``state`` records ``states`` ((stamp ns,
+    shaft rad/s, cage rad/s or None, shaft angle rad, cage angle rad), in order) of a window whose
+    first sample is stamped ``start_ns``: stamps in s from it, the cage speed NaN where not given."""
+    return (np.array([(s[0] - start_ns) / NS for s in states]), np.array([s[3] for s in states]),
+            np.array([s[1] for s in states]), np.array([s[4] for s in states]),
+            np.array([np.nan if s[2] is None else s[2] for s in states]))
 
 
 def format_verdict(t: float, result: dict) -> str:
@@ -183,14 +234,24 @@ def format_verdict(t: float, result: dict) -> str:
     parts = [f"t={t:.2f}s shaft={result['shaft_hz'] * 60:.0f}rpm verdict={result['verdict']} "
              f"truth={truth_text(result.get('truth'))}"]
     if result["verdict"] == "unknown":
+        untracked = result.get("untracked")
         return " | ".join(parts + [f"the shaft and cage speeds in state moved by {100 * result['moved']:.0f} % in "
                                    "the window (a speed step or ramp, a load step that changed the cage's skid): "
-                                   "its envelope lines smear, no verdict"])
+                                   "its envelope lines smear, no verdict"
+                                   + (f"; no order tracking: {untracked}" if untracked else "")])
+    in_orders = "shaft_rpm" in result           # order_verdict's: the lines in orders of the shaft
+    if in_orders:
+        slowest, fastest = result["shaft_rpm"]
+        parts.append(f"in orders (order tracking over {slowest:.0f}-{fastest:.0f} rpm, {result['revolutions']:.0f} "
+                     f"revolutions: the speeds in state moved by {100 * result['moved']:.0f} % in the window, which "
+                     "smears the lines in Hz)")
     for fault, key in FAULT_LINES.items():
         if fault == "cage":
             continue
         line = result["lines"][key]
-        parts.append(f"{key} {line.found_hz:.1f}/{line.expected_hz:.1f}Hz x{line.prominence:.1f}")
+        where = f"{line.found_hz:.3f}/{line.expected_hz:.3f} orders" if in_orders else \
+            f"{line.found_hz:.1f}/{line.expected_hz:.1f}Hz"
+        parts.append(f"{key} {where} x{line.prominence:.1f}")
     parts.append(f"({FAULT_NAMES[result['verdict']]}, threshold x{DETECTION_THRESHOLD:g}, axis {result['axis']})")
     return " | ".join(parts)
 
@@ -465,7 +526,12 @@ class MonitorNode(Node):
         if "shaft" in names and len(msg.velocity) == len(names):
             cage = float(msg.velocity[names.index("cage")]) if "cage" in names else None
             stamp = msg.header.stamp.sec * NS + msg.header.stamp.nanosec
-            self._speeds.append((stamp, float(msg.velocity[names.index("shaft")]), cage))
+            # the angles for order tracking (NaN where another tool leaves them out: then the
+            # speeds alone give them)
+            angles = msg.position if len(msg.position) == len(names) else [np.nan] * len(names)
+            self._speeds.append((stamp, float(msg.velocity[names.index("shaft")]), cage,
+                                 float(angles[names.index("shaft")]),
+                                 float(angles[names.index("cage")]) if cage is not None else np.nan))
 
     def _on_diagnostics(self, msg):
         stamp = msg.header.stamp.sec * NS + msg.header.stamp.nanosec
@@ -584,40 +650,54 @@ class MonitorNode(Node):
             # state of its last batch may come after its table, and then goes uncounted
             start = self.window.first_stamp
             speeds = [s for s in self._speeds if start + SLACK_NS < s[0] <= end + SLACK_NS]
-            self._speeds = [s for s in self._speeds if s[0] > end + SLACK_NS]
+            # for order tracking, the states that span the window: those in it and the last at or
+            # before its start (its shaft angle where the window begins)
+            before = [s for s in self._speeds if s[0] <= start + SLACK_NS][-1:]
+            # the last at or before the end stays: it begins the next window (it comes after this
+            # window's last table, or with it)
+            self._speeds = ([s for s in self._speeds if s[0] <= end + SLACK_NS][-1:]
+                            + [s for s in self._speeds if s[0] > end + SLACK_NS])
             # the speed in use comes from `state`; without it, the scene's operating point
             shaft = float(np.mean([s[1] for s in speeds])) if speeds else float(self.scene.shaft_speed)
             cages = [s[2] for s in speeds if s[2] is not None]
             cage = float(np.mean(cages)) if cages else None
             moved = max(spread([s[1] for s in speeds]), spread(cages))
+            # only a window whose lines move is order tracked, and only its states go with it
+            states = window_states(before + speeds, start) if moved > STEADY_LINES else None
             self.windows_queued += 1
             self.run.windows += 1
             self._analysis.submit(self._analyse, end, self.window.take(), channels, fs, shaft,
-                                  time.monotonic() + TRUTH_GRACE_S, self.run, cage, moved)
+                                  time.monotonic() + TRUTH_GRACE_S, self.run, cage, moved, states)
 
     def _analyse(self, end: int, x: np.ndarray, channels, fs: float, shaft: float, grace: float,
-                 run: SourceRun | None = None, cage: float | None = None, moved: float = 0.0) -> None:
+                 run: SourceRun | None = None, cage: float | None = None, moved: float = 0.0,
+                 states=None) -> None:
         """On the analysis thread: one verdict with the truth at the window's ``end`` (ns),
         printed.  ``grace``: until when (monotonic s) to wait for the diagnostics stamped there;
         ``run``: the run of the source the window is of (default the current one), whose clock
         and ground truth it takes: a new run may start while the window waits in the queue.
         ``shaft``, ``cage``: their mean speeds in the window (rad/s; ``cage`` None without it in
         ``state``); ``moved``: how far they moved in it (``envelope.spread``), beyond
-        ``STEADY_LINES`` no verdict (``unknown``)."""
+        ``STEADY_LINES`` the verdict in orders of the shaft (``order_verdict`` with ``states``,
+        ``window_states``), or where that cannot be, none (``unknown``)."""
         try:
-            self._verdict_line(end, x, channels, fs, shaft, grace, run or self.run, cage, moved)
+            self._verdict_line(end, x, channels, fs, shaft, grace, run or self.run, cage, moved, states)
         finally:
             self.windows_done += 1
 
     def _verdict_line(self, end: int, x: np.ndarray, channels, fs: float, shaft: float, grace: float,
-                      run: SourceRun, cage: float | None = None, moved: float = 0.0) -> None:
+                      run: SourceRun, cage: float | None = None, moved: float = 0.0, states=None) -> None:
         """``_analyse``'s work: the verdict on the window of ``run`` that ends at ``end``, printed."""
         t = (end - run.t0) / NS
         shaft_hz = abs(shaft) / (2 * np.pi)
         try:
             if moved > STEADY_LINES:
-                # a step or ramp in the window smeared its lines: "healthy" of an outer-race pit
-                result = {"verdict": "unknown", "shaft_hz": shaft_hz, "moved": moved}
+                # a step or ramp in the window smeared its lines in Hz ("healthy" of an outer-race
+                # pit): in orders of the shaft they hold still
+                tracked, why = (order_verdict(x, channels, fs, np.arange(x.shape[0]) / fs, self.scene.bearing, states)
+                                if states is not None else (None, "no state samples in the window"))
+                result = ({**tracked, "shaft_hz": shaft_hz, "moved": moved} if tracked is not None else
+                          {"verdict": "unknown", "shaft_hz": shaft_hz, "moved": moved, "untracked": why})
             else:
                 result = verdict(x, channels, fs, self.scene.bearing, shaft_hz,
                                  None if cage is None else abs(cage) / (2 * np.pi))
