@@ -36,18 +36,24 @@ def _record_tail(paths, max_s: float) -> dict:
     use, the mean cage speed of ``state`` in that stretch (rad/s, None without it: where the
     cage skids, the fault lines are there), how far the shaft and cage speeds moved in it
     (``envelope.spread``; of the speed commands without ``state``), and the skid ratios of the
-    whole recording (percent; the skidding tier's ``/diagnostics``)."""
+    whole recording (percent; the skidding tier's ``/diagnostics``).  For order tracking where
+    the speeds moved: ``times_s``, the signal time of each sample (s from the stretch's first,
+    by its table's stamp), and ``states``, the ``state`` samples that span the stretch (with the
+    last before it) as ``monitor_node.order_verdict`` takes them."""
     from rclpy.serialization import deserialize_message
 
-    from .analysis.envelope import spread
+    from .analysis.envelope import STEADY_LINES, spread
     from .analysis.report import skid_ratios
+    from .nodes.monitor_node import window_states
     from .recording.reader import get_message, open_recording
     from .waveform import NS, from_pointcloud2
 
     parts: deque = deque()
     held = 0
     speeds: deque = deque()
-    states: deque = deque()         # (stamp ns, shaft rad/s, cage rad/s): the speeds at the end of a batch
+    # (stamp ns, shaft rad/s, cage rad/s, shaft rad, cage rad): the speeds and angles at the end of a batch
+    states: deque = deque()
+    before = []                     # the last state before the stretch (its angles where it begins)
     starts: deque = deque()         # the stamp of each table in parts
     skids: dict = {}
     channels, rate = None, None
@@ -74,8 +80,10 @@ def _record_tail(paths, max_s: float) -> dict:
             if topic == state_topic:
                 names = list(msg.name)
                 if {"shaft", "cage"} <= set(names) and len(msg.velocity) == len(names):
+                    angles = msg.position if len(msg.position) == len(names) else [math.nan] * len(names)
                     states.append((msg.header.stamp.sec * NS + msg.header.stamp.nanosec,
-                                   float(msg.velocity[names.index("shaft")]), float(msg.velocity[names.index("cage")])))
+                                   float(msg.velocity[names.index("shaft")]), float(msg.velocity[names.index("cage")]),
+                                   float(angles[names.index("shaft")]), float(angles[names.index("cage")])))
                 continue
             stamp, channels, arr = from_pointcloud2(msg)
             if prev is not None and rate is None:
@@ -91,12 +99,17 @@ def _record_tail(paths, max_s: float) -> dict:
                 while len(speeds) > len(parts):       # one speed record per batch
                     speeds.popleft()
                 while states and states[0][0] <= starts[0]:     # before the stretch's first sample
-                    states.popleft()
+                    before = [states.popleft()]
         meta = dict(rec.metadata)
         counts = {t: c.count for t, c in topics.items()}
     data = np.concatenate(list(parts)) if parts else np.zeros((0, 0), np.float32)
     moved = (max(spread([s[1] for s in states]), spread([s[2] for s in states])) if states else spread(speeds))
-    return {"accel": data, "channels": channels, "sample_rate": rate,
+    t0 = starts[0] if starts else 0
+    # order tracking's signal times (an array as long as the stretch) only where it is wanted
+    times = (np.concatenate([(stamp - t0) / NS + np.arange(part.shape[0]) / rate for stamp, part in zip(starts, parts)])
+             if rate and moved > STEADY_LINES else None)
+    return {"accel": data, "channels": channels, "sample_rate": rate, "times_s": times,
+            "states": window_states(before + list(states), t0),
             "shaft_speed": float(np.mean(speeds)) if speeds else None,
             "cage_speed": float(np.mean([s[2] for s in states])) if states else None, "speed_spread": moved,
             "metadata": meta,
@@ -155,7 +168,7 @@ def summarise(scene, tail: dict, node_figures: dict, path, out: str | None = Non
     recording (``recording_argument``); ``out``: the name it was made to (default ``path``),
     whose stem names the report's folder."""
     from .analysis.envelope import DETECTION_THRESHOLD, STEADY_LINES
-    from .nodes.monitor_node import verdict
+    from .nodes.monitor_node import order_verdict, verdict
     from .recording.render import tier_summary
 
     lines = []
@@ -177,24 +190,42 @@ def summarise(scene, tail: dict, node_figures: dict, path, out: str | None = Non
         shaft_hz = abs(speed) / (2 * math.pi)
         cage = tail.get("cage_speed")
         moved = tail.get("speed_spread", 0.0)
+        tracked, untracked = None, ""
         if moved > STEADY_LINES:
-            # a speed step or ramp (commands to the node) smeared the lines: no verdict, and why
+            # a speed step or ramp (commands to the node) smeared the lines in Hz: in orders of
+            # the shaft they hold still
+            tracked, untracked = order_verdict(x, tail["channels"], fs, tail["times_s"], scene.bearing,
+                                               tail["states"])
+        if moved > STEADY_LINES and tracked is None:
             lines.append(f"envelope analysis of the last {x.shape[0] / fs:.1f} s: no verdict: the shaft and cage "
                          f"speeds moved by {100 * moved:.0f} % in it (a speed step or ramp, a load step that "
                          "changed the cage's skid), which smears the envelope lines; bearing-sim report gives "
-                         "the verdict of each second")
+                         f"the verdict of each second; no order tracking: {untracked}")
         else:
-            # the cage's speed from state: where it skids (7 % at 10000 rpm / 10 N on the ER-16K)
-            # the lines are there, and at pure rolling's this said "ball fault" of an outer-race pit
-            res = verdict(x, tail["channels"], fs, scene.bearing, shaft_hz,
-                          None if cage is None else abs(cage) / (2 * math.pi))
-            lines.append(f"envelope analysis of the last {x.shape[0] / fs:.1f} s ({', '.join(tail['channels'])}, "
-                         f"band 2-5 kHz) at shaft {shaft_hz:.2f} Hz ({shaft_hz * 60:.0f} rpm), axis {res['axis']}:")
-            lines.append(f"  {'line':<6} {'theory Hz':>10} {'found Hz':>9} {'x floor':>8}")
+            if tracked is not None:
+                res, unit, digits = tracked, "order", 3
+                slowest, fastest = tracked["shaft_rpm"]
+                lines.append(f"envelope analysis of the last {x.shape[0] / fs:.1f} s ({', '.join(tail['channels'])}, "
+                             f"band 2-5 kHz) by order tracking, axis {res['axis']}: the shaft and cage speeds moved "
+                             f"by {100 * moved:.0f} % in it ({slowest:.0f}-{fastest:.0f} rpm), which smears the "
+                             f"lines in Hz; in orders of the shaft ({tracked['revolutions']:.0f} revolutions) "
+                             "they hold still:")
+            else:
+                # the cage's speed from state: where it skids (7 % at 10000 rpm / 10 N on the
+                # ER-16K) the lines are there, and at pure rolling's this said "ball fault" of an
+                # outer-race pit
+                res, unit, digits = verdict(x, tail["channels"], fs, scene.bearing, shaft_hz,
+                                            None if cage is None else abs(cage) / (2 * math.pi)), "Hz", 2
+                lines.append(f"envelope analysis of the last {x.shape[0] / fs:.1f} s ({', '.join(tail['channels'])}, "
+                             f"band 2-5 kHz) at shaft {shaft_hz:.2f} Hz ({shaft_hz * 60:.0f} rpm), axis {res['axis']}:")
+            theory, found = f"theory {unit}", f"found {unit}"
+            wide = (max(10, len(theory)), max(9, len(found)))
+            lines.append(f"  {'line':<6} {theory:>{wide[0]}} {found:>{wide[1]}} {'x floor':>8}")
             for key, label in (("bpfo", "BPFO"), ("bpfi", "BPFI"), ("2bsf", "2xBSF"), ("ftf", "FTF")):
                 ln = res["lines"][key]
                 mark = "  <- detected" if key != "ftf" and ln.prominence >= DETECTION_THRESHOLD else ""
-                lines.append(f"  {label:<6} {ln.expected_hz:>10.2f} {ln.found_hz:>9.2f} {ln.prominence:>8.1f}{mark}")
+                lines.append(f"  {label:<6} {ln.expected_hz:>{wide[0]}.{digits}f} {ln.found_hz:>{wide[1]}.{digits}f} "
+                             f"{ln.prominence:>8.1f}{mark}")
             lines += _verdict_lines(scene, res, f["signal_s"], x.shape[0] / fs)
     if tail["skid_percent"]:
         lines.append(f"skid ratios, mean of the recording's /diagnostics ({f['tier_values']['tier']} tier): "

@@ -7,7 +7,7 @@ import subprocess
 import numpy as np
 import pytest
 
-from test_node_support import NS, assert_diverged_and_recorded, read_recording
+from test_node_support import NS, assert_diverged_and_recorded, read_recording, render_run_up
 
 from bearing_sim_ros.analysis.report import build_report
 
@@ -277,10 +277,12 @@ def test_the_summary_looks_for_the_lines_where_the_cage_of_state_puts_them(skidd
     assert abs(expected - found) < 1.0 and expected < 560, text
 
 
-def test_the_summary_gives_no_verdict_where_the_speed_stepped_in_the_stretch(tmp_path):
+def test_the_summary_of_a_stretch_whose_speed_stepped_is_in_orders(tmp_path):
     """A speed command from 1600 to 3000 rpm in the analysed stretch smears every envelope line;
     the summary judged it at the lines of the mean speed, where neither half has them, and called
-    this outer-race pit a ball fault.  Now it says that there is no verdict, and why."""
+    this outer-race pit a ball fault; then it said there was no verdict.  Now it judges the
+    stretch in orders of the shaft (order tracking, as report does): an outer-race fault, and
+    one line says how it got there."""
     from bearing_sim_ros import load_scene
     from bearing_sim_ros.recording.render import render
 
@@ -290,5 +292,31 @@ def test_the_summary_gives_no_verdict_where_the_speed_stepped_in_the_stretch(tmp
     recording = tmp_path / "step.mcap"
     render(str(scene), 3.0, recording, progress=False)
     text = _summary_of(recording, load_scene(str(scene)))
-    assert ("envelope analysis of the last 3.0 s: no verdict: the shaft and cage speeds moved by 61 % in it"
-            in text and "\nverdict:" not in text), text
+    assert ("envelope analysis of the last 3.0 s (accel_x, accel_y, band 2-5 kHz) by order tracking, axis accel_y: "
+            "the shaft and cage speeds moved by 61 % in it (1600-3000 rpm), which smears the lines in Hz; in orders "
+            "of the shaft (114 revolutions) they hold still:") in text, text
+    assert "\nverdict: outer-race fault (" in text, text
+
+
+def test_the_summary_of_a_run_up_is_in_orders(outer_run_up):
+    """er16k_outer_race run up from 1000 to 3000 rpm over 4 s (its lines move 89 % in Hz): the
+    summary said "no verdict".  Now BPFO stands at its order (3.572 events per shaft revolution)
+    and the verdict is an outer-race fault."""
+    from bearing_sim_ros import load_scene
+
+    text = _summary_of(outer_run_up, load_scene("er16k_outer_race"))
+    assert "by order tracking, axis accel_y: the shaft and cage speeds moved by 89 % in it (1009-2999 rpm)" in text, text
+    assert "  line   theory order found order  x floor\n" in text, text
+    expected, found, height = map(float, re.search(r"BPFO +([\d.]+) +([\d.]+) +([\d.]+)  <- detected", text).groups())
+    assert expected == 3.572 and abs(found - expected) < 0.005 and height > 50, text
+    assert "\nverdict: outer-race fault (threshold x4 the local floor; the scene's defects: outer)" in text, text
+
+
+def test_the_summary_gives_no_verdict_where_the_speed_moved_and_state_is_too_sparse(tmp_path):
+    """The same run-up with ``state`` at 5 Hz (a speed step between two states would be drawn as a
+    smooth turn): no order tracking, no verdict, and the summary says why."""
+    from bearing_sim_ros import load_scene
+
+    text = _summary_of(render_run_up(tmp_path, "er16k_outer_race", 2.0, state_rate=5.0), load_scene("er16k_outer_race"))
+    assert ("envelope analysis of the last 2.0 s: no verdict: the shaft and cage speeds moved by" in text
+            and "; no order tracking: state samples up to 0.2 s apart" in text and "\nverdict:" not in text), text
