@@ -365,6 +365,25 @@ def _record_a_scene_file(ros_env, bearing_sim_exe, scene, text, duration):
     return read_recording(scene.parent / "live.mcap")
 
 
+def test_a_scene_with_a_profile_is_said_to_be_run_at_its_operating_point(ros_env, bearing_sim_exe, tmp_path):
+    """A scene with a speed profile (for ``render``) ran on the node at its operating point, the
+    profile left out without a word: a user expecting a run-up recorded a steady run.  The node
+    says so at its start, and what publishes a profile to it; it still runs at the operating point."""
+    text = load_scene("er16k_outer_race").source_text + (
+        "profile:\n  - {t: 0.0, shaft_speed_rpm: 1000}\n  - {t: 4.0, shaft_speed_rpm: 3000}\n")
+    scene = tmp_path / "ramp.yaml"
+    scene.write_text(text)
+    r = subprocess.run([bearing_sim_exe, "node", "--scene", str(scene), "--ros-args", "-p", "real_time:=false",
+                        "-p", "fidelity:=kinematic", "-p", "duration:=0.2", "-p", "record:=live.mcap"],
+                       cwd=tmp_path, env=ros_env, capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    assert ("scene er16k_outer_race: its speed/load profile (2 knots) is for offline renders; the node runs at the "
+            "operating point and follows /shaft_speed and /load (`bearing-sim play` of a render of the scene "
+            "publishes its profile to them)") in r.stderr, r.stderr
+    topics, _meta = read_recording(tmp_path / "live.mcap")
+    assert {round(m.data * 60 / (2 * np.pi)) for _t, m in topics["/shaft_speed"]} == {1600}
+
+
 def test_a_run_ends_with_the_ground_truth_of_its_last_sample(ros_env, bearing_sim_exe, tmp_path):
     """``duration:=2.5`` on a scene whose pit appears at 2.2 s: the recording held 0.3 s of the
     pit, but its last /diagnostics were those of 2 s (none), and ``report`` said the pit came

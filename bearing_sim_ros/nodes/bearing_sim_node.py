@@ -515,6 +515,14 @@ class BearingSimNode(Node):
             f"{self.sim.sample_rate:g} Hz in batches of {self.n_batch}, "
             f"real_time {self._cfg['real_time']}, duration {self._cfg['duration']:g} s, "
             f"recording {_recording_text(self._cfg)}; inputs accepted: {self.limits}")
+        if self.scene.profile:
+            # a scene written for `render` ran at its operating point without a word (a ramp
+            # expected, a steady run recorded)
+            self.get_logger().warning(
+                f"scene {self.scene.name}: its speed/load profile ({len(self.scene.profile)} knots) is for "
+                f"offline renders; the node runs at the operating point and follows {self.sub_speed.topic_name} "
+                f"and {self.sub_load.topic_name} (`bearing-sim play` of a render of the scene publishes "
+                f"its profile to them)")
         self._peer_timer = self.create_timer(PEER_CHECK_S, self._check_peers)
         self._reject_timer = self.create_timer(REJECT_LOG_PERIOD / 4, self._log_held_rejections)
         self._thread.start()
