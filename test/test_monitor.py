@@ -226,8 +226,8 @@ def test_a_verdict_waits_for_the_diagnostics_stamped_at_its_window_end(ros_env):
         node.run.t0 = NS
         node.run.reports.extend(_reports(((1, "none"),), onsets={}))
         late = _reports(((2, "outer"),), onsets={"outer": 1.5})
+        t = time.monotonic()            # before the timer starts: it waited 0.1492 s, timed after it
         threading.Timer(0.15, node.run.reports.extend, (late,)).start()
-        t = time.monotonic()
         node._analyse(2 * NS, x, ["accel_x", "accel_y"], 15000.0, shaft, time.monotonic() + TRUTH_GRACE_S)
         waited = time.monotonic() - t
         assert 0.15 <= waited < 0.15 + TRUTH_GRACE_S and " truth=outer " in out.getvalue(), (waited, out.getvalue())
