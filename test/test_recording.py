@@ -1033,3 +1033,32 @@ def test_what_is_not_a_recording_is_still_refused_when_it_is_cut(three_chunks, t
                                         rf"opcode 0x42 \(at byte {s1}\)\)$"):
         open_recording(cut)
 
+
+def test_a_finished_file_without_a_summary_is_read_when_it_is_chunked(tmp_path):
+    """Another writer's finished file without a summary section (allowed by MCAP) was refused
+    ("`mcap recover` can rebuild it"); its chunks are now read as a truncated file's are, and
+    nothing is said lost.  One whose messages are outside chunks is still refused, in one line."""
+    import struct
+
+    from mcap.writer import IndexType, Writer
+
+    path = tmp_path / "no_summary.mcap"
+    for chunked in (True, False):
+        with open(path, "wb") as f:
+            writer = Writer(f, index_types=IndexType.NONE, repeat_channels=False, repeat_schemas=False,
+                            use_statistics=False, use_summary_offsets=False, use_chunking=chunked)
+            writer.start(profile="ros2")
+            channel = writer.register_channel("/x", "cdr", writer.register_schema("std_msgs/msg/Float64", "ros2msg",
+                                                                                  b"float64 data"))
+            for k in range(5):
+                writer.add_message(channel, log_time=k * 10**9, data=b"\0\1\0\0" + struct.pack("<d", k),
+                                   publish_time=k * 10**9)
+            writer.finish()
+        if chunked:
+            with open_recording(path) as rec:
+                assert rec.recovered is None and rec.message_count == 5
+                assert [m[2] for m in rec.messages()] == [k * 10**9 for k in range(5)]
+        else:
+            with pytest.raises(UserError, match=rf"^{path}: MCAP recording without a summary and with its messages "
+                                                r"outside chunks \(from byte \d+\): this reader reads only chunked"):
+                open_recording(path)

@@ -113,24 +113,22 @@ class Recording:
                 except Exception as exc:  # noqa: BLE001 - any failure to parse is a corrupt file
                     raise UserError(f"{name}: corrupt MCAP recording ({exc.__class__.__name__}: "
                                     f"{str(exc).splitlines()[0] if str(exc) else 'unreadable'})") from None
-            if not finished:
-                # no footer (a hard kill, a power cut: the summary is written last): its records
-                # read in file order, up to the last complete one (what `mcap recover` salvages,
-                # without that tool)
+            if not finished or summary is None:
+                # no footer (a hard kill, a power cut: the summary is written last), or another
+                # writer's file without a summary: its records read in file order, up to the
+                # last complete one (what `mcap recover` salvages, without that tool)
                 scan = _scan(self._stream, size, name)
                 header, summary, metas, self.attachments = scan.header, scan.summary, scan.metas, scan.attachments
                 self._reader = _indexed_reader(self._stream, summary)
-                if not summary.chunk_indexes:
+                if not finished and not summary.chunk_indexes:
                     # nothing to read, and perhaps not even the metadata that says what it is
                     raise UserError(f"{name}: truncated MCAP recording ({size} bytes, no footer) without a complete "
                                     "chunk: no message to read, e.g. the last file of a recording killed hard "
                                     "(kill -9) as it began")
-                self.recovered = scan.recovered_text(name, size)
+                if not finished:
+                    self.recovered = scan.recovered_text(name, size)
             if header.profile != "ros2":
                 raise UserError(f"{name}: MCAP profile {header.profile!r} is not 'ros2': not a ROS 2 recording")
-            if summary is None:
-                raise UserError(f"{name}: MCAP recording without a summary section; "
-                                "`mcap recover` can rebuild it")
             stats = summary.statistics
             if stats is not None and sum(stats.channel_message_counts.values()) == stats.message_count:
                 counts = stats.channel_message_counts
