@@ -319,9 +319,8 @@ def test_bad_files_exit_2_with_one_line(kind, recording, bearing_sim_exe, ros_en
     bad = tmp_path / f"{kind}.mcap"
     if kind == "not_mcap":
         bad.write_text("name: not a recording\n")
-    elif kind == "truncated":
-        data = path.read_bytes()
-        bad.write_bytes(data[: len(data) // 2])
+    elif kind == "truncated":       # inside its first record (one cut later plays: below)
+        bad.write_bytes(path.read_bytes()[:12])
     elif kind == "folder":          # was "no such file": it exists
         bad.mkdir()
     r = subprocess.run([bearing_sim_exe, "play", str(bad)], env=ros_env, capture_output=True, text=True,
@@ -330,6 +329,29 @@ def test_bad_files_exit_2_with_one_line(kind, recording, bearing_sim_exe, ros_en
     assert r.returncode == 2 and len(lines) == 1, r.stderr
     assert {"not_mcap": "not an MCAP file", "truncated": "truncated", "missing": "no such file",
             "folder": f"{bad}: is a folder, not a file; expected an .mcap recording"}[kind] in lines[0]
+
+
+def test_a_truncated_recording_plays_what_it_holds(recording, bearing_sim_exe, ros_env, tmp_path):
+    """A file a hard kill left without its footer was refused, in one line that pointed to
+    another tool (`mcap recover`).  It plays up to its last complete chunk, each table as
+    recorded, and one line says it was read as recovered and what is lost."""
+    from rclpy.serialization import deserialize_message
+    from sensor_msgs.msg import PointCloud2
+
+    path, _counts, accel = recording
+    data = path.read_bytes()
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(data[: len(data) * 9 // 10])      # inside its second chunk
+    with open_recording(cut) as rec:
+        held, recovered = rec.topics()["/accel"].count, rec.recovered
+    assert 0 < held < len(accel) and recovered.startswith(f"{cut}: read as recovered: ")
+    sub, result = _subscriber(tmp_path, ros_env, held, 40)
+    play = _play_to(sub, [bearing_sim_exe, "play", str(cut), "--rate", "4", *WAIT], ros_env)
+    assert f"play {recovered}\n" in play.stderr and "Traceback" not in play.stderr, play.stderr
+    got = json.loads(result.read_text())["/accel"]
+    expected = [deserialize_message(d, PointCloud2) for _, d in accel[:held]]
+    assert [(s, w, c) for s, w, c, _t in got] == [
+        (m.header.stamp.sec * NS + m.header.stamp.nanosec, m.width, zlib.crc32(bytes(m.data))) for m in expected]
 
 
 def test_waiting_for_a_subscriber_is_said_and_so_is_playing_to_nobody(recording, bearing_sim_exe, ros_env):

@@ -940,3 +940,125 @@ def test_a_file_moved_away_while_it_is_written_is_finished_where_it_went(tmp_pat
     assert rec.status["ok"], rec.status
     with open_recording(moved) as r:
         assert sum(1 for _ in r.messages(["/accel"])) == 20
+
+
+@pytest.fixture(scope="module")
+def three_chunks(tmp_path_factory):
+    """A 2 s render (three chunks) and its chunk index: (the file's bytes, its messages in log-time
+    order, its metadata and attachments, [(chunk start, chunk end)] in bytes, the data end's start)."""
+    from mcap.reader import SeekingReader
+
+    from bearing_sim_ros.recording.render import render
+
+    path = tmp_path_factory.mktemp("chunks") / "whole.mcap"
+    render("er16k_outer_race", 2.0, path, fidelity="kinematic", seed=4, progress=False)
+    with open_recording(path) as rec:
+        whole = (list(rec.messages()), rec.metadata, rec.attachments)
+    with open(path, "rb") as f:
+        summary = SeekingReader(f).get_summary()
+        chunks = [(c.chunk_start_offset, c.chunk_start_offset + c.chunk_length) for c in summary.chunk_indexes]
+    assert len(chunks) == 3
+    return path.read_bytes(), *whole, chunks
+
+
+def test_a_truncated_recording_is_read_up_to_its_last_complete_chunk(three_chunks, tmp_path):
+    """What a kill -9 or a power cut leaves (no footer, no summary) was refused ("`mcap recover` can
+    salvage its complete chunks", a tool not installed with this one).  Now it is read as far as it
+    goes: the messages of its complete chunks, in the same order as from the whole file, with its
+    metadata and attachments, and ``recovered`` says so in one line: what was read, what is lost."""
+    data, messages, metadata, attachments, chunks = three_chunks
+    cut = tmp_path / "cut.mcap"
+    _, (s1, e1), (s2, _e2) = chunks             # each chunk followed by its message index records
+    for size, read, lost in [((s1 + e1) // 2, s1, "an incomplete record"),      # inside the second chunk
+                             (s2, s2, None),                                     # between two records
+                             (s2 + 5, s2, "an incomplete record"),               # inside a record's opcode/length
+                             (len(data) - 100, None, "summary")]:                # in the summary section
+        cut.write_bytes(data[:size])
+        with open_recording(cut) as rec:
+            got = list(rec.messages())
+            assert got == messages[:len(got)] and len(got) == rec.message_count > 0
+            assert sum(c.count for c in rec.topics().values()) == rec.message_count
+            assert (rec.start_ns, rec.end_ns) == (got[0][2], max(m[2] for m in got))
+            assert (rec.metadata, rec.attachments) == (metadata, attachments)
+            assert rec.recovered.startswith(f"{cut}: read as recovered: no footer and no summary (its writer never "
+                                            "finished, e.g. a hard kill or a power cut); read up to byte ")
+            assert "\n" not in rec.recovered
+            assert f"{rec.message_count} messages in its " in rec.recovered
+            assert f"{(rec.end_ns - rec.start_ns) * 1e-9:.2f} s of log time" in rec.recovered
+            if lost == "summary":
+                assert len(got) == len(messages)
+                assert rec.recovered.endswith("its data section complete, only the summary lost")
+            elif lost is None:
+                assert rec.recovered.endswith(f"read up to byte {read} of {size}: {len(got)} messages in its 2 "
+                                              f"complete chunks, {(rec.end_ns - rec.start_ns) * 1e-9:.2f} s of log "
+                                              "time; it ends after a complete record: what its writer had not written yet is lost")
+            else:
+                assert f"read up to byte {read} of {size}: " in rec.recovered
+                assert rec.recovered.endswith(f"the last {size - read} bytes ({lost}) lost")
+    # a power cut: the size grew, the blocks were never written (zeros), after a record or inside
+    # a chunk (which then neither decompresses nor checks, and is not corrupt but cut)
+    for size, zeros_from in [(s2 + 50_000, s2), (len(data), s2 + 1000)]:
+        cut.write_bytes(data[:zeros_from] + bytes(size - zeros_from))
+        with open_recording(cut) as rec:
+            assert rec.message_count == sum(1 for _ in rec.messages()) and rec.recovered.endswith(
+                f"read up to byte {s2} of {size}: 722 messages in its 2 complete chunks, 1.60 s of log time; "
+                f"the last {size - s2} bytes (zeros: never written, e.g. a power cut) lost")
+
+
+def test_what_is_not_a_recording_is_still_refused_when_it_is_cut(three_chunks, tmp_path):
+    """A file cut inside its first record or chunk holds nothing to read, and a chunk before the
+    cut that does not check (CRC, compression) is a corrupt file: read up to it, the chunks after
+    it would be lost unsaid.  One line each."""
+    data, _messages, _metadata, _attachments, chunks = three_chunks
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(data[:12])
+    with pytest.raises(UserError, match=rf"^{cut}: truncated MCAP recording \(12 bytes\): it ends before the end "
+                                        r"of its first record, nothing in it to read$"):
+        open_recording(cut)
+    (s0, e0), (s1, e1), _ = chunks
+    cut.write_bytes(data[:(s0 + e0) // 2])
+    with pytest.raises(UserError, match=rf"^{cut}: truncated MCAP recording \({(s0 + e0) // 2} bytes, no footer\) "
+                                        r"without a complete chunk: no message to read, e\.g\. the last file of a "
+                                        r"recording killed hard \(kill -9\) as it began$"):
+        open_recording(cut)
+    broken = bytearray(data[:(s1 + e1) // 2])
+    broken[s0 + 60] ^= 0xFF                            # the first chunk's compressed data
+    cut.write_bytes(bytes(broken))
+    with pytest.raises(UserError, match=rf"^{cut}: corrupt MCAP recording \((ZstdError|CRCValidationError): "):
+        open_recording(cut)
+    broken = bytearray(data[:(s1 + e1) // 2])
+    broken[s1] = 0x42                                  # the second chunk's opcode: no such record
+    cut.write_bytes(bytes(broken))
+    with pytest.raises(UserError, match=rf"^{cut}: corrupt MCAP recording \(McapError: no MCAP record has "
+                                        rf"opcode 0x42 \(at byte {s1}\)\)$"):
+        open_recording(cut)
+
+
+def test_a_finished_file_without_a_summary_is_read_when_it_is_chunked(tmp_path):
+    """Another writer's finished file without a summary section (allowed by MCAP) was refused
+    ("`mcap recover` can rebuild it"); its chunks are now read as a truncated file's are, and
+    nothing is said lost.  One whose messages are outside chunks is still refused, in one line."""
+    import struct
+
+    from mcap.writer import IndexType, Writer
+
+    path = tmp_path / "no_summary.mcap"
+    for chunked in (True, False):
+        with open(path, "wb") as f:
+            writer = Writer(f, index_types=IndexType.NONE, repeat_channels=False, repeat_schemas=False,
+                            use_statistics=False, use_summary_offsets=False, use_chunking=chunked)
+            writer.start(profile="ros2")
+            channel = writer.register_channel("/x", "cdr", writer.register_schema("std_msgs/msg/Float64", "ros2msg",
+                                                                                  b"float64 data"))
+            for k in range(5):
+                writer.add_message(channel, log_time=k * 10**9, data=b"\0\1\0\0" + struct.pack("<d", k),
+                                   publish_time=k * 10**9)
+            writer.finish()
+        if chunked:
+            with open_recording(path) as rec:
+                assert rec.recovered is None and rec.message_count == 5
+                assert [m[2] for m in rec.messages()] == [k * 10**9 for k in range(5)]
+        else:
+            with pytest.raises(UserError, match=rf"^{path}: MCAP recording without a summary and with its messages "
+                                                r"outside chunks \(from byte \d+\): this reader reads only chunked"):
+                open_recording(path)

@@ -376,9 +376,8 @@ def test_report_bad_files_exit_2_with_one_line(kind, outer, tmp_path, capsys):
     bad = tmp_path / "bad.mcap"
     if kind == "not_mcap":
         bad.write_bytes(b"\x89PNG\r\n\x1a\n" + bytes(100))
-    elif kind == "truncated":
-        data = rec.read_bytes()
-        bad.write_bytes(data[: len(data) - 500])
+    elif kind == "truncated":       # inside its first record (one cut later is reported: below)
+        bad.write_bytes(rec.read_bytes()[:12])
     else:                           # was "no such file": it exists
         bad.mkdir()
     code = cli.main(["report", str(bad), "--out", str(tmp_path / "o")])
@@ -386,6 +385,28 @@ def test_report_bad_files_exit_2_with_one_line(kind, outer, tmp_path, capsys):
     assert code == 2 and len(err) == 1
     assert {"not_mcap": "not an MCAP file", "truncated": "truncated",
             "folder": f"{bad}: is a folder, not a file; expected an .mcap recording"}[kind] in err[0]
+
+
+def test_a_truncated_recording_is_reported_as_recovered(outer, tmp_path, capsys):
+    """A file a hard kill left without its footer was refused (exit 2, "`mcap recover` can
+    salvage its complete chunks").  It is reported up to its last complete chunk: one line on the
+    command line says so, ``recovered`` in summary.json and summary.md what is lost; the
+    report is that of its messages."""
+    rec, _ = outer
+    data = rec.read_bytes()
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(data[: len(data) - 500])         # in its summary: every message there
+    code = cli.main(["report", str(cut), "--out", str(tmp_path / "o")])
+    captured = capsys.readouterr()
+    summary = json.loads((tmp_path / "o" / "summary.json").read_text())
+    assert code == 0 and captured.err.splitlines() == [f"report: {summary['recovered']}"], captured.err
+    assert summary["recovered"].startswith(f"{cut}: read as recovered: no footer and no summary ")
+    assert summary["recovered"].endswith("its data section complete, only the summary lost")
+    whole = build_report(rec, tmp_path / "whole")
+    assert whole["recovered"] is None
+    same = ("duration_s", "messages", "analysed_s", "waveform_gaps", "statistics", "verdict", "timeline")
+    assert {k: summary[k] for k in same} == {k: whole[k] for k in same}
+    assert f"| recovered | {summary['recovered']} |" in (tmp_path / "o" / "summary.md").read_text()
 
 
 def test_report_of_a_skidding_run_shows_cage_and_skid_ratios(tmp_path):

@@ -3,7 +3,8 @@
 or by the name it was recorded to.  Its report is the report of the same messages in one file; a
 subscriber gets every table of every piece, contiguous across the seams, also looped.  Files that
 are not the consecutive pieces of one recording are refused in one line, naming them; a hard
-kill's unreadable last piece is left out, and said, when the pieces are found from the name."""
+kill's last piece is read up to its last complete chunk, said in one line; one with no complete
+chunk is left out, and said, when the pieces are found from the name."""
 from __future__ import annotations
 
 import json
@@ -175,31 +176,47 @@ def _copied(whole, folder) -> tuple:
     return folder / "run.mcap", copies
 
 
-def test_a_hard_kills_last_piece_is_left_out_and_said_when_found_by_name(whole, tmp_path):
-    """What a kill leaves of the file being written (no footer): from the split's name, the
-    pieces before it are reported and the note says which was left out and why; given
-    explicitly, the broken piece is an error, as a single file is."""
+def test_a_hard_kills_last_piece_is_read_as_far_as_it_goes_and_left_out_without_a_chunk(whole, tmp_path):
+    """What a kill leaves of the file being written (no footer): it was left out, and its
+    messages with it, though they are the end of the signal.  Now it is read up to its last
+    complete chunk (here its one chunk, the cut in its summary), said in ``recovered``; a last
+    piece cut before its first chunk ends has no message and is left out, as an empty one is,
+    and said in ``files_left_out``."""
     base, copies = _copied(whole, tmp_path)
     data = copies[-1].read_bytes()
-    copies[-1].write_bytes(data[: len(data) // 2])           # cut: no footer, no summary
+    copies[-1].write_bytes(data[: len(data) - 100])         # cut in its summary: every message there
+    s = build_report(base, tmp_path / "report")
+    assert s["files"] == [str(p) for p in copies] and s["files_left_out"] == []
+    assert s["analysed_s"] == pytest.approx(2.0) and s["waveform_gaps"] == 0
+    assert s["recovered"].startswith(f"{copies[3]}: read as recovered: no footer and no summary (its writer never "
+                                     "finished, e.g. a hard kill or a power cut); read up to byte ")
+    assert s["recovered"].endswith("its data section complete, only the summary lost")
+    assert f"| recovered | {s['recovered']} |" in (tmp_path / "report" / "summary.md").read_text()
+    for given in (base, copies, [copies[2], copies[3]]):    # by name or by hand alike
+        with open_recording(given) as rec:
+            assert rec.recovered == s["recovered"] and rec.paths[-1] == copies[3] and rec.notes == []
+    copies[-1].write_bytes(data[: len(data) // 2])           # cut inside its one chunk
     s = build_report(base, tmp_path / "report")
     # the tables logged at 0.01-1.79 s (each at its batch's end)
     assert s["files"] == [str(p) for p in copies[:3]] and s["analysed_s"] == pytest.approx(1.79)
+    assert s["recovered"] is None
     assert s["files_left_out"] == [f"{copies[3]} left out: truncated MCAP recording ({len(data) // 2} bytes, no "
-                                   "footer: the writer never finished, e.g. a hard kill); `mcap recover` can "
-                                   "salvage its complete chunks"]
+                                   "footer) without a complete chunk: no message to read, e.g. the last file of a "
+                                   "recording killed hard (kill -9) as it began"]
     assert f"| left out | {s['files_left_out'][0]} |" in (tmp_path / "report" / "summary.md").read_text()
-    assert "truncated MCAP recording" in _refusal(copies)
+    assert "without a complete chunk" in _refusal(copies)
     copies[0].write_bytes(b"")                               # a broken first piece is not left out
     assert _refusal(base) == f"{copies[0]}: empty file (0 bytes): its writer wrote nothing to it before it " \
                              "stopped, e.g. the last file of a recording killed hard (kill -9)"
 
 
 def test_a_hard_kills_last_piece_given_by_hand_says_how_to_read_the_pieces_before_it(whole, tmp_path):
-    """``report runs/run_*.mcap`` after a ``kill -9``: the last piece (no footer, or empty) is an
-    error, and it said only that `mcap recover` (another tool, not installed with this one) could
-    salvage it.  Now the line says that it is the last piece of ``runs/run.mcap`` and how to read
-    the pieces before it; a truncated file that is no such piece is said as before."""
+    """``report runs/run_*.mcap`` after a ``kill -9``: a last piece with nothing to read (empty,
+    or cut before its first chunk ends) is an error, and it said only that `mcap recover`
+    (another tool, not installed with this one) could salvage it.  Now the line says that it is
+    the last piece of ``runs/run.mcap`` and how to read the pieces before it.  A piece cut before
+    the last is refused, as the pieces after it would follow a gap; a truncated file that is no
+    piece is read as recovered, alone."""
     base, copies = _copied(whole, tmp_path)
     hint = f"; it is the last piece of {base}: give the pieces before it, or {base}, which reads all 3 of them and " \
            "leaves it out"
@@ -209,13 +226,21 @@ def test_a_hard_kills_last_piece_given_by_hand_says_how_to_read_the_pieces_befor
         for given in (copies, [copies[3], copies[2]], [copies[2], copies[3]]):
             text = _refusal(given)
             assert text.startswith(f"{copies[3]}: ") and text.endswith(hint), text
-            assert ("truncated MCAP recording" if broken else "empty file (0 bytes)") in text, text
-    # not the last piece: a piece in the middle, a file of another name
-    copies[1].write_bytes(data[: len(data) // 2])
+            assert ("without a complete chunk" if broken else "empty file (0 bytes)") in text, text
+    # a piece in the middle: cut before its chunk ends, or after (then it has messages)
+    middle = copies[1].read_bytes()
+    copies[1].write_bytes(middle[: len(middle) // 2])
     assert not _refusal([copies[0], copies[1]]).endswith(hint)
+    copies[1].write_bytes(middle[: len(middle) - 100])
+    assert _refusal([copies[2], copies[1], copies[0]]) == (
+        f"{copies[1]}: truncated MCAP recording (no footer: its writer never finished), and not the last of the "
+        "pieces given (file_index 1): the pieces after it would follow a gap; give the pieces up to it")
+    with open_recording([copies[0], copies[1]]) as rec:      # up to it
+        assert rec.recovered.startswith(f"{copies[1]}: read as recovered: ")
     lone = tmp_path / "lone.mcap"
-    lone.write_bytes(data[: len(data) // 2])
-    assert _refusal([lone, copies[0]]).endswith("`mcap recover` can salvage its complete chunks")
+    lone.write_bytes(data[: len(data) - 100])
+    with open_recording(lone) as rec:
+        assert rec.recovered.startswith(f"{lone}: read as recovered: ") and rec.message_count > 0
 
 
 def test_report_and_play_take_several_files_on_the_command_line(whole, bearing_sim_exe, ros_env, tmp_path):

@@ -24,7 +24,9 @@ Writes to DIR:
 The bearing comes from the scene text in the ``bearing_sim`` metadata record, so a report needs
 nothing but the file.  A split recording (the node's ``record_max_duration`` /
 ``record_max_size``) is reported as one: its pieces, or the name it was recorded to
-(``recording.reader.open_recording``); ``files`` in the summary lists them.  The waveform,
+(``recording.reader.open_recording``); ``files`` in the summary lists them.  A truncated file
+(killed hard: no footer), alone or a split recording's last piece, is reported up to its last
+complete chunk, said in ``recovered`` (what is lost) and on the command line.  The waveform,
 spectra and the whole-recording verdict use at most ``MAX_ANALYSIS_S`` seconds of signal (the
 start); the verdict timeline covers the whole recording (a longer one is read again for it, one
 window at a time).
@@ -1027,7 +1029,7 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
         meta = dict(rec.metadata)
         log_span = (rec.end_ns - rec.start_ns) / NS
         message_count = rec.message_count
-        shown, files, notes = str(rec.path), [str(f) for f in rec.paths], list(rec.notes)
+        shown, files, notes, recovered = str(rec.path), [str(f) for f in rec.paths], list(rec.notes), rec.recovered
     finally:
         rec.close()
     out = output_folder(out)
@@ -1101,6 +1103,7 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
         "file": shown,
         "files": files,                  # the pieces of a split recording, in order; else [file]
         "files_left_out": notes,         # a split recording's unreadable last piece, and why
+        "recovered": recovered,          # a truncated (last) file read up to its last complete chunk: what is lost
         "scene": meta.get("scene", ""),
         "description": meta.get("scene_description", ""),
         "package_version": meta.get("package_version", ""),
@@ -1238,6 +1241,7 @@ def _markdown(s: dict) -> str:
                f"| files | `{s['files'][0]}` .. `{s['files'][-1]}`: {len(s['files'])} pieces of a split recording, "
                "read as one |"),
               *(f"| left out | {note} |" for note in s["files_left_out"]),
+              *([f"| recovered | {s['recovered']} |"] if s["recovered"] else []),
               (f"| made by | bearing_sim_ros {s['package_version']}, {_tiers_text(s)}, seed {s['seed']} |"
                if s["package_version"] else "| made by | unknown (no bearing_sim metadata) |"),
               f"| length | {s['duration_s']:.2f} s, {s['messages']} messages; analysed {s['analysed_s']:.2f} s |",
@@ -1469,7 +1473,7 @@ def report_command(args) -> int:
     import sys
 
     s = build_report(args.file, args.out, window_s=args.window)
-    for note in s["files_left_out"]:
+    for note in [*s["files_left_out"], *([s["recovered"]] if s["recovered"] else [])]:
         print(f"report: {note}", file=sys.stderr)
     timing = "".join(f", {label} {s[key]:.2f} s" for key, label in (
         ("fault_onset_s", "fault onset"), ("first_detection_s", "first detection"),

@@ -16,6 +16,7 @@ refuses, looped or not, a recording with nothing on the topics it plays (all on 
 A split recording (the node's ``record_max_duration`` / ``record_max_size``) plays as one: its
 pieces one after the other (their tables continue each other to the nanosecond), given as files
 or by the name it was recorded to (``reader.open_recording``); ``--loop`` repeats them all.
+A truncated file (killed hard: no footer) plays up to its last complete chunk, said in one line.
 ``--clock`` publishes ``/clock`` with the recording's time (log time, shifted like the stamps)
 before each new instant, for nodes running with ``use_sim_time``.  A recorded ``/clock`` topic
 is replaced by the generated one then.
@@ -115,6 +116,8 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
     try:
         for note in rec.notes:
             log(f"play {path}: {note}")
+        if rec.recovered:               # it names the file cut: the recording's last
+            log(f"play {rec.recovered}")
         topics = rec.topics()
         if not topics or rec.message_count == 0:
             raise UserError(f"{path}: the recording holds no messages")

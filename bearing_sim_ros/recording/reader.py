@@ -3,11 +3,16 @@
 (``run_000.mcap``, ``run_001.mcap``, ...: the node's ``record_max_duration`` /
 ``record_max_size``) read as one (:class:`SplitRecording`).
 
+A truncated file (no footer and no summary: its writer never finished, e.g. the process was
+killed hard or the machine lost power) is read as far as it goes, up to its last complete chunk,
+and says so in ``recovered`` (one line: what was read, what is lost), which the commands print.
+
 Every problem with the file is a :class:`~bearing_sim_ros.errors.UserError` of one line: no such
-file, an empty file, not an MCAP file, a truncated file (no footer: the writer never finished,
-e.g. the process was killed hard), a corrupt chunk, a file that is not a ROS 2 recording; and of
-several files, one that is not a piece of a split recording, pieces of different recordings, a
-piece missing between two given, a piece given twice.
+file, an empty file, not an MCAP file, a file cut before its first chunk ends, a corrupt chunk
+(also one before the cut of a truncated file: it is not skipped), a file that is not a ROS 2
+recording; and of several files, one that is not a piece of a split recording, pieces of
+different recordings, a piece missing between two given, a piece given twice, a truncated piece
+before the last.
 """
 from __future__ import annotations
 
@@ -66,7 +71,11 @@ def deserialize(path, topic: str, msg_type: str, log_ns: int, data: bytes, cls):
 
 
 class Recording:
-    """An opened, checked MCAP recording.  Use as a context manager or call :meth:`close`."""
+    """An opened, checked MCAP recording.  Use as a context manager or call :meth:`close`.
+
+    ``recovered``: None for a finished file; for a truncated one (no footer), the line that says
+    it was read up to its last complete record and what is lost (its counts and times are those
+    of the messages read)."""
 
     def __init__(self, path):
         from mcap.reader import SeekingReader
@@ -91,24 +100,35 @@ class Recording:
                 raise UserError(f"{name}: not an MCAP file (it does not start with the MCAP magic); "
                                 "expected a recording made by `bearing-sim render` or the node's `record`")
             self._stream.seek(max(0, size - 8))
-            if size < 16 or self._stream.read(8) != MAGIC:
-                raise UserError(f"{name}: truncated MCAP recording ({size} bytes, no footer: the writer "
-                                "never finished, e.g. a hard kill); `mcap recover` can salvage its complete chunks")
+            finished = size >= 16 and self._stream.read(8) == MAGIC
             self._stream.seek(0)
-            self._reader = SeekingReader(self._stream, validate_crcs=True)
-            try:
-                header = self._reader.get_header()
-                summary = self._reader.get_summary()
-                metas = list(self._reader.iter_metadata())
-                self.attachments = {a.name: a.data for a in self._reader.iter_attachments()}
-            except Exception as exc:  # noqa: BLE001 - any failure to parse is a corrupt file
-                raise UserError(f"{name}: corrupt MCAP recording ({exc.__class__.__name__}: "
-                                f"{str(exc).splitlines()[0] if str(exc) else 'unreadable'})") from None
+            self.recovered = None          # what a truncated file lost (read up to its last complete record)
+            if finished:
+                self._reader = SeekingReader(self._stream, validate_crcs=True)
+                try:
+                    header = self._reader.get_header()
+                    summary = self._reader.get_summary()
+                    metas = list(self._reader.iter_metadata())
+                    self.attachments = {a.name: a.data for a in self._reader.iter_attachments()}
+                except Exception as exc:  # noqa: BLE001 - any failure to parse is a corrupt file
+                    raise UserError(f"{name}: corrupt MCAP recording ({exc.__class__.__name__}: "
+                                    f"{str(exc).splitlines()[0] if str(exc) else 'unreadable'})") from None
+            if not finished or summary is None:
+                # no footer (a hard kill, a power cut: the summary is written last), or another
+                # writer's file without a summary: its records read in file order, up to the
+                # last complete one (what `mcap recover` salvages, without that tool)
+                scan = _scan(self._stream, size, name)
+                header, summary, metas, self.attachments = scan.header, scan.summary, scan.metas, scan.attachments
+                self._reader = _indexed_reader(self._stream, summary)
+                if not finished and not summary.chunk_indexes:
+                    # nothing to read, and perhaps not even the metadata that says what it is
+                    raise UserError(f"{name}: truncated MCAP recording ({size} bytes, no footer) without a complete "
+                                    "chunk: no message to read, e.g. the last file of a recording killed hard "
+                                    "(kill -9) as it began")
+                if not finished:
+                    self.recovered = scan.recovered_text(name, size)
             if header.profile != "ros2":
                 raise UserError(f"{name}: MCAP profile {header.profile!r} is not 'ros2': not a ROS 2 recording")
-            if summary is None:
-                raise UserError(f"{name}: MCAP recording without a summary section; "
-                                "`mcap recover` can rebuild it")
             stats = summary.statistics
             if stats is not None and sum(stats.channel_message_counts.values()) == stats.message_count:
                 counts = stats.channel_message_counts
@@ -187,6 +207,187 @@ class Recording:
         self.close()
 
 
+# MCAP records in a data section (opcodes 0x01-0x0F are the specification's; 0x00 is reserved)
+_OPCODES = range(0x01, 0x10)
+
+
+class _Scan:
+    """What :func:`_scan` read of a file: its ``header``, a ``summary`` built from its records
+    (schemas, channels, statistics, an index of its complete chunks), ``metas`` and
+    ``attachments``; where it stopped (``end``: the byte after the last complete record) and why
+    (``ended``)."""
+
+    def __init__(self):
+        from mcap.summary import Summary
+
+        self.header = None
+        self.summary = Summary()
+        self.metas: list = []
+        self.attachments: dict = {}
+        self.end = 8
+        self.zeros = False         # the rest after ``end`` is zero bytes
+        self.ended = ""            # "footer", "data end" or "" (cut inside or after a record)
+        self.counts: dict = {}     # channel id -> messages
+        self.first_ns = self.last_ns = None
+
+    def recovered_text(self, name: str, size: int) -> str:
+        """One line: what was read of the truncated file ``name`` (``size`` bytes) and what is lost."""
+        chunks = len(self.summary.chunk_indexes)
+        read = (f"{sum(self.counts.values())} messages in its {chunks} complete chunk{'s' if chunks > 1 else ''}, "
+                f"{(self.last_ns - self.first_ns) * 1e-9:.2f} s of log time")
+        lost = ("its data section complete, only the summary lost" if self.ended == "data end" else
+                f"the last {size - self.end} bytes (zeros: never written, e.g. a power cut) lost" if self.zeros else
+                f"the last {size - self.end} bytes (an incomplete record) lost" if size > self.end else
+                "it ends after a complete record: what its writer had not written yet is lost")
+        return (f"{name}: read as recovered: no footer and no summary (its writer never finished, e.g. a hard kill "
+                f"or a power cut); read up to byte {self.end} of {size}: {read}; {lost}")
+
+
+def _scan(stream, size: int, name: str) -> _Scan:
+    """Read the MCAP file ``stream`` (``size`` bytes) record by record from the start, without its
+    summary: every chunk is decompressed and its CRC checked.  Stops at the footer, the data end,
+    or where the rest is not a complete record (the cut of a truncated file: a record whose length
+    runs past the end, or zeros, which a power cut leaves in blocks never written).  A complete
+    record that does not parse (a CRC that fails, a chunk that does not decompress, an opcode
+    MCAP does not have) is a corrupt file: the records after it would be skipped unsaid."""
+    import struct
+
+    from mcap.data_stream import ReadDataStream
+    from mcap.exceptions import McapError
+    from mcap.records import (Attachment, Channel, Chunk, ChunkIndex, Header, Message, Metadata, Schema,
+                              Statistics)
+    from mcap.stream_reader import breakup_chunk
+    from zstandard import ZstdError
+
+    from io import BytesIO
+
+    scan = _Scan()
+    summary = scan.summary
+
+    def read(opcode: int, length: int, pos: int) -> None:
+        body = ReadDataStream(BytesIO(stream.read(length)))
+        if scan.header is None and opcode != 0x01:
+            raise McapError(f"expected the header record at byte 8, found opcode 0x{opcode:02x}")
+        if opcode == 0x01:
+            scan.header = Header.read(body)
+        elif opcode == 0x02:
+            scan.ended = "footer"
+        elif opcode == 0x0F:
+            scan.ended = "data end"
+        elif opcode == 0x03:
+            schema = Schema.read(body)
+            summary.schemas[schema.id] = schema
+        elif opcode == 0x04:
+            channel = Channel.read(body)
+            summary.channels[channel.id] = channel
+        elif opcode == 0x05:
+            # not damage: an unchunked writer's file, whose messages the index built here (of
+            # chunks) cannot reach
+            raise UserError(f"{name}: MCAP recording without a summary and with its messages outside chunks "
+                            f"(from byte {pos}): this reader reads only chunked files without their summary; "
+                            "`mcap recover` can rebuild it")
+        elif opcode == 0x06:
+            chunk = Chunk.read(body)
+            records = breakup_chunk(chunk, validate_crc=True)
+            channels = {**summary.channels, **{r.id: r for r in records if isinstance(r, Channel)}}
+            times = [r.log_time for r in records if isinstance(r, Message)]
+            undefined = next((r.channel_id for r in records
+                              if isinstance(r, Message) and r.channel_id not in channels), None)
+            if undefined is not None:
+                raise McapError(f"a message on channel {undefined}, which no channel record before it defines "
+                                f"(chunk at byte {pos})")
+            # only once the whole chunk checks: one a power cut left zeros in the end of adds nothing
+            summary.schemas.update({r.id: r for r in records if isinstance(r, Schema)})
+            summary.channels.update(channels)
+            for r in records:
+                if isinstance(r, Message):
+                    scan.counts[r.channel_id] = scan.counts.get(r.channel_id, 0) + 1
+            first, last = (min(times), max(times)) if times else (None, None)
+            if first is not None:
+                # no message index offsets: the reader looks into the chunk for any topic
+                summary.chunk_indexes.append(ChunkIndex(
+                    chunk_length=9 + length, chunk_start_offset=pos, compression=chunk.compression,
+                    compressed_size=len(chunk.data), message_end_time=last, message_index_length=0,
+                    message_index_offsets={}, message_start_time=first,
+                    uncompressed_size=chunk.uncompressed_size))
+                scan.first_ns = first if scan.first_ns is None else min(scan.first_ns, first)
+                scan.last_ns = last if scan.last_ns is None else max(scan.last_ns, last)
+        elif opcode == 0x0C:
+            scan.metas.append(Metadata.read(body))
+        elif opcode == 0x09:
+            attachment = Attachment.read(body)
+            scan.attachments[attachment.name] = attachment.data
+
+    zeros_from = _zero_tail(stream, size)
+    pos = 8
+    stream.seek(pos)
+    try:
+        while pos + 9 <= size:
+            if pos >= zeros_from:
+                scan.zeros = True                       # blocks a power cut left unwritten
+                break
+            opcode, length = struct.unpack("<BQ", stream.read(9))
+            if opcode not in _OPCODES:
+                raise McapError(f"no MCAP record has opcode 0x{opcode:02x} (at byte {pos})")
+            if pos + 9 + length > size:
+                break                                   # the record the writer was writing
+            try:
+                read(opcode, length, pos)
+            except (McapError, ZstdError, ValueError, KeyError, struct.error):
+                if pos + 9 + length <= zeros_from:
+                    raise
+                scan.zeros = True                       # a record whose end a power cut left zeros
+                break
+            pos += 9 + length
+            scan.end = pos
+            if scan.ended:
+                break
+    except (McapError, ZstdError, ValueError, KeyError, struct.error) as exc:
+        raise UserError(f"{name}: corrupt MCAP recording ({exc.__class__.__name__}: "
+                        f"{str(exc).splitlines()[0] if str(exc) else 'unreadable'})") from None
+    if scan.header is None:
+        raise UserError(f"{name}: truncated MCAP recording ({size} bytes): it ends before the end of its first "
+                        "record, nothing in it to read")
+    summary.statistics = Statistics(
+        attachment_count=len(scan.attachments), channel_count=len(summary.channels),
+        channel_message_counts=dict(scan.counts), chunk_count=len(summary.chunk_indexes),
+        message_count=sum(scan.counts.values()), message_end_time=scan.last_ns or 0,
+        message_start_time=scan.first_ns or 0, metadata_count=len(scan.metas), schema_count=len(summary.schemas))
+    return scan
+
+
+def _zero_tail(stream, size: int) -> int:
+    """Where the zero bytes at the end of ``stream`` (``size`` bytes) begin: ``size`` without any.
+    Read backwards a MiB at a time."""
+    end = size
+    while end > 0:
+        start = max(0, end - (1 << 20))
+        stream.seek(start)
+        block = stream.read(end - start).rstrip(b"\0")
+        if block:
+            return start + len(block)
+        end = start
+    return 0
+
+
+def _indexed_reader(stream, summary):
+    """A reader of ``stream``'s messages by ``summary`` (what :func:`_scan` built of a file
+    without its own): the mcap library's, in log-time order as for any file."""
+    from mcap.reader import SeekingReader
+
+    class IndexedReader(SeekingReader):
+        def get_summary(self):
+            return summary
+
+        def iter_messages(self, *args, **kwargs):
+            # without chunks it would read the whole file as a stream, into the cut
+            if summary.chunk_indexes:
+                yield from super().iter_messages(*args, **kwargs)
+
+    stream.seek(0)
+    return IndexedReader(stream, validate_crcs=True)
+
+
 class SplitRecording:
     """The pieces of one split recording, checked and read as one recording: the same interface
     as :class:`Recording` (``path``, ``metadata``, ``attachments``, ``topics()``,
@@ -196,8 +397,11 @@ class SplitRecording:
     ``paths``: the pieces, in any order; a run of consecutive pieces (``run_002.mcap`` ..
     ``run_004.mcap``) is a recording too.  ``named``: the path the split recording was made to
     (``run.mcap``), when the pieces were found from it: then a last piece that cannot be read
-    (empty or without its footer: what a hard kill leaves of the file being written) is left out
-    and said in ``notes`` instead of failing the whole recording.
+    (empty, or cut before its first complete chunk: what a hard kill leaves of a file just begun)
+    is left out and said in ``notes`` instead of failing the whole recording.  A last piece cut
+    later (no footer: the file being written when the recording was killed) is read as recovered,
+    up to its last complete chunk, and said in ``recovered`` (None otherwise): it is the end of
+    the signal.  A piece cut before the last is refused: the pieces after it would follow a gap.
 
     The pieces' ``bearing_sim`` metadata must be the same but for ``file_index`` (it holds no
     wall clock, so two runs of one command have the same: such pieces mixed show as gaps in
@@ -225,10 +429,16 @@ class SplitRecording:
                         raise
                     self.notes.append(f"{p} left out: {str(exc).split(': ', 1)[-1]}")
             self._check_and_order()
+            for r in self._pieces[:-1]:
+                if r.recovered:
+                    raise UserError(f"{r.path}: truncated MCAP recording (no footer: its writer never finished), "
+                                    f"and not the last of the pieces given ({FILE_INDEX} {r.metadata[FILE_INDEX]}): "
+                                    "the pieces after it would follow a gap; give the pieces up to it")
         except BaseException:
             self.close()
             raise
         first, last = self._pieces[0], self._pieces[-1]
+        self.recovered = last.recovered
         self.paths = [r.path for r in self._pieces]
         names = first.path.name if first is last else f"{first.path.name} .. {last.path.name}"
         self.path = f"{first.path} .. {last.path}" if named is None else f"{named} ({names})"
