@@ -1123,3 +1123,40 @@ def test_the_monitor_says_no_tables_only_before_the_first(ros_env, bearing_sim_e
     first = next(k for k, line in enumerate(lines) if line.startswith("monitor: first table stamped"))
     assert not any("no waveform tables" in line for line in lines[first:]), out
     assert "monitor: 1 verdicts from 600 tables, 0 gaps" in out, out
+
+
+def test_the_monitor_says_the_simulators_trouble_as_it_begins_and_ends(ros_env):
+    """The monitor printed a simulator's status only at its end: a recording that failed, or a
+    node that fell behind real time (every verdict later and later), went unsaid while it ran.
+    Now each is said once as it begins and once as it ends; overruns of a second and other WARNs
+    are not (a loaded machine has them), nor another simulator's trouble."""
+    import io
+
+    import rclpy
+
+    from bearing_sim_ros.recording.render import diagnostics_message
+
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx)
+    out = io.StringIO()
+    node = MonitorNode(load_scene("er16k_outer_race"), window=1.0, out=out, context=ctx)
+    failed = "recording failed: recording to run.mcap stopped: the file was deleted while it was written"
+    behind = "falling behind real time: x0.55 over the last 5 s, 2.25 s behind and further each second"
+    sequence = [(0, "ok", {}), (1, "3 overruns in the last second", {}), (2, failed, {}), (2, failed, {}),
+                (0, "ok", {}), (1, behind, {"falling_behind": "true"}), (1, behind, {"falling_behind": "true"}),
+                (0, "ok", {"falling_behind": "false"})]
+    try:
+        for k, (level, message, extra) in enumerate(sequence):
+            values = {"faults_present": "outer", "defect_sizes": "1", "simulated_s": f"{k + 1:.6f}",
+                      "run": "running", **extra}
+            node._on_diagnostics(diagnostics_message((k + 1) * NS, values, level, message))
+        node._on_diagnostics(diagnostics_message(10 * NS, {"faults_present": "none", "simulated_s": "1.000000"},
+                                                 2, failed, "rig9/bearing_sim"))
+    finally:
+        node.destroy_node()
+        rclpy.shutdown(context=ctx)
+    said = [line for line in out.getvalue().splitlines() if line.startswith("monitor: bearing_sim")]
+    assert said == [f"monitor: bearing_sim says (ERROR): {failed}",
+                    "monitor: bearing_sim: no error again (ok)",
+                    f"monitor: bearing_sim says (WARN): {behind}",
+                    "monitor: bearing_sim: keeping up again (ok)"], out.getvalue()

@@ -472,6 +472,7 @@ class MonitorNode(Node):
         self._several_said = False
         self.truth_status = ground_truth.status_name(self.simulator)
         self.ignored = set()        # names of other simulators' statuses, said once each
+        self._trouble = ""          # the simulator's trouble said last (``_say_trouble``): "", "error", "behind"
         self.scenes_said = set()    # the simulator's (scene, bearing) that are not --scene's, said once each
         self._speeds = []
         self._warned = False
@@ -559,6 +560,7 @@ class MonitorNode(Node):
             self.run.reports.append(truth)
             self.run.appeared.add(truth)
             self._check_scene(values)
+            self._say_trouble(status, values)
             if values.get(RUN_KEY) == RUN_ENDED:
                 # the simulator's end status (its last /diagnostics): the tables stopped because the
                 # run is complete (or was stopped), not because it crashed or discovery lost it
@@ -574,6 +576,24 @@ class MonitorNode(Node):
                     self.run.source_start = stamp - round(float(values[ground_truth.TIME_KEY]) * NS)
                 except ValueError:
                     pass
+
+    def _say_trouble(self, status, values: dict) -> None:
+        """The watched simulator's own trouble, said once as it begins and once as it ends: an
+        ERROR (its recording failed, its solver diverged) or falling behind real time
+        (``falling_behind``), which delays every verdict.  The monitor printed a simulator's
+        status only at its end, and a recording that failed an hour into a run went unsaid.
+        The end status is said on its own (``_on_diagnostics``)."""
+        level = status.level[0] if isinstance(status.level, (bytes, bytearray)) else int(status.level)
+        trouble = ("error" if level >= 2 else "behind" if values.get("falling_behind") == "true" else "")
+        if values.get(RUN_KEY) == RUN_ENDED or trouble == self._trouble:
+            return
+        if trouble:
+            print(f"monitor: {self.simulator} says ({'ERROR' if trouble == 'error' else 'WARN'}): {status.message}",
+                  file=self.out, flush=True)
+        else:
+            print(f"monitor: {self.simulator}: {'no error' if self._trouble == 'error' else 'keeping up'} "
+                  f"again ({status.message})", file=self.out, flush=True)
+        self._trouble = trouble
 
     def _started_again_after(self, values: dict, stamp: int):
         """After what (``its end status``, ``its publisher was gone``) a diagnostics of the watched
