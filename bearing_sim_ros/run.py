@@ -147,7 +147,7 @@ def _verdict_lines(scene, res: dict, end_s: float = math.inf, analysed_s: float 
         return [f"verdict: {FAULT_NAMES[res['verdict']]} ({threshold}; the scene's defects: {defects})"]
     if res["verdict"] == "healthy":
         return [f"verdict: healthy ({threshold}; this scene has no defect)"]
-    what, advice = no_defect_note(res)
+    what, advice = no_defect_note(res["verdict"], res["lines"]["bpfo"].prominence if "lines" in res else math.nan)
     # the outer-race note names the line itself; another fault's says only what it is not
     said = "" if res["verdict"] == "outer" else f"the detector says {FAULT_NAMES[res['verdict']]} ({threshold}); "
     return [f"verdict: {said}{what},", f"  {advice}"]

@@ -216,7 +216,7 @@ def test_a_fault_verdict_on_a_healthy_scene_is_explained_in_the_reports_words():
     from bearing_sim_ros.run import _verdict_lines
 
     inner = {"verdict": "inner"}
-    what, advice = no_defect_note(inner)
+    what, advice = no_defect_note(inner["verdict"])
     assert _verdict_lines(load_scene("er16k_healthy"), inner, 3.0, 3.0) == [
         f"verdict: the detector says inner-race fault (threshold x4 the local floor); {what},", f"  {advice}"]
 

@@ -266,17 +266,17 @@ def verdict_of(lines: dict, threshold: float = DETECTION_THRESHOLD) -> dict:
     return {"verdict": verdict, "lines": lines, "scores": scores}
 
 
-def no_defect_note(verdict: dict) -> tuple | None:
-    """What a fault verdict (:func:`diagnose`'s result) on a scene *without* a defect means, in
-    words: ``(what the line is, what to do)``, or None where the verdict is healthy.  A bearing
-    with radial play rattles from ball to ball at the ball-pass frequency (varying compliance;
-    seed 000 Fig. 9), and a detector that judges the height of the BPFO line alone calls that an
-    outer-race fault."""
-    fault = verdict["verdict"]
+def no_defect_note(fault: str, bpfo_prominence: float = float("nan")) -> tuple | None:
+    """What a fault verdict (``fault``: :func:`diagnose`'s ``verdict``) on a scene *without* a
+    defect means, in words: ``(what the line is, what to do)``, or None where the verdict is
+    healthy.  ``bpfo_prominence``: the height of the BPFO line over its local median, which the
+    words of an "outer" verdict give.  A bearing with radial play rattles from ball to ball at
+    the ball-pass frequency (varying compliance; seed 000 Fig. 9), and a detector that judges the
+    height of the BPFO line alone calls that an outer-race fault."""
     if fault in ("healthy", "unknown"):
         return None
     if fault == "outer":
-        return (f"this scene has no defect; the line at BPFO (x{verdict['lines']['bpfo'].prominence:.0f}) is the "
+        return (f"this scene has no defect; the line at BPFO (x{bpfo_prominence:.0f}) is the "
                 "ball-pass (varying compliance) line",
                 "which the detector alone calls an outer-race fault: compare line heights with a healthy baseline")
     return ("this scene has no defect, so the line is not a defect's",

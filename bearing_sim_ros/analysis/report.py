@@ -54,7 +54,7 @@ from ..errors import UserError
 from ..paths import output_folder, writing_into
 from ..recording.reader import open_recording
 from ..waveform import NS, from_pointcloud2
-from .envelope import (DEFAULT_BAND, DETECTION_THRESHOLD, FAULT_LINES, STEADY_LINES, Line, diagnose,
+from .envelope import (DEFAULT_BAND, DETECTION_THRESHOLD, FAULT_LINES, STEADY_LINES, diagnose,
                        envelope_spectrum, no_defect_note, spread, statistics, with_cage)
 from .orders import order_diagnose
 
@@ -1088,14 +1088,14 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
             plots.append(plot_timeline(timeline, d.truth, [df.kind for df in scene.defects] if scene else [],
                                        onset, detected, out, meta))
     changes = truth_changes(d.truth)
+    # the verdict and its BPFO line's height for the note on a scene without a defect
     if tracked:
-        note_verdict = tracked
+        noted = (tracked["verdict"], tracked["lines"]["bpfo"].prominence)
     elif verdict is not None and overall != verdict["verdict"]:
-        # the notes below read the verdict's lines: the windows' highest BPFO stands for them
-        best = max((w["prominences"].get("outer", 0.0) for w in timeline), default=0.0)
-        note_verdict = {"verdict": overall, "lines": {"bpfo": Line(math.nan, math.nan, math.nan, best)}}
-    else:
-        note_verdict = verdict
+        # the windows' verdict: their highest BPFO line stands for the recording's
+        noted = (overall, max((w["prominences"].get("outer", 0.0) for w in timeline), default=0.0))
+    elif verdict is not None:
+        noted = (verdict["verdict"], verdict["lines"]["bpfo"].prominence)
 
     expected, expected_from = expected_defects(scene, d.truth, d.analysed_end_s)
     speed_var = (float(np.ptp(d.cmd_speed) / abs(speed)) if d.cmd_speed.size and speed else 0.0)
@@ -1140,7 +1140,7 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
         "expected_defects": expected,
         "expected_defects_from": expected_from,
         # a fault verdict on a scene without a defect (the healthy ER-16K's ball-pass line at BPFO)
-        "verdict_note": (", ".join(no_defect_note(note_verdict) or ()) or None
+        "verdict_note": (", ".join(no_defect_note(*noted) or ()) or None
                          if verdict and scene is not None and not scene.defects else None),
         "scene_defects": scene_defects(scene, d.truth, d.analysed_end_s, d.signal_s),
         "scene_unknown": scene_problem or None,
