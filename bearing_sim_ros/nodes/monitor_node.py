@@ -75,8 +75,11 @@ answered for them (a healthy recording played after an outer-race one scored ``t
 So does a node started again on the wall clock after the end status (or once the publisher was
 seen gone): its tables do not continue the last, its diagnostics' signal does not start where the
 last run ended (the next pass of ``play --loop`` does both), and the end status of the run before
-answered for its windows before its own first diagnostics.  One line says so; ``t=`` and the
-ground truth start afresh, and the exit lines take each run on its own.
+answered for its windows before its own first diagnostics.  So does a node killed and started
+again within DDS's lease, seen neither gone nor ended (the graph keeps the dead publisher): its
+tables' and diagnostics' publication sequence numbers (rclpy's message info) start over
+(:class:`Publishers`).  One line says so; ``t=`` and the ground truth start afresh, and
+the exit lines take each run on its own.
 """
 from __future__ import annotations
 
@@ -421,6 +424,50 @@ def started_again(what: str, stamp_ns: int, after: str) -> str:
     return f"a {what} stamped {stamp_text(stamp_ns)} s not continuing the run before, after {after}: a node started again"
 
 
+def publication_number(info) -> int | None:
+    """The publication sequence number of a message, from the message info that rclpy gives a
+    subscription callback that takes two arguments: its publisher numbers its messages 1, 2, ...
+    (a node started again numbers from 1 anew).  None where the middleware does not give it, or
+    without the info (a callback called directly)."""
+    return info.get("publication_sequence_number") if info else None
+
+
+class Publishers:
+    """The publishers of one topic, told apart by the publication sequence numbers of their
+    messages (``publication_number``): each numbers its own 1, 2, ..., so a message goes on from
+    the publisher whose last number is the highest below its own, and one numbered at most the
+    last of every publisher known is from a new one (a node started again numbers from 1 anew).
+    The stamps cannot tell a node killed and started again at once on the wall clock (they jump
+    on, as after lost tables), nor can the graph (DDS keeps the dead publisher for its lease,
+    about 20 s), and rclpy gives no publisher GID with a message.  Two publishers whose messages
+    interleave (two simulators in one namespace) stay two, not a new one at every switch."""
+
+    KEPT = 256      # publishers remembered, the latest to go on: a dead one stays at its last number
+
+    def __init__(self):
+        self.last = []              # the last number of each publisher known, the latest last
+        self.previous = None        # the number of the message before on the topic
+
+    def is_new(self, number: int | None) -> bool:
+        """Is the message numbered ``number`` from a publisher not known before (the first message
+        too)?  False where ``number`` is None (the middleware does not give it).  Counts it."""
+        if number is None:
+            return False
+        self.previous = self.last[-1] if self.last else None
+        below = [last for last in self.last if last < number]
+        if below:
+            self.last.remove(max(below))        # it goes on from that publisher
+        self.last = (self.last + [number])[-self.KEPT:]
+        return not below
+
+
+def new_publisher(what: str, stamp_ns: int, number: int, previous: int) -> str:
+    """Why a run starts where a ``what`` stamped ``stamp_ns``, numbered ``number`` by a new
+    publisher (``Publishers``), came after one numbered ``previous`` (``new_run_line``)."""
+    return (f"a {what} stamped {stamp_text(stamp_ns)} s from a new publisher (its publication sequence number "
+            f"{number} after {previous}: a node started again within DDS's lease)")
+
+
 def new_run_line(number: int, why: str) -> str:
     """The line that says run ``number`` starts, and ``why``."""
     return f"monitor: run {number}: {why}; t= and the ground truth start afresh"
@@ -467,6 +514,10 @@ class MonitorNode(Node):
         self.run = SourceRun(1)
         self.runs_before = []
         self._went_back_said_at = None  # monotonic s of the last run-started line (throttled)
+        # the publishers of the tables and of the watched simulator's /diagnostics: a new one is a
+        # node started again, maybe within DDS's lease
+        self._table_publishers = Publishers()
+        self._report_publishers = Publishers()
         self.simulator = simulator_name(self.resolve_topic_name(TOPIC_ACCEL), simulator)
         self.simulator_given = simulator    # --simulator as given (None: the default, resolved)
         self._several_said = False
@@ -487,9 +538,13 @@ class MonitorNode(Node):
         verdict(warm, ("warm_up",), WARM_UP_RATE, scene.bearing, scene.shaft_hz)
         # reliable like the node offers; depth = 1 s of 10 ms batches: plenty while the
         # executor thread only decodes tables
-        self.create_subscription(PointCloud2, TOPIC_ACCEL, self._on_accel, waveform_qos(0.01))
+        # (the callbacks of accel and /diagnostics take the message info too, for the publication
+        # sequence number that tells a new publisher: rclpy gives it to a callback of two arguments)
+        self.create_subscription(PointCloud2, TOPIC_ACCEL,
+                                 lambda msg, info: self._on_accel(msg, publication_number(info)), waveform_qos(0.01))
         self.create_subscription(JointState, TOPIC_STATE, self._on_state, 10)
-        self.create_subscription(DiagnosticArray, TOPIC_DIAGNOSTICS, self._on_diagnostics, 10)
+        self.create_subscription(DiagnosticArray, TOPIC_DIAGNOSTICS,
+                                 lambda msg, info: self._on_diagnostics(msg, publication_number(info)), 10)
 
     @property
     def done(self) -> bool:
@@ -534,7 +589,9 @@ class MonitorNode(Node):
                                  float(angles[names.index("shaft")]),
                                  float(angles[names.index("cage")]) if cage is not None else np.nan))
 
-    def _on_diagnostics(self, msg):
+    def _on_diagnostics(self, msg, number: int | None = None):
+        """A /diagnostics message, ``number`` by its publisher (``publication_number``; None:
+        not known)."""
         stamp = msg.header.stamp.sec * NS + msg.header.stamp.nanosec
         for status in msg.status:           # a simulator's: a status with faults_present
             values = {kv.key: kv.value for kv in status.values}
@@ -549,12 +606,15 @@ class MonitorNode(Node):
                     print(f"monitor: ground truth of {status.name!r} ignored: truth= is that of "
                           f"{self.truth_status!r}, {self._whose_truth()}", file=self.out, flush=True)
                 continue
+            new = self._report_publishers.is_new(number)
             if self.run.last_report is not None and stamp < self.run.last_report - SLACK_NS:
                 self._start_run(went_back("/diagnostics", stamp, self.run.last_report))
             else:
                 after = self._started_again_after(values, stamp)
                 if after:
                     self._start_run(started_again("/diagnostics", stamp, after))
+                elif new and self.run.last_report is not None:
+                    self._start_run(new_publisher("/diagnostics", stamp, number, self._report_publishers.previous))
             self._lost = False
             self.run.last_report = stamp
             self.run.reports.append(truth)
@@ -627,7 +687,8 @@ class MonitorNode(Node):
             self.scenes_said.add(theirs)
             print(line, file=self.out, flush=True)
 
-    def _on_accel(self, msg):
+    def _on_accel(self, msg, number: int | None = None):
+        """A table on accel, ``number`` by its publisher (``publication_number``; None: not known)."""
         self._last_table_at = time.monotonic()
         if self.count and self.windows_queued >= self.count:
             return
@@ -642,12 +703,14 @@ class MonitorNode(Node):
                                       throttle_duration_sec=5.0)
             return
         self.tables += 1
+        ended = self._ended is not None and stamp >= self._ended[0] - SLACK_NS
+        new = self._table_publishers.is_new(number)
         if self.run.last_table is not None and stamp < self.run.last_table - SLACK_NS:
             self._start_run(went_back("table", stamp, self.run.last_table))
-        elif not self.window.continues(stamp, channels):
-            ended = self._ended is not None and stamp >= self._ended[0] - SLACK_NS
-            if ended or self._lost:
-                self._start_run(started_again("table", stamp, "its end status" if ended else "its publisher was gone"))
+        elif (ended or self._lost) and not self.window.continues(stamp, channels):
+            self._start_run(started_again("table", stamp, "its end status" if ended else "its publisher was gone"))
+        elif new and self.run.last_table is not None:
+            self._start_run(new_publisher("table", stamp, number, self._table_publishers.previous))
         self._lost = False
         first_of_run = self.run.last_table is None      # of a new run (said), or the monitor's first
         self.run.last_table = stamp
