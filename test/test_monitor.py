@@ -636,6 +636,7 @@ def test_a_node_killed_and_started_again_within_the_lease_starts_a_new_run(ros_e
 
     out = _monitor_beside_nodes_in_turn(ros_env, bearing_sim_exe, tmp_path, turns)
     assert "no publisher on /accel any more" not in out, out       # within the lease: not seen gone
+    assert "publishers on /accel" not in out, out       # nor "2 publishers": the dead one sends nothing
     runs = re.findall(r"^monitor: run (\d): a (?:table|/diagnostics) stamped [\d.]+ s from a new publisher "
                       r"\(its publication sequence number \d+ after \d+: a node started again within DDS's "
                       r"lease\); t= and the ground truth start afresh$", out, re.M)
@@ -660,6 +661,9 @@ def test_publishers_are_told_apart_by_their_publication_sequence_numbers():
     assert [tables.is_new(n) for n in (179, 2, 180, 3, 5, 181, 6)] == [False] * 7
     assert tables.is_new(1) and not tables.is_new(2)
     assert not tables.is_new(None) and not tables.is_new(None)
+    # the switches from one publisher to another: to the new one, then between the two 6 times,
+    # to the newest; not the first message nor a number not given
+    assert tables.switches == 8
 
 
 def _wait_for_subscribers(monitor, *publishers, timeout: float = 30.0) -> None:

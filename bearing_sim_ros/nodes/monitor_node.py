@@ -440,25 +440,34 @@ class Publishers:
     The stamps cannot tell a node killed and started again at once on the wall clock (they jump
     on, as after lost tables), nor can the graph (DDS keeps the dead publisher for its lease,
     about 20 s), and rclpy gives no publisher GID with a message.  Two publishers whose messages
-    interleave (two simulators in one namespace) stay two, not a new one at every switch."""
+    interleave (two simulators in one namespace) stay two, not a new one at every switch; the
+    switches are counted (``switches``), for telling them from a dead publisher the graph keeps."""
 
     KEPT = 256      # publishers remembered, the latest to go on: a dead one stays at its last number
 
     def __init__(self):
         self.last = []              # the last number of each publisher known, the latest last
         self.previous = None        # the number of the message before on the topic
+        self.numbered = False       # a message came with its number
+        # messages from another publisher than the message before's (the first message is none)
+        self.switches = 0
 
     def is_new(self, number: int | None) -> bool:
         """Is the message numbered ``number`` from a publisher not known before (the first message
         too)?  False where ``number`` is None (the middleware does not give it).  Counts it."""
         if number is None:
             return False
+        self.numbered = True
         self.previous = self.last[-1] if self.last else None
-        below = [last for last in self.last if last < number]
-        if below:
-            self.last.remove(max(below))        # it goes on from that publisher
+        below = [k for k, last in enumerate(self.last) if last < number]
+        # the publisher it goes on from (None: a new one)
+        going_on = max(below, key=self.last.__getitem__) if below else None
+        if self.last and going_on != len(self.last) - 1:
+            self.switches += 1
+        if going_on is not None:
+            del self.last[going_on]
         self.last = (self.last + [number])[-self.KEPT:]
-        return not below
+        return going_on is None
 
 
 def new_publisher(what: str, stamp_ns: int, number: int, previous: int) -> str:
@@ -829,10 +838,12 @@ class MonitorNode(Node):
     def check_sources(self) -> None:
         """Several publishers on ``accel`` (two simulators in one namespace, a ``play`` beside a
         node): their tables interleave, each switch reads as a gap or a restarted source, and the
-        verdicts (and their t=) are of no one signal.  Said once.  And none left after tables came,
+        verdicts (and their t=) are of no one signal.  Said once, once the tables are seen to switch
+        publishers back and forth (``Publishers.switches``).  And none left after tables came,
         without an end status (a node killed or crashed): said once each time, for ``source_lost``."""
         topic = self.resolve_topic_name(TOPIC_ACCEL)
         n = self.count_publishers(topic)
+        switches, self._table_publishers.switches = self._table_publishers.switches, 0
         if n or self._ended is not None or self._last_table_at is None:
             self._gone_since = None
         elif self._gone_since is None:
@@ -845,7 +856,11 @@ class MonitorNode(Node):
             print(f"monitor: no publisher on {topic} any more and no end status from {self.simulator} "
                   f"({SOURCE_LOST_CAUSES}); waiting for one (a node started again; {until})",
                   file=self.out, flush=True)
-        if n > 1 and not self._several_said:
+        # a publisher that sends no tables interleaves none: a node killed and started again
+        # within DDS's lease leaves its dead publisher in the graph (the tables switched once, to
+        # the new one); said where they switched back and forth since the last look, or without
+        # their publication sequence numbers (as where no table came yet)
+        if n > 1 and not self._several_said and (switches > 1 or not self._table_publishers.numbered):
             self._several_said = True
             print(f"monitor: {n} publishers on {topic}: their tables interleave and the verdicts are not of "
                   f"one signal; give each simulator its own namespace and watch one (--ros-args -r __ns:=/rig1)",
