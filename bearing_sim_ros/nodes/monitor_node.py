@@ -75,8 +75,11 @@ answered for them (a healthy recording played after an outer-race one scored ``t
 So does a node started again on the wall clock after the end status (or once the publisher was
 seen gone): its tables do not continue the last, its diagnostics' signal does not start where the
 last run ended (the next pass of ``play --loop`` does both), and the end status of the run before
-answered for its windows before its own first diagnostics.  One line says so; ``t=`` and the
-ground truth start afresh, and the exit lines take each run on its own.
+answered for its windows before its own first diagnostics.  So does a node killed and started
+again within DDS's lease, seen neither gone nor ended (the graph keeps the dead publisher): its
+tables' and diagnostics' publication sequence numbers (rclpy's message info) start over
+(:class:`Publishers`).  One line says so; ``t=`` and the ground truth start afresh, and
+the exit lines take each run on its own.
 """
 from __future__ import annotations
 
@@ -421,6 +424,59 @@ def started_again(what: str, stamp_ns: int, after: str) -> str:
     return f"a {what} stamped {stamp_text(stamp_ns)} s not continuing the run before, after {after}: a node started again"
 
 
+def publication_number(info) -> int | None:
+    """The publication sequence number of a message, from the message info that rclpy gives a
+    subscription callback that takes two arguments: its publisher numbers its messages 1, 2, ...
+    (a node started again numbers from 1 anew).  None where the middleware does not give it, or
+    without the info (a callback called directly)."""
+    return info.get("publication_sequence_number") if info else None
+
+
+class Publishers:
+    """The publishers of one topic, told apart by the publication sequence numbers of their
+    messages (``publication_number``): each numbers its own 1, 2, ..., so a message goes on from
+    the publisher whose last number is the highest below its own, and one numbered at most the
+    last of every publisher known is from a new one (a node started again numbers from 1 anew).
+    The stamps cannot tell a node killed and started again at once on the wall clock (they jump
+    on, as after lost tables), nor can the graph (DDS keeps the dead publisher for its lease,
+    about 20 s), and rclpy gives no publisher GID with a message.  Two publishers whose messages
+    interleave (two simulators in one namespace) stay two, not a new one at every switch; the
+    switches are counted (``switches``), for telling them from a dead publisher the graph keeps."""
+
+    KEPT = 256      # publishers remembered, the latest to go on: a dead one stays at its last number
+
+    def __init__(self):
+        self.last = []              # the last number of each publisher known, the latest last
+        self.previous = None        # the number of the message before on the topic
+        self.numbered = False       # a message came with its number
+        # messages from another publisher than the message before's (the first message is none)
+        self.switches = 0
+
+    def is_new(self, number: int | None) -> bool:
+        """Is the message numbered ``number`` from a publisher not known before (the first message
+        too)?  False where ``number`` is None (the middleware does not give it).  Counts it."""
+        if number is None:
+            return False
+        self.numbered = True
+        self.previous = self.last[-1] if self.last else None
+        below = [k for k, last in enumerate(self.last) if last < number]
+        # the publisher it goes on from (None: a new one)
+        going_on = max(below, key=self.last.__getitem__) if below else None
+        if self.last and going_on != len(self.last) - 1:
+            self.switches += 1
+        if going_on is not None:
+            del self.last[going_on]
+        self.last = (self.last + [number])[-self.KEPT:]
+        return going_on is None
+
+
+def new_publisher(what: str, stamp_ns: int, number: int, previous: int) -> str:
+    """Why a run starts where a ``what`` stamped ``stamp_ns``, numbered ``number`` by a new
+    publisher (``Publishers``), came after one numbered ``previous`` (``new_run_line``)."""
+    return (f"a {what} stamped {stamp_text(stamp_ns)} s from a new publisher (its publication sequence number "
+            f"{number} after {previous}: a node started again within DDS's lease)")
+
+
 def new_run_line(number: int, why: str) -> str:
     """The line that says run ``number`` starts, and ``why``."""
     return f"monitor: run {number}: {why}; t= and the ground truth start afresh"
@@ -467,6 +523,10 @@ class MonitorNode(Node):
         self.run = SourceRun(1)
         self.runs_before = []
         self._went_back_said_at = None  # monotonic s of the last run-started line (throttled)
+        # the publishers of the tables and of the watched simulator's /diagnostics: a new one is a
+        # node started again, maybe within DDS's lease
+        self._table_publishers = Publishers()
+        self._report_publishers = Publishers()
         self.simulator = simulator_name(self.resolve_topic_name(TOPIC_ACCEL), simulator)
         self.simulator_given = simulator    # --simulator as given (None: the default, resolved)
         self._several_said = False
@@ -487,9 +547,13 @@ class MonitorNode(Node):
         verdict(warm, ("warm_up",), WARM_UP_RATE, scene.bearing, scene.shaft_hz)
         # reliable like the node offers; depth = 1 s of 10 ms batches: plenty while the
         # executor thread only decodes tables
-        self.create_subscription(PointCloud2, TOPIC_ACCEL, self._on_accel, waveform_qos(0.01))
+        # (the callbacks of accel and /diagnostics take the message info too, for the publication
+        # sequence number that tells a new publisher: rclpy gives it to a callback of two arguments)
+        self.create_subscription(PointCloud2, TOPIC_ACCEL,
+                                 lambda msg, info: self._on_accel(msg, publication_number(info)), waveform_qos(0.01))
         self.create_subscription(JointState, TOPIC_STATE, self._on_state, 10)
-        self.create_subscription(DiagnosticArray, TOPIC_DIAGNOSTICS, self._on_diagnostics, 10)
+        self.create_subscription(DiagnosticArray, TOPIC_DIAGNOSTICS,
+                                 lambda msg, info: self._on_diagnostics(msg, publication_number(info)), 10)
 
     @property
     def done(self) -> bool:
@@ -534,7 +598,9 @@ class MonitorNode(Node):
                                  float(angles[names.index("shaft")]),
                                  float(angles[names.index("cage")]) if cage is not None else np.nan))
 
-    def _on_diagnostics(self, msg):
+    def _on_diagnostics(self, msg, number: int | None = None):
+        """A /diagnostics message, ``number`` by its publisher (``publication_number``; None:
+        not known)."""
         stamp = msg.header.stamp.sec * NS + msg.header.stamp.nanosec
         for status in msg.status:           # a simulator's: a status with faults_present
             values = {kv.key: kv.value for kv in status.values}
@@ -549,12 +615,15 @@ class MonitorNode(Node):
                     print(f"monitor: ground truth of {status.name!r} ignored: truth= is that of "
                           f"{self.truth_status!r}, {self._whose_truth()}", file=self.out, flush=True)
                 continue
+            new = self._report_publishers.is_new(number)
             if self.run.last_report is not None and stamp < self.run.last_report - SLACK_NS:
                 self._start_run(went_back("/diagnostics", stamp, self.run.last_report))
             else:
                 after = self._started_again_after(values, stamp)
                 if after:
                     self._start_run(started_again("/diagnostics", stamp, after))
+                elif new and self.run.last_report is not None:
+                    self._start_run(new_publisher("/diagnostics", stamp, number, self._report_publishers.previous))
             self._lost = False
             self.run.last_report = stamp
             self.run.reports.append(truth)
@@ -627,7 +696,8 @@ class MonitorNode(Node):
             self.scenes_said.add(theirs)
             print(line, file=self.out, flush=True)
 
-    def _on_accel(self, msg):
+    def _on_accel(self, msg, number: int | None = None):
+        """A table on accel, ``number`` by its publisher (``publication_number``; None: not known)."""
         self._last_table_at = time.monotonic()
         if self.count and self.windows_queued >= self.count:
             return
@@ -642,12 +712,14 @@ class MonitorNode(Node):
                                       throttle_duration_sec=5.0)
             return
         self.tables += 1
+        ended = self._ended is not None and stamp >= self._ended[0] - SLACK_NS
+        new = self._table_publishers.is_new(number)
         if self.run.last_table is not None and stamp < self.run.last_table - SLACK_NS:
             self._start_run(went_back("table", stamp, self.run.last_table))
-        elif not self.window.continues(stamp, channels):
-            ended = self._ended is not None and stamp >= self._ended[0] - SLACK_NS
-            if ended or self._lost:
-                self._start_run(started_again("table", stamp, "its end status" if ended else "its publisher was gone"))
+        elif (ended or self._lost) and not self.window.continues(stamp, channels):
+            self._start_run(started_again("table", stamp, "its end status" if ended else "its publisher was gone"))
+        elif new and self.run.last_table is not None:
+            self._start_run(new_publisher("table", stamp, number, self._table_publishers.previous))
         self._lost = False
         first_of_run = self.run.last_table is None      # of a new run (said), or the monitor's first
         self.run.last_table = stamp
@@ -766,10 +838,12 @@ class MonitorNode(Node):
     def check_sources(self) -> None:
         """Several publishers on ``accel`` (two simulators in one namespace, a ``play`` beside a
         node): their tables interleave, each switch reads as a gap or a restarted source, and the
-        verdicts (and their t=) are of no one signal.  Said once.  And none left after tables came,
+        verdicts (and their t=) are of no one signal.  Said once, once the tables are seen to switch
+        publishers back and forth (``Publishers.switches``).  And none left after tables came,
         without an end status (a node killed or crashed): said once each time, for ``source_lost``."""
         topic = self.resolve_topic_name(TOPIC_ACCEL)
         n = self.count_publishers(topic)
+        switches, self._table_publishers.switches = self._table_publishers.switches, 0
         if n or self._ended is not None or self._last_table_at is None:
             self._gone_since = None
         elif self._gone_since is None:
@@ -782,7 +856,11 @@ class MonitorNode(Node):
             print(f"monitor: no publisher on {topic} any more and no end status from {self.simulator} "
                   f"({SOURCE_LOST_CAUSES}); waiting for one (a node started again; {until})",
                   file=self.out, flush=True)
-        if n > 1 and not self._several_said:
+        # a publisher that sends no tables interleaves none: a node killed and started again
+        # within DDS's lease leaves its dead publisher in the graph (the tables switched once, to
+        # the new one); said where they switched back and forth since the last look, or without
+        # their publication sequence numbers (as where no table came yet)
+        if n > 1 and not self._several_said and (switches > 1 or not self._table_publishers.numbered):
             self._several_said = True
             print(f"monitor: {n} publishers on {topic}: their tables interleave and the verdicts are not of "
                   f"one signal; give each simulator its own namespace and watch one (--ros-args -r __ns:=/rig1)",
