@@ -1175,6 +1175,43 @@ def test_a_run_started_by_diagnostics_that_go_back_keeps_each_runs_latency(ros_e
         assert f"monitor: run {run}: latency 0.50s: outer appeared at t=0.50s, first called at t=1.00s" in lines, lines
 
 
+def test_two_sources_interleaving_do_not_flood_the_output(ros_env, tmp_path):
+    """Two simulators in one namespace: their tables interleave, and every table of the one behind
+    goes back and starts a run.  The run lines were throttled (one in 5 s), but each run's "first
+    table stamped" line was not: hundreds of lines in a few seconds (408 in 12 s with two live
+    nodes).  Now a run whose start goes unsaid leaves its first table unsaid too."""
+    import io
+
+    import rclpy
+    from rclpy.serialization import deserialize_message, serialize_message
+    from sensor_msgs.msg import PointCloud2
+
+    from bearing_sim_ros.recording.reader import open_recording
+
+    recording = tmp_path / "two.mcap"
+    render("er16k_outer_race", 1.0, recording, fidelity="kinematic", seed=1, progress=False)
+    with open_recording(recording) as rec:
+        tables = [deserialize_message(data, PointCloud2) for _t, _type, _ns, data in rec.messages(["/accel"])]
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx)
+    out = io.StringIO()
+    node = MonitorNode(load_scene("er16k_outer_race"), window=1.0, out=out, context=ctx)
+    try:
+        for msg in tables:
+            node._on_accel(msg)
+            behind = deserialize_message(serialize_message(msg), PointCloud2)
+            behind.header.stamp.sec -= 1            # the second simulator, a second behind
+            node._on_accel(behind)
+    finally:
+        node.destroy_node()
+        rclpy.shutdown(context=ctx)
+    text = out.getvalue()
+    assert node.run.number > 50, text                   # the test can fail: runs did start
+    firsts = re.findall(r"^monitor: first table stamped ", text, re.M)
+    said = re.findall(r"^monitor: run \d+: ", text, re.M)
+    assert len(said) <= 2 and len(firsts) == len(said) + 1, text
+
+
 def test_the_monitor_says_no_tables_only_before_the_first(ros_env, bearing_sim_exe, tmp_path):
     """The monitor says "no waveform tables on /accel yet" 5 s after it starts without any.  It
     looked at the window instead, which is empty too from the moment it is taken for analysis:

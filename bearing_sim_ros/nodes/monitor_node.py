@@ -523,6 +523,7 @@ class MonitorNode(Node):
         self.run = SourceRun(1)
         self.runs_before = []
         self._went_back_said_at = None  # monotonic s of the last run-started line (throttled)
+        self._run_said = True           # the current run's start was said (its first table is, then)
         # the publishers of the tables and of the watched simulator's /diagnostics: a new one is a
         # node started again, maybe within DDS's lease
         self._table_publishers = Publishers()
@@ -728,9 +729,11 @@ class MonitorNode(Node):
         if self.run.t0 is None:
             self.run.t0 = stamp
             # t= counts from here: the source's first table unless discovery or a late start
-            # lost some, which this stamp (against a recording's first) tells
-            print(f"monitor: first table stamped {stamp_text(stamp)} s, t=0 below",
-                  file=self.out, flush=True)
+            # lost some, which this stamp (against a recording's first) tells; unsaid for a run
+            # whose start went unsaid (two sources interleaving start one at every switch)
+            if self._run_said:
+                print(f"monitor: first table stamped {stamp_text(stamp)} s, t=0 below",
+                      file=self.out, flush=True)
         if not self.window.add(stamp, channels, data) and not first_of_run:
             self.get_logger().warning("accel tables not contiguous (a table was lost or the source "
                                       "restarted): starting the window again", throttle_duration_sec=5.0)
@@ -809,7 +812,8 @@ class MonitorNode(Node):
     def _start_run(self, why: str) -> None:
         """A new run of the source, for ``why`` (``went_back``, ``started_again``).  The run before
         keeps its clock and truth for its windows still queued; said in one line, at most every
-        5 s (two sources whose tables interleave would start one at every switch)."""
+        5 s, with its first table's stamp (two sources whose tables interleave would start one at
+        every switch)."""
         if self.run.windows:
             self.runs_before.append(self.run)
         self.run = SourceRun(self.run.number + 1)
@@ -817,7 +821,8 @@ class MonitorNode(Node):
         self._lost = False
         self._speeds = []
         now = time.monotonic()
-        if self._went_back_said_at is None or now - self._went_back_said_at >= 5.0:
+        self._run_said = self._went_back_said_at is None or now - self._went_back_said_at >= 5.0
+        if self._run_said:
             self._went_back_said_at = now
             print(new_run_line(self.run.number, why), file=self.out, flush=True)
 
