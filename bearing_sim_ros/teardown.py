@@ -40,6 +40,30 @@ def teardown_watchdog():
         faulthandler.cancel_dump_traceback_later()
 
 
+def drop_a_closed_terminal() -> None:
+    """Point standard output and error at /dev/null where they go to a terminal that hung up
+    (its window closed, the SSH session dropped: the SIGHUP that comes with it).  Every write to
+    such a terminal fails (EIO): the lines a command prints as it ends (``run``'s summary,
+    ``monitor``'s last lines, ``render``'s progress bar and its ``interrupted`` line) raised an
+    OSError there, after the recording was finalised, and ended the command as an internal error
+    (exit 1; a traceback where stderr went to a file), or ended a render before it kept its file.
+    Nobody can read them any more.  A terminal still there (a ``kill -HUP`` by hand) is kept."""
+    import select
+
+    for fd in (1, 2):                   # standard output and error
+        try:
+            poll = select.poll()
+            poll.register(fd, select.POLLOUT)
+            # a terminal that hung up polls as hung up (and in error); a live one, a file or a pipe not
+            hung_up = any(events & select.POLLHUP for _fd, events in poll.poll(0))
+        except OSError:                 # closed
+            continue
+        if hung_up:
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, fd)
+            os.close(devnull)
+
+
 @contextmanager
 def signal_handlers(handlers: dict):
     """Install ``handlers`` ({signal: handler}) for the block and put the previous ones back
@@ -88,6 +112,7 @@ class CommandSignals:
         self._status = None         # set by exit()
 
     def handle(self, signum, _frame):
+        drop_a_closed_terminal()
         if self.first is None and not self._stopping:
             self.first = signum
             self._stopping = True
