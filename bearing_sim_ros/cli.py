@@ -3,16 +3,21 @@
 Exit status: 0 done; 2 a user mistake (one line naming what is wrong and what is allowed, never a
 traceback); 1 an internal error; 3 ``monitor --count N`` whose simulator's run ended before N
 verdicts; 4 ``monitor`` with ``--count`` or ``--end-wait`` whose source went away without an end
-status (killed, crashed, lost to discovery); 141 (quietly) when the reader of standard output went away.  Each subcommand's work lives in its own module; this file only
+status (killed, crashed, lost to discovery); 141 (quietly) when the reader of standard output went away;
+130 (143, 129) a command stopped by Ctrl-C (SIGTERM, SIGHUP) before it was done, 0 where it runs a node
+and stopped as asked (README "Shutdown and recording").  Each subcommand's work lives in its own module; this file only
 parses arguments and maps errors to exit codes.
 """
 from __future__ import annotations
 
 import argparse
 import math
+import signal
 import sys
+from contextlib import contextmanager
 
 from .errors import UserError
+from .teardown import EXIT_INTERRUPTED, signal_handlers
 
 EXIT_OK, EXIT_INTERNAL, EXIT_USER = 0, 1, 2
 EXIT_STDOUT_CLOSED = 141        # 128 + SIGPIPE: what the shell reports for `yes | head`
@@ -422,9 +427,27 @@ def _stdout_closed() -> bool:
     return True
 
 
+@contextmanager
+def _ctrl_c_held():
+    """Ctrl-C during the block (the parser's imports: numpy) noted and raised after it, as a
+    KeyboardInterrupt: raised inside numpy's import, it came out as an ImportError that said
+    numpy's install was broken ("Importing the numpy C-extensions failed"), and "internal error",
+    exit 1.  Only where Ctrl-C would raise (the commands that run a node hold it from their
+    first line, teardown.CommandSignals)."""
+    if signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+        yield
+        return
+    noted = []
+    with signal_handlers({signal.SIGINT: lambda signum, _frame: noted.append(signum)}):
+        yield
+    if noted:
+        raise KeyboardInterrupt
+
+
 def _main(argv: list) -> int:
     try:
-        parser = build_parser()
+        with _ctrl_c_held():
+            parser = build_parser()
         # `node` passes everything after it to ROS (--ros-args ...)
         if argv[:1] == ["node"]:
             args, rest = parser.parse_known_args(argv)
@@ -442,7 +465,12 @@ def _main(argv: list) -> int:
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_USER
     except KeyboardInterrupt:
-        return EXIT_OK
+        if argv[:1] and argv[0] in SIGNAL_COMMANDS:
+            return EXIT_OK          # stopped while it started: README "Shutdown and recording"
+        # render, report, bench, ...: stopped before they were done (it said 0, as if they were),
+        # 130 as the shell reports an interrupted command (render says what it kept itself)
+        print("interrupted (Ctrl-C)", file=sys.stderr)
+        return EXIT_INTERRUPTED[signal.SIGINT]
     except SystemExit as exc:           # argparse --help
         return int(exc.code or 0)
     except BrokenPipeError:

@@ -465,3 +465,41 @@ def test_a_reader_that_goes_away_ends_the_command_quietly(bearing_sim_exe):
     proc.stdout.close()                 # gone before the first line
     err = proc.stderr.read().decode()
     assert proc.wait(60) == 141 and err == "", err
+
+
+def test_ctrl_c_of_a_command_that_runs_no_node_exits_130(monkeypatch, capsys, tmp_path):
+    """Ctrl-C of ``report`` (of ``render`` while it started, ``bench``, ...) exited 0 without a
+    word, as if the command had done its work (``report x --out d && upload d`` uploaded a
+    folder without its report).  Now 130, as the shell reports an interrupted command, and one
+    line."""
+    import bearing_sim_ros.analysis.report as report
+
+    def interrupted(_args):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(report, "report_command", interrupted)
+    assert cli.main(["report", str(tmp_path / "x.mcap"), "--out", str(tmp_path / "d")]) == 130
+    assert capsys.readouterr().err == "interrupted (Ctrl-C)\n"
+
+
+def test_ctrl_c_while_the_parser_imports_numpy_is_an_interruption(monkeypatch, capsys):
+    """Ctrl-C in a command's first tenths of a second, while building the parser imported numpy:
+    raised there it came out of numpy as an ImportError ("Importing the numpy C-extensions
+    failed ... bad install"), "internal error", exit 1; a little later, exit 0 without a word.
+    Now it is held until the imports are done: 130 and one line, and the command does not run."""
+    import os
+    import signal
+    import time
+
+    build = cli.build_parser
+
+    def ctrl_c_while_building():
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(0.05)                # where a handler runs: in the middle of the imports
+        return build()
+
+    monkeypatch.setattr(cli, "build_parser", ctrl_c_while_building)
+    assert cli.main(["scenes"]) == 130
+    out = capsys.readouterr()
+    assert (out.out, out.err) == ("", "interrupted (Ctrl-C)\n")
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
