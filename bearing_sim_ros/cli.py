@@ -17,7 +17,7 @@ import sys
 from contextlib import contextmanager
 
 from .errors import UserError
-from .teardown import EXIT_INTERRUPTED, signal_handlers
+from .teardown import EXIT_INTERRUPTED, point_at_devnull, say_on_stderr, signal_handlers
 
 EXIT_OK, EXIT_INTERNAL, EXIT_USER = 0, 1, 2
 EXIT_STDOUT_CLOSED = 141        # 128 + SIGPIPE: what the shell reports for `yes | head`
@@ -409,7 +409,6 @@ def _stdout_closed() -> bool:
     """Whether standard output is a pipe whose reader has gone (``bearing-sim scenes | head -2``:
     a BrokenPipeError traceback and "internal error", exit 1).  Then it points at /dev/null, so
     that Python's own flush at exit says nothing either."""
-    import os
     import select
 
     try:
@@ -421,9 +420,7 @@ def _stdout_closed() -> bool:
             return False
     except (OSError, ValueError):       # no descriptor (a test's capture): not this case
         return False
-    devnull = os.open(os.devnull, os.O_WRONLY)
-    os.dup2(devnull, fd)
-    os.close(devnull)
+    point_at_devnull(fd)
     return True
 
 
@@ -462,14 +459,14 @@ def _main(argv: list) -> int:
                 raise UserError(f"bearing-sim {args.command}: unrecognized arguments: {' '.join(rest)}")
         return int(_dispatch(args, rest) or EXIT_OK)
     except UserError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        say_on_stderr(f"error: {exc}")
         return EXIT_USER
     except KeyboardInterrupt:
         if argv[:1] and argv[0] in SIGNAL_COMMANDS:
             return EXIT_OK          # stopped while it started: README "Shutdown and recording"
         # render, report, bench, ...: stopped before they were done (it said 0, as if they were),
         # 130 as the shell reports an interrupted command (render says what it kept itself)
-        print("interrupted (Ctrl-C)", file=sys.stderr)
+        say_on_stderr("interrupted (Ctrl-C)")
         return EXIT_INTERRUPTED[signal.SIGINT]
     except SystemExit as exc:           # argparse --help
         return int(exc.code or 0)

@@ -59,9 +59,25 @@ def drop_a_closed_terminal() -> None:
         except OSError:                 # closed
             continue
         if hung_up:
-            devnull = os.open(os.devnull, os.O_WRONLY)
-            os.dup2(devnull, fd)
-            os.close(devnull)
+            point_at_devnull(fd)
+
+
+def say_on_stderr(line: str) -> None:
+    """``line`` on standard error; where its reader went away (``bearing-sim node ... 2>&1 | head
+    -1``), nothing, and the command's exit status stays its own: the BrokenPipeError made a
+    mistake's or a failed recording's 2 an "internal error" (1) or a closed output (141)."""
+    try:
+        print(line, file=sys.stderr, flush=True)
+    except BrokenPipeError:
+        point_at_devnull(sys.stderr.fileno())
+
+
+def point_at_devnull(fd: int) -> None:
+    """Point descriptor ``fd`` (standard output or error whose reader went away) at /dev/null:
+    what is still written there, Python's own flush at exit included, goes nowhere quietly."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, fd)
+    os.close(devnull)
 
 
 @contextmanager

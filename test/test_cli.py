@@ -503,3 +503,18 @@ def test_ctrl_c_while_the_parser_imports_numpy_is_an_interruption(monkeypatch, c
     out = capsys.readouterr()
     assert (out.out, out.err) == ("", "interrupted (Ctrl-C)\n")
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+@pytest.mark.parametrize("command", ["render", "node"])
+def test_a_mistake_said_to_a_reader_that_went_away_keeps_its_exit_status(bearing_sim_exe, ros_env, tmp_path, command):
+    """``bearing-sim node ... 2>&1 | head -1`` whose recording then failed (or any mistake, said
+    after the reader of standard error went away): printing the ``error:`` line raised a
+    BrokenPipeError, and the status was 1, an internal error (``render``, ``run``), or 141, a
+    closed output (``node``), not 2.  Now the line goes nowhere and the status is the mistake's."""
+    out = str(tmp_path / "no_such_folder" / "x.mcap")
+    args = {"render": ["render", "er16k_outer_race", "--duration", "1", "--out", out],
+            "node": ["node", "--ros-args", "-p", f"record:={out}"]}[command]
+    proc = subprocess.Popen([bearing_sim_exe, *args], env=ros_env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc.stdout.close()
+    proc.stderr.close()                 # gone before the line
+    assert proc.wait(120) == 2

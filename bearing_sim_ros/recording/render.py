@@ -30,7 +30,7 @@ import numpy as np
 
 from ..errors import CLI_SETTINGS, UserError
 from ..paths import output_file
-from ..teardown import EXIT_INTERRUPTED, SIGNAL_NAMES, drop_a_closed_terminal, signal_handlers
+from ..teardown import EXIT_INTERRUPTED, SIGNAL_NAMES, drop_a_closed_terminal, say_on_stderr, signal_handlers
 from ..messages import BATCH_DURATION, RUN_KEY, RUN_RUNNING, STATE_RATE, TOPIC_ACCEL, TOPIC_CONTACT, \
     TOPIC_DIAGNOSTICS, TOPIC_LOAD, TOPIC_SHAFT_SPEED, TOPIC_STATE, TYPES, batching_error, duration_error, \
     end_of_run, waveform_qos
@@ -534,8 +534,7 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
         # KeyboardInterrupt from a caller's own handler comes in the middle of the loop: the end of
         # the signal has its end status all the same
         signum = getattr(exc, "signum", signal.SIGINT)
-        print(f"interrupted ({SIGNAL_NAMES[signum]}): {keep_what_was_rendered(signal.Signals(signum).name)}",
-              file=sys.stderr)
+        say_on_stderr(f"interrupted ({SIGNAL_NAMES[signum]}): {keep_what_was_rendered(signal.Signals(signum).name)}")
         exc.reported = True
         raise
     except SolverDiverged as exc:
@@ -600,7 +599,7 @@ def render_command(args) -> int:
     except KeyboardInterrupt as exc:
         # 130 / 143: the file holds less than asked, and a script should know
         if not getattr(exc, "reported", False):
-            print(f"interrupted: nothing rendered, {out!r} left as it was", file=sys.stderr)
+            say_on_stderr(f"interrupted: nothing rendered, {out!r} left as it was")
         return EXIT_INTERRUPTED[getattr(exc, "signum", signal.SIGINT)]
     except SolverDiverged as exc:
         # the model words its advice for the Python API; here the knobs are options.  Diverged
