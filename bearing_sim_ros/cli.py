@@ -3,16 +3,21 @@
 Exit status: 0 done; 2 a user mistake (one line naming what is wrong and what is allowed, never a
 traceback); 1 an internal error; 3 ``monitor --count N`` whose simulator's run ended before N
 verdicts; 4 ``monitor`` with ``--count`` or ``--end-wait`` whose source went away without an end
-status (killed, crashed, lost to discovery); 141 (quietly) when the reader of standard output went away.  Each subcommand's work lives in its own module; this file only
+status (killed, crashed, lost to discovery); 141 (quietly) when the reader of standard output went away;
+130 (143, 129) a command stopped by Ctrl-C (SIGTERM, SIGHUP) before it was done, 0 where it runs a node
+and stopped as asked (README "Shutdown and recording").  Each subcommand's work lives in its own module; this file only
 parses arguments and maps errors to exit codes.
 """
 from __future__ import annotations
 
 import argparse
 import math
+import signal
 import sys
+from contextlib import contextmanager
 
 from .errors import UserError
+from .teardown import EXIT_INTERRUPTED, point_at_devnull, say_on_stderr, signal_handlers
 
 EXIT_OK, EXIT_INTERNAL, EXIT_USER = 0, 1, 2
 EXIT_STDOUT_CLOSED = 141        # 128 + SIGPIPE: what the shell reports for `yes | head`
@@ -404,7 +409,6 @@ def _stdout_closed() -> bool:
     """Whether standard output is a pipe whose reader has gone (``bearing-sim scenes | head -2``:
     a BrokenPipeError traceback and "internal error", exit 1).  Then it points at /dev/null, so
     that Python's own flush at exit says nothing either."""
-    import os
     import select
 
     try:
@@ -416,15 +420,31 @@ def _stdout_closed() -> bool:
             return False
     except (OSError, ValueError):       # no descriptor (a test's capture): not this case
         return False
-    devnull = os.open(os.devnull, os.O_WRONLY)
-    os.dup2(devnull, fd)
-    os.close(devnull)
+    point_at_devnull(fd)
     return True
+
+
+@contextmanager
+def _ctrl_c_held():
+    """Ctrl-C during the block (the parser's imports: numpy) noted and raised after it, as a
+    KeyboardInterrupt: raised inside numpy's import, it came out as an ImportError that said
+    numpy's install was broken ("Importing the numpy C-extensions failed"), and "internal error",
+    exit 1.  Only where Ctrl-C would raise (the commands that run a node hold it from their
+    first line, teardown.CommandSignals)."""
+    if signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+        yield
+        return
+    noted = []
+    with signal_handlers({signal.SIGINT: lambda signum, _frame: noted.append(signum)}):
+        yield
+    if noted:
+        raise KeyboardInterrupt
 
 
 def _main(argv: list) -> int:
     try:
-        parser = build_parser()
+        with _ctrl_c_held():
+            parser = build_parser()
         # `node` passes everything after it to ROS (--ros-args ...)
         if argv[:1] == ["node"]:
             args, rest = parser.parse_known_args(argv)
@@ -439,10 +459,15 @@ def _main(argv: list) -> int:
                 raise UserError(f"bearing-sim {args.command}: unrecognized arguments: {' '.join(rest)}")
         return int(_dispatch(args, rest) or EXIT_OK)
     except UserError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        say_on_stderr(f"error: {exc}")
         return EXIT_USER
     except KeyboardInterrupt:
-        return EXIT_OK
+        if argv[:1] and argv[0] in SIGNAL_COMMANDS:
+            return EXIT_OK          # stopped while it started: README "Shutdown and recording"
+        # render, report, bench, ...: stopped before they were done (it said 0, as if they were),
+        # 130 as the shell reports an interrupted command (render says what it kept itself)
+        say_on_stderr("interrupted (Ctrl-C)")
+        return EXIT_INTERRUPTED[signal.SIGINT]
     except SystemExit as exc:           # argparse --help
         return int(exc.code or 0)
     except BrokenPipeError:

@@ -47,8 +47,8 @@ DISCOVERY_GRACE_S = 0.5
 # discovery loss (the publishers just went away before).  The node and ``render`` alike
 RUN_KEY, RUN_RUNNING, RUN_ENDED = "run", "running", "ended"
 END_REASON_KEY, PUBLISHED_SAMPLES_KEY = "end_reason", "published_samples"
-# why a run ended: its duration reached, or a signal (the node's Ctrl-C, SIGTERM, SIGHUP; render's
-# Ctrl-C and SIGTERM), or the node's stop() called by a program that runs it in its own process, or
+# why a run ended: its duration reached, or a signal (Ctrl-C, SIGTERM, SIGHUP of the node or a
+# render), or the node's stop() called by a program that runs it in its own process, or
 # the skidding solver's divergence (level ERROR, its line in the message)
 END_REASONS = ("duration", "SIGINT", "SIGTERM", "SIGHUP", "stopped", "diverged")
 # s the node and `play` give reliable subscribers at their end to acknowledge their last messages

@@ -40,6 +40,46 @@ def teardown_watchdog():
         faulthandler.cancel_dump_traceback_later()
 
 
+def drop_a_closed_terminal() -> None:
+    """Point standard output and error at /dev/null where they go to a terminal that hung up
+    (its window closed, the SSH session dropped: the SIGHUP that comes with it).  Every write to
+    such a terminal fails (EIO): the lines a command prints as it ends (``run``'s summary,
+    ``monitor``'s last lines, ``render``'s progress bar and its ``interrupted`` line) raised an
+    OSError there, after the recording was finalised, and ended the command as an internal error
+    (exit 1; a traceback where stderr went to a file), or ended a render before it kept its file.
+    Nobody can read them any more.  A terminal still there (a ``kill -HUP`` by hand) is kept."""
+    import select
+
+    for fd in (1, 2):                   # standard output and error
+        try:
+            poll = select.poll()
+            poll.register(fd, select.POLLOUT)
+            # a terminal that hung up polls as hung up (and in error); a live one, a file or a pipe not
+            hung_up = any(events & select.POLLHUP for _fd, events in poll.poll(0))
+        except OSError:                 # closed
+            continue
+        if hung_up:
+            point_at_devnull(fd)
+
+
+def say_on_stderr(line: str) -> None:
+    """``line`` on standard error; where its reader went away (``bearing-sim node ... 2>&1 | head
+    -1``), nothing, and the command's exit status stays its own: the BrokenPipeError made a
+    mistake's or a failed recording's 2 an "internal error" (1) or a closed output (141)."""
+    try:
+        print(line, file=sys.stderr, flush=True)
+    except BrokenPipeError:
+        point_at_devnull(sys.stderr.fileno())
+
+
+def point_at_devnull(fd: int) -> None:
+    """Point descriptor ``fd`` (standard output or error whose reader went away) at /dev/null:
+    what is still written there, Python's own flush at exit included, goes nowhere quietly."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, fd)
+    os.close(devnull)
+
+
 @contextmanager
 def signal_handlers(handlers: dict):
     """Install ``handlers`` ({signal: handler}) for the block and put the previous ones back
@@ -88,6 +128,7 @@ class CommandSignals:
         self._status = None         # set by exit()
 
     def handle(self, signum, _frame):
+        drop_a_closed_terminal()
         if self.first is None and not self._stopping:
             self.first = signum
             self._stopping = True

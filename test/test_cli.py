@@ -465,3 +465,56 @@ def test_a_reader_that_goes_away_ends_the_command_quietly(bearing_sim_exe):
     proc.stdout.close()                 # gone before the first line
     err = proc.stderr.read().decode()
     assert proc.wait(60) == 141 and err == "", err
+
+
+def test_ctrl_c_of_a_command_that_runs_no_node_exits_130(monkeypatch, capsys, tmp_path):
+    """Ctrl-C of ``report`` (of ``render`` while it started, ``bench``, ...) exited 0 without a
+    word, as if the command had done its work (``report x --out d && upload d`` uploaded a
+    folder without its report).  Now 130, as the shell reports an interrupted command, and one
+    line."""
+    import bearing_sim_ros.analysis.report as report
+
+    def interrupted(_args):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(report, "report_command", interrupted)
+    assert cli.main(["report", str(tmp_path / "x.mcap"), "--out", str(tmp_path / "d")]) == 130
+    assert capsys.readouterr().err == "interrupted (Ctrl-C)\n"
+
+
+def test_ctrl_c_while_the_parser_imports_numpy_is_an_interruption(monkeypatch, capsys):
+    """Ctrl-C in a command's first tenths of a second, while building the parser imported numpy:
+    raised there it came out of numpy as an ImportError ("Importing the numpy C-extensions
+    failed ... bad install"), "internal error", exit 1; a little later, exit 0 without a word.
+    Now it is held until the imports are done: 130 and one line, and the command does not run."""
+    import os
+    import signal
+    import time
+
+    build = cli.build_parser
+
+    def ctrl_c_while_building():
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(0.05)                # where a handler runs: in the middle of the imports
+        return build()
+
+    monkeypatch.setattr(cli, "build_parser", ctrl_c_while_building)
+    assert cli.main(["scenes"]) == 130
+    out = capsys.readouterr()
+    assert (out.out, out.err) == ("", "interrupted (Ctrl-C)\n")
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+@pytest.mark.parametrize("command", ["render", "node"])
+def test_a_mistake_said_to_a_reader_that_went_away_keeps_its_exit_status(bearing_sim_exe, ros_env, tmp_path, command):
+    """``bearing-sim node ... 2>&1 | head -1`` whose recording then failed (or any mistake, said
+    after the reader of standard error went away): printing the ``error:`` line raised a
+    BrokenPipeError, and the status was 1, an internal error (``render``, ``run``), or 141, a
+    closed output (``node``), not 2.  Now the line goes nowhere and the status is the mistake's."""
+    out = str(tmp_path / "no_such_folder" / "x.mcap")
+    args = {"render": ["render", "er16k_outer_race", "--duration", "1", "--out", out],
+            "node": ["node", "--ros-args", "-p", f"record:={out}"]}[command]
+    proc = subprocess.Popen([bearing_sim_exe, *args], env=ros_env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc.stdout.close()
+    proc.stderr.close()                 # gone before the line
+    assert proc.wait(120) == 2

@@ -292,6 +292,62 @@ def signal_when(proc, ready, sig, settle_s: float, what: str, timeout_s: float =
             proc.wait()
 
 
+def on_a_terminal_that_closes(args, env, ready, settle_s: float, what: str, stderr=None,
+                              timeout_s: float = 60.0) -> int:
+    """Run ``args`` on a terminal of its own (a pty it leads, as a shell in a terminal window
+    starts a command; ``stderr`` a file object, else the terminal too), wait up to ``timeout_s``
+    for ``ready()`` while it runs, ``settle_s`` more, then close the terminal as closing the
+    window does: the kernel sends SIGHUP, and every later write to it fails (EIO).  Its exit
+    status; it is killed if anything fails on the way."""
+    import fcntl
+    import pty
+    import termios
+
+    def own_terminal():
+        for sig in (signal.SIGINT, signal.SIGHUP):      # as a shell leaves them (conftest)
+            signal.signal(sig, signal.SIG_DFL)
+        fcntl.ioctl(0, termios.TIOCSCTTY, 0)            # its controlling terminal: it gets the hangup
+
+    master, slave = pty.openpty()
+    proc = subprocess.Popen(args, env=env, stdin=slave, stdout=slave, stderr=stderr or slave,
+                            start_new_session=True, preexec_fn=own_terminal)
+    os.close(slave)
+    # what it writes must be read, or it blocks on a full terminal; not by a read that blocks, which
+    # would hold the terminal open after os.close (no hangup)
+    reading = threading.Event()
+    reading.set()
+    reader = threading.Thread(target=_read_while, args=(master, reading), daemon=True)
+    reader.start()
+    try:
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline and not ready():
+            assert proc.poll() is None, f"{what}: exited with {proc.returncode}"
+            time.sleep(0.05)
+        assert ready(), what
+        time.sleep(settle_s)
+    finally:
+        reading.clear()
+        reader.join()
+        os.close(master)                # the window closed
+    try:
+        return proc.wait(timeout_s)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+
+
+def _read_while(fd: int, reading: threading.Event) -> None:
+    import select
+
+    while reading.is_set():
+        if select.select([fd], [], [], 0.1)[0]:
+            try:
+                os.read(fd, 65536)
+            except OSError:             # the other side went (EIO)
+                return
+
+
 def assert_diverged_and_recorded(result, recording, advice: str) -> None:
     """``result`` (a finished ``subprocess.run`` of the node or ``run`` on conftest's
     DIVERGING_PIT) ended with exit status 2, no traceback, the divergence logged as an error

@@ -564,12 +564,13 @@ def test_the_scene_file_and_other_files_that_are_not_recordings_are_not_replaced
             assert rec.topics()["/accel"].count == samples // 150
 
 
-@pytest.mark.parametrize("sig, status", [(2, 130), (15, 143)], ids=["SIGINT", "SIGTERM"])
+@pytest.mark.parametrize("sig, status", [(2, 130), (15, 143), (1, 129)], ids=["SIGINT", "SIGTERM", "SIGHUP"])
 def test_a_render_stopped_by_a_signal_leaves_a_finalised_file_at_out_and_says_so(tmp_path, ros_env, sig, status):
     """SIGTERM killed a render (status 143, no word) and left a file without a footer at --out,
-    which report and play refuse.  Ctrl-C and SIGTERM both finalise what was rendered, move it
-    onto --out (it was written beside it, ``<out>.<pid>.partial``), say so in one line and exit
-    130 / 143: the file is shorter than asked."""
+    which report and play refuse; SIGHUP (the terminal closed) still did (129), leaving its
+    ``.partial`` file and nothing at --out.  Ctrl-C, SIGTERM and SIGHUP all finalise what was
+    rendered, move it onto --out (it was written beside it, ``<out>.<pid>.partial``), say so in
+    one line and exit 130 / 143 / 129: the file is shorter than asked."""
     import sys
 
     out = tmp_path / "long.mcap"
@@ -583,7 +584,7 @@ def test_a_render_stopped_by_a_signal_leaves_a_finalised_file_at_out_and_says_so
 
     stdout, stderr = signal_when(proc, rendering_for_a_second, sig, 1.0, "no partial file")
     assert proc.returncode == status, stderr
-    how = "Ctrl-C" if sig == 2 else "SIGTERM"
+    how = {2: "Ctrl-C", 15: "SIGTERM", 1: "SIGHUP"}[sig]
     line = re.fullmatch(rf"interrupted \({how}\): '{re.escape(str(out))}' holds the first ([\d.]+) s, finalised\n",
                         stderr)
     assert line, stderr
@@ -591,6 +592,26 @@ def test_a_render_stopped_by_a_signal_leaves_a_finalised_file_at_out_and_says_so
     assert [p.name for p in tmp_path.iterdir()] == ["long.mcap"]           # no partial file left
     with open_recording(out) as rec:
         assert rec.topics()["/accel"].count == round(float(line.group(1)) * FS / 150)
+
+
+def test_a_render_whose_terminal_closes_keeps_a_finalised_file_at_out(tmp_path, ros_env):
+    """A render on a terminal whose window is closed (or whose SSH session drops): killed by the
+    SIGHUP, it left its ``.partial`` file without a footer and nothing at --out.  Now it ends as
+    on SIGHUP: what was rendered, finalised, at --out, exit 129, though its progress bar and its
+    last line go to a terminal that fails every write."""
+    import sys
+
+    from test_node_support import on_a_terminal_that_closes
+
+    out = tmp_path / "long.mcap"
+    status = on_a_terminal_that_closes([sys.executable, "-m", "bearing_sim_ros.cli", "render", "er16k_outer_race",
+                                        "--duration", "3000", "--fidelity", "kinematic", "--out", str(out)],
+                                       ros_env, lambda: any(tmp_path.glob("long.mcap.*.partial")), 1.0,
+                                       "no partial file")
+    assert status == 129
+    assert [p.name for p in tmp_path.iterdir()] == ["long.mcap"]           # no partial file left
+    with open_recording(out) as rec:
+        assert rec.recovered is None and rec.topics()["/accel"].count > 0         # finalised
 
 
 def test_a_pipe_or_a_device_at_out_gets_a_complete_recording(tmp_path):
@@ -826,9 +847,9 @@ def test_a_renders_last_diagnostics_is_its_end_status(tmp_path, monkeypatch, bat
         render("er16k_outer_race", 2.5, out, fidelity="kinematic", progress=False)
     else:
         with pytest.raises(KeyboardInterrupt):
-            from bearing_sim_ros.recording.render import _terminated_on_sigterm
+            from bearing_sim_ros.recording.render import _terminated_on_sigterm_or_sighup
 
-            with _terminated_on_sigterm():
+            with _terminated_on_sigterm_or_sighup():
                 render("er16k_outer_race", 10.0, out, fidelity="kinematic", progress=False)
     from rclpy.serialization import deserialize_message
 

@@ -243,6 +243,29 @@ def test_run_stopped_by_ctrl_c_states_the_signal_it_recorded(ros_env, bearing_si
     assert float(said.group(1)) == pytest.approx(recorded_s, abs=0.006), (stdout, recorded_s)
 
 
+def test_run_whose_terminal_closes_finalises_and_exits_without_an_internal_error(ros_env, bearing_sim_exe, tmp_path):
+    """``bearing-sim run`` in a terminal window that is closed (an SSH session that drops): the
+    SIGHUP ended the run and finalised the recording, but the summary then went to a terminal
+    that fails every write (EIO): a traceback and "internal error", exit 1.  Now it exits 0, as
+    the node does on SIGHUP, and says nothing more (nobody can read it)."""
+    from test_node_support import on_a_terminal_that_closes
+
+    from bearing_sim_ros.recording.reader import open_recording
+
+    out = tmp_path / "r.mcap"
+    with open(tmp_path / "stderr.txt", "w+") as err:
+        status = on_a_terminal_that_closes([bearing_sim_exe, "run", "--duration", "0", "--out", str(out)], ros_env,
+                                           lambda: out.exists() and out.stat().st_size > 200_000, 1.0,
+                                           "no recording", stderr=err)
+        err.seek(0)
+        said = err.read()
+    assert status == 0, said
+    assert "Traceback" not in said and "internal error" not in said, said
+    assert "run ended by SIGHUP" in said, said
+    with open_recording(out) as rec:
+        assert rec.recovered is None and rec.topics()["/accel"].count > 0         # finalised
+
+
 def test_run_whose_solver_diverges_says_it_in_one_line_and_keeps_the_recording(ros_env, bearing_sim_exe,
                                                                                 diverging_scene, tmp_path):
     """``bearing-sim run`` on a scene whose skidding solver diverges at 0.32 s was a traceback and

@@ -41,7 +41,7 @@ from rclpy.node import Node
 
 from ..errors import NODE_SETTINGS, SettingNames, UserError
 from ..limits import LOAD_MULTIPLE_C0, NDM_LIMIT, STATIC_F0, InputLimits, load_on_balls  # noqa: F401 (names kept here)
-from ..teardown import EXIT_INTERRUPTED, SIGNAL_NAMES, command_signals, teardown_watchdog
+from ..teardown import EXIT_INTERRUPTED, SIGNAL_NAMES, command_signals, say_on_stderr, teardown_watchdog
 
 NODE_NAME = "bearing_sim"
 OVERSAMPLE_ZERO = "each tier's own"       # what the parameter oversample's default 0 means
@@ -1401,7 +1401,7 @@ def main(argv=None) -> int:
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except UserError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        say_on_stderr(f"error: {exc}")
         status = 2
     finally:
         signals.shutting_down()         # a signal from here on is held, said, and exits 130 / 143
@@ -1418,11 +1418,11 @@ def main(argv=None) -> int:
         raise error
     if status == 0 and node is not None and node.failure is not None:
         # said in the log as it happened; here the line a script sees, and where the file stands
-        print(f"error: {node.failure.worded(node._settings)}{failure_recording_text(node)}", file=sys.stderr)
+        say_on_stderr(f"error: {node.failure.worded(node._settings)}{failure_recording_text(node)}")
         status = 2
     if status == 0 and node is not None and node.recorder is not None and node.recorder.error:
         # published in full, but the file is not: a script that checks the status must know
-        print(f"error: {node.recorder.error}", file=sys.stderr)
+        say_on_stderr(f"error: {node.recorder.error}")
         status = 2
     # where the user insisted (a second Ctrl-C), 130 as the shell says; the recording is complete
     # all the same.  Ends the process: a signal until its very end is not lost

@@ -30,7 +30,7 @@ import numpy as np
 
 from ..errors import CLI_SETTINGS, UserError
 from ..paths import output_file
-from ..teardown import EXIT_INTERRUPTED, signal_handlers
+from ..teardown import EXIT_INTERRUPTED, SIGNAL_NAMES, drop_a_closed_terminal, say_on_stderr, signal_handlers
 from ..messages import BATCH_DURATION, RUN_KEY, RUN_RUNNING, STATE_RATE, TOPIC_ACCEL, TOPIC_CONTACT, \
     TOPIC_DIAGNOSTICS, TOPIC_LOAD, TOPIC_SHAFT_SPEED, TOPIC_STATE, TYPES, batching_error, duration_error, \
     end_of_run, waveform_qos
@@ -41,15 +41,23 @@ NODE_NAME = "bearing_sim"
 
 
 class Terminated(KeyboardInterrupt):
-    """SIGTERM during a render: handled as Ctrl-C is (``render_command`` raises it)."""
+    """SIGTERM or SIGHUP (``signum``) during a render: handled as Ctrl-C is (``render_command``
+    raises it)."""
 
-    signum = signal.SIGTERM
+    def __init__(self, signum: int = signal.SIGTERM):
+        super().__init__()
+        self.signum = signum
+
+
+def _interruption(signum: int) -> KeyboardInterrupt:
+    """What a render stopped by ``signum`` raises at the end of its batch."""
+    return KeyboardInterrupt() if signum == signal.SIGINT else Terminated(signum)
 
 
 @contextlib.contextmanager
 def _stop_at_batch_end():
-    """Ctrl-C and SIGTERM during the render loop: noted (``.signum``), and the loop stops at the
-    end of the batch in progress, so that the file holds whole batches and the seconds said are
+    """Ctrl-C, SIGTERM and SIGHUP during the render loop: noted (``.signum``), and the loop stops
+    at the end of the batch in progress, so that the file holds whole batches and the seconds said are
     exact (raised at once, the exception could fall between a batch's messages).  Only where
     they would otherwise interrupt or kill (Python's default handlers, or ``render_command``'s),
     and in the main thread: a caller's own handlers are left alone."""
@@ -59,16 +67,19 @@ def _stop_at_batch_end():
     stop = Stop()
 
     def note(signum, _frame):
+        drop_a_closed_terminal()        # a hangup: the progress bar and the last line go nowhere
         stop.signum = signum
 
-    ours = {signal.SIGINT: signal.default_int_handler, signal.SIGTERM: signal.SIG_DFL}
+    # a hangup ignored (``nohup``) is neither of these and stays ignored: the render runs on
+    ours = {signal.SIGINT: signal.default_int_handler, signal.SIGTERM: signal.SIG_DFL, signal.SIGHUP: signal.SIG_DFL}
     noted = {sig: note for sig, default in ours.items() if signal.getsignal(sig) in (default, _raise_terminated)}
     with signal_handlers(noted):
         yield stop
 
 
-def _raise_terminated(_signum, _frame):
-    raise Terminated()
+def _raise_terminated(signum, _frame):
+    drop_a_closed_terminal()
+    raise Terminated(signum)
 
 
 def _signals_held():
@@ -293,14 +304,21 @@ class _Progress:
         width = 30
         fill = int(round(frac * width))
         wall = max(now - self.t_wall0, 1e-9)
-        sys.stderr.write(f"\rrender [{'#' * fill}{'.' * (width - fill)}] {100 * frac:5.1f}% "
-                         f"{done:7.2f}/{self.total:.2f} s  {done / wall:6.1f}x real time")
-        sys.stderr.flush()
+        self._write(f"\rrender [{'#' * fill}{'.' * (width - fill)}] {100 * frac:5.1f}% "
+                    f"{done:7.2f}/{self.total:.2f} s  {done / wall:6.1f}x real time")
 
     def done(self) -> None:
         if self.enabled:
-            sys.stderr.write("\n")
+            self._write("\n")
+
+    def _write(self, text: str) -> None:
+        # a terminal that hung up fails every write (EIO) until the SIGHUP that comes with it is
+        # handled (teardown.drop_a_closed_terminal); the bar goes, the render must not
+        try:
+            sys.stderr.write(text)
             sys.stderr.flush()
+        except OSError:
+            self.enabled = False
 
 
 def _runs_skidding(scene, sim, duration: float, sample_rate: float, n_batch: int) -> bool:
@@ -479,7 +497,7 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
         with _stop_at_batch_end() as stop:
             while done < total:
                 if stop.signum is not None and not done:     # before the first batch: nothing rendered
-                    raise Terminated() if stop.signum == signal.SIGTERM else KeyboardInterrupt()
+                    raise _interruption(stop.signum)
                 if rec.error:
                     break       # the recording stopped (disk full, its file deleted): said below
                 n = min(n_batch, total - done)
@@ -510,14 +528,13 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
                     write_diagnostics(pub_ns, ending)
                 bar.update(done / sample_rate)
                 if stop.signum is not None and done < total:     # in the last batch: complete
-                    raise Terminated() if stop.signum == signal.SIGTERM else KeyboardInterrupt()
+                    raise _interruption(stop.signum)
     except KeyboardInterrupt as exc:
-        # Ctrl-C or SIGTERM: keep what was rendered, finalised, and say so
-        how = "SIGTERM" if isinstance(exc, Terminated) else "Ctrl-C"
-        # a KeyboardInterrupt from a caller's own handler comes in the middle of the loop: the end of
+        # Ctrl-C, SIGTERM or SIGHUP: keep what was rendered, finalised, and say so.  A
+        # KeyboardInterrupt from a caller's own handler comes in the middle of the loop: the end of
         # the signal has its end status all the same
-        ending = signal.Signals(getattr(exc, "signum", signal.SIGINT)).name
-        print(f"interrupted ({how}): {keep_what_was_rendered(ending)}", file=sys.stderr)
+        signum = getattr(exc, "signum", signal.SIGINT)
+        say_on_stderr(f"interrupted ({SIGNAL_NAMES[signum]}): {keep_what_was_rendered(signal.Signals(signum).name)}")
         exc.reported = True
         raise
     except SolverDiverged as exc:
@@ -555,10 +572,15 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
             "solver_unused": solver_unused}
 
 
-def _terminated_on_sigterm():
-    """SIGTERM raises ``Terminated`` (a KeyboardInterrupt), so that a render ends as on Ctrl-C:
-    what was rendered, finalised (it killed the process and left a file without a footer)."""
-    return signal_handlers({signal.SIGTERM: _raise_terminated})
+def _terminated_on_sigterm_or_sighup():
+    """SIGTERM and SIGHUP (the terminal closed, an SSH session dropped) raise ``Terminated`` (a
+    KeyboardInterrupt), so that a render ends as on Ctrl-C: what was rendered, finalised (they
+    killed the process and left its ``.partial`` file without a footer, and nothing at --out).
+    A hangup ignored from the start (``nohup``) stays ignored."""
+    handlers = {signal.SIGTERM: _raise_terminated}
+    if signal.getsignal(signal.SIGHUP) != signal.SIG_IGN:
+        handlers[signal.SIGHUP] = _raise_terminated
+    return signal_handlers(handlers)
 
 
 def render_command(args) -> int:
@@ -569,7 +591,7 @@ def render_command(args) -> int:
 
     out = str(args.out)
     try:
-        with _terminated_on_sigterm():
+        with _terminated_on_sigterm_or_sighup():
             scene = load_scene(args.scene)
             summary = render(scene, float(args.duration), out, fidelity=args.fidelity, seed=int(args.seed),
                              sample_rate=float(args.sample_rate), solver=args.solver,
@@ -577,7 +599,7 @@ def render_command(args) -> int:
     except KeyboardInterrupt as exc:
         # 130 / 143: the file holds less than asked, and a script should know
         if not getattr(exc, "reported", False):
-            print(f"interrupted: nothing rendered, {out!r} left as it was", file=sys.stderr)
+            say_on_stderr(f"interrupted: nothing rendered, {out!r} left as it was")
         return EXIT_INTERRUPTED[getattr(exc, "signum", signal.SIGINT)]
     except SolverDiverged as exc:
         # the model words its advice for the Python API; here the knobs are options.  Diverged
