@@ -1077,3 +1077,23 @@ def test_the_recorded_periods_give_the_frequencies_of_every_window_to_the_bit():
                     report.recorded_frequencies(whole, start, start + length)
     assert report.RecordedPeriods([]).frequencies(0.0, 1.0, 26.7) == {}
 
+
+def test_a_truncated_recording_is_scanned_once_per_report(outer, tmp_path, monkeypatch):
+    """A file without its footer is scanned as it opens: every chunk read and decompressed to
+    find its messages.  The report opened it a second time to read the windows of its timeline
+    beyond ``MAX_ANALYSIS_S``, scanning it all again (an hour's cut file: one more pass over
+    gigabytes).  It is opened once now, and its timeline is the same."""
+    from bearing_sim_ros.recording import reader
+
+    rec, _ = outer
+    data = rec.read_bytes()
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(data[: len(data) - 500])
+    scans = []
+    scan = reader._scan
+    monkeypatch.setattr(reader, "_scan", lambda *args: scans.append(args[2]) or scan(*args))
+    monkeypatch.setattr(report, "MAX_ANALYSIS_S", 1.0)
+    s = build_report(cut, tmp_path / "o", window_s=0.5)
+    assert scans == [str(cut)]
+    assert s["analysed_s"] == pytest.approx(1.0) and len(s["timeline"]) == 4      # two of them read again
+    assert s["timeline"] == build_report(rec, tmp_path / "whole", window_s=0.5)["timeline"]

@@ -773,40 +773,36 @@ def order_tracked(d: "_Data", x, times_s, scene, periods: RecordedPeriods | None
                           d.cage_angle, d.cage_w, per_shaft_hz, balls)
 
 
-def _windows_read_again(path, topic: str, channel: str, widths, bounds: list):
+def _windows_read_again(rec, topic: str, channel: str, widths, bounds: list):
     """The samples of ``channel`` in each window (first, end) of ``bounds`` (sample indices over
-    the waveform tables on ``topic`` in order, ``widths`` samples each), read from the recording
-    ``path`` again, one table at a time, the tables before the first window only counted: a
-    recording longer than the report holds in memory (``MAX_ANALYSIS_S``) gets its verdict
-    timeline to the end, in the memory of one window."""
+    the waveform tables on ``topic`` in order, ``widths`` samples each), read from the open
+    recording ``rec`` again, one table at a time, the tables before the first window only
+    counted: a recording longer than the report holds in memory (``MAX_ANALYSIS_S``) gets its
+    verdict timeline to the end, in the memory of one window."""
     from rclpy.serialization import deserialize_message
 
     from ..recording.reader import get_message
 
     first = np.concatenate(([0], np.cumsum(widths)[:-1]))       # each table's first sample
     skip = int(np.searchsorted(first, bounds[0][0], side="right")) - 1 if bounds else 0
-    rec = open_recording(path)
-    try:
-        cls = get_message(rec.topics()[topic].msg_type)
-        held, start, k = [], int(first[skip]), 0          # held: the samples from index ``start`` on
-        count = 0
-        for n, (_topic, _type, _log_ns, data) in enumerate(rec.messages([topic])):
-            if n < skip:
-                continue
-            _stamp, names, table = from_pointcloud2(deserialize_message(data, cls))
-            held.append(table[:, names.index(channel)].astype(float))
-            count += table.shape[0]
-            while k < len(bounds) and start + count >= bounds[k][1]:
-                samples = np.concatenate(held)
-                i0, i1 = bounds[k]
-                yield samples[i0 - start:i1 - start]
-                k += 1
-                keep = bounds[k][0] if k < len(bounds) else i1      # what the next window needs
-                held, count, start = [samples[keep - start:]], start + count - keep, keep
-            if k == len(bounds):
-                return
-    finally:
-        rec.close()
+    cls = get_message(rec.topics()[topic].msg_type)
+    held, start, k = [], int(first[skip]), 0          # held: the samples from index ``start`` on
+    count = 0
+    for n, (_topic, _type, _log_ns, data) in enumerate(rec.messages([topic])):
+        if n < skip:
+            continue
+        _stamp, names, table = from_pointcloud2(deserialize_message(data, cls))
+        held.append(table[:, names.index(channel)].astype(float))
+        count += table.shape[0]
+        while k < len(bounds) and start + count >= bounds[k][1]:
+            samples = np.concatenate(held)
+            i0, i1 = bounds[k]
+            yield samples[i0 - start:i1 - start]
+            k += 1
+            keep = bounds[k][0] if k < len(bounds) else i1      # what the next window needs
+            held, count, start = [samples[keep - start:]], start + count - keep, keep
+        if k == len(bounds):
+            return
 
 
 # ---- plots -------------------------------------------------------------------------------------
@@ -1068,15 +1064,22 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
     reason = window_error(window_s)
     if reason:
         raise UserError(reason)
+    # open once, and open until the timeline has read the rest again: a truncated file is scanned
+    # (every chunk decompressed) as it opens, and a second open scanned it again
     rec = open_recording(path)
     try:
-        d = _Data(rec)
-        meta = dict(rec.metadata)
-        log_span = (rec.end_ns - rec.start_ns) / NS
-        message_count = rec.message_count
-        shown, files, notes, recovered = str(rec.path), [str(f) for f in rec.paths], list(rec.notes), rec.recovered
+        return _report(rec, out, window_s)
     finally:
         rec.close()
+
+
+def _report(rec, out, window_s: float) -> dict:
+    """``build_report`` of the open recording ``rec``."""
+    d = _Data(rec)
+    meta = dict(rec.metadata)
+    log_span = (rec.end_ns - rec.start_ns) / NS
+    message_count = rec.message_count
+    shown, files, notes, recovered = str(rec.path), [str(f) for f in rec.paths], list(rec.notes), rec.recovered
     out = output_folder(out)
     scene, scene_problem = _scene_from_metadata(meta)
     if scene is None and d.named_scenes:
@@ -1104,7 +1107,7 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
         not_drawn["operating_point.png"] = missing
     with writing_into(out):             # a full disk: one line, not a traceback
         timeline = (verdict_timeline(d, x, scene, window_s, speed,
-                                     lambda bounds: _windows_read_again(path, d.accel_topic, ch, d.widths, bounds))
+                                     lambda bounds: _windows_read_again(rec, d.accel_topic, ch, d.widths, bounds))
                     if verdict is not None else [])
         moved = line_spread(d, 0.0, d.analysed_end_s)
         tracked, untracked = None, ""
