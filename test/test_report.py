@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import re
+import tracemalloc
 
 import numpy as np
 import pytest
@@ -1097,3 +1098,41 @@ def test_a_truncated_recording_is_scanned_once_per_report(outer, tmp_path, monke
     assert scans == [str(cut)]
     assert s["analysed_s"] == pytest.approx(1.0) and len(s["timeline"]) == 4      # two of them read again
     assert s["timeline"] == build_report(rec, tmp_path / "whole", window_s=0.5)["timeline"]
+
+
+class _LongerRecording:
+    """A recording ``rec`` whose ``state``, ``shaft_speed`` and ``load`` messages come ``times`` x
+    over (its waveform tables and /diagnostics once): what the report keeps of every message of
+    an hour's recording, without an hour's file.  ``held``: the memory traced once all are read."""
+
+    def __init__(self, rec, times: int):
+        self.rec, self.times = rec, times
+        self.path, self.metadata = rec.path, rec.metadata
+        self.topics, self.parameters = rec.topics, rec.parameters
+
+    def messages(self, topics=None):
+        held = list(self.rec.messages(topics))
+        yield from held
+        repeated = [m for m in held if m[0] in ("/state", "/shaft_speed", "/load")]
+        for _ in range(self.times - 1):
+            yield from repeated
+        self.held = tracemalloc.get_traced_memory()[0]
+
+
+def test_what_the_report_keeps_of_every_message_is_a_few_bytes_a_value(outer):
+    """The report keeps the whole recording's ``state`` (50 Hz), ``shaft_speed`` commands and
+    ``load`` (100 Hz) and table stamps for its timeline.  It kept them as lists of Python floats,
+    ints and (x, y) tuples while it read the file: 2 s of those messages (100 states of 5 values,
+    200 commands and 200 loads) added 50 kB, 90 MB an hour.  Arrays of machine
+    numbers hold 8 bytes a value: 8 kB."""
+    rec_path, _ = outer
+    held = []
+    with open_recording(rec_path) as rec:
+        for times in (10, 40):
+            longer = _LongerRecording(rec, times)
+            tracemalloc.start()
+            report._Data(longer)
+            tracemalloc.stop()
+            held.append(longer.held)
+    per_2_s = (held[1] - held[0]) / 30
+    assert per_2_s < 20_000, per_2_s
