@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import re
+import tracemalloc
 
 import numpy as np
 import pytest
@@ -1001,3 +1002,137 @@ def test_no_verdict_names_the_fault_frequency_keys_the_diagnostics_lack(outer, t
     why = ("no verdict: no bearing to place the fault lines on (the recording has no bearing_sim scene) and no "
            "bsf_hz in its /diagnostics (they give cage_hz, bpfo_hz, bpfi_hz; the lines need all four)")
     _report_without_a_verdict(old, tmp_path / "old_report", why, capsys)
+
+
+class _CountedReads(dict):
+    """A period's recorded frequencies that count how often they are read (``reads[0]``)."""
+
+    def __init__(self, values, reads):
+        super().__init__(values)
+        self.reads = reads
+
+    def __getitem__(self, key):
+        self.reads[0] += 1
+        return super().__getitem__(key)
+
+    def items(self):
+        self.reads[0] += 1
+        return super().items()
+
+
+def _hours_data(seconds: int, reads: list):
+    """What ``verdict_timeline`` needs of ``_Data`` for ``seconds`` s of signal at 10 kHz: a state
+    at 50 Hz, a ``shaft_speed`` command at 100 Hz and a ``/diagnostics`` period a second (their
+    frequencies counting their reads), the speed ramping 1600 -> 2400 rpm."""
+    from types import SimpleNamespace
+
+    rpm = 2 * np.pi / 60
+    fs, tables = 10_000.0, 100 * seconds
+    state_t = np.arange(1, 50 * seconds + 1) / 50.0
+    shaft = (1600 + 800 * state_t / seconds) * rpm
+    cage = 0.4 * shaft
+    periods = [(float(k), float(k + 1), _CountedReads({"ftf": 10.0 + k * 1e-3, "bpfo": 80.0, "bpfi": 120.0,
+                                                       "bsf": 50.0}, reads)) for k in range(seconds)]
+    return SimpleNamespace(t0_ns=0, samples=int(fs * seconds), sample_rate=fs, stamps=np.arange(tables) * NS // 100,
+                           widths=np.full(tables, 100), cmd_t=np.arange(100 * seconds) / 100.0,
+                           cmd_speed=(1600 + 800 * np.arange(100 * seconds) / 100.0 / seconds) * rpm,
+                           state_t=state_t, shaft_w=shaft, cage_w=cage, shaft_angle=np.cumsum(shaft) / 50.0,
+                           cage_angle=np.cumsum(cage) / 50.0, signal_frequency_periods=periods,
+                           signal_frequencies={}, truth=[])
+
+
+def test_the_verdict_timeline_of_a_long_recording_reads_each_period_for_the_windows_it_overlaps():
+    """An hour's report places each one-second window's fault lines by the recorded /diagnostics
+    periods it overlaps.  It moved every period to the window's speed and weighed all of them,
+    in Python, for each window: quadratic in the length (a 30-min recording spent 80 s on it,
+    an hour four times that).  Now each window reads the periods it overlaps, so the reads grow
+    as the recording does: 4 x the length, 4 x the reads (they were 16 x)."""
+    scene = load_scene("er16k_outer_race")
+    counted = []
+    for seconds in (60, 240):
+        reads = [0]
+        d = _hours_data(seconds, reads)
+        empty = lambda bounds: (np.zeros(0) for _ in bounds)       # noqa: E731 - unscored windows
+        timeline = report.verdict_timeline(d, np.zeros(0), scene, 1.0, d.cmd_speed.mean(), empty)
+        assert len(timeline) == seconds
+        counted.append(reads[0])
+    assert counted[1] < 6 * counted[0], counted
+
+
+def test_the_recorded_periods_give_the_frequencies_of_every_window_to_the_bit():
+    """``RecordedPeriods.frequencies`` (each window reads the periods it overlaps) gives what
+    ``recorded_frequencies(at_shaft_speed(...))`` of all the periods gives, bit for bit: windows
+    across several periods, inside one, before and after all of them (the nearest), at a shaft
+    speed and as recorded."""
+    rng = np.random.default_rng(3)
+    ends = np.cumsum(rng.uniform(0.3, 1.2, 40))
+    periods = [(0.0 if k == 0 else float(ends[k - 1]), float(end),
+                {"ftf": rng.uniform(9, 11), "bpfo": rng.uniform(70, 90), "bpfi": rng.uniform(110, 130),
+                 **({"bsf": rng.uniform(40, 60)} if k % 7 else {})}) for k, end in enumerate(ends)]
+    held = report.RecordedPeriods(periods)
+    for start in [-3.0, -0.5, *rng.uniform(0, ends[-1], 60), ends[-1] - 0.1, ends[-1] + 2.0]:
+        for length in (0.25, 1.0, 3.7):
+            for shaft_hz in (None, 1.0, 26.7, float("nan"), 0.0):
+                whole = report.at_shaft_speed(periods, shaft_hz) if shaft_hz is not None else periods
+                assert held.frequencies(start, start + length, shaft_hz) == \
+                    report.recorded_frequencies(whole, start, start + length)
+    assert report.RecordedPeriods([]).frequencies(0.0, 1.0, 26.7) == {}
+
+
+def test_a_truncated_recording_is_scanned_once_per_report(outer, tmp_path, monkeypatch):
+    """A file without its footer is scanned as it opens: every chunk read and decompressed to
+    find its messages.  The report opened it a second time to read the windows of its timeline
+    beyond ``MAX_ANALYSIS_S``, scanning it all again (an hour's cut file: one more pass over
+    gigabytes).  It is opened once now, and its timeline is the same."""
+    from bearing_sim_ros.recording import reader
+
+    rec, _ = outer
+    data = rec.read_bytes()
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(data[: len(data) - 500])
+    scans = []
+    scan = reader._scan
+    monkeypatch.setattr(reader, "_scan", lambda *args: scans.append(args[2]) or scan(*args))
+    monkeypatch.setattr(report, "MAX_ANALYSIS_S", 1.0)
+    s = build_report(cut, tmp_path / "o", window_s=0.5)
+    assert scans == [str(cut)]
+    assert s["analysed_s"] == pytest.approx(1.0) and len(s["timeline"]) == 4      # two of them read again
+    assert s["timeline"] == build_report(rec, tmp_path / "whole", window_s=0.5)["timeline"]
+
+
+class _LongerRecording:
+    """A recording ``rec`` whose ``state``, ``shaft_speed`` and ``load`` messages come ``times`` x
+    over (its waveform tables and /diagnostics once): what the report keeps of every message of
+    an hour's recording, without an hour's file.  ``held``: the memory traced once all are read."""
+
+    def __init__(self, rec, times: int):
+        self.rec, self.times = rec, times
+        self.path, self.metadata = rec.path, rec.metadata
+        self.topics, self.parameters = rec.topics, rec.parameters
+
+    def messages(self, topics=None):
+        held = list(self.rec.messages(topics))
+        yield from held
+        repeated = [m for m in held if m[0] in ("/state", "/shaft_speed", "/load")]
+        for _ in range(self.times - 1):
+            yield from repeated
+        self.held = tracemalloc.get_traced_memory()[0]
+
+
+def test_what_the_report_keeps_of_every_message_is_a_few_bytes_a_value(outer):
+    """The report keeps the whole recording's ``state`` (50 Hz), ``shaft_speed`` commands and
+    ``load`` (100 Hz) and table stamps for its timeline.  It kept them as lists of Python floats,
+    ints and (x, y) tuples while it read the file: 2 s of those messages (100 states of 5 values,
+    200 commands and 200 loads) added 50 kB, 90 MB an hour.  Arrays of machine
+    numbers hold 8 bytes a value: 8 kB."""
+    rec_path, _ = outer
+    held = []
+    with open_recording(rec_path) as rec:
+        for times in (10, 40):
+            longer = _LongerRecording(rec, times)
+            tracemalloc.start()
+            report._Data(longer)
+            tracemalloc.stop()
+            held.append(longer.held)
+    per_2_s = (held[1] - held[0]) / 30
+    assert per_2_s < 20_000, per_2_s

@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import itertools
 import json
+from array import array
 import math
 import numbers
 from pathlib import Path
@@ -85,11 +86,14 @@ class _Data:
                               self._find(topics, "diagnostics", "diagnostic_msgs/msg/DiagnosticArray", roles))
                   if t]
         classes = {t: get_message(topics[t].msg_type) for t in wanted}
-        chunks, stamps, widths = [], [], []
+        # what is kept of every message, as machine numbers: as lists of Python floats, ints and
+        # (x, y) tuples an hour's (a state at 50 Hz, a command and a load at 100 Hz, a table's
+        # stamp) took 90 MB while the file was read; arrays of them take a sixth of that
+        chunks, stamps, widths = [], array("q"), array("q")
         self.channels = ()
         self.truncated_analysis = False
-        state_t, shaft_w, cage_w, shaft_angle, cage_angle = [], [], [], [], []
-        cmd_t, cmd_speed, load_t, load_xy = [], [], [], []
+        state_t, shaft_w, cage_w, shaft_angle, cage_angle = array("q"), array("d"), array("d"), array("d"), array("d")
+        cmd_t, cmd_speed, load_t, load_xy = array("q"), array("d"), array("q"), array("d")   # load_xy: x, y, x, ...
         diag = {}
         tiers = []
         in_signal, truth_raw = [], []
@@ -138,7 +142,7 @@ class _Data:
                 cmd_speed.append(msg.data)
             elif topic == load_topic:
                 load_t.append(_stamp(msg.header.stamp))
-                load_xy.append((msg.wrench.force.x, msg.wrench.force.y))
+                load_xy.extend((msg.wrench.force.x, msg.wrench.force.y))
             else:
                 for key, percent in skid_ratios(msg).items():
                     diag.setdefault(key, []).append((_stamp(msg.header.stamp), percent))
@@ -400,12 +404,16 @@ def at_shaft_speed(periods: list, shaft_hz: float) -> list:
     a speed or a period has no cage."""
     if not (math.isfinite(shaft_hz) and shaft_hz > 0):
         return periods
-    moved = []
-    for p0, p1, f in periods:
-        period_hz = f["ftf"] + f["bpfi"] * f["ftf"] / f["bpfo"] if f["ftf"] > 0 and f["bpfo"] > 0 else 0.0
-        scale = shaft_hz / period_hz if period_hz > 0 else 1.0
-        moved.append((p0, p1, {k: v * scale for k, v in f.items()}))
-    return moved
+    return [(p0, p1, _moved_to(f, shaft_hz)) for p0, p1, f in periods]
+
+
+def _moved_to(frequencies: dict, shaft_hz: float) -> dict:
+    """One period's ``frequencies`` ({"ftf", "bpfo", "bpfi"[, "bsf"]: Hz}) moved to the shaft
+    speed ``shaft_hz`` (Hz, a speed) at their own skids (``at_shaft_speed``)."""
+    f = frequencies
+    period_hz = f["ftf"] + f["bpfi"] * f["ftf"] / f["bpfo"] if f["ftf"] > 0 and f["bpfo"] > 0 else 0.0
+    scale = shaft_hz / period_hz if period_hz > 0 else 1.0
+    return {k: v * scale for k, v in f.items()}
 
 
 def recorded_frequencies(periods: list, start_s: float, end_s: float) -> dict:
@@ -423,6 +431,44 @@ def recorded_frequencies(periods: list, start_s: float, end_s: float) -> dict:
     w = overlap / overlap.sum()
     common = set.intersection(*(set(f) for _, _, f in periods))
     return {k: float(sum(wi * f[k] for wi, (_, _, f) in zip(w, periods))) for k in sorted(common)}
+
+
+class RecordedPeriods:
+    """The recorded ``/diagnostics`` periods (``_Data.signal_frequency_periods``) for asking
+    ``recorded_frequencies(at_shaft_speed(periods, shaft_hz), start_s, end_s)`` of every window
+    of a long recording: the periods' bounds are held as arrays, and a window moves and weighs
+    only the periods it overlaps, the others weighing 0 (the same numbers).  Moving and weighing
+    all of them in Python for each window made the verdict timeline quadratic in the length:
+    80 s of a 30-min recording's report (1800 windows by 1800 periods), 4 x that for an hour."""
+
+    def __init__(self, periods: list):
+        self.periods = periods
+        self.starts = np.array([p0 for p0, _, _ in periods], dtype=float)
+        self.ends = np.array([p1 for _, p1, _ in periods], dtype=float)
+        self.common = sorted(set.intersection(*(set(f) for _, _, f in periods))) if periods else []
+        # a value that is not finite (another writer's "nan") makes every window's mean NaN, even
+        # at weight 0: those recordings take the whole sum as before
+        self.finite = all(math.isfinite(v) for _, _, f in periods for v in f.values())
+
+    def frequencies(self, start_s: float, end_s: float, shaft_hz: float | None = None) -> dict:
+        """``recorded_frequencies`` over [start_s, end_s) (s) of the periods moved to
+        ``shaft_hz`` (Hz, ``at_shaft_speed``; None: as recorded)."""
+        moving = shaft_hz is not None and math.isfinite(shaft_hz) and shaft_hz > 0
+        if not self.finite:
+            return recorded_frequencies(at_shaft_speed(self.periods, shaft_hz) if moving else self.periods,
+                                        start_s, end_s)
+        if not self.periods:
+            return {}
+        # recorded_frequencies' weights, element for element (the sum over the same array)
+        overlap = np.maximum(0.0, np.minimum(end_s, self.ends) - np.maximum(start_s, self.starts))
+        if overlap.sum() <= 0.0:
+            mid = 0.5 * (start_s + end_s)
+            overlap = np.zeros(len(self.periods))
+            overlap[int(np.argmin(np.minimum(np.abs(mid - self.starts), np.abs(mid - self.ends))))] = 1.0
+        w = overlap / overlap.sum()
+        used = np.flatnonzero(w)
+        values = [_moved_to(self.periods[i][2], shaft_hz) if moving else self.periods[i][2] for i in used]
+        return {k: float(sum(w[i] * f[k] for i, f in zip(used, values))) for k in self.common}
 
 
 LINE_KEYS = {"ftf", "bpfo", "bpfi", "bsf"}     # what envelope.diagnose places its lines by
@@ -675,6 +721,7 @@ def verdict_timeline(d: "_Data", x, scene, window_s: float, mean_speed_rad_s: fl
     edges = sample_times_s([i for b in bounds for i in b], d.stamps, d.widths, fs, d.t0_ns)
     times = [(float(edges[2 * k]), float(edges[2 * k + 1])) for k in range(len(bounds))]
     cmd_t, state_t = d.cmd_t - d.t0_ns / NS, d.state_t - d.t0_ns / NS
+    periods = RecordedPeriods(d.signal_frequency_periods)
     speeds, freqs, spreads = [], [], []
     for t0, t1 in times:
         speed = mean_in_window(cmd_t, d.cmd_speed, t0, t1)
@@ -683,14 +730,14 @@ def verdict_timeline(d: "_Data", x, scene, window_s: float, mean_speed_rad_s: fl
         speed = mean_speed_rad_s if speed is None else speed
         speeds.append(speed)
         rolling = scene.bearing.fault_frequencies(speed / (2 * math.pi)) if scene is not None else {}
-        recorded = recorded_frequencies(at_shaft_speed(d.signal_frequency_periods, abs(speed) / (2 * math.pi)), t0, t1)
+        recorded = periods.frequencies(t0, t1, abs(speed) / (2 * math.pi))
         freqs.append(line_frequencies(rolling, with_state_cage(recorded, d, scene, t0, t1)))
         spreads.append(line_spread(d, t0, t1))
     held = [b for b in bounds if b[1] <= x.size]          # the windows in memory; the rest read again
     rest = bounds[len(held):]
     windows = itertools.chain((x[i0:i1] for i0, i1 in held), reread(rest) if rest else ())
     return score_windows(windows, fs, times, freqs, d.truth, speeds, spreads,
-                         lambda xw, times_s: order_tracked(d, xw, times_s, scene))
+                         lambda xw, times_s: order_tracked(d, xw, times_s, scene, periods))
 
 
 def with_state_cage(recorded: dict, d: "_Data", scene, start_s: float, end_s: float) -> dict:
@@ -708,19 +755,21 @@ def with_state_cage(recorded: dict, d: "_Data", scene, start_s: float, end_s: fl
     return with_cage(recorded, balls, shaft.mean() / (2 * math.pi), cage.mean() / (2 * math.pi))
 
 
-def order_tracked(d: "_Data", x, times_s, scene):
+def order_tracked(d: "_Data", x, times_s, scene, periods: RecordedPeriods | None = None):
     """``orders.order_diagnose`` of the samples ``x`` of ``d``'s envelope channel at signal times
     ``times_s`` (s), with the shaft and cage angles of its ``state``: ``(result, "")``, or
     ``(None, why not)`` (no ``state``, too sparse, a cage skid that changes, ...).  The fault
     frequencies per shaft hertz are the scene's bearing's at pure rolling with those of the
     recorded ``/diagnostics`` over the stretch moved to 1 Hz (``at_shaft_speed``: the ball's spin
-    where the balls skid); the cage's lines come from ``state``."""
+    where the balls skid); the cage's lines come from ``state``.  ``periods``: ``d``'s
+    ``RecordedPeriods``, made once for the windows of a timeline (made here when None)."""
     start_s, end_s = float(times_s[0]), float(times_s[-1])
     if not d.state_t.size:
         return None, "the recording has no state (JointState of shaft and cage) to take the shaft angle from"
     rolling = scene.bearing.fault_frequencies(1.0) if scene is not None else {}
-    per_shaft_hz = line_frequencies(rolling, recorded_frequencies(at_shaft_speed(d.signal_frequency_periods, 1.0),
-                                                                  start_s, end_s))
+    if periods is None:
+        periods = RecordedPeriods(d.signal_frequency_periods)
+    per_shaft_hz = line_frequencies(rolling, periods.frequencies(start_s, end_s, 1.0))
     if not per_shaft_hz or per_shaft_hz["ftf"] <= 0:
         return None, "no fault frequencies to take the fault orders from"
     balls = scene.bearing.balls if scene is not None else round(per_shaft_hz["bpfo"] / per_shaft_hz["ftf"])
@@ -728,40 +777,36 @@ def order_tracked(d: "_Data", x, times_s, scene):
                           d.cage_angle, d.cage_w, per_shaft_hz, balls)
 
 
-def _windows_read_again(path, topic: str, channel: str, widths, bounds: list):
+def _windows_read_again(rec, topic: str, channel: str, widths, bounds: list):
     """The samples of ``channel`` in each window (first, end) of ``bounds`` (sample indices over
-    the waveform tables on ``topic`` in order, ``widths`` samples each), read from the recording
-    ``path`` again, one table at a time, the tables before the first window only counted: a
-    recording longer than the report holds in memory (``MAX_ANALYSIS_S``) gets its verdict
-    timeline to the end, in the memory of one window."""
+    the waveform tables on ``topic`` in order, ``widths`` samples each), read from the open
+    recording ``rec`` again, one table at a time, the tables before the first window only
+    counted: a recording longer than the report holds in memory (``MAX_ANALYSIS_S``) gets its
+    verdict timeline to the end, in the memory of one window."""
     from rclpy.serialization import deserialize_message
 
     from ..recording.reader import get_message
 
     first = np.concatenate(([0], np.cumsum(widths)[:-1]))       # each table's first sample
     skip = int(np.searchsorted(first, bounds[0][0], side="right")) - 1 if bounds else 0
-    rec = open_recording(path)
-    try:
-        cls = get_message(rec.topics()[topic].msg_type)
-        held, start, k = [], int(first[skip]), 0          # held: the samples from index ``start`` on
-        count = 0
-        for n, (_topic, _type, _log_ns, data) in enumerate(rec.messages([topic])):
-            if n < skip:
-                continue
-            _stamp, names, table = from_pointcloud2(deserialize_message(data, cls))
-            held.append(table[:, names.index(channel)].astype(float))
-            count += table.shape[0]
-            while k < len(bounds) and start + count >= bounds[k][1]:
-                samples = np.concatenate(held)
-                i0, i1 = bounds[k]
-                yield samples[i0 - start:i1 - start]
-                k += 1
-                keep = bounds[k][0] if k < len(bounds) else i1      # what the next window needs
-                held, count, start = [samples[keep - start:]], start + count - keep, keep
-            if k == len(bounds):
-                return
-    finally:
-        rec.close()
+    cls = get_message(rec.topics()[topic].msg_type)
+    held, start, k = [], int(first[skip]), 0          # held: the samples from index ``start`` on
+    count = 0
+    for n, (_topic, _type, _log_ns, data) in enumerate(rec.messages([topic])):
+        if n < skip:
+            continue
+        _stamp, names, table = from_pointcloud2(deserialize_message(data, cls))
+        held.append(table[:, names.index(channel)].astype(float))
+        count += table.shape[0]
+        while k < len(bounds) and start + count >= bounds[k][1]:
+            samples = np.concatenate(held)
+            i0, i1 = bounds[k]
+            yield samples[i0 - start:i1 - start]
+            k += 1
+            keep = bounds[k][0] if k < len(bounds) else i1      # what the next window needs
+            held, count, start = [samples[keep - start:]], start + count - keep, keep
+        if k == len(bounds):
+            return
 
 
 # ---- plots -------------------------------------------------------------------------------------
@@ -1023,15 +1068,22 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
     reason = window_error(window_s)
     if reason:
         raise UserError(reason)
+    # open once, and open until the timeline has read the rest again: a truncated file is scanned
+    # (every chunk decompressed) as it opens, and a second open scanned it again
     rec = open_recording(path)
     try:
-        d = _Data(rec)
-        meta = dict(rec.metadata)
-        log_span = (rec.end_ns - rec.start_ns) / NS
-        message_count = rec.message_count
-        shown, files, notes, recovered = str(rec.path), [str(f) for f in rec.paths], list(rec.notes), rec.recovered
+        return _report(rec, out, window_s)
     finally:
         rec.close()
+
+
+def _report(rec, out, window_s: float) -> dict:
+    """``build_report`` of the open recording ``rec``."""
+    d = _Data(rec)
+    meta = dict(rec.metadata)
+    log_span = (rec.end_ns - rec.start_ns) / NS
+    message_count = rec.message_count
+    shown, files, notes, recovered = str(rec.path), [str(f) for f in rec.paths], list(rec.notes), rec.recovered
     out = output_folder(out)
     scene, scene_problem = _scene_from_metadata(meta)
     if scene is None and d.named_scenes:
@@ -1059,7 +1111,7 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
         not_drawn["operating_point.png"] = missing
     with writing_into(out):             # a full disk: one line, not a traceback
         timeline = (verdict_timeline(d, x, scene, window_s, speed,
-                                     lambda bounds: _windows_read_again(path, d.accel_topic, ch, d.widths, bounds))
+                                     lambda bounds: _windows_read_again(rec, d.accel_topic, ch, d.widths, bounds))
                     if verdict is not None else [])
         moved = line_spread(d, 0.0, d.analysed_end_s)
         tracked, untracked = None, ""

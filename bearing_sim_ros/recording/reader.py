@@ -254,9 +254,7 @@ def _scan(stream, size: int, name: str) -> _Scan:
 
     from mcap.data_stream import ReadDataStream
     from mcap.exceptions import McapError
-    from mcap.records import (Attachment, Channel, Chunk, ChunkIndex, Header, Message, Metadata, Schema,
-                              Statistics)
-    from mcap.stream_reader import breakup_chunk
+    from mcap.records import Attachment, Channel, Chunk, ChunkIndex, Header, Metadata, Schema, Statistics
     from zstandard import ZstdError
 
     from io import BytesIO
@@ -288,20 +286,18 @@ def _scan(stream, size: int, name: str) -> _Scan:
                             "`mcap recover` can rebuild it")
         elif opcode == 0x06:
             chunk = Chunk.read(body)
-            records = breakup_chunk(chunk, validate_crc=True)
-            channels = {**summary.channels, **{r.id: r for r in records if isinstance(r, Channel)}}
-            times = [r.log_time for r in records if isinstance(r, Message)]
-            undefined = next((r.channel_id for r in records
-                              if isinstance(r, Message) and r.channel_id not in channels), None)
+            defined, messages = _chunk_contents(chunk)
+            channels = {**summary.channels, **{r.id: r for r in defined if isinstance(r, Channel)}}
+            times = [log_ns for _, log_ns in messages]
+            undefined = next((channel_id for channel_id, _ in messages if channel_id not in channels), None)
             if undefined is not None:
                 raise McapError(f"a message on channel {undefined}, which no channel record before it defines "
                                 f"(chunk at byte {pos})")
             # only once the whole chunk checks: one a power cut left zeros in the end of adds nothing
-            summary.schemas.update({r.id: r for r in records if isinstance(r, Schema)})
+            summary.schemas.update({r.id: r for r in defined if isinstance(r, Schema)})
             summary.channels.update(channels)
-            for r in records:
-                if isinstance(r, Message):
-                    scan.counts[r.channel_id] = scan.counts.get(r.channel_id, 0) + 1
+            for channel_id, _ in messages:
+                scan.counts[channel_id] = scan.counts.get(channel_id, 0) + 1
             first, last = (min(times), max(times)) if times else (None, None)
             if first is not None:
                 # no message index offsets: the reader looks into the chunk for any topic
@@ -354,6 +350,41 @@ def _scan(stream, size: int, name: str) -> _Scan:
         message_count=sum(scan.counts.values()), message_end_time=scan.last_ns or 0,
         message_start_time=scan.first_ns or 0, metadata_count=len(scan.metas), schema_count=len(summary.schemas))
     return scan
+
+
+def _chunk_contents(chunk) -> tuple:
+    """(the schema and channel records in ``chunk``, its messages' (channel id, log time ns) in
+    order): what ``breakup_chunk`` finds of them, the chunk decompressed and its CRC checked the
+    same way, without making a record of each message (the scan needs their channels and times
+    only; making them took a quarter of the time to open a cut file: 3.4 s of 150 MB, 2.5 s now).
+    A record that runs past the end of the chunk is an McapError."""
+    import struct
+
+    from mcap.data_stream import ReadDataStream
+    from mcap.exceptions import McapError
+    from mcap.records import Channel, Schema
+    from mcap.stream_reader import get_chunk_data_stream
+
+    from io import BytesIO
+
+    stream, size = get_chunk_data_stream(chunk, validate_crc=True)
+    data = stream.read(size)
+    defined, messages = [], []
+    record, message = struct.Struct("<BQ"), struct.Struct("<HIQ")     # opcode, length; channel, sequence, log time
+    pos = 0
+    while pos < size:
+        opcode, length = record.unpack_from(data, pos)
+        body = pos + record.size
+        if body + length > size or (opcode == 0x05 and length < 22):
+            raise McapError(f"a record (opcode 0x{opcode:02x}, {length} bytes) runs past the end of its chunk")
+        if opcode == 0x05:
+            channel_id, _sequence, log_ns = message.unpack_from(data, body)
+            messages.append((channel_id, log_ns))
+        elif opcode in (0x03, 0x04):
+            kind = Schema if opcode == 0x03 else Channel
+            defined.append(kind.read(ReadDataStream(BytesIO(data[body:body + length]))))
+        pos = body + length
+    return defined, messages
 
 
 def _zero_tail(stream, size: int) -> int:
