@@ -30,7 +30,7 @@ import numpy as np
 
 from .analysis.envelope import fault_lines
 from .errors import UserError
-from .paths import output_folder, replace_file, replaceable_file, writing_into
+from .paths import output_folder, replace_file, replaceable_file, save_figure, writing_into
 from .scene import RPM, load_scene
 
 
@@ -360,7 +360,7 @@ def plot(result: dict, path: Path) -> None:
     ax.legend(handles=handles, fontsize=7, loc="best")
     ax.grid(True, which="both", alpha=0.3)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     plt.close(fig)
 
 
@@ -452,8 +452,8 @@ def bench_command(args) -> int:
     result = study(quick=args.quick, progress=say)
     result["default_against_rk4"] = default_against_rk4(result["rows"])
     with writing_into(out):           # after minutes of work: one line, not a traceback
-        (out / "bench.json").write_text(json.dumps(result, indent=2))
-        (out / "bench.md").write_text(markdown(result))
+        replace_file(out / "bench.json", json.dumps(result, indent=2))
+        replace_file(out / "bench.md", markdown(result))
         plot(result, out / "bench.png")
     print(markdown(result))
     print(f"wrote {out / 'bench.md'}, {out / 'bench.json'}, {out / 'bench.png'}")

@@ -98,29 +98,45 @@ def replaceable_file(path, where: str) -> Path:
 
 
 def replace_file(path, text: str) -> None:
-    """Write ``text`` (UTF-8) to ``path`` atomically: into a temporary file beside it, synced,
-    then moved onto it, so that ``path`` holds the old text or the new, never part of one (a full
-    disk), and the temporary file goes when that fails (OSError).  A symbolic link is followed;
-    the file keeps its permissions (a new one gets the umask's)."""
+    """Write ``text`` (UTF-8) to ``path`` atomically (``replacing``)."""
+    with replacing(path, "w", encoding="utf-8") as f:
+        f.write(text)
+
+
+@contextlib.contextmanager
+def replacing(path, mode: str = "wb", encoding: str | None = None):
+    """A file object (``mode``, ``encoding``) whose content replaces ``path`` at the end of the
+    block: written into a temporary file beside it, synced, then moved onto it, so that ``path``
+    holds the old content or the new, never part of one (a full disk: a report's plot cut
+    short, 118 784 bytes of a PNG, stayed beside the complete ones), and the temporary file goes
+    when the block or the write fails.  A symbolic link is followed; the file keeps its
+    permissions (a new one gets the umask's)."""
     path = Path(path).resolve()
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".partial")
     try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
+        with os.fdopen(fd, mode, encoding=encoding) as f:
+            yield f
             f.flush()
             os.fsync(f.fileno())
         try:
-            mode = stat.S_IMODE(path.stat().st_mode)
+            mode_bits = stat.S_IMODE(path.stat().st_mode)
         except FileNotFoundError:
             umask = os.umask(0)
             os.umask(umask)
-            mode = 0o666 & ~umask
-        os.chmod(tmp, mode)
+            mode_bits = 0o666 & ~umask
+        os.chmod(tmp, mode_bits)
         os.replace(tmp, path)
     except BaseException:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
         raise
+
+
+def save_figure(fig, path, dpi: int) -> None:
+    """The matplotlib figure ``fig`` as a PNG at ``path`` (``dpi`` dots per inch), whole or not at
+    all (``replacing``)."""
+    with replacing(path) as f:
+        fig.savefig(f, format="png", dpi=dpi)
 
 
 @contextlib.contextmanager

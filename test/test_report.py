@@ -17,7 +17,6 @@ from bearing_sim_ros.analysis.envelope import envelope_spectrum
 from bearing_sim_ros.analysis.report import build_report
 from bearing_sim_ros.recording.reader import open_recording
 from bearing_sim_ros.recording.render import render
-from bearing_sim_ros.waveform import NS
 from bearing_sim_ros.waveform import NS, from_pointcloud2
 
 from test_node_support import render_run_up
@@ -124,6 +123,38 @@ def test_report_draws_plots_and_finds_the_outer_race_fault(outer, figures):
     n = len(line.get_ydata())
     assert f[n - 1] > 3 * bpfo and _line_with(env_ax, s[:n]) is line
     assert np.allclose(line.get_xdata(), f[:n], rtol=1e-12, atol=0)
+
+
+def test_a_write_cut_short_leaves_no_broken_file_in_out(tmp_path):
+    """A full disk while report wrote its plots: one line and exit status 2, but the plot whose
+    write failed stayed in --out cut short (118 784 bytes of a PNG, hH's 3 MB tmpfs), beside the
+    complete ones, for a script or a viewer to take as the report.  Now every file is written
+    beside its place and moved there whole; a write that fails leaves nothing.  A limit on a
+    file's size (RLIMIT_FSIZE, as a full disk would) just below the first plot's size fails its
+    last write, the buffer's at the file's close, where a write that failed earlier, inside
+    Pillow, had the file removed by Pillow."""
+    import subprocess
+    import sys
+
+    recording = tmp_path / "rec.mcap"
+    render("er16k_outer_race", 0.5, recording, fidelity="kinematic", seed=1, progress=False)
+    assert cli.main(["report", str(recording), "--out", str(tmp_path / "whole")]) == 0
+    sizes = {p.name: p.stat().st_size for p in (tmp_path / "whole").iterdir()}
+    limit = sizes["waveform.png"] - 50         # the first file report writes
+    code = "\n".join([
+        "import resource, signal, sys",
+        "from bearing_sim_ros import cli",
+        "signal.signal(signal.SIGXFSZ, signal.SIG_IGN)",
+        f"resource.setrlimit(resource.RLIMIT_FSIZE, ({limit}, resource.RLIM_INFINITY))",
+        "sys.exit(cli.main(sys.argv[1:]))",
+    ])
+    out = tmp_path / "cut"
+    run = subprocess.run([sys.executable, "-c", code, "report", str(recording), "--out", str(out)],
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == 2 and run.stderr.startswith(f"error: --out = {str(out)!r}: cannot write"), run.stderr
+    assert run.stderr.count("\n") == 1 and "File too large" in run.stderr, run.stderr
+    left = {p.name: p.stat().st_size for p in out.iterdir()}
+    assert all(size == sizes[name] for name, size in left.items()), (left, sizes)      # whole files only
 
 
 def test_report_of_a_healthy_bearing_says_healthy(tmp_path):

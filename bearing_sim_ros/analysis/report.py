@@ -43,16 +43,16 @@ from __future__ import annotations
 
 import itertools
 import json
-from array import array
 import math
 import numbers
+from array import array
 from pathlib import Path
 
 import numpy as np
 
 from .. import ground_truth
 from ..errors import UserError
-from ..paths import output_folder, writing_into
+from ..paths import output_folder, replace_file, save_figure, writing_into
 from ..recording.reader import open_recording
 from ..waveform import NS, from_pointcloud2
 from .envelope import (DEFAULT_BAND, DETECTION_THRESHOLD, FAULT_LINES, STEADY_LINES, diagnose,
@@ -822,7 +822,7 @@ def _figure(rows: int, height: float = 3.0):
 
 def _save(plt, fig, path: Path) -> str:
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     plt.close(fig)
     return path.name
 
@@ -1215,8 +1215,8 @@ def _report(rec, out, window_s: float) -> dict:
         "plots_not_drawn": not_drawn,
     }
     with writing_into(out):
-        (out / "summary.json").write_text(json.dumps(summary, indent=2, default=_json_default) + "\n")
-        (out / "summary.md").write_text(_markdown(summary))
+        replace_file(out / "summary.json", json.dumps(summary, indent=2, default=_json_default) + "\n")
+        replace_file(out / "summary.md", _markdown(summary))
     return summary
 
 

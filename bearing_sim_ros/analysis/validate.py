@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..paths import output_folder, writing_into
+from ..paths import output_folder, replace_file, save_figure, writing_into
 from . import envelope as env
 from .cwru import Recording, find_recordings, read_recording, shaft_order_check
 
@@ -287,7 +287,7 @@ def plot_envelopes(rows: list, path: Path) -> None:
     for j in range(2):
         axes[-1, j].set_xlabel("frequency, Hz", fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=80)
+    save_figure(fig, path, dpi=80)
     plt.close(fig)
 
 
@@ -314,7 +314,7 @@ def plot_spectra(rows: list, path: Path) -> None:
         ax.legend(fontsize=7, loc="upper right")
     axes[-1, 0].set_xlabel("frequency, Hz", fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=80)
+    save_figure(fig, path, dpi=80)
     plt.close(fig)
 
 
@@ -338,7 +338,7 @@ def plot_waveforms(rows: list, path: Path, span: float = 0.05) -> None:
         ax.tick_params(labelsize=7)
     axes[-1, 0].set_xlabel("time, ms", fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=80)
+    save_figure(fig, path, dpi=80)
     plt.close(fig)
 
 
@@ -372,7 +372,7 @@ def plot_metrics(rows: list, path: Path) -> None:
             ax.axhline(env.DETECTION_THRESHOLD, color="tab:red", lw=0.8, ls="--", label="threshold")
     axes[0].legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(path, dpi=80)
+    save_figure(fig, path, dpi=80)
     plt.close(fig)
 
 
@@ -528,12 +528,12 @@ def write_report(out: Path, rows: list, robust: list, zone: list) -> None:
                       f"| {q['verdict']} ({q['expected']}){ok} | {_g(q['rms'])} | {_g(q['kurtosis'])} "
                       f"| {_g(q['prominence'])} |")
         md.append("")
-    (out / "validation.md").write_text("\n".join(md), encoding="utf-8")
+    replace_file(out / "validation.md", "\n".join(md))
     data = {"rows": [{k: v for k, v in r.items() if k != "signals"} for r in rows],
             "robustness": robust, "load_zone": zone,
             "detector": {"band_hz": list(env.DEFAULT_BAND), "segment_s": env.DEFAULT_SEGMENT,
                          "threshold": env.DETECTION_THRESHOLD}}
-    (out / "validation.json").write_text(json.dumps(data, indent=1, default=_json_default), encoding="utf-8")
+    replace_file(out / "validation.json", json.dumps(data, indent=1, default=_json_default))
 
 
 def _json_default(o):
