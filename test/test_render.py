@@ -201,6 +201,9 @@ def test_scene_error_and_bad_output_exit_2_with_one_line(tmp_path, capsys):
     # directory'), not the folder to create
     assert f"its folder '{tmp_path / 'nodir'}' does not exist; create it first)" in err and ".partial" not in err, err
     assert not (tmp_path / "x.mcap").exists()
+    # a folder that takes no files (/proc, even for root): it named the temporary file too
+    code, err = _one_line_error(capsys, ["render", "er16k_healthy", "--duration", "1", "--out", "/proc/x.mcap"])
+    assert (code, err) == (2, "error: --out = '/proc/x.mcap': cannot write there (No such file or directory)"), err
 
 
 @pytest.mark.parametrize("extra, message", [

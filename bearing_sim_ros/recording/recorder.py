@@ -247,10 +247,11 @@ class Recorder:
         try:
             self._open_file()
         except OSError as exc:
-            # a missing folder by its name: render's error named its temporary <out>.<pid>.partial
+            # a missing folder by its name, and the system's reason without the file's: render's
+            # error named its temporary <out>.<pid>.partial, a path the user never gave
             folder = Path(path).parent
             why = (f"its folder {str(folder)!r} does not exist; create it first"
-                   if isinstance(exc, FileNotFoundError) and not folder.is_dir() else _one_line(exc))
+                   if isinstance(exc, FileNotFoundError) and not folder.is_dir() else exc.strerror or _one_line(exc))
             raise UserError(f"{argument} = {str(path)!r}: cannot write there ({why})") from None
         self._thread = threading.Thread(target=self._run, name="mcap-writer", daemon=True)
         self._thread.start()
