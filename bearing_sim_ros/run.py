@@ -22,7 +22,7 @@ import numpy as np
 
 from .errors import SettingNames, UserError
 from .paths import output_file
-from .teardown import command_signals, teardown_watchdog
+from .teardown import command_signals
 
 ANALYSIS_MAX_S = 30.0       # s of signal (the end of the recording) that the summary analyses
 # what a divergence's advice offers: run has no --fidelity, the scene's fidelity.tier does it
@@ -249,8 +249,8 @@ def run_command(args) -> int:
     from rclpy.parameter import Parameter
     from rclpy.signals import SignalHandlerOptions
 
-    from .nodes.bearing_sim_node import (DEFAULT_SAMPLE_RATE, BearingSimNode, build_node, failure_recording_text,
-                                         log_end, log_recording, say_held, spin_node, stop_reason)
+    from .nodes.bearing_sim_node import (DEFAULT_SAMPLE_RATE, BearingSimNode, build_node, close_node,
+                                         failure_recording_text, say_held, spin_node, stop_reason)
     from .messages import BATCH_DURATION, duration_error
     from .recording.recorder import files_text, sizes_text, split_error
     from .recording.render import tier_values
@@ -305,12 +305,7 @@ def run_command(args) -> int:
                        "dropped": rs["dropped"], "ok": rs["ok"], "error": rs["error"],
                        "path": rs["path"], "paths": rs["files"], "files": files_text(rs),
                        "sizes": sizes_text(rs)}
-        with teardown_watchdog():
-            if node is not None:
-                node.destroy_node()
-                log_end(node)
-                log_recording(node)
-            rclpy.try_shutdown()
+        close_node(node)
     if error is not None:
         raise error
     if node is not None and node.failure is not None:

@@ -1257,6 +1257,19 @@ def log_recording(node) -> None:
         log.info(text)
 
 
+def close_node(node) -> None:
+    """The end of a command that ran ``node`` (None: it was not built), once it stopped: the node
+    destroyed, its end status and its recording's whereabouts logged (``log_end``,
+    ``log_recording``: after ``destroy_node``), rclpy shut down; under the teardown watchdog, so
+    that a hang in DDS's teardown cannot keep the process from its exit."""
+    with teardown_watchdog():
+        if node is not None:
+            node.destroy_node()
+            log_end(node)
+            log_recording(node)
+        rclpy.try_shutdown()
+
+
 def failure_recording_text(node) -> str:
     """``; recorded to PATH, finalised`` after a divergence's line, or "" without a recording."""
     from ..recording.recorder import files_text
@@ -1408,12 +1421,7 @@ def main(argv=None) -> int:
         if node is not None:
             node.stop(reason=stop_reason(signals))      # the recording is closed here, before anything can hang
             error = node.error
-        with teardown_watchdog():
-            if node is not None:
-                node.destroy_node()
-                log_end(node)
-                log_recording(node)
-            rclpy.try_shutdown()
+        close_node(node)
     if error is not None:
         raise error
     if status == 0 and node is not None and node.failure is not None:
