@@ -995,3 +995,28 @@ def test_a_diverging_solver_ends_a_render_in_one_line_and_keeps_what_was_rendere
                                          "--out", str(tmp_path / "none.mcap")])
     assert code == 2 and err.endswith(f"; nothing rendered, '{tmp_path / 'none.mcap'}' left as it was"), err
     assert len(err.splitlines()) == 1 and not (tmp_path / "none.mcap").exists()
+
+
+@pytest.mark.parametrize("sig, status", [("SIGTERM", 143), ("SIGHUP", 129)])
+def test_a_signal_as_the_render_opens_its_file_leaves_no_partial_file(tmp_path, monkeypatch, capsys, sig, status):
+    """SIGTERM or SIGHUP between the render opening its ``<out>.<pid>.partial`` and entering its
+    loop raised there, and left that file behind, neither finalised nor removed (hH's report; a
+    window of milliseconds).  Now the file is opened where a signal is only noted: the render
+    ends before its first batch, says nothing was rendered, and leaves nothing."""
+    import signal
+
+    import bearing_sim_ros.recording.recorder as recorder_module
+
+    opened = recorder_module.Recorder
+
+    class SignalledAsItOpens(opened):
+        def __init__(self, *a, **kw):
+            super().__init__(*a, **kw)
+            os.kill(os.getpid(), getattr(signal, sig))      # the partial file is there now
+
+    monkeypatch.setattr(recorder_module, "Recorder", SignalledAsItOpens)      # render imports it as it runs
+    out = tmp_path / "x.mcap"
+    assert cli.main(["render", "er16k_healthy", "--duration", "1", "--out", str(out)]) == status
+    assert list(tmp_path.iterdir()) == []
+    err = capsys.readouterr().err
+    assert err == f"interrupted ({sig}): nothing rendered, {str(out)!r} left as it was\n", err

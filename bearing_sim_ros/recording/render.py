@@ -308,7 +308,7 @@ class _Progress:
                     f"{done:7.2f}/{self.total:.2f} s  {done / wall:6.1f}x real time")
 
     def done(self) -> None:
-        if self.enabled:
+        if self.enabled and self.last:         # the line after a bar drawn, none without one
             self._write("\n")
 
     def _write(self, text: str) -> None:
@@ -434,8 +434,7 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
     # written as <out>.<pid>.partial and moved onto out when finalised: out only ever holds a
     # complete file, and an earlier recording there stays until then; a disk slower than the
     # simulator holds the render up (nothing waits for it), never costs messages
-    rec = Recorder(out, meta, attachments, start_time_ns=0, argument="--out", keep=[scene.source_path],
-                   replace_when_done=True, when_full="wait")
+    rec = None                  # opened where a signal is only noted (below)
     bar = _Progress(total / sample_rate, sys.stderr.isatty() if progress is None else progress)
     t_wall0 = time.perf_counter()
     frame = msgs.frame_id
@@ -481,7 +480,7 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
                 if (diagnosed < done or error) and not rec.error:
                     write_diagnostics(msgs.stamp_ns(done), ending, error)
                 rec.close()
-            else:
+            elif rec is not None:       # None: a caller's own handler raised before it was open
                 rec.discard()
         bar.done()
         st = rec.status
@@ -492,9 +491,14 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
         return st["error"]
 
     try:
-        for topic in topics:
-            rec.add_topic(topic, TYPES[topic], _qos_for(topic, batch_duration))
         with _stop_at_batch_end() as stop:
+            # the partial file opened, and its topics added, where a signal is only noted: raised
+            # between its opening and the loop (SIGTERM, SIGHUP; Ctrl-C where a caller's handler
+            # raised), it left the file behind, never finalised nor removed
+            rec = Recorder(out, meta, attachments, start_time_ns=0, argument="--out", keep=[scene.source_path],
+                           replace_when_done=True, when_full="wait")
+            for topic in topics:
+                rec.add_topic(topic, TYPES[topic], _qos_for(topic, batch_duration))
             while done < total:
                 if stop.signum is not None and not done:     # before the first batch: nothing rendered
                     raise _interruption(stop.signum)
@@ -545,9 +549,10 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
         raise
     except BaseException:
         # a failed render (disk full, ...) must not leave a short file that looks complete:
-        # its partial file goes, and out keeps what it held
-        with _signals_held():
-            rec.discard()
+        # its partial file goes, and out keeps what it held (None: it could not be opened)
+        if rec is not None:
+            with _signals_held():
+                rec.discard()
         bar.done()
         raise
     with _signals_held():
