@@ -35,8 +35,8 @@ setup(
     license="Apache-2.0",
     entry_points={
         "console_scripts": [
-            "bearing-sim = bearing_sim_ros.cli:main",
-            "bearing_sim_node = bearing_sim_ros.cli:node_main",
+            "bearing-sim = bearing_sim_ros.entry:main",
+            "bearing_sim_node = bearing_sim_ros.entry:node_main",
         ],
     },
 )

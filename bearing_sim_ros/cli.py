@@ -16,6 +16,10 @@ import signal
 import sys
 from contextlib import contextmanager
 
+# SIGNAL_COMMANDS, the commands that run a node: their Ctrl-C and SIGTERM are handled from the
+# first line (teardown.CommandSignals), before the imports of numpy, numba and rclpy, where one was
+# lost; the console scripts (entry) note them before this module loads
+from .entry import SIGNAL_COMMANDS
 from .errors import UserError
 from .teardown import EXIT_INTERRUPTED, point_at_devnull, say_on_stderr, signal_handlers
 
@@ -30,9 +34,6 @@ EXIT_SOURCE_LOST = 4
 # monitor --end-wait (s): long enough for the tables still queued behind the end status and the
 # next pass of play --loop; a node restarted in its place takes a second or two to publish
 MONITOR_END_WAIT_S, MONITOR_END_WAIT_RANGE_S = 5.0, (0.0, 3600.0)
-# the commands that run a node: their Ctrl-C and SIGTERM are handled from the first line
-# (teardown.CommandSignals), before the imports of numpy, numba and rclpy, where one was lost
-SIGNAL_COMMANDS = ("node", "run", "monitor", "play")
 # play and report: what several files, or a split recording's name, mean
 SPLIT_FILES_HELP = ("a split recording (the node's record_max_duration / record_max_size) is read as one: "
                     "give its pieces F_000.mcap F_001.mcap ... (in any order, e.g. F_*.mcap) or the name "

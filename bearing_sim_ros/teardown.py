@@ -185,6 +185,11 @@ def command_signals() -> CommandSignals:
                 # a hangup ignored from the start (``nohup``) stays ignored: run to survive it
                 if sig != signal.SIGHUP or signal.getsignal(sig) != signal.SIG_IGN:
                     signal.signal(sig, _COMMAND_SIGNALS.handle)
+            # those the console script noted before (``entry``: while cli was loaded), as if now
+            from .entry import EARLY_SIGNALS
+
+            while EARLY_SIGNALS:
+                _COMMAND_SIGNALS.handle(EARLY_SIGNALS.pop(0), None)
     return _COMMAND_SIGNALS
 
 
