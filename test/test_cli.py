@@ -3,11 +3,13 @@ error lines show numbers as a user types them."""
 from __future__ import annotations
 
 import math
-import os
+import signal
 import subprocess
 
 import numpy as np
 import pytest
+
+from test_node_support import signal_at_import
 
 from bearing_sim_ros import Simulator, UserError, cli
 from bearing_sim_ros.limits import RPM
@@ -489,7 +491,6 @@ def test_ctrl_c_while_the_parser_imports_numpy_is_an_interruption(monkeypatch, c
     failed ... bad install"), "internal error", exit 1; a little later, exit 0 without a word.
     Now it is held until the imports are done: 130 and one line, and the command does not run."""
     import os
-    import signal
     import time
 
     build = cli.build_parser
@@ -533,19 +534,8 @@ def test_ctrl_c_while_the_command_module_loads_is_not_a_traceback(bearing_sim_ex
     few lines that notes the signal first: a command that runs a node takes it as its Ctrl-C (0),
     the others end in one line (130).  The Ctrl-C is sent by the process itself as ``cli``
     imports argparse (a sitecustomize on PYTHONPATH wraps the import), the moment that failed."""
-    site = tmp_path / "site"
-    site.mkdir()
-    (site / "sitecustomize.py").write_text("\n".join([
-        "import builtins, os, signal",
-        "_import = builtins.__import__",
-        "def _ctrl_c_at_argparse(name, *a, **kw):",
-        "    if name == 'argparse' and not getattr(_ctrl_c_at_argparse, 'sent', False):",
-        "        _ctrl_c_at_argparse.sent = True",
-        "        os.kill(os.getpid(), signal.SIGINT)",
-        "    return _import(name, *a, **kw)",
-        "builtins.__import__ = _ctrl_c_at_argparse",
-    ]) + "\n")
-    env = {**ros_env, "PYTHONPATH": os.pathsep.join(filter(None, [str(site), ros_env.get("PYTHONPATH")]))}
+    env = signal_at_import(ros_env, tmp_path, "argparse", signal.SIGINT)
     run = subprocess.run([bearing_sim_exe, *command], env=env, capture_output=True, text=True, timeout=120)
     assert "Traceback" not in run.stderr and run.returncode == status, (run.returncode, run.stderr)
     assert run.stderr.endswith(said), run.stderr
+    assert (tmp_path / "signal_sent").exists()

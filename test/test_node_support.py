@@ -45,6 +45,26 @@ def assert_one_error_line(result, words) -> None:
         assert w in lines[0], lines[0]
 
 
+def signal_at_import(env: dict, folder, module: str, sig) -> dict:
+    """``env`` for a process that sends itself ``sig`` as it first imports ``module`` (by that
+    name: ``import numpy``, ``from numpy import ...``) and then leaves ``folder / "signal_sent"``:
+    a sitecustomize in ``folder`` (put first on PYTHONPATH) wraps ``__import__``.  A signal at a
+    known moment of a command's start, where one sent after a delay may come while Python itself
+    still starts (45-120 ms on the CI machine), before any code of ours."""
+    (folder / "sitecustomize.py").write_text("\n".join([
+        "import builtins, os",
+        "_import = builtins.__import__",
+        "def _signal_at_import(name, *a, **kw):",
+        f"    if name == {module!r} and not getattr(_signal_at_import, 'sent', False):",
+        "        _signal_at_import.sent = True",
+        f"        os.kill(os.getpid(), {int(sig)})",
+        f"        open({str(folder / 'signal_sent')!r}, 'w').close()",
+        "    return _import(name, *a, **kw)",
+        "builtins.__import__ = _signal_at_import",
+    ]) + "\n")
+    return {**env, "PYTHONPATH": os.pathsep.join(filter(None, [str(folder), env.get("PYTHONPATH")]))}
+
+
 def param_text(value) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
