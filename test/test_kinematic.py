@@ -228,6 +228,24 @@ def test_seed_changes_noise_and_slip_but_not_the_physics():
     assert np.max(np.abs(f1 - f2)) > 0.1 * np.max(f1)
 
 
+def test_the_noise_is_the_seeds_whatever_the_scene():
+    """README, "What `seed` draws": one seed gives every scene, tier and operating point the
+    same noise sequence, scaled by the sensor's noise_density (what a dataset whose classes reuse
+    seeds must know), and another seed another one."""
+    def noise(name, seed, fidelity="kinematic", **changes):
+        scene = replace(load_scene(name), **changes)
+        quiet = replace(scene, sensor=replace(scene.sensor, noise_density=0.0))
+        noisy, clean = (Simulator(s, seed=seed, fidelity=fidelity).advance(3000).accel for s in (scene, quiet))
+        return (noisy - clean) / scene.sensor.noise_density
+
+    healthy = noise("cwru_6205_normal", 0)
+    elsewhere = noise("cwru_6205_or007_6", 0, shaft_speed=2400 * RPM, radial_load=(0.0, -1000.0))
+    np.testing.assert_allclose(elsewhere, healthy, rtol=0, atol=1e-9 * np.max(np.abs(healthy)))
+    np.testing.assert_allclose(noise("er16k_skidding", 0, fidelity="skidding"), healthy,
+                               rtol=0, atol=1e-9 * np.max(np.abs(healthy)))
+    assert abs(np.corrcoef(noise("cwru_6205_normal", 1)[:, 1], healthy[:, 1])[0, 1]) < 0.1
+
+
 def test_batch_shapes_channels_and_static_load():
     sim = Simulator("er16k_outer_race", fidelity="kinematic")
     b = sim.advance(150)

@@ -190,7 +190,8 @@ def test_the_sweep_blocks_make_labelled_recordings_the_api_repeats(tmp_path, mon
     scope = {}
     exec(_block_containing("python", "yaml.safe_dump(doc, f"), scope)
     assert sorted(p.name for p in tmp_path.glob("*.mcap")) == [
-        f"ir007_{rpm}rpm_1000N_s{seed}.mcap" for rpm in (1200, 2400) for seed in (0, 1)]
+        "ir007_1200rpm_1000N_s0.mcap", "ir007_1200rpm_1000N_s1.mcap",
+        "ir007_2400rpm_1000N_s2.mcap", "ir007_2400rpm_1000N_s3.mcap"]
     exec(_block_containing("python", "make_reader(f).iter_metadata()"), scope)
     assert (scope["meta"]["scene"], scope["meta"]["seed"]) == ("ir007_1200rpm_1000N", "1")
 
