@@ -171,7 +171,6 @@ def test_the_rosbags_block_reads_a_rendered_recording(tmp_path, monkeypatch, bea
     assert scope["samples"].shape == (150, 2) and scope["stamp_ns"] > 0
 
 
-
 def test_the_sweep_blocks_make_labelled_recordings_the_api_repeats(tmp_path, monkeypatch, bearing_sim_exe):
     """"Render offline": the sweep, run as written, writes a scene YAML per speed and a file per
     seed; the metadata block reads that file's scene and seed; the command the text gives makes
@@ -215,6 +214,7 @@ def test_the_sweep_blocks_make_labelled_recordings_the_api_repeats(tmp_path, mon
     accel = [Simulator(dataclasses.replace(scene, defects=(dataclasses.replace(pit, depth=depth),)), seed=0,
                        fidelity="kinematic").advance(3000).accel for depth in (0.002e-3, pit.depth, 1e-3)]
     assert np.array_equal(accel[0], accel[1]) and np.array_equal(accel[2], accel[1])
+
 
 # ---- the commands, against the code ------------------------------------------------------------
 def _subparsers():
