@@ -12,6 +12,7 @@ from __future__ import annotations
 import os
 import re
 import subprocess
+import threading
 import time
 
 import numpy as np
@@ -1340,4 +1341,39 @@ def test_a_terminal_closed_as_the_monitor_writes_a_line_ends_it_with_0(ros_env, 
         err.seek(0)
         said = err.read()
     assert status == 0, said
+    assert "Traceback" not in said and "internal error" not in said, said
+
+
+def test_a_monitor_whose_reader_goes_away_ends_quietly(ros_env, bearing_sim_exe, tmp_path):
+    """``bearing-sim monitor | head -3`` beside a node: the verdict lines are written on the
+    analysis thread, whose BrokenPipeError went unseen into its future, and the monitor ran on,
+    printing to nobody, until a line of the main thread (the node's end status: never, for a node
+    without ``duration``).  Now it ends at the first verdict line that finds no reader, quietly,
+    141 (README: as ``bearing-sim scenes | head -2``)."""
+    with open(tmp_path / "stderr.txt", "w+") as err:
+        monitor = subprocess.Popen([bearing_sim_exe, "monitor", "--window", "0.5"], env=ros_env, text=True,
+                                   stdout=subprocess.PIPE, stderr=err)
+        node = None
+        hung = threading.Timer(120, monitor.kill)     # a readline that never comes back ends with it
+        hung.start()
+        try:
+            assert "envelope analysis every" in monitor.stdout.readline()
+            node = NodeProcess(bearing_sim_exe, ros_env, {"fidelity": "kinematic"}, tmp_path / "node.log")
+            while " verdict=" not in monitor.stdout.readline():
+                assert monitor.poll() is None, err.read()
+            monitor.stdout.close()          # the reader went away, the node runs on
+            try:
+                status = monitor.wait(20)
+            except subprocess.TimeoutExpired:
+                status = None
+        finally:
+            hung.cancel()
+            if monitor.poll() is None:
+                monitor.kill()
+                monitor.wait()
+            if node is not None:
+                node.close()
+        err.seek(0)
+        said = err.read()
+    assert status == 141, (status, said)
     assert "Traceback" not in said and "internal error" not in said, said

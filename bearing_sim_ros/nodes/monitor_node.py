@@ -537,6 +537,7 @@ class MonitorNode(Node):
         self.scenes_said = set()    # the simulator's (scene, bearing) that are not --scene's, said once each
         self._speeds = []
         self._warned = False
+        self.output_gone = False    # a verdict line found no reader on the output (BrokenPipeError)
         # one worker: verdicts come out in signal order; the windows wait in its queue, so an
         # analysis slower than the signal would grow it (8 ms per 3 s window here, no danger)
         self._analysis = ThreadPoolExecutor(max_workers=1, thread_name_prefix="envelope")
@@ -776,6 +777,11 @@ class MonitorNode(Node):
         ``window_states``), or where that cannot be, none (``unknown``)."""
         try:
             self._verdict_line(end, x, channels, fs, shaft, grace, run or self.run, cage, moved, states)
+        except BrokenPipeError:
+            # the reader of the lines went away (``monitor | head -3``): raised on this thread, it
+            # went unseen into the future and the monitor ran on, printing to nobody; the main
+            # loop ends on it (``output_gone``) as on a line of its own (cli: 141)
+            self.output_gone = True
         finally:
             self.windows_done += 1
 
@@ -929,6 +935,8 @@ def main(args, ros_args=()) -> int:
         executor.add_node(node)
         t_start = next_look = time.monotonic()
         while rclpy.ok() and not node.done and signals.first is None:
+            if node.output_gone:
+                raise BrokenPipeError("a verdict line found no reader")
             if node.source_lost(time.monotonic()):
                 status = EXIT_SOURCE_LOST
                 of = f" of --count {node.count}" if node.count else ""
