@@ -9,7 +9,6 @@ healthy would be a test of the wrong thing.  The CWRU 6205 scene carries its loa
 """
 from __future__ import annotations
 
-import os
 import re
 import subprocess
 import threading
@@ -1294,50 +1293,12 @@ def test_a_terminal_closed_as_the_monitor_writes_a_line_ends_it_with_0(ros_env, 
     milliseconds), and the OSError ended the monitor as an internal error, exit 1, where a closed
     terminal ends it with 0 (README "Shutdown and recording").  Now the line goes nowhere, as
     every line after a hangup does, and the SIGHUP ends the monitor with 0.  The moment is made
-    exact: a sitecustomize holds the monitor's SIGHUP handler as its first line is written, lets the
-    test close the terminal, writes the line once the terminal has hung up and the SIGHUP came,
-    then runs the handler."""
-    from test_node_support import on_a_terminal_that_closes
+    exact (``closed_as_it_writes``): the terminal closes as the monitor's first line is written."""
+    from test_node_support import closed_as_it_writes
 
-    site, at_line = tmp_path / "site", tmp_path / "at_line"
-    site.mkdir()
-    (site / "sitecustomize.py").write_text("\n".join([
-        "import select, signal, sys, time",
-        "class _ClosedAsItWrites:",
-        "    def __init__(self, stream):",
-        "        self._stream, self._done = stream, False",
-        "    def write(self, text):",
-        "        if self._done or 'envelope analysis every' not in text:",
-        "            return self._stream.write(text)",
-        "        self._done = True",
-        # the monitor's handler of the hangup held until the line is written, as it is where the
-        # write comes before Python runs it (blocking the signal in this thread would not do: the
-        # kernel gives it to another, and the handler runs in this one at its next step)
-        "        held = []",
-        "        handler = signal.signal(signal.SIGHUP, lambda signum, _frame: held.append(signum))",
-        "        try:",
-        f"            open({str(at_line)!r}, 'w').close()",
-        "            poll = select.poll()",
-        "            poll.register(1, select.POLLOUT)",
-        "            deadline = time.monotonic() + 30",
-        "            while not (held and any(ev & select.POLLHUP for _fd, ev in poll.poll(0))) \\",
-        "                    and time.monotonic() < deadline:",
-        "                time.sleep(0.01)",
-        "            written = self._stream.write(text)",
-        "            self._stream.flush()",
-        "            return written",
-        "        finally:",
-        "            signal.signal(signal.SIGHUP, handler)",
-        "            for signum in held:",
-        "                handler(signum, None)",
-        "    def __getattr__(self, name):",
-        "        return getattr(self._stream, name)",
-        "sys.stdout = _ClosedAsItWrites(sys.stdout)",
-    ]) + "\n")
-    env = {**ros_env, "PYTHONPATH": os.pathsep.join(filter(None, [str(site), ros_env.get("PYTHONPATH")]))}
     with open(tmp_path / "stderr.txt", "w+") as err:
-        status = on_a_terminal_that_closes([bearing_sim_exe, "monitor", "--window", "1"], env, at_line.exists, 0.0,
-                                           "the monitor's first line not written", stderr=err)
+        status = closed_as_it_writes([bearing_sim_exe, "monitor", "--window", "1"], ros_env, "envelope analysis every",
+                                     tmp_path, err)
         err.seek(0)
         said = err.read()
     assert status == 0, said
