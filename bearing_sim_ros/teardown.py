@@ -67,8 +67,8 @@ def say(line: str, file=None) -> None:
     EIO, a terminal that hung up as the line was written, before the SIGHUP that comes with it was
     handled (``CommandSignals.handle``; a shell passing the hangup on to its jobs takes
     milliseconds): the line goes nowhere, as every line after it does (``drop_a_closed_terminal``),
-    and the command goes on to the end its SIGHUP gives it.  ``monitor``'s and ``run``'s lines raised
-    the OSError there and ended them as an internal error, exit 1."""
+    and the command goes on to the end its SIGHUP gives it.  ``monitor``'s, ``run``'s and ``play``'s
+    lines raised the OSError there and ended them as an internal error, exit 1."""
     import errno
 
     try:
