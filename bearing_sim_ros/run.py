@@ -22,7 +22,7 @@ import numpy as np
 
 from .errors import SettingNames, UserError
 from .paths import output_file
-from .teardown import command_signals
+from .teardown import command_signals, say
 
 ANALYSIS_MAX_S = 30.0       # s of signal (the end of the recording) that the summary analyses
 # what a divergence's advice offers: run has no --fidelity, the scene's fidelity.tier does it
@@ -282,8 +282,8 @@ def run_command(args) -> int:
         node = build_node(lambda: BearingSimNode(record_argument="--out", settings=RUN_SETTINGS,
                                                  parameter_overrides=overrides))
         signals.check()
-        print(f"bearing-sim run: {scene.name} in real time "
-              f"{'until Ctrl-C' if duration == 0 else f'for {duration:g} s'}, recording to {out}", flush=True)
+        say(f"bearing-sim run: {scene.name} in real time "
+            f"{'until Ctrl-C' if duration == 0 else f'for {duration:g} s'}, recording to {out}")
         spin_node(node, signals)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
@@ -318,5 +318,5 @@ def run_command(args) -> int:
     # the recording is complete.  A second Ctrl-C while its tail is read for the summary (about a
     # second) surfaced inside rclpy's deserialiser as a TypeError traceback: it is held (130)
     tail = _record_tail(figures["paths"], ANALYSIS_MAX_S)
-    print(summarise(scene, tail, figures, recording_argument(out, any(split)), out), flush=True)
+    say(summarise(scene, tail, figures, recording_argument(out, any(split)), out))
     return 0

@@ -62,6 +62,25 @@ def drop_a_closed_terminal() -> None:
             point_at_devnull(fd)
 
 
+def say(line: str, file=None) -> None:
+    """``line`` on ``file`` (default standard output, as it is now), flushed.  Where that fails with
+    EIO, a terminal that hung up as the line was written, before the SIGHUP that comes with it was
+    handled (``CommandSignals.handle``; a shell passing the hangup on to its jobs takes
+    milliseconds): the line goes nowhere, as every line after it does (``drop_a_closed_terminal``),
+    and the command goes on to the end its SIGHUP gives it.  ``monitor``'s, ``run``'s and ``play``'s
+    lines raised the OSError there and ended them as an internal error, exit 1."""
+    import errno
+
+    try:
+        print(line, file=file or sys.stdout, flush=True)
+    except OSError as exc:
+        if exc.errno != errno.EIO:
+            raise
+        # not re-raised where the terminal is not found hung up: the SIGHUP's handler may have
+        # pointed it at /dev/null between the write and here
+        drop_a_closed_terminal()
+
+
 def say_on_stderr(line: str) -> None:
     """``line`` on standard error; where its reader went away (``bearing-sim node ... 2>&1 | head
     -1``), nothing, and the command's exit status stays its own: the BrokenPipeError made a

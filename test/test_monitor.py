@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import re
 import subprocess
+import threading
 import time
 
 import numpy as np
@@ -433,6 +434,24 @@ def test_monitor_takes_the_ground_truth_of_the_rig_it_watches_only(ros_env, bear
     assert out.count("monitor: ground truth of 'rig2/bearing_sim: simulator' ignored") == 1, out
 
 
+def _wait_for_the_end_status(monitor, ended: str, timeout: float = 5.0) -> None:
+    """Wait for the line in which ``monitor`` prints its simulator's end status, ``run ended:
+    {ended}``, and says that it waits for more.  What the node's status said besides goes between
+    the two: under load its last second had overruns (``...published; 1 overruns in the last
+    second; waiting for more``, in 3 of 10 runs beside two CPU hogs), where a match of the whole
+    line without them failed."""
+    said = f"monitor: bearing_sim: run ended: {ended}"
+    monitor.wait_for_output(said, timeout=timeout)
+    deadline = time.monotonic() + timeout
+    line = None
+    while line is None and time.monotonic() < deadline:
+        line = re.search(f"^{re.escape(said)}.*$\n", monitor.output(), re.M)   # complete: its newline out
+        time.sleep(0.05)
+    assert line, monitor.output()
+    assert re.fullmatch(re.escape(said) + r"(?:; [^\n]+?)?; waiting for more \(a node started again, the next pass of "
+                        r"play --loop; [^()\n]+\)\n", line[0]), line[0]
+
+
 def _short_run_watched(ros_env, bearing_sim_exe, tmp_path, *monitor_options):
     """A monitor in 1 s windows (and ``monitor_options``), up before a node that runs 1.5 s of
     signal, until it printed the node's end status: (monitor, node), for the caller to close."""
@@ -444,8 +463,7 @@ def _short_run_watched(ros_env, bearing_sim_exe, tmp_path, *monitor_options):
         node = NodeProcess(bearing_sim_exe, ros_env, {"fidelity": "kinematic", "duration": 1.5,
                                                       "wait_for_subscribers": 1}, tmp_path / "node.log")
         assert node.wait(90) == 0, node.output()
-        monitor.wait_for_output("monitor: bearing_sim: run ended: duration 1.5 s reached, 1.500000 s of signal "
-                                "(22500 samples) published; waiting for more", timeout=5)
+        _wait_for_the_end_status(monitor, "duration 1.5 s reached, 1.500000 s of signal (22500 samples) published")
     except BaseException:
         monitor.close()
         if node is not None:
@@ -1267,3 +1285,56 @@ def test_the_monitor_says_the_simulators_trouble_as_it_begins_and_ends(ros_env):
                     "monitor: bearing_sim: no error again (ok)",
                     f"monitor: bearing_sim says (WARN): {behind}",
                     "monitor: bearing_sim: keeping up again (ok)"], out.getvalue()
+
+
+def test_a_terminal_closed_as_the_monitor_writes_a_line_ends_it_with_0(ros_env, bearing_sim_exe, tmp_path):
+    """``bearing-sim monitor`` in a terminal that closes as it writes a line: the write fails (EIO)
+    before the hangup's SIGHUP is handled (a shell that passes it on to its jobs takes
+    milliseconds), and the OSError ended the monitor as an internal error, exit 1, where a closed
+    terminal ends it with 0 (README "Shutdown and recording").  Now the line goes nowhere, as
+    every line after a hangup does, and the SIGHUP ends the monitor with 0.  The moment is made
+    exact (``closed_as_it_writes``): the terminal closes as the monitor's first line is written."""
+    from test_node_support import closed_as_it_writes
+
+    with open(tmp_path / "stderr.txt", "w+") as err:
+        status = closed_as_it_writes([bearing_sim_exe, "monitor", "--window", "1"], ros_env, "envelope analysis every",
+                                     tmp_path, err)
+        err.seek(0)
+        said = err.read()
+    assert status == 0, said
+    assert "Traceback" not in said and "internal error" not in said, said
+
+
+def test_a_monitor_whose_reader_goes_away_ends_quietly(ros_env, bearing_sim_exe, tmp_path):
+    """``bearing-sim monitor | head -3`` beside a node: the verdict lines are written on the
+    analysis thread, whose BrokenPipeError went unseen into its future, and the monitor ran on,
+    printing to nobody, until a line of the main thread (the node's end status: never, for a node
+    without ``duration``).  Now it ends at the first verdict line that finds no reader, quietly,
+    141 (README: as ``bearing-sim scenes | head -2``)."""
+    with open(tmp_path / "stderr.txt", "w+") as err:
+        monitor = subprocess.Popen([bearing_sim_exe, "monitor", "--window", "0.5"], env=ros_env, text=True,
+                                   stdout=subprocess.PIPE, stderr=err)
+        node = None
+        hung = threading.Timer(120, monitor.kill)     # a readline that never comes back ends with it
+        hung.start()
+        try:
+            assert "envelope analysis every" in monitor.stdout.readline()
+            node = NodeProcess(bearing_sim_exe, ros_env, {"fidelity": "kinematic"}, tmp_path / "node.log")
+            while " verdict=" not in monitor.stdout.readline():
+                assert monitor.poll() is None, err.read()
+            monitor.stdout.close()          # the reader went away, the node runs on
+            try:
+                status = monitor.wait(20)
+            except subprocess.TimeoutExpired:
+                status = None
+        finally:
+            hung.cancel()
+            if monitor.poll() is None:
+                monitor.kill()
+                monitor.wait()
+            if node is not None:
+                node.close()
+        err.seek(0)
+        said = err.read()
+    assert status == 141, (status, said)
+    assert "Traceback" not in said and "internal error" not in said, said

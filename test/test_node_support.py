@@ -357,6 +357,52 @@ def on_a_terminal_that_closes(args, env, ready, settle_s: float, what: str, stde
             proc.wait()
 
 
+def closed_as_it_writes(args, env, line: str, tmp_path, stderr=None, stream: str = "stdout") -> int:
+    """``on_a_terminal_that_closes`` at the moment the command writes the first ``line`` (a
+    part of it) to ``stream`` (``stdout``, or ``stderr`` where ``stderr`` is None: the terminal
+    too): the write fails (EIO) from the hangup on, and Python runs the
+    handler of the SIGHUP that comes with it only at the main thread's next step, or, where a
+    shell passes the hangup on to its jobs, milliseconds later.  A sitecustomize (in
+    ``tmp_path``/site) holds the handler as the line is written, lets the terminal close, writes the
+    line once it hung up and the SIGHUP came, then runs the handler.  (Blocking the signal in the
+    main thread would not do: the kernel gives it to another thread, and the handler runs at
+    once.)  The command's exit status; ``stderr``: a file object, or None."""
+    site, at_line = tmp_path / "site", tmp_path / "at_line"
+    site.mkdir()
+    (site / "sitecustomize.py").write_text("\n".join([
+        "import select, signal, sys, time",
+        "class _ClosedAsItWrites:",
+        "    def __init__(self, stream):",
+        "        self._stream, self._done = stream, False",
+        "    def write(self, text):",
+        f"        if self._done or {line!r} not in text:",
+        "            return self._stream.write(text)",
+        "        self._done = True",
+        "        held = []",
+        "        handler = signal.signal(signal.SIGHUP, lambda signum, _frame: held.append(signum))",
+        "        try:",
+        f"            open({str(at_line)!r}, 'w').close()",
+        "            poll = select.poll()",
+        "            poll.register(self._stream.fileno(), select.POLLOUT)",
+        "            deadline = time.monotonic() + 30",
+        "            while not (held and any(ev & select.POLLHUP for _fd, ev in poll.poll(0))) \\",
+        "                    and time.monotonic() < deadline:",
+        "                time.sleep(0.01)",
+        "            written = self._stream.write(text)",
+        "            self._stream.flush()",
+        "            return written",
+        "        finally:",
+        "            signal.signal(signal.SIGHUP, handler)",
+        "            for signum in held:",
+        "                handler(signum, None)",
+        "    def __getattr__(self, name):",
+        "        return getattr(self._stream, name)",
+        f"sys.{stream} = _ClosedAsItWrites(sys.{stream})",
+    ]) + "\n")
+    env = {**env, "PYTHONPATH": os.pathsep.join(filter(None, [str(site), env.get("PYTHONPATH")]))}
+    return on_a_terminal_that_closes(args, env, at_line.exists, 0.0, f"no {line!r} written", stderr=stderr)
+
+
 def _read_while(fd: int, reading: threading.Event) -> None:
     import select
 

@@ -162,6 +162,20 @@ STALLS = textwrap.dedent('''
 
 
 @pytest.mark.wall_clock
+def test_play_whose_terminal_closes_as_it_writes_a_line_exits_0(recording, bearing_sim_exe, ros_env, tmp_path):
+    """``bearing-sim play --loop`` in a terminal that closes as it writes its first line (on
+    standard error): the write failed (EIO) before the hangup's SIGHUP was handled, and the
+    OSError ended it as an internal error, exit 1.  Now the line goes nowhere and the SIGHUP
+    ends it: 0, as README says of a closed terminal.  The moment made exact:
+    ``closed_as_it_writes``."""
+    from test_node_support import closed_as_it_writes
+
+    path, _counts, _accel = recording
+    status = closed_as_it_writes([bearing_sim_exe, "play", str(path), "--loop", "--wait", "0"], ros_env,
+                                 " messages on ", tmp_path, stream="stderr")
+    assert status == 0
+
+
 def test_play_gives_a_stalled_subscriber_one_grace_at_its_end(recording, ros_env, tmp_path):
     """A reliable subscriber of every topic that stops (SIGSTOP) after its first table never
     acknowledges the rest: play waited up to 2 s for each of its 6 topics, 12 s after its last message.  Now it

@@ -266,6 +266,27 @@ def test_run_whose_terminal_closes_finalises_and_exits_without_an_internal_error
         assert rec.recovered is None and rec.topics()["/accel"].count > 0         # finalised
 
 
+def test_run_whose_terminal_closes_as_it_writes_a_line_exits_0(ros_env, bearing_sim_exe, tmp_path):
+    """``bearing-sim run`` in a terminal that closes as it writes its first line: the write failed
+    (EIO) before the hangup's SIGHUP was handled, and the OSError ended it as an internal error,
+    exit 1.  Now the line goes nowhere and the SIGHUP ends the run: 0, the recording finalised.
+    The moment made exact: ``closed_as_it_writes``."""
+    from test_node_support import closed_as_it_writes
+
+    from bearing_sim_ros.recording.reader import open_recording
+
+    out = tmp_path / "r.mcap"
+    with open(tmp_path / "stderr.txt", "w+") as err:
+        status = closed_as_it_writes([bearing_sim_exe, "run", "--duration", "0", "--out", str(out)], ros_env,
+                                     "bearing-sim run: ", tmp_path, err)
+        err.seek(0)
+        said = err.read()
+    assert status == 0, said
+    assert "Traceback" not in said and "internal error" not in said, said
+    with open_recording(out) as rec:
+        assert rec.recovered is None            # finalised
+
+
 def test_run_whose_solver_diverges_says_it_in_one_line_and_keeps_the_recording(ros_env, bearing_sim_exe,
                                                                                 diverging_scene, tmp_path):
     """``bearing-sim run`` on a scene whose skidding solver diverges at 0.32 s was a traceback and

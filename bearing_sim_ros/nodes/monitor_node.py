@@ -95,7 +95,7 @@ from .. import ground_truth
 from ..analysis.envelope import DETECTION_THRESHOLD, FAULT_LINES, STEADY_LINES, diagnose, spread, with_cage
 from ..analysis.orders import order_diagnose
 from ..messages import RUN_ENDED, RUN_KEY, TOPIC_ACCEL, TOPIC_DIAGNOSTICS, TOPIC_STATE, waveform_qos
-from ..teardown import command_signals, teardown_watchdog
+from ..teardown import command_signals, say, teardown_watchdog
 from .bearing_sim_node import NODE_NAME as SIMULATOR_NODE, PEER_CHECK_S
 from ..waveform import NS, from_pointcloud2
 
@@ -537,6 +537,7 @@ class MonitorNode(Node):
         self.scenes_said = set()    # the simulator's (scene, bearing) that are not --scene's, said once each
         self._speeds = []
         self._warned = False
+        self.output_gone = False    # a verdict line found no reader on the output (BrokenPipeError)
         # one worker: verdicts come out in signal order; the windows wait in its queue, so an
         # analysis slower than the signal would grow it (8 ms per 3 s window here, no danger)
         self._analysis = ThreadPoolExecutor(max_workers=1, thread_name_prefix="envelope")
@@ -613,8 +614,8 @@ class MonitorNode(Node):
                 # not in this waveform
                 if status.name not in self.ignored:
                     self.ignored.add(status.name)
-                    print(f"monitor: ground truth of {status.name!r} ignored: truth= is that of "
-                          f"{self.truth_status!r}, {self._whose_truth()}", file=self.out, flush=True)
+                    say(f"monitor: ground truth of {status.name!r} ignored: truth= is that of "
+                        f"{self.truth_status!r}, {self._whose_truth()}", self.out)
                 continue
             new = self._report_publishers.is_new(number)
             if self.run.last_report is not None and stamp < self.run.last_report - SLACK_NS:
@@ -639,8 +640,8 @@ class MonitorNode(Node):
                     until = "Ctrl-C ends the monitor"
                 else:
                     until = f"without a table for {self.end_wait:g} s the monitor ends"
-                print(f"monitor: {self.simulator}: {status.message}; waiting for more (a node started "
-                      f"again, the next pass of play --loop; {until})", file=self.out, flush=True)
+                say(f"monitor: {self.simulator}: {status.message}; waiting for more (a node started "
+                    f"again, the next pass of play --loop; {until})", self.out)
             if self.run.source_start is None and ground_truth.TIME_KEY in values:
                 try:
                     self.run.source_start = stamp - round(float(values[ground_truth.TIME_KEY]) * NS)
@@ -658,11 +659,11 @@ class MonitorNode(Node):
         if values.get(RUN_KEY) == RUN_ENDED or trouble == self._trouble:
             return
         if trouble:
-            print(f"monitor: {self.simulator} says ({'ERROR' if trouble == 'error' else 'WARN'}): {status.message}",
-                  file=self.out, flush=True)
+            say(f"monitor: {self.simulator} says ({'ERROR' if trouble == 'error' else 'WARN'}): {status.message}",
+                self.out)
         else:
-            print(f"monitor: {self.simulator}: {'no error' if self._trouble == 'error' else 'keeping up'} "
-                  f"again ({status.message})", file=self.out, flush=True)
+            say(f"monitor: {self.simulator}: {'no error' if self._trouble == 'error' else 'keeping up'} "
+                f"again ({status.message})", self.out)
         self._trouble = trouble
 
     def _started_again_after(self, values: dict, stamp: int):
@@ -695,7 +696,7 @@ class MonitorNode(Node):
         line = scene_mismatch_line(self.scene, values, self.simulator)
         if line:
             self.scenes_said.add(theirs)
-            print(line, file=self.out, flush=True)
+            say(line, self.out)
 
     def _on_accel(self, msg, number: int | None = None):
         """A table on accel, ``number`` by its publisher (``publication_number``; None: not known)."""
@@ -732,8 +733,7 @@ class MonitorNode(Node):
             # lost some, which this stamp (against a recording's first) tells; unsaid for a run
             # whose start went unsaid (two sources interleaving start one at every switch)
             if self._run_said:
-                print(f"monitor: first table stamped {stamp_text(stamp)} s, t=0 below",
-                      file=self.out, flush=True)
+                say(f"monitor: first table stamped {stamp_text(stamp)} s, t=0 below", self.out)
         if not self.window.add(stamp, channels, data) and not first_of_run:
             self.get_logger().warning("accel tables not contiguous (a table was lost or the source "
                                       "restarted): starting the window again", throttle_duration_sec=5.0)
@@ -777,6 +777,11 @@ class MonitorNode(Node):
         ``window_states``), or where that cannot be, none (``unknown``)."""
         try:
             self._verdict_line(end, x, channels, fs, shaft, grace, run or self.run, cage, moved, states)
+        except BrokenPipeError:
+            # the reader of the lines went away (``monitor | head -3``): raised on this thread, it
+            # went unseen into the future and the monitor ran on, printing to nobody; the main
+            # loop ends on it (``output_gone``) as on a line of its own (cli: 141)
+            self.output_gone = True
         finally:
             self.windows_done += 1
 
@@ -806,7 +811,7 @@ class MonitorNode(Node):
         scored = (end, result["verdict"], result["truth"])
         self.verdicts.append(scored)
         run.verdicts.append(scored)
-        print(format_verdict(t, result), file=self.out, flush=True)
+        say(format_verdict(t, result), self.out)
         ground_truth.forget_before(reports, end, SLACK_NS)      # the next windows end later
 
     def _start_run(self, why: str) -> None:
@@ -824,7 +829,7 @@ class MonitorNode(Node):
         self._run_said = self._went_back_said_at is None or now - self._went_back_said_at >= 5.0
         if self._run_said:
             self._went_back_said_at = now
-            print(new_run_line(self.run.number, why), file=self.out, flush=True)
+            say(new_run_line(self.run.number, why), self.out)
 
     def exit_lines(self) -> list:
         """The lines after the verdict count at exit: those of the run (``SourceRun.exit_lines``);
@@ -858,18 +863,17 @@ class MonitorNode(Node):
                 until = "Ctrl-C ends the monitor"
             else:
                 until = f"without one for {self.end_wait:g} s the monitor ends"
-            print(f"monitor: no publisher on {topic} any more and no end status from {self.simulator} "
-                  f"({SOURCE_LOST_CAUSES}); waiting for one (a node started again; {until})",
-                  file=self.out, flush=True)
+            say(f"monitor: no publisher on {topic} any more and no end status from {self.simulator} "
+                f"({SOURCE_LOST_CAUSES}); waiting for one (a node started again; {until})", self.out)
         # a publisher that sends no tables interleaves none: a node killed and started again
         # within DDS's lease leaves its dead publisher in the graph (the tables switched once, to
         # the new one); said where they switched back and forth since the last look, or without
         # their publication sequence numbers (as where no table came yet)
         if n > 1 and not self._several_said and (switches > 1 or not self._table_publishers.numbered):
             self._several_said = True
-            print(f"monitor: {n} publishers on {topic}: their tables interleave and the verdicts are not of "
-                  f"one signal; give each simulator its own namespace and watch one (--ros-args -r __ns:=/rig1)",
-                  file=self.out, flush=True)
+            say(f"monitor: {n} publishers on {topic}: their tables interleave and the verdicts are not of "
+                f"one signal; give each simulator its own namespace and watch one (--ros-args -r __ns:=/rig1)",
+                self.out)
 
     def destroy_node(self):
         # the window being analysed finishes; queued ones are dropped (Ctrl-C means stop)
@@ -917,9 +921,9 @@ def main(args, ros_args=()) -> int:
                 raise                   # not the arguments: rclpy.init went through
             raise ros_arguments_error(exc) from None
         signals.check()
-        print(f"monitor: {scene.bearing.name} ({scene.name}), envelope analysis every {args.window:g} s "
-              f"of {node.resolve_topic_name(TOPIC_ACCEL)}, ground truth from /diagnostics "
-              f"{node.truth_status!r}", flush=True)
+        say(f"monitor: {scene.bearing.name} ({scene.name}), envelope analysis every {args.window:g} s "
+            f"of {node.resolve_topic_name(TOPIC_ACCEL)}, ground truth from /diagnostics "
+            f"{node.truth_status!r}")
         # one executor for the run: rclpy.spin_once(node) adds and removes the node at every
         # call, a wait set rebuilt per callback at 100 tables/s
         try:
@@ -931,19 +935,21 @@ def main(args, ros_args=()) -> int:
         executor.add_node(node)
         t_start = next_look = time.monotonic()
         while rclpy.ok() and not node.done and signals.first is None:
+            if node.output_gone:
+                raise BrokenPipeError("a verdict line found no reader")
             if node.source_lost(time.monotonic()):
                 status = EXIT_SOURCE_LOST
                 of = f" of --count {node.count}" if node.count else ""
-                print(f"monitor: {len(node.verdicts)}{of} verdicts: no publisher on "
-                      f"{node.resolve_topic_name(TOPIC_ACCEL)} for {node.end_wait:g} s and no end status from "
-                      f"{node.simulator} ({SOURCE_LOST_CAUSES}; exit status {status})", flush=True)
+                say(f"monitor: {len(node.verdicts)}{of} verdicts: no publisher on "
+                    f"{node.resolve_topic_name(TOPIC_ACCEL)} for {node.end_wait:g} s and no end status from "
+                    f"{node.simulator} ({SOURCE_LOST_CAUSES}; exit status {status})")
                 break
             if node.run_over(time.monotonic()):
                 if node.count:
                     status = EXIT_COUNT_NOT_REACHED
-                    print(f"monitor: {len(node.verdicts)} of --count {node.count} verdicts: the run of "
-                          f"{node.simulator} ended and no table came in the {node.end_wait:g} s since "
-                          f"(exit status {status})", flush=True)
+                    say(f"monitor: {len(node.verdicts)} of --count {node.count} verdicts: the run of "
+                        f"{node.simulator} ended and no table came in the {node.end_wait:g} s since "
+                        f"(exit status {status})")
                 break
             executor.spin_once(timeout_sec=0.2)
             if time.monotonic() >= next_look:
@@ -954,8 +960,8 @@ def main(args, ros_args=()) -> int:
             # tables yet" with hundreds taken
             if not node.tables and not node.rejected and time.monotonic() - t_start > 5.0 and not node._warned:
                 node._warned = True
-                print(f"monitor: no waveform tables on {node.resolve_topic_name(TOPIC_ACCEL)} yet "
-                      "(is `bearing-sim node` running on this ROS_DOMAIN_ID?)", flush=True)
+                say(f"monitor: no waveform tables on {node.resolve_topic_name(TOPIC_ACCEL)} yet "
+                    "(is `bearing-sim node` running on this ROS_DOMAIN_ID?)")
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
@@ -965,10 +971,10 @@ def main(args, ros_args=()) -> int:
                 executor.shutdown(timeout_sec=0)
             if node is not None:
                 node.destroy_node()
-                print(f"monitor: {len(node.verdicts)} verdicts from {node.tables} tables, "
-                      f"{node.window.gaps} gaps (lost tables or a restarted source), "
-                      f"{node.rejected} rejected", flush=True)
+                say(f"monitor: {len(node.verdicts)} verdicts from {node.tables} tables, "
+                    f"{node.window.gaps} gaps (lost tables or a restarted source), "
+                    f"{node.rejected} rejected")
                 for line in node.exit_lines():
-                    print(line, flush=True)
+                    say(line)
             rclpy.try_shutdown()
     return status

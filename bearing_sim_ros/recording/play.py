@@ -42,7 +42,7 @@ import time
 
 from ..errors import UserError
 from ..messages import DISCOVERY_GRACE_S, END_DELIVERY_GRACE_S, deliver_the_end
-from ..teardown import teardown_watchdog
+from ..teardown import say, teardown_watchdog
 from ..waveform import NS
 from .reader import deserialize, get_message, open_recording
 from .schemas import qos_from_yaml
@@ -108,7 +108,8 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
         raise UserError(f"--rate = {rate!r}: expected a number > 0")
     if not wait_for_subscribers >= 0:
         raise UserError(f"--wait = {wait_for_subscribers!r}: expected seconds >= 0")
-    log = log or (lambda text: print(text, file=sys.stderr, flush=True))
+    # teardown.say: a line written as the terminal closes goes nowhere (an EIO was an internal error)
+    log = log or (lambda text: say(text, sys.stderr))
     stop = stop or threading.Event()
     running = lambda: rclpy.ok() and not stop.is_set()  # noqa: E731
     rec = open_recording(path)
