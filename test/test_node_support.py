@@ -45,6 +45,11 @@ def assert_one_error_line(result, words) -> None:
         assert w in lines[0], lines[0]
 
 
+def with_site(env: dict, folder) -> dict:
+    """``env`` with ``folder`` first on PYTHONPATH: its sitecustomize runs in the process."""
+    return {**env, "PYTHONPATH": os.pathsep.join(filter(None, [str(folder), env.get("PYTHONPATH")]))}
+
+
 def signal_at_import(env: dict, folder, module: str, sig) -> dict:
     """``env`` for a process that sends itself ``sig`` as it first imports ``module`` (by that
     name: ``import numpy``, ``from numpy import ...``) and then leaves ``folder / "signal_sent"``:
@@ -62,7 +67,7 @@ def signal_at_import(env: dict, folder, module: str, sig) -> dict:
         "    return _import(name, *a, **kw)",
         "builtins.__import__ = _signal_at_import",
     ]) + "\n")
-    return {**env, "PYTHONPATH": os.pathsep.join(filter(None, [str(folder), env.get("PYTHONPATH")]))}
+    return with_site(env, folder)
 
 
 def param_text(value) -> str:
@@ -399,7 +404,7 @@ def closed_as_it_writes(args, env, line: str, tmp_path, stderr=None, stream: str
         "        return getattr(self._stream, name)",
         f"sys.{stream} = _ClosedAsItWrites(sys.{stream})",
     ]) + "\n")
-    env = {**env, "PYTHONPATH": os.pathsep.join(filter(None, [str(site), env.get("PYTHONPATH")]))}
+    env = with_site(env, site)
     return on_a_terminal_that_closes(args, env, at_line.exists, 0.0, f"no {line!r} written", stderr=stderr)
 
 
