@@ -83,10 +83,11 @@ def say(line: str, file=None) -> None:
 
 def say_on_stderr(line: str) -> None:
     """``line`` on standard error; where its reader went away (``bearing-sim node ... 2>&1 | head
-    -1``), nothing, and the command's exit status stays its own: the BrokenPipeError made a
-    mistake's or a failed recording's 2 an "internal error" (1) or a closed output (141)."""
+    -1``) or its terminal closed as it was written (``say``), nothing, and the command's exit
+    status stays its own: the BrokenPipeError made a mistake's or a failed recording's 2 an
+    "internal error" (1) or a closed output (141), and the terminal's EIO an internal error."""
     try:
-        print(line, file=sys.stderr, flush=True)
+        say(line, sys.stderr)
     except BrokenPipeError:
         point_at_devnull(sys.stderr.fileno())
 

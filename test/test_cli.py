@@ -9,7 +9,7 @@ import subprocess
 import numpy as np
 import pytest
 
-from test_node_support import signal_at_import
+from test_node_support import closed_as_it_writes, signal_at_import
 
 from bearing_sim_ros import Simulator, UserError, cli
 from bearing_sim_ros.limits import RPM
@@ -520,6 +520,19 @@ def test_a_mistake_said_to_a_reader_that_went_away_keeps_its_exit_status(bearing
     proc.stdout.close()
     proc.stderr.close()                 # gone before the line
     assert proc.wait(120) == 2
+
+
+@pytest.mark.parametrize("command", ["node", "monitor"])
+def test_a_mistake_said_as_the_terminal_closes_keeps_its_exit_status(bearing_sim_exe, ros_env, tmp_path, command):
+    """A mistake said on a terminal that closes as the ``error:`` line is written, by a command
+    that takes the hangup's SIGHUP as its end (those that run a node; the others end as any
+    program, killed by it): the write failed (EIO) before the SIGHUP was handled, and the
+    OSError ended the command as an internal error, exit 1.  Now the line goes nowhere and the
+    status is the mistake's, 2.  The moment made exact: ``closed_as_it_writes``."""
+    out = str(tmp_path / "no_such_folder" / "x.mcap")
+    args = {"node": ["node", "--ros-args", "-p", f"record:={out}"],
+            "monitor": ["monitor", "--window", "0"]}[command]
+    assert closed_as_it_writes([bearing_sim_exe, *args], ros_env, "error: ", tmp_path, stream="stderr") == 2
 
 
 @pytest.mark.parametrize("command, status, said", [(("monitor", "--window", "1"), 0, ""),
