@@ -32,14 +32,31 @@ def test_window_gathers_contiguous_tables_and_restarts_on_a_gap():
     t = 5 * NS
     assert w.add(t, ["a"], np.zeros((150, 1), np.float32))
     assert w.add(t + step, ["a"], np.ones((150, 1), np.float32))
-    assert w.sample_rate == pytest.approx(15000.0)
+    assert w.sample_rate is None                # proposed by the first pair ...
     assert w.add(t + 2 * step, ["a"], np.ones((150, 1), np.float32))
+    assert w.sample_rate == pytest.approx(15000.0)      # ... and confirmed by the next table
     assert w.seconds() == pytest.approx(0.03)
     assert not w.add(t + 4 * step, ["a"], np.ones((150, 1), np.float32))      # one table lost
     assert w.gaps == 1 and w.samples == 150 and w.sample_rate is None
     assert w.add(t + 5 * step, ["a"], np.ones((150, 1), np.float32))
     assert not w.add(t + 6 * step, ["b"], np.ones((150, 1), np.float32))      # other channels
     assert w.take().shape == (150, 1) and w.samples == 0
+
+
+def test_a_table_alone_between_two_gaps_gives_the_window_no_rate():
+    """A lossy link or a recording with clustered drops: one table after a gap, the next 2 s
+    later.  That pair made the rate 75 Hz, and the two tables 4 s of "signal" at it: a verdict
+    of the default window (4 s), on nothing (``bpfo nan``).  Now the pair only proposes the rate;
+    the next table, 10 ms on, does not fit it (a gap), and the rate comes from the tables after it."""
+    w = Window()
+    step = 10_000_000
+    t = 5 * NS
+    table = np.ones((150, 1), np.float32)
+    assert w.add(t, ["a"], table) and w.add(t + 200 * step, ["a"], table)
+    assert w.sample_rate is None and w.seconds() == 0.0
+    assert not w.add(t + 201 * step, ["a"], table)
+    assert w.add(t + 202 * step, ["a"], table) and w.add(t + 203 * step, ["a"], table)
+    assert w.sample_rate == pytest.approx(15000.0) and w.seconds() == pytest.approx(0.03) and w.gaps == 1
 
 
 def _reports(items, onsets=None):

@@ -113,11 +113,16 @@ class Window:
     """Contiguous waveform tables gathered into one (n, channels) array.
 
     ``add`` returns False when a table does not continue the previous one (then the window
-    restarts with it).  The sample rate comes from the stamps: width / (stamp - previous stamp)."""
+    restarts with it).  The sample rate comes from the stamps: width / (stamp - previous stamp)
+    of the first pair of tables after a start or a gap, confirmed by the next table (stamped where
+    that rate ends the second): a single table between two gaps, stamped 2 s after the one
+    before, gave a rate of 75 Hz that only the following table's stamp showed wrong, and the two
+    tables made 4 s of that "signal", a verdict of the default ``--window`` on nothing."""
 
     def __init__(self):
         self.clear()
-        self.sample_rate = None
+        self.sample_rate = None     # Hz, confirmed by a second pair; None after a start or a gap
+        self._proposed_rate = None  # Hz, of the first pair, until the second confirms it
         self.gaps = 0
         self._prev_stamp = None
         self._prev_width = None
@@ -129,26 +134,31 @@ class Window:
         self.first_stamp = None
 
     def continues(self, stamp_ns: int, channels) -> bool:
-        """Would a table stamped ``stamp_ns`` with ``channels`` continue the last one added: stamped
-        where its samples end (1 us of rounding allowed), the same channels?  Any later stamp where
-        the rate is not known yet (one table since a gap): that pair fixes it."""
+        """Would a table stamped ``stamp_ns`` with ``channels`` continue the last one added: the same
+        channels, stamped where its samples end (1 us of rounding allowed) at the rate known or
+        proposed; any later stamp where neither is (one table since a gap): that pair proposes it."""
         if self._prev_stamp is None:
             return True
-        if self.sample_rate is None:
+        if list(channels) != self.channels:
+            return False
+        rate = self.sample_rate or self._proposed_rate
+        if rate is None:
             return stamp_ns > self._prev_stamp
-        expected = self._prev_stamp + round(self._prev_width * NS / self.sample_rate)
+        expected = self._prev_stamp + round(self._prev_width * NS / rate)
         # > 1 us off: a table is missing or time jumped
-        return abs(stamp_ns - expected) <= 1000 and list(channels) == self.channels
+        return abs(stamp_ns - expected) <= 1000
 
     def add(self, stamp_ns: int, channels, data: np.ndarray) -> bool:
         contiguous = self.continues(stamp_ns, channels)
-        if contiguous and self.sample_rate is None and self._prev_stamp is not None:
-            # the first pair of tables fixes the rate
-            self.sample_rate = self._prev_width * NS / (stamp_ns - self._prev_stamp)
         if not contiguous:
             self.gaps += 1
             self.clear()
-            self.sample_rate = None
+            self.sample_rate = self._proposed_rate = None
+        elif self._prev_stamp is not None and self.sample_rate is None:
+            if self._proposed_rate is None:         # the first pair of tables proposes the rate
+                self._proposed_rate = self._prev_width * NS / (stamp_ns - self._prev_stamp)
+            else:                                   # and the next table, where it fits, confirms it
+                self.sample_rate, self._proposed_rate = self._proposed_rate, None
         self._prev_stamp, self._prev_width = stamp_ns, data.shape[0]
         self.channels = list(channels)
         if self.first_stamp is None:
