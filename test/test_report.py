@@ -1131,6 +1131,53 @@ def test_a_truncated_recording_is_scanned_once_per_report(outer, tmp_path, monke
     assert s["timeline"] == build_report(rec, tmp_path / "whole", window_s=0.5)["timeline"]
 
 
+def test_a_recording_longer_than_the_report_holds_is_decompressed_once(outer, tmp_path, monkeypatch):
+    """The windows of the timeline past ``MAX_ANALYSIS_S`` were read from the file again: every
+    chunk decompressed twice per report, a truncated file's three times with the scan as it opens
+    (a 10-min recording: 747 chunks, 276 MB, decompressed again).  The report keeps those samples as
+    it reads them (a temporary file in --out, gone after): once, twice a truncated file, and the
+    timeline is that of the whole recording held in memory."""
+    import zstandard
+
+    rec, _ = outer
+    data = rec.read_bytes()
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(data[: len(data) - 500])         # in its summary: every chunk there
+    with open_recording(rec) as whole_file:
+        chunks = len(whole_file.summary.chunk_indexes)
+    whole = build_report(rec, tmp_path / "whole", window_s=0.5)["timeline"]
+    decompressed = []
+    decompress = zstandard.decompress
+    monkeypatch.setattr(zstandard, "decompress", lambda *a, **k: decompressed.append(1) or decompress(*a, **k))
+    monkeypatch.setattr(report, "MAX_ANALYSIS_S", 1.0)
+    for path, passes in ((rec, 1), (cut, 2)):
+        decompressed.clear()
+        out = tmp_path / f"o_{path.stem}"
+        s = build_report(path, out, window_s=0.5)
+        assert len(decompressed) == passes * chunks, (path.name, len(decompressed), chunks)
+        assert s["analysed_s"] == pytest.approx(1.0) and s["timeline"] == whole
+        assert sorted(p.name for p in out.iterdir()) == sorted([*s["plots"], "summary.json", "summary.md"])
+
+
+def test_a_full_disk_while_the_samples_past_those_held_are_kept_is_one_line(outer, tmp_path, monkeypatch, capsys):
+    """The samples past ``MAX_ANALYSIS_S`` go to a temporary file in --out as the recording is
+    read: a full disk there is one line naming --out and exit status 2, not a traceback."""
+    import errno
+    import io
+
+    class FullDisk(io.BytesIO):
+        def write(self, data):
+            raise OSError(errno.ENOSPC, "No space left on device")
+
+    rec, _ = outer
+    monkeypatch.setattr(report, "MAX_ANALYSIS_S", 1.0)
+    monkeypatch.setattr(report.tempfile, "TemporaryFile", lambda **kwargs: FullDisk())
+    out = tmp_path / "o"
+    code = cli.main(["report", str(rec), "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2 and err == f"error: --out = {str(out)!r}: cannot write (No space left on device)\n", err
+
+
 class _LongerRecording:
     """A recording ``rec`` whose ``state``, ``shaft_speed`` and ``load`` messages come ``times`` x
     over (its waveform tables and /diagnostics once): what the report keeps of every message of

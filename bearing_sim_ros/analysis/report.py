@@ -28,8 +28,8 @@ nothing but the file.  A split recording (the node's ``record_max_duration`` /
 (killed hard: no footer), alone or a split recording's last piece, is reported up to its last
 complete chunk, said in ``recovered`` (what is lost) and on the command line.  The waveform,
 spectra and the whole-recording verdict use at most ``MAX_ANALYSIS_S`` seconds of signal (the
-start); the verdict timeline covers the whole recording (a longer one is read again for it, one
-window at a time).
+start); the verdict timeline covers the whole recording (the envelope channel past that start is
+kept in a temporary file in DIR as the recording is read, ``_Spool``: the file is read once).
 
 Time bases: signal time is seconds after the first waveform sample (``header.stamp`` of the
 first table).  A ``/diagnostics`` message is stamped with the end of the last batch published,
@@ -45,6 +45,7 @@ import itertools
 import json
 import math
 import numbers
+import tempfile
 from array import array
 from pathlib import Path
 
@@ -69,9 +70,10 @@ RPM = 60.0 / (2.0 * math.pi)
 
 # ---- reading ---------------------------------------------------------------------------------
 class _Data:
-    """What the report needs from a recording, as arrays."""
+    """What the report needs from a recording, as arrays; ``spool`` (a ``_Spool``, or None to
+    leave them out) takes the envelope channel's samples past those held (``MAX_ANALYSIS_S``)."""
 
-    def __init__(self, rec):
+    def __init__(self, rec, spool=None):
         from ..recording.reader import deserialize, get_message
 
         topics = rec.topics()
@@ -125,6 +127,8 @@ class _Data:
                 self.channels = tuple(names)
                 if fs_meta and samples / fs_meta >= MAX_ANALYSIS_S:
                     self.truncated_analysis = True
+                    if spool is not None:
+                        spool.append(arr[:, self.channels.index(envelope_channel(self.channels))])
                     continue
                 chunks.append(arr)
                 samples += arr.shape[0]
@@ -247,6 +251,12 @@ class _Data:
             return 0
         expected = self.stamps[:-1] + np.round(self.widths[:-1] * NS / self.sample_rate).astype(np.int64)
         return int(np.sum(np.abs(self.stamps[1:] - expected) > 1000))
+
+
+def envelope_channel(channels) -> str:
+    """The channel of the waveform tables (``channels``: their names) that the envelope verdicts
+    are of: ``accel_y`` where they have it, else the first."""
+    return "accel_y" if "accel_y" in channels else channels[0]
 
 
 def skid_ratios(diagnostics) -> dict:
@@ -712,7 +722,7 @@ def verdict_timeline(d: "_Data", x, scene, window_s: float, mean_speed_rad_s: fl
     cage of ``state`` in it, ``with_state_cage``), those whose lines move within it
     (``line_spread``) in orders of the shaft (``order_tracked``) where they can be, else unscored.
     ``x`` holds the first samples (``MAX_ANALYSIS_S``); the windows beyond it come from
-    ``reread(bounds)`` (``_windows_read_again``).  Without a scene, the recorded ``/diagnostics``
+    ``reread(bounds)`` (``_windows_spooled``).  Without a scene, the recorded ``/diagnostics``
     alone (``line_frequencies``); [] where they do not give all four lines either."""
     if scene is None and not line_frequencies({}, d.signal_frequencies):
         return []
@@ -733,7 +743,7 @@ def verdict_timeline(d: "_Data", x, scene, window_s: float, mean_speed_rad_s: fl
         recorded = periods.frequencies(t0, t1, abs(speed) / (2 * math.pi))
         freqs.append(line_frequencies(rolling, with_state_cage(recorded, d, scene, t0, t1)))
         spreads.append(line_spread(d, t0, t1))
-    held = [b for b in bounds if b[1] <= x.size]          # the windows in memory; the rest read again
+    held = [b for b in bounds if b[1] <= x.size]          # the windows in memory; the rest from reread
     rest = bounds[len(held):]
     windows = itertools.chain((x[i0:i1] for i0, i1 in held), reread(rest) if rest else ())
     return score_windows(windows, fs, times, freqs, d.truth, speeds, spreads,
@@ -777,36 +787,43 @@ def order_tracked(d: "_Data", x, times_s, scene, periods: RecordedPeriods | None
                           d.cage_angle, d.cage_w, per_shaft_hz, balls)
 
 
-def _windows_read_again(rec, topic: str, channel: str, widths, bounds: list):
-    """The samples of ``channel`` in each window (first, end) of ``bounds`` (sample indices over
-    the waveform tables on ``topic`` in order, ``widths`` samples each), read from the open
-    recording ``rec`` again, one table at a time, the tables before the first window only
-    counted: a recording longer than the report holds in memory (``MAX_ANALYSIS_S``) gets its
-    verdict timeline to the end, in the memory of one window."""
-    from rclpy.serialization import deserialize_message
+class _Spool:
+    """The envelope channel's samples past those the report holds in memory (``MAX_ANALYSIS_S``),
+    for the windows of the verdict timeline beyond them: kept as the recording has them (float32,
+    4 bytes a sample: 216 MB an hour at 15 kHz) in a nameless temporary file in the report's
+    folder ``out`` (``--out``), made at the first sample kept, gone when closed or the process
+    ends.  The report read the file again for those windows: every chunk decompressed twice, a
+    truncated file's three times with the scan as it opens (README, "What a long recording
+    costs"); now once, in the memory of one window."""
 
-    from ..recording.reader import get_message
+    def __init__(self, out):
+        self.out = out
+        self.file = None
 
-    first = np.concatenate(([0], np.cumsum(widths)[:-1]))       # each table's first sample
-    skip = int(np.searchsorted(first, bounds[0][0], side="right")) - 1 if bounds else 0
-    cls = get_message(rec.topics()[topic].msg_type)
-    held, start, k = [], int(first[skip]), 0          # held: the samples from index ``start`` on
-    count = 0
-    for n, (_topic, _type, _log_ns, data) in enumerate(rec.messages([topic])):
-        if n < skip:
-            continue
-        _stamp, names, table = from_pointcloud2(deserialize_message(data, cls))
-        held.append(table[:, names.index(channel)].astype(float))
-        count += table.shape[0]
-        while k < len(bounds) and start + count >= bounds[k][1]:
-            samples = np.concatenate(held)
-            i0, i1 = bounds[k]
-            yield samples[i0 - start:i1 - start]
-            k += 1
-            keep = bounds[k][0] if k < len(bounds) else i1      # what the next window needs
-            held, count, start = [samples[keep - start:]], start + count - keep, keep
-        if k == len(bounds):
-            return
+    def append(self, samples) -> None:
+        """Keep ``samples`` (float32), the next after those kept; a full disk is one line naming --out."""
+        with writing_into(self.out):
+            if self.file is None:
+                self.file = tempfile.TemporaryFile(dir=output_folder(self.out), prefix=".bearing-sim-report-")
+            self.file.write(np.ascontiguousarray(samples, dtype="<f4").tobytes())
+
+    def read(self, first: int, end: int) -> np.ndarray:
+        """The samples ``first`` to ``end`` (excluded) of those kept, as float."""
+        self.file.seek(4 * first)
+        return np.frombuffer(self.file.read(4 * (end - first)), dtype="<f4").astype(float)
+
+    def close(self) -> None:
+        if self.file is not None:
+            self.file.close()
+
+
+def _windows_spooled(x, spool: _Spool, bounds: list):
+    """The samples of each window (first, end) of ``bounds`` (sample indices over the waveform
+    tables in order) where the first ``x.size`` are ``x`` and the rest ``spool``'s, one window at a
+    time (a window across the two: both parts joined)."""
+    held = x.size
+    for i0, i1 in bounds:
+        yield np.concatenate((x[i0:held], spool.read(max(i0, held) - held, i1 - held)))
 
 
 # ---- plots -------------------------------------------------------------------------------------
@@ -1068,18 +1085,20 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
     reason = window_error(window_s)
     if reason:
         raise UserError(reason)
-    # open once, and open until the timeline has read the rest again: a truncated file is scanned
-    # (every chunk decompressed) as it opens, and a second open scanned it again
+    # open once: a truncated file is scanned (every chunk decompressed) as it opens, and a second
+    # open scanned it again
     rec = open_recording(path)
+    spool = _Spool(out)
     try:
-        return _report(rec, out, window_s)
+        return _report(rec, out, window_s, spool)
     finally:
+        spool.close()
         rec.close()
 
 
-def _report(rec, out, window_s: float) -> dict:
-    """``build_report`` of the open recording ``rec``."""
-    d = _Data(rec)
+def _report(rec, out, window_s: float, spool: _Spool) -> dict:
+    """``build_report`` of the open recording ``rec``, the samples past those it holds kept in ``spool``."""
+    d = _Data(rec, spool)
     meta = dict(rec.metadata)
     log_span = (rec.end_ns - rec.start_ns) / NS
     message_count = rec.message_count
@@ -1091,7 +1110,7 @@ def _report(rec, out, window_s: float) -> dict:
         # the report names it and where it came from, and takes nothing from it
         scene_problem += f"; its /diagnostics name {named_scene_text(d.named_scenes)}"
     fs = d.sample_rate
-    ch = "accel_y" if "accel_y" in d.channels else d.channels[0]
+    ch = envelope_channel(d.channels)
     x = d.accel[:, d.channels.index(ch)]
     speed = float(np.mean(d.cmd_speed)) if d.cmd_speed.size else (
         float(np.mean(d.shaft_w)) if d.shaft_w.size else (scene.shaft_speed if scene else float("nan")))
@@ -1110,8 +1129,7 @@ def _report(rec, out, window_s: float) -> dict:
     if missing:
         not_drawn["operating_point.png"] = missing
     with writing_into(out):             # a full disk: one line, not a traceback
-        timeline = (verdict_timeline(d, x, scene, window_s, speed,
-                                     lambda bounds: _windows_read_again(rec, d.accel_topic, ch, d.widths, bounds))
+        timeline = (verdict_timeline(d, x, scene, window_s, speed, lambda bounds: _windows_spooled(x, spool, bounds))
                     if verdict is not None else [])
         moved = line_spread(d, 0.0, d.analysed_end_s)
         tracked, untracked = None, ""
