@@ -1214,3 +1214,24 @@ def test_what_the_report_keeps_of_every_message_is_a_few_bytes_a_value(outer):
             held.append(longer.held)
     per_2_s = (held[1] - held[0]) / 30
     assert per_2_s < 20_000, per_2_s
+
+
+def test_the_timeline_gives_each_defects_sizes_by_its_kind(tmp_path):
+    """A scene with two defects, one of them appearing and growing: summary.md's "defect sizes"
+    column gave the range of all sizes at once ("1" for a ball and an inner-race defect at full
+    size, "0-1" for one at full size and one growing, which could be either); now each defect's
+    by its kind, in the scene's order that summary.json's ``scene_defect_kinds`` gives (that of
+    ``defect_sizes``)."""
+    import yaml
+
+    doc = yaml.safe_load(load_scene("b6205_ball_inner").source_text)
+    assert [d["kind"] for d in doc["defects"]] == ["ball", "inner"]
+    doc["defects"][1].update(onset_s=1.5, growth_s=2.0)
+    (tmp_path / "grows.yaml").write_text(yaml.safe_dump(doc))
+    out = tmp_path / "r.mcap"
+    render(str(tmp_path / "grows.yaml"), 4.0, out, fidelity="kinematic", progress=False)
+    s = build_report(out, tmp_path / "rep", window_s=1.0)
+    assert s["scene_defect_kinds"] == ["ball", "inner"]
+    md = (tmp_path / "rep" / "summary.md").read_text()
+    rows = [line for line in md.splitlines() if re.match(r"\| \d+\.\d\d-\d+\.\d\d \|", line)]
+    assert [row.split(" | ")[4] for row in rows] == ["ball 1, inner 0", "ball 1, inner 0.25", "ball 1, inner 0.75-1"], rows

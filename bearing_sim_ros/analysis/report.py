@@ -1225,6 +1225,7 @@ def _report(rec, out, window_s: float, spool: _Spool) -> dict:
         "ground_truth_changes": changes,
         "fault_onset_s": onset[0] if onset else None,
         "fault_onset_resolution_s": onset[1] if onset else None,
+        "scene_defect_kinds": [df.kind for df in scene.defects] if scene is not None else [],
         "scene_defect_onsets_s": [df.onset for df in scene.defects] if scene is not None else [],
         "first_detection_s": detected,
         "detection_latency_s": detected - onset[0] if onset and detected is not None else None,
@@ -1428,6 +1429,23 @@ def _timeline_runs(timeline: list) -> list:
     return runs
 
 
+def _sizes_text(run: list, kinds: list) -> str:
+    """The defect sizes over a run of timeline windows: their range ("0.2-0.6"), and where the
+    scene has several defects, each one's by its kind ("ball 1, inner 0.2-0.6"; ``kinds``: the
+    scene's, in its order, that of ``defect_sizes``; a recording without its scene numbers them,
+    "#1 1, #2 0.2-0.6"): the range of all of them at once said "1" for a ball and an inner-race
+    defect.  "n/a" without sizes."""
+    per_defect = [sorted({w["defect_sizes"][k] for w in run if w["defect_sizes"] and k < len(w["defect_sizes"])})
+                  for k in range(max((len(w["defect_sizes"] or []) for w in run), default=0))]
+    ranges = [_num(v[0]) + ("-" + _num(v[-1]) if len(v) > 1 else "") for v in per_defect if v]
+    if not ranges:
+        return "n/a"
+    if len(ranges) == 1:
+        return ranges[0]
+    names = kinds if len(kinds) == len(ranges) else [f"#{k + 1}" for k in range(len(ranges))]
+    return ", ".join(f"{name} {text}" for name, text in zip(names, ranges))
+
+
 def _timeline_markdown(s: dict) -> list:
     """The "Verdict over time" section: onset, first detection, latency and the runs of windows."""
     timeline = s["timeline"]
@@ -1482,14 +1500,13 @@ def _timeline_markdown(s: dict) -> list:
     runs = _timeline_runs(timeline)
     lines += ["| signal time (s) | windows | verdict | faults present | defect sizes | "
               "highest prominence BPFO / BPFI / 2xBSF |", "| --- | --- | --- | --- | --- | --- |"]
+    kinds = s["scene_defect_kinds"]
     for run in runs[:MAX_TIMELINE_ROWS]:
-        sizes = sorted({v for w in run for v in (w["defect_sizes"] or [])})
         tops = [max((w["prominences"].get(fault, float("nan")) for w in run), default=float("nan"))
                 for fault, _ in TIMELINE_LINES]
         lines.append(f"| {run[0]['start_s']:.2f}-{run[-1]['end_s']:.2f} | {len(run)} | {run[0]['verdict']}"
                      f"{' (in orders)' if run[0].get('order_tracked') else ''} | "
-                     f"{_faults_text(run[0]['faults_present'])} | "
-                     f"{(_num(sizes[0]) + ('-' + _num(sizes[-1]) if len(sizes) > 1 else '')) if sizes else 'n/a'} | "
+                     f"{_faults_text(run[0]['faults_present'])} | {_sizes_text(run, kinds)} | "
                      f"{' / '.join(_num(v) for v in tops)} |")
     if len(runs) > MAX_TIMELINE_ROWS:
         lines.append(f"| ... | {sum(map(len, runs[MAX_TIMELINE_ROWS:]))} more windows in "
