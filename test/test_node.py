@@ -938,6 +938,41 @@ def test_a_second_node_given_the_same_record_path_ends_with_one_line_and_the_fir
     assert len(stamps) >= 100 and np.all(np.diff(stamps) == BATCH_NS)
 
 
+def test_a_render_and_a_node_given_one_path_the_second_ends_with_one_line_and_the_first_records_whole(
+        started, ros_env, bearing_sim_exe, tmp_path, capsys):
+    """A render to the path a node records to, or a node given the path a render writes: the
+    render moved its file onto the path when it was done, and the node's recording was lost
+    (replaced under it) or the render's (the node's file moved onto it after).  The second of the
+    two now ends at start with one line, exit 2, naming its option, and the first's file is whole."""
+    from bearing_sim_ros import cli
+    from test_node_support import rendering_until_stopped, stop_render
+
+    out = tmp_path / "run.mcap"
+    node = started({"record": str(out)}, name="node")
+    node.wait_for_output("recording " + str(out), 30)
+    assert cli.main(["render", "er16k_healthy", "--duration", "0.5", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err == (f"error: --out = '{out}': another recording is being written to this file (two renders, nodes "
+                   "or runs given the same path?); give each its own, or wait until the other ends\n"), err
+    time.sleep(1.0)
+    node.send(signal.SIGINT)
+    assert node.wait(20) == 0, node.output()
+    topics, meta = read_recording(out)
+    assert json.loads(meta["bearing_sim"]["parameters"]).get("mode") != "render", meta["bearing_sim"]["parameters"]
+    stamps = np.array([m.header.stamp.sec * NS + m.header.stamp.nanosec for _t, m in topics["/accel"]], dtype=np.int64)
+    assert len(stamps) >= 100 and np.all(np.diff(stamps) == BATCH_NS)
+    assert [p.name for p in tmp_path.iterdir() if p.suffix != ".log"] == ["run.mcap"]
+
+    rendered = tmp_path / "rendered.mcap"
+    with rendering_until_stopped(rendered, 7, ros_env) as render:
+        r = subprocess.run([bearing_sim_exe, "node", "--ros-args", "-p", f"record:={rendered}", "-p", "duration:=2.0"],
+                           env=ros_env, capture_output=True, text=True, timeout=60)
+        assert_one_error_line(r, [f"record = '{rendered}'", "another recording is being written to this file"])
+        stop_render(render)
+    topics, meta = read_recording(rendered)
+    assert meta["bearing_sim"]["seed"] == "7" and len(topics["/accel"]) > 0
+
+
 def test_a_node_started_with_hangups_ignored_runs_on_through_one(ros_env, bearing_sim_exe, tmp_path):
     """``nohup bearing-sim node ...``: a hangup ignored from the start stays ignored (the node
     takes SIGHUP as SIGTERM otherwise): the node records its whole ``duration``."""

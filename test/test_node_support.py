@@ -2,6 +2,7 @@
 rclpy listener/publisher in the test process, each test on its own ROS_DOMAIN_ID (``ros_env``)."""
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import subprocess
@@ -288,6 +289,39 @@ def read_recording(path):
     with open(path, "rb") as f:
         meta = {m.name: dict(m.metadata) for m in make_reader(f).iter_metadata()}
     return out, meta
+
+
+@contextlib.contextmanager
+def rendering_until_stopped(out, seed: int, env):
+    """A render of ``seed`` to ``out`` in another process, long enough to be stopped by a signal
+    (``stop_render``), from when its ``<out>.<pid>.partial`` file is there (held): its Popen,
+    killed at the end of the block if it still runs."""
+    import sys
+
+    proc = subprocess.Popen([sys.executable, "-m", "bearing_sim_ros.cli", "render", "er16k_outer_race",
+                             "--duration", "3000", "--fidelity", "kinematic", "--seed", str(seed), "--out", str(out)],
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 60
+        while not any(out.parent.glob(f"{out.name}.*.partial")):
+            if proc.poll() is not None or time.monotonic() > deadline:
+                proc.kill()
+                raise AssertionError(f"no partial file: {proc.communicate()}")
+            time.sleep(0.05)
+        time.sleep(0.5)             # created, then held: a moment apart
+        yield proc
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+
+
+def stop_render(proc) -> None:
+    """Stop ``proc`` (``rendering_until_stopped``) with Ctrl-C: it ends with status 130, its file
+    finalised at --out."""
+    proc.send_signal(signal.SIGINT)
+    _stdout, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 130 and "finalised" in stderr, stderr
 
 
 def signal_when(proc, ready, sig, settle_s: float, what: str, timeout_s: float = 60.0):

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from test_node_support import signal_when
+from test_node_support import read_recording, rendering_until_stopped, signal_when, stop_render
 
 from bearing_sim_ros import Simulator, UserError, cli, load_scene
 from bearing_sim_ros.recording.reader import get_message, open_recording
@@ -652,6 +652,49 @@ def test_a_pipe_or_a_device_at_out_gets_a_complete_recording(tmp_path):
     assert summary is not None and summary.statistics.channel_message_counts
     with open_recording(tmp_path / "copy.mcap") as rec:
         assert rec.topics()["/accel"].count == 5
+
+
+def test_a_second_render_to_the_same_out_is_refused_in_one_line_and_the_first_kept_whole(tmp_path, ros_env,
+                                                                                        capsys):
+    """Two renders of a batch script given one --out both exited 0, and the one that finished
+    last was kept: the other's recording was lost without a word.  The second now ends before it
+    renders, in one line and exit 2 (and ``render()`` raises the same UserError); the first
+    renders on, and its file at --out is whole."""
+    out = tmp_path / "same.mcap"
+    with rendering_until_stopped(out, 1, ros_env) as first:
+        busy = (f"--out = '{out}': another recording is being written to this file (two renders, nodes or runs "
+                "given the same path?); give each its own, or wait until the other ends")
+        code, err = _one_line_error(capsys, ["render", "er16k_healthy", "--duration", "0.5", "--seed", "2",
+                                             "--out", str(out)])
+        assert (code, err) == (2, f"error: {busy}")
+        with pytest.raises(UserError) as refused:
+            render("er16k_healthy", 0.5, out, seed=3, progress=False)
+        assert str(refused.value) == busy
+        assert not out.exists() and len(list(tmp_path.iterdir())) == 1      # the first's partial file alone
+        stop_render(first)
+    assert [p.name for p in tmp_path.iterdir()] == ["same.mcap"]
+    assert read_recording(out)[1]["bearing_sim"]["seed"] == "1"
+    with open_recording(out) as rec:
+        assert rec.recovered is None and rec.topics()["/accel"].count > 0
+
+
+def test_a_partial_file_left_by_a_killed_render_neither_blocks_a_render_nor_stays(tmp_path, ros_env, capsys):
+    """A render killed with ``kill -9`` leaves its ``<out>.<pid>.partial`` behind, held by nobody:
+    the next render to that --out renders and removes it.  A partial file nobody holds whose
+    process still runs (it may have just created it) is left alone, and blocks nothing either."""
+    import signal
+
+    out = tmp_path / "same.mcap"
+    with rendering_until_stopped(out, 1, ros_env) as killed:
+        killed.send_signal(signal.SIGKILL)
+        killed.communicate(timeout=30)
+    (stale,) = tmp_path.glob("same.mcap.*.partial")
+    starting = tmp_path / f"same.mcap.{os.getppid()}.partial"       # a live process's, not yet held
+    starting.write_bytes(b"")
+    assert cli.main(["render", "er16k_healthy", "--duration", "0.5", "--seed", "2", "--out", str(out)]) == 0, \
+        capsys.readouterr().err
+    assert not stale.exists() and sorted(p.name for p in tmp_path.iterdir()) == sorted(["same.mcap", starting.name])
+    assert read_recording(out)[1]["bearing_sim"]["seed"] == "2"
 
 
 def test_a_render_that_fails_keeps_the_earlier_recording_at_out(tmp_path, monkeypatch):

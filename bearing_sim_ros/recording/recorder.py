@@ -45,10 +45,16 @@ so the name only ever holds a complete file, and an earlier recording there stay
 one is complete; ``discard`` (a failed render) removes the partial file and leaves the name
 alone.  A device or a pipe (/dev/null) is written directly.  Without it (the live node) the file
 grows under its own name while it is written.
+
+One writer per name: each holds the file it writes (the name, or its partial file) with a lock,
+and a recorder whose name another is writing (a render's held partial file, a node's held file)
+ends at start with a UserError, before it writes anything (``_open_held``); the partial file of a
+render killed hard (held by nobody, its process gone) is removed then.
 """
 from __future__ import annotations
 
 import atexit
+import contextlib
 import glob
 import json
 import math
@@ -61,7 +67,7 @@ from collections import deque
 from pathlib import Path
 
 from ..errors import UserError
-from ..paths import check_replaceable, output_file
+from ..paths import MCAP_MAGIC, check_replaceable, output_file
 from .cdr import zero_padding
 from .schemas import message_definition, qos_to_yaml
 
@@ -157,28 +163,121 @@ def files_text(status: dict) -> str:
     return f"{files[0]} .. {files[-1]}, {len(files)} files"
 
 
-def _open_held(path: Path, where: str):
+_PARTIAL_SUFFIX = re.compile(r"\.(\d+)\.partial")   # after the final name: replace_when_done's <name>.<pid>.partial
+
+
+def _busy(where: str) -> UserError:
+    return UserError(f"{where}: another recording is being written to this file (two renders, nodes or runs "
+                     "given the same path?); give each its own, or wait until the other ends")
+
+
+def _held(path: Path) -> bool:
+    """Whether the regular file ``path`` is held by a writer (``_open_held``'s lock): tried with a
+    lock of our own, released at once.  A file that cannot be opened is not taken for held."""
+    import fcntl
+
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)     # a pipe put there must not block
+    except OSError:
+        return False
+    try:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            return False
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        return False
+    except BlockingIOError:
+        return True
+    finally:
+        os.close(fd)
+
+
+def _gone(pid: int) -> bool:
+    """Whether no process ``pid`` runs (on this machine)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    except (OSError, OverflowError):
+        return False                      # another user's process (EPERM): it runs
+    return False
+
+
+def _other_writer(final: Path, mine: Path) -> bool:
+    """Whether another recording is being written to ``final``, beside ours (``mine``: the file we
+    hold, ``final`` itself or our partial file): ``final`` held by a node writing it directly, or
+    a partial file ``<final>.<pid>.partial`` held by a render.  A partial file nobody holds whose
+    process is gone (a render killed with ``kill -9``) is removed on the way: it is no recording,
+    and would otherwise stay beside it for ever.  One whose process still runs is left alone: its
+    render may have created it and not yet taken its lock."""
+    if mine != final and _held(final):
+        return True
+    for partial in final.parent.glob(f"{glob.escape(final.name)}.*.partial"):
+        match = _PARTIAL_SUFFIX.fullmatch(partial.name[len(final.name):])
+        if partial == mine or not match:
+            continue
+        if _held(partial):
+            return True
+        if _gone(int(match.group(1))) and _is_recording_or_empty(partial):
+            with contextlib.suppress(OSError):
+                partial.unlink()
+    return False
+
+
+def _is_recording_or_empty(path: Path) -> bool:
+    """Whether ``path`` starts as an MCAP file does, or as far as it goes (an empty file)."""
+    try:
+        with open(path, "rb") as f:
+            return MCAP_MAGIC.startswith(f.read(len(MCAP_MAGIC)))
+    except OSError:
+        return False
+
+
+def _open_held(path: Path, where: str, final: Path | None = None):
     """``path`` opened for writing from its start, a regular file held with an exclusive lock
     (``flock``, released as it is closed) and emptied only once it is held.  Two nodes given one
     ``record`` path (a parameters file for several, ``/**: record: run.mcap``) both wrote into the
     one file, and both said they had recorded it: the file held one, the other was lost.  The
     second now gets a one-line UserError (``where``: ``record = 'run.mcap'``) and the first's file
-    is untouched.  A pipe or a device (/dev/null) is opened as it is."""
+    is untouched.  A pipe or a device (/dev/null) is opened as it is.
+
+    ``final``: the name that ``path``, a partial file (``replace_when_done``), is moved onto at
+    the end.  Two renders to one ``--out`` held two partial files and moved each onto the name:
+    the last was kept, the other lost without a word; and a render moved its file onto the one a
+    node was writing there.  So once ``path`` is held, another writer of the name
+    (``_other_writer``) refuses this one, before it empties anything.  Each looks only after
+    taking its own lock, so two starting at once cannot both miss each other: then both may
+    refuse, which loses nothing."""
     import fcntl
 
+    final = path if final is None else final
     fd = os.open(path, os.O_WRONLY | os.O_CREAT, 0o666)
     try:
         if stat.S_ISREG(os.fstat(fd).st_mode):
             try:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
             except BlockingIOError:
-                raise UserError(f"{where}: another recording is being written to this file (two nodes "
-                                "given one record path?); give each its own") from None
+                raise _busy(where) from None
+            # a node's file moved aside by a render finishing meanwhile is not at its name any more
+            if _other_writer(final, path) or not _at(path, fd):
+                if path != final:       # our partial file (its name is our pid's); a node's new
+                    with contextlib.suppress(OSError):     # empty file stays: a render may be
+                        path.unlink()                      # moving its own onto the name
+                raise _busy(where)
             os.ftruncate(fd, 0)
         return os.fdopen(fd, "wb")
     except BaseException:
         os.close(fd)
         raise
+
+
+def _at(path: Path, fd: int) -> bool:
+    """Whether the open file ``fd`` is the one at ``path``."""
+    try:
+        there = os.stat(path)
+    except OSError:
+        return False
+    mine = os.fstat(fd)
+    return (there.st_dev, there.st_ino) == (mine.st_dev, mine.st_ino)
 
 
 class Recorder:
@@ -382,7 +481,7 @@ class Recorder:
         written = path
         if self._replace_when_done and (not path.exists() or path.is_file()):
             written = path.with_name(f"{path.name}.{os.getpid()}.partial")
-        stream = _open_held(written, self._where(path))
+        stream = _open_held(written, self._where(path), final=path)
         if not stream.seekable():
             stream = _Counted(stream)     # a pipe: the MCAP writer asks where each record starts
         self._writing = (written, path)
@@ -450,12 +549,15 @@ class Recorder:
             # finalised in a file that was deleted meanwhile is lost all the same; and a partial
             # file replaced by another must not be moved onto the name
             self._check_in_place(stream)
+            written, path = self._writing
+            if written != path:
+                # moved while still held: a writer starting in between would find the partial
+                # file free and the name not yet ours, miss this recording and replace it
+                os.replace(written, path)
+                self._writing = None
         finally:
             stream.close()
-        written, path = self._writing
         if written != path:
-            os.replace(written, path)
-            self._writing = None
             try:                          # the rename itself on disk (best effort)
                 fd = os.open(path.parent, os.O_RDONLY)
                 try:
