@@ -783,6 +783,29 @@ def test_the_first_file_is_checked_before_anything_is_written(tmp_path):
     assert kept.read_text() == "name: x\n"
 
 
+def test_a_second_recording_into_one_named_pipe_is_refused(tmp_path):
+    """Two renders given one named pipe as --out both wrote into it and both exited 0: its reader
+    got their bytes interleaved, a corrupt file (``report``: RecordLengthLimitExceeded).  The
+    second is refused at start as for a file; the pipe is free again once the first is done."""
+    import os
+
+    fifo = tmp_path / "pipe.mcap"
+    os.mkfifo(fifo)
+    reader = os.open(fifo, os.O_RDONLY | os.O_NONBLOCK)     # there, so that the writers' opens go through
+    try:
+        first = Recorder(fifo, {"a": "b"}, argument="--out", replace_when_done=True)
+        with pytest.raises(UserError) as refused:
+            Recorder(fifo, {"a": "b"}, argument="--out", replace_when_done=True)
+        assert str(refused.value) == (f"--out = '{fifo}': another recording is being written to this file (two "
+                                      "renders, nodes or runs given the same path?); give each its own, or wait "
+                                      "until the other ends")
+        first.discard()
+        Recorder(fifo, {"a": "b"}, argument="--out").discard()
+    finally:
+        os.close(reader)
+    assert [p.name for p in tmp_path.iterdir()] == ["pipe.mcap"]
+
+
 def test_replace_when_done_moves_each_finished_file_onto_its_name(tmp_path, sim_msgs):
     """``replace_when_done`` (render's): the files are written as ``<name>.<pid>.partial`` and
     moved onto their names once finalised, rotation included; ``discard`` removes the partial file

@@ -238,7 +238,8 @@ def _open_held(path: Path, where: str, final: Path | None = None):
     ``record`` path (a parameters file for several, ``/**: record: run.mcap``) both wrote into the
     one file, and both said they had recorded it: the file held one, the other was lost.  The
     second now gets a one-line UserError (``where``: ``record = 'run.mcap'``) and the first's file
-    is untouched.  A pipe or a device (/dev/null) is opened as it is.
+    is untouched.  A named pipe is held too, and nothing more; a device (/dev/null) is opened
+    as it is.
 
     ``final``: the name that ``path``, a partial file (``replace_when_done``), is moved onto at
     the end.  Two renders to one ``--out`` held two partial files and moved each onto the name:
@@ -252,11 +253,15 @@ def _open_held(path: Path, where: str, final: Path | None = None):
     final = path if final is None else final
     fd = os.open(path, os.O_WRONLY | os.O_CREAT, 0o666)
     try:
-        if stat.S_ISREG(os.fstat(fd).st_mode):
+        mode = os.fstat(fd).st_mode
+        if stat.S_ISREG(mode) or stat.S_ISFIFO(mode):
+            # a named pipe too: two recordings into one interleave their bytes, and its reader
+            # gets neither (both writers exited 0)
             try:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
             except BlockingIOError:
                 raise _busy(where) from None
+        if stat.S_ISREG(mode):
             # a node's file moved aside by a render finishing meanwhile is not at its name any more
             if _other_writer(final, path) or not _at(path, fd):
                 if path != final:       # our partial file (its name is our pid's); a node's new
