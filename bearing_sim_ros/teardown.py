@@ -68,17 +68,30 @@ def say(line: str, file=None) -> None:
     handled (``CommandSignals.handle``; a shell passing the hangup on to its jobs takes
     milliseconds): the line goes nowhere, as every line after it does (``drop_a_closed_terminal``),
     and the command goes on to the end its SIGHUP gives it.  ``monitor``'s, ``run``'s and ``play``'s
-    lines raised the OSError there and ended them as an internal error, exit 1."""
+    lines raised the OSError there and ended them as an internal error, exit 1.  An EIO of a file
+    (``monitor > verdicts.txt`` on a failing disk or network mount) is raised: its lines are lost."""
     import errno
 
+    file = file or sys.stdout
     try:
-        print(line, file=file or sys.stdout, flush=True)
+        print(line, file=file, flush=True)
     except OSError as exc:
-        if exc.errno != errno.EIO:
+        if exc.errno != errno.EIO or not _a_terminal(file):
             raise
         # not re-raised where the terminal is not found hung up: the SIGHUP's handler may have
         # pointed it at /dev/null between the write and here
         drop_a_closed_terminal()
+
+
+def _a_terminal(file) -> bool:
+    """Is ``file`` a character device: a terminal (one that hung up is no longer ``isatty``: its
+    ioctls fail), or /dev/null where the SIGHUP's handler pointed it there since?"""
+    import stat
+
+    try:
+        return stat.S_ISCHR(os.fstat(file.fileno()).st_mode)
+    except (AttributeError, OSError, ValueError):      # no descriptor (io.StringIO) or closed
+        return False
 
 
 def say_on_stderr(line: str) -> None:

@@ -2,6 +2,7 @@
 error lines show numbers as a user types them."""
 from __future__ import annotations
 
+import errno
 import math
 import signal
 import subprocess
@@ -552,3 +553,39 @@ def test_ctrl_c_while_the_command_module_loads_is_not_a_traceback(bearing_sim_ex
     assert "Traceback" not in run.stderr and run.returncode == status, (run.returncode, run.stderr)
     assert run.stderr.endswith(said), run.stderr
     assert (tmp_path / "signal_sent").exists()
+
+
+class _WriteFailsWithEIO:
+    """A stream on the descriptor ``fd`` whose writes fail as a dying disk's or a hung-up terminal's."""
+
+    def __init__(self, fd: int):
+        self.fd = fd
+
+    def fileno(self) -> int:
+        return self.fd
+
+    def write(self, text):
+        raise OSError(errno.EIO, "Input/output error")
+
+    def flush(self):
+        pass
+
+
+def test_a_line_lost_to_an_eio_of_a_file_is_an_error_and_one_of_a_terminal_is_not(tmp_path):
+    """teardown.say drops a line whose write fails with EIO only where it goes to a terminal (one
+    that hung up as it was written; the SIGHUP ends the command): on a file (``monitor >
+    verdicts.txt`` on a failing disk or network mount) the line is lost, and the error is raised.
+    Until 2026-11-30 every EIO was dropped and the monitor went on, exit 0, its lines gone."""
+    import os
+
+    from bearing_sim_ros.teardown import say
+
+    with open(tmp_path / "verdicts.txt", "w") as file:
+        with pytest.raises(OSError, match="Input/output error"):
+            say("t=4.0 s verdict=outer", _WriteFailsWithEIO(file.fileno()))
+    leader, terminal = os.openpty()
+    try:
+        say("t=4.0 s verdict=outer", _WriteFailsWithEIO(terminal))
+    finally:
+        os.close(leader)
+        os.close(terminal)

@@ -1355,3 +1355,37 @@ def test_a_monitor_whose_reader_goes_away_ends_quietly(ros_env, bearing_sim_exe,
         said = err.read()
     assert status == 141, (status, said)
     assert "Traceback" not in said and "internal error" not in said, said
+
+
+def test_a_verdict_line_the_disk_cannot_take_ends_the_monitor_as_an_error(ros_env, bearing_sim_exe, tmp_path):
+    """``bearing-sim monitor --count 2 > verdicts.txt`` on a full disk: the verdict lines are written
+    on the analysis thread, whose OSError (ENOSPC) went unseen into its future, and the monitor
+    ran on, its lines lost, until the count ended it with 0.  Now the main thread raises it, as it
+    does that of a line of its own: exit 1 naming the error.  A sitecustomize fails the writes of
+    verdict lines (the banner before them is written: ``/dev/full`` would fail that first)."""
+    from test_node_support import with_site
+
+    site = tmp_path / "site"
+    site.mkdir()
+    (site / "sitecustomize.py").write_text("\n".join([
+        "import errno, sys",
+        "class _FullDisk:",
+        "    def __init__(self, stream):",
+        "        self._stream = stream",
+        "    def write(self, text):",
+        "        if ' verdict=' in text:",
+        "            raise OSError(errno.ENOSPC, 'No space left on device')",
+        "        return self._stream.write(text)",
+        "    def __getattr__(self, name):",
+        "        return getattr(self._stream, name)",
+        "sys.stdout = _FullDisk(sys.stdout)",
+    ]) + "\n")
+    node = NodeProcess(bearing_sim_exe, ros_env, {"fidelity": "kinematic"}, tmp_path / "node.log")
+    try:
+        monitor = subprocess.run([bearing_sim_exe, "monitor", "--window", "0.5", "--count", "2"],
+                                 env=with_site(ros_env, site), capture_output=True, text=True, timeout=120)
+    finally:
+        node.close()
+    assert monitor.returncode == 1, (monitor.returncode, monitor.stdout, monitor.stderr)
+    assert "OSError: [Errno 28] No space left on device" in monitor.stderr, monitor.stderr
+    assert " verdict=" not in monitor.stdout, monitor.stdout

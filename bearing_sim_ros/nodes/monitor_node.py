@@ -548,6 +548,7 @@ class MonitorNode(Node):
         self._speeds = []
         self._warned = False
         self.output_gone = False    # a verdict line found no reader on the output (BrokenPipeError)
+        self.output_failed = None   # the OSError of a verdict line that could not be written (a full disk)
         # one worker: verdicts come out in signal order; the windows wait in its queue, so an
         # analysis slower than the signal would grow it (8 ms per 3 s window here, no danger)
         self._analysis = ThreadPoolExecutor(max_workers=1, thread_name_prefix="envelope")
@@ -792,8 +793,18 @@ class MonitorNode(Node):
             # went unseen into the future and the monitor ran on, printing to nobody; the main
             # loop ends on it (``output_gone``) as on a line of its own (cli: 141)
             self.output_gone = True
+        except OSError as exc:
+            # the lines' file could not take it (ENOSPC of a full disk, EIO of a failing one): unseen
+            # in the future, the monitor ran on without its lines and a --count ended it with 0; the
+            # main thread raises it (``raise_output_failure``), as it does its own lines' (cli: exit 1)
+            self.output_failed = exc
         finally:
             self.windows_done += 1
+
+    def raise_output_failure(self) -> None:
+        """Raise the OSError of a verdict line that could not be written, if there was one."""
+        if self.output_failed is not None:
+            raise self.output_failed
 
     def _verdict_line(self, end: int, x: np.ndarray, channels, fs: float, shaft: float, grace: float,
                       run: SourceRun, cage: float | None = None, moved: float = 0.0, states=None) -> None:
@@ -947,6 +958,7 @@ def main(args, ros_args=()) -> int:
         while rclpy.ok() and not node.done and signals.first is None:
             if node.output_gone:
                 raise BrokenPipeError("a verdict line found no reader")
+            node.raise_output_failure()
             if node.source_lost(time.monotonic()):
                 status = EXIT_SOURCE_LOST
                 of = f" of --count {node.count}" if node.count else ""
@@ -987,4 +999,6 @@ def main(args, ros_args=()) -> int:
                 for line in node.exit_lines():
                     say(line)
             rclpy.try_shutdown()
+    if node is not None:
+        node.raise_output_failure()     # the last window's, analysed as the loop ended (--count)
     return status
