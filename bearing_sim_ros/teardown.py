@@ -96,12 +96,13 @@ def _a_terminal(file) -> bool:
 
 def say_on_stderr(line: str) -> None:
     """``line`` on standard error; where its reader went away (``bearing-sim node ... 2>&1 | head
-    -1``) or its terminal closed as it was written (``say``), nothing, and the command's exit
-    status stays its own: the BrokenPipeError made a mistake's or a failed recording's 2 an
-    "internal error" (1) or a closed output (141), and the terminal's EIO an internal error."""
+    -1``), its terminal closed as it was written (``say``) or its file cannot take it (``2> log``
+    on a full disk), nothing, and the command's exit status stays its own: the BrokenPipeError
+    made a mistake's or a failed recording's 2 an "internal error" (1) or a closed output (141),
+    and the terminal's EIO or the disk's ENOSPC an internal error (whose own lines went nowhere)."""
     try:
         say(line, sys.stderr)
-    except BrokenPipeError:
+    except OSError:         # nowhere left to say it; the status says it
         point_at_devnull(sys.stderr.fileno())
 
 

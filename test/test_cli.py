@@ -523,6 +523,19 @@ def test_a_mistake_said_to_a_reader_that_went_away_keeps_its_exit_status(bearing
     assert proc.wait(120) == 2
 
 
+@pytest.mark.parametrize("command", ["render", "node"])
+def test_a_mistake_said_to_a_full_disk_keeps_its_exit_status(bearing_sim_exe, ros_env, tmp_path, command):
+    """``bearing-sim node ... 2> node.log`` on a full disk (here /dev/full: every write ENOSPC):
+    the ``error:`` line could not be written, and the OSError made the mistake's 2 an internal
+    error, 1.  Now the line goes nowhere and the status is the mistake's."""
+    out = str(tmp_path / "no_such_folder" / "x.mcap")
+    args = {"render": ["render", "er16k_outer_race", "--duration", "1", "--out", out],
+            "node": ["node", "--ros-args", "-p", f"record:={out}"]}[command]
+    with open("/dev/full", "w") as full:
+        assert subprocess.run([bearing_sim_exe, *args], env=ros_env, stdout=subprocess.DEVNULL, stderr=full,
+                              timeout=120).returncode == 2
+
+
 @pytest.mark.parametrize("command", ["node", "monitor"])
 def test_a_mistake_said_as_the_terminal_closes_keeps_its_exit_status(bearing_sim_exe, ros_env, tmp_path, command):
     """A mistake said on a terminal that closes as the ``error:`` line is written, by a command
