@@ -547,8 +547,8 @@ class MonitorNode(Node):
         self.scenes_said = set()    # the simulator's (scene, bearing) that are not --scene's, said once each
         self._speeds = []
         self._warned = False
-        self.output_gone = False    # a verdict line found no reader on the output (BrokenPipeError)
-        self.output_failed = None   # the OSError of a verdict line that could not be written (a full disk)
+        # the OSError of a verdict line that could not be written (no reader: BrokenPipeError; a full disk)
+        self.output_failed = None
         # one worker: verdicts come out in signal order; the windows wait in its queue, so an
         # analysis slower than the signal would grow it (8 ms per 3 s window here, no danger)
         self._analysis = ThreadPoolExecutor(max_workers=1, thread_name_prefix="envelope")
@@ -788,15 +788,12 @@ class MonitorNode(Node):
         ``window_states``), or where that cannot be, none (``unknown``)."""
         try:
             self._verdict_line(end, x, channels, fs, shaft, grace, run or self.run, cage, moved, states)
-        except BrokenPipeError:
-            # the reader of the lines went away (``monitor | head -3``): raised on this thread, it
-            # went unseen into the future and the monitor ran on, printing to nobody; the main
-            # loop ends on it (``output_gone``) as on a line of its own (cli: 141)
-            self.output_gone = True
         except OSError as exc:
-            # the lines' file could not take it (ENOSPC of a full disk, EIO of a failing one): unseen
-            # in the future, the monitor ran on without its lines and a --count ended it with 0; the
-            # main thread raises it (``raise_output_failure``), as it does its own lines' (cli: exit 1)
+            # the reader of the lines went away (``monitor | head -3``: BrokenPipeError) or their
+            # file could not take them (ENOSPC of a full disk, EIO of a failing one): raised on
+            # this thread, it went unseen into the future, and the monitor ran on printing to
+            # nobody, or a --count ended it with 0; the main thread raises it
+            # (``raise_output_failure``) as it does its own lines' (cli: 141, or exit 1)
             self.output_failed = exc
         finally:
             self.windows_done += 1
@@ -956,8 +953,6 @@ def main(args, ros_args=()) -> int:
         executor.add_node(node)
         t_start = next_look = time.monotonic()
         while rclpy.ok() and not node.done and signals.first is None:
-            if node.output_gone:
-                raise BrokenPipeError("a verdict line found no reader")
             node.raise_output_failure()
             if node.source_lost(time.monotonic()):
                 status = EXIT_SOURCE_LOST
