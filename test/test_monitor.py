@@ -39,6 +39,7 @@ def test_window_gathers_contiguous_tables_and_restarts_on_a_gap():
     assert not w.add(t + 4 * step, ["a"], np.ones((150, 1), np.float32))      # one table lost
     assert w.gaps == 1 and w.samples == 150 and w.sample_rate is None
     assert w.add(t + 5 * step, ["a"], np.ones((150, 1), np.float32))
+    assert w.sample_rate == pytest.approx(15000.0)      # a pair at the rate of before the gap: at once
     assert not w.add(t + 6 * step, ["b"], np.ones((150, 1), np.float32))      # other channels
     assert w.take().shape == (150, 1) and w.samples == 0
 
@@ -57,6 +58,9 @@ def test_a_table_alone_between_two_gaps_gives_the_window_no_rate():
     assert not w.add(t + 201 * step, ["a"], table)
     assert w.add(t + 202 * step, ["a"], table) and w.add(t + 203 * step, ["a"], table)
     assert w.sample_rate == pytest.approx(15000.0) and w.seconds() == pytest.approx(0.03) and w.gaps == 1
+    # the same after a gap where a rate was known: a pair at another rate still waits for a third
+    assert not w.add(t + 300 * step, ["a"], table) and w.add(t + 500 * step, ["a"], table)
+    assert w.sample_rate is None and w.seconds() == 0.0
 
 
 def _reports(items, onsets=None):

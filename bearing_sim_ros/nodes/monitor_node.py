@@ -117,12 +117,16 @@ class Window:
     of the first pair of tables after a start or a gap, confirmed by the next table (stamped where
     that rate ends the second): a single table between two gaps, stamped 2 s after the one
     before, gave a rate of 75 Hz that only the following table's stamp showed wrong, and the two
-    tables made 4 s of that "signal", a verdict of the default ``--window`` on nothing."""
+    tables made 4 s of that "signal", a verdict of the default ``--window`` on nothing.  A pair at
+    the rate confirmed before the gap (the same source after a lost table, the next pass of play
+    --loop, a node started again) needs no third table: with 1 s tables, that would have cost
+    every run after the first a verdict."""
 
     def __init__(self):
         self.clear()
         self.sample_rate = None     # Hz, confirmed by a second pair; None after a start or a gap
         self._proposed_rate = None  # Hz, of the first pair, until the second confirms it
+        self._last_rate = None      # Hz, the last confirmed, before the gap
         self.gaps = 0
         self._prev_stamp = None
         self._prev_width = None
@@ -153,10 +157,15 @@ class Window:
         if not contiguous:
             self.gaps += 1
             self.clear()
+            self._last_rate = self.sample_rate or self._last_rate
             self.sample_rate = self._proposed_rate = None
         elif self._prev_stamp is not None and self.sample_rate is None:
             if self._proposed_rate is None:         # the first pair of tables proposes the rate
                 self._proposed_rate = self._prev_width * NS / (stamp_ns - self._prev_stamp)
+                if self._last_rate and abs(stamp_ns - self._prev_stamp
+                                           - round(self._prev_width * NS / self._last_rate)) <= 1000:
+                    # that of before the gap: confirmed already
+                    self.sample_rate, self._proposed_rate = self._proposed_rate, None
             else:                                   # and the next table, where it fits, confirms it
                 self.sample_rate, self._proposed_rate = self._proposed_rate, None
         self._prev_stamp, self._prev_width = stamp_ns, data.shape[0]
