@@ -1237,3 +1237,13 @@ def test_the_timeline_gives_each_defects_sizes_by_its_kind(tmp_path):
     md = (tmp_path / "rep" / "summary.md").read_text()
     rows = [line for line in md.splitlines() if re.match(r"\| \d+\.\d\d-\d+\.\d\d \|", line)]
     assert [row.split(" | ")[4] for row in rows] == ["ball 1, inner 0", "ball 1, inner 0.25", "ball 1, inner 0.75-1"], rows
+
+
+def test_the_timeline_names_two_defects_of_one_kind_by_their_place():
+    """Two outer-race pits said "outer 1, outer 0.5" in summary.md's defect sizes, which does not
+    say which is which; now by their place in the scene, as a scene without kinds numbers them."""
+    run = [{"defect_sizes": [1.0, 0.5]}, {"defect_sizes": [1.0, 0.75]}]
+    assert report._sizes_text(run, ["outer", "outer"]) == "outer #1 1, outer #2 0.5-0.75"
+    assert report._sizes_text(run, ["ball", "outer"]) == "ball 1, outer 0.5-0.75"
+    assert report._sizes_text(run, []) == "#1 1, #2 0.5-0.75"
+    assert report._sizes_text([{"defect_sizes": None}], ["outer"]) == "n/a"

@@ -1432,8 +1432,8 @@ def _timeline_runs(timeline: list) -> list:
 def _sizes_text(run: list, kinds: list) -> str:
     """The defect sizes over a run of timeline windows: their range ("0.2-0.6"), and where the
     scene has several defects, each one's by its kind ("ball 1, inner 0.2-0.6"; ``kinds``: the
-    scene's, in its order, that of ``defect_sizes``; a recording without its scene numbers them,
-    "#1 1, #2 0.2-0.6"): the range of all of them at once said "1" for a ball and an inner-race
+    scene's, in its order, that of ``defect_sizes``; two of a kind by their place, "outer #1 1, outer
+    #2 0.5"; a recording without its scene numbers them, "#1 1, #2 0.2-0.6"): the range of all of them at once said "1" for a ball and an inner-race
     defect.  "n/a" without sizes."""
     per_defect = [sorted({w["defect_sizes"][k] for w in run if w["defect_sizes"] and k < len(w["defect_sizes"])})
                   for k in range(max((len(w["defect_sizes"] or []) for w in run), default=0))]
@@ -1442,7 +1442,11 @@ def _sizes_text(run: list, kinds: list) -> str:
         return "n/a"
     if len(ranges) == 1:
         return ranges[0]
-    names = kinds if len(kinds) == len(ranges) else [f"#{k + 1}" for k in range(len(ranges))]
+    if len(kinds) == len(ranges):       # a kind twice in the scene: each by its place among them
+        names = [kind if kinds.count(kind) == 1 else f"{kind} #{kinds[:k + 1].count(kind)}"
+                 for k, kind in enumerate(kinds)]
+    else:
+        names = [f"#{k + 1}" for k in range(len(ranges))]
     return ", ".join(f"{name} {text}" for name, text in zip(names, ranges))
 
 
