@@ -1432,21 +1432,22 @@ def _timeline_runs(timeline: list) -> list:
 def _sizes_text(run: list, kinds: list) -> str:
     """The defect sizes over a run of timeline windows: their range ("0.2-0.6"), and where the
     scene has several defects, each one's by its kind ("ball 1, inner 0.2-0.6"; ``kinds``: the
-    scene's, in its order, that of ``defect_sizes``; two of a kind by their place, "outer #1 1, outer
-    #2 0.5"; a recording without its scene numbers them, "#1 1, #2 0.2-0.6"): the range of all of them at once said "1" for a ball and an inner-race
-    defect.  "n/a" without sizes."""
+    scene's, in its order, that of ``defect_sizes``; two of a kind by their place, "outer #1 1,
+    outer #2 0.5"; a recording without its scene numbers them, "#1 1, #2 0.2-0.6"): the range of
+    all of them at once said "1" for a ball and an inner-race defect.  "n/a" without sizes."""
+    count = max((len(w["defect_sizes"] or []) for w in run), default=0)
     per_defect = [sorted({w["defect_sizes"][k] for w in run if w["defect_sizes"] and k < len(w["defect_sizes"])})
-                  for k in range(max((len(w["defect_sizes"] or []) for w in run), default=0))]
-    ranges = [_num(v[0]) + ("-" + _num(v[-1]) if len(v) > 1 else "") for v in per_defect if v]
-    if not ranges:
+                  for k in range(count)]
+    if not any(per_defect):
         return "n/a"
-    if len(ranges) == 1:
+    ranges = [_num(v[0]) + ("-" + _num(v[-1]) if len(v) > 1 else "") if v else "n/a" for v in per_defect]
+    if count == 1:
         return ranges[0]
-    if len(kinds) == len(ranges):       # a kind twice in the scene: each by its place among them
+    if len(kinds) == count:             # a kind twice in the scene: each by its place among them
         names = [kind if kinds.count(kind) == 1 else f"{kind} #{kinds[:k + 1].count(kind)}"
                  for k, kind in enumerate(kinds)]
     else:
-        names = [f"#{k + 1}" for k in range(len(ranges))]
+        names = [f"#{k + 1}" for k in range(count)]
     return ", ".join(f"{name} {text}" for name, text in zip(names, ranges))
 
 

@@ -148,9 +148,12 @@ class Window:
         rate = self.sample_rate or self._proposed_rate
         if rate is None:
             return stamp_ns > self._prev_stamp
-        expected = self._prev_stamp + round(self._prev_width * NS / rate)
-        # > 1 us off: a table is missing or time jumped
-        return abs(stamp_ns - expected) <= 1000
+        return self._ends_last_at(stamp_ns, rate)
+
+    def _ends_last_at(self, stamp_ns: int, rate: float) -> bool:
+        """Is ``stamp_ns`` where the last table's samples end at ``rate`` (Hz)?  More than 1 us
+        off: a table is missing or time jumped."""
+        return abs(stamp_ns - self._prev_stamp - round(self._prev_width * NS / rate)) <= 1000
 
     def add(self, stamp_ns: int, channels, data: np.ndarray) -> bool:
         contiguous = self.continues(stamp_ns, channels)
@@ -162,8 +165,7 @@ class Window:
         elif self._prev_stamp is not None and self.sample_rate is None:
             if self._proposed_rate is None:         # the first pair of tables proposes the rate
                 self._proposed_rate = self._prev_width * NS / (stamp_ns - self._prev_stamp)
-                if self._last_rate and abs(stamp_ns - self._prev_stamp
-                                           - round(self._prev_width * NS / self._last_rate)) <= 1000:
+                if self._last_rate and self._ends_last_at(stamp_ns, self._last_rate):
                     # that of before the gap: confirmed already
                     self.sample_rate, self._proposed_rate = self._proposed_rate, None
             else:                                   # and the next table, where it fits, confirms it
