@@ -370,12 +370,42 @@ def test_sample_rate_range_is_the_nodes():
 
 @pytest.mark.parametrize("duration", [True, 0, -1.0, math.inf, "1"])
 def test_a_duration_that_is_not_seconds_is_refused_in_one_line(tmp_path, duration):
-    """render(scene, True, out) was one second of signal (bool is an int); the rest were refused."""
+    """render(scene, True, out) was one second of signal (bool is an int); the rest were refused,
+    in the API's words (they named the CLI's --duration, an option a Python caller never gave)."""
     out = tmp_path / "x.mcap"
     with pytest.raises(UserError) as exc:
         render("er16k_healthy", duration, out, fidelity="kinematic", progress=False)
-    assert str(exc.value) == f"--duration = {duration!r}: expected a finite number of seconds > 0"
+    assert str(exc.value) == f"duration = {duration!r}: expected a finite number of seconds > 0"
     assert not out.exists()
+
+
+@pytest.mark.parametrize("kwargs, api, cli_args, cli", [
+    ({"duration": 1e-5}, "duration = 1e-05 s: shorter than one sample", ["--duration", "1e-5"],
+     "--duration = 1e-05 s: shorter than one sample"),
+    ({"rk4_step": 5e-6}, "rk4_step = 5e-06 s: applies to solver='rk4' only (given solver='default')",
+     ["--rk4-step", "5e-6"], "--rk4-step = 5e-06 s: applies to --solver rk4 only (given --solver default)"),
+    ({"solver": "rk4", "rk4_step": 2e-6, "fidelity": "kinematic"},
+     "solver='rk4' rk4_step=2e-06: the solver applies to the skidding tier only, and fidelity='kinematic' runs "
+     "the kinematic tier; drop solver or use fidelity='skidding'",
+     ["--solver", "rk4", "--rk4-step", "2e-6", "--fidelity", "kinematic"],
+     "--solver rk4 --rk4-step 2e-06: the solver applies to the skidding tier only, and --fidelity kinematic runs "
+     "the kinematic tier; drop --solver or use --fidelity skidding"),
+    ({"out": ""}, "out = '': expected the path of an .mcap file", ["--out", ""],
+     "--out = '': expected the path of an .mcap file"),
+], ids=["duration", "rk4_step", "solver", "out"])
+def test_render_names_its_arguments_in_the_callers_words(tmp_path, capsys, kwargs, api, cli_args, cli):
+    """``render()`` from Python names its keyword arguments (``duration = ...``,
+    ``solver='rk4'``), ``bearing-sim render`` its options (``--duration = ...``, ``--solver rk4``):
+    the function said the CLI's words to a Python caller, who had given no option."""
+    out = tmp_path / "x.mcap"
+    call = {"duration": 0.05, "out": out, **kwargs}
+    with pytest.raises(UserError) as exc:
+        render("er16k_healthy", call.pop("duration"), call.pop("out"), progress=False, **call)
+    assert str(exc.value).startswith(api), str(exc.value)
+    args = ["render", "er16k_healthy", "--duration", "0.05", "--out", str(out)] + cli_args
+    code, err = _one_line_error(capsys, args)
+    assert code == 2 and err.startswith(f"error: {cli}"), err
+    assert list(tmp_path.iterdir()) == []
 
 
 @pytest.mark.parametrize("kwargs, message", [
@@ -669,7 +699,7 @@ def test_a_second_render_to_the_same_out_is_refused_in_one_line_and_the_first_ke
         assert (code, err) == (2, f"error: {busy}")
         with pytest.raises(UserError) as refused:
             render("er16k_healthy", 0.5, out, seed=3, progress=False)
-        assert str(refused.value) == busy
+        assert str(refused.value) == busy[2:]          # the API's words: out = '...'; the rest alike
         assert not out.exists() and len(list(tmp_path.iterdir())) == 1      # the first's partial file alone
         stop_render(first)
     assert [p.name for p in tmp_path.iterdir()] == ["same.mcap"]

@@ -28,7 +28,7 @@ import time
 
 import numpy as np
 
-from ..errors import CLI_SETTINGS, UserError
+from ..errors import API_SETTINGS, CLI_SETTINGS, SettingNames, UserError
 from ..paths import output_file
 from ..teardown import EXIT_INTERRUPTED, SIGNAL_NAMES, drop_a_closed_terminal, say_on_stderr, signal_handlers
 from ..messages import BATCH_DURATION, RUN_KEY, RUN_RUNNING, STATE_RATE, TOPIC_ACCEL, TOPIC_CONTACT, \
@@ -345,7 +345,7 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
            sample_rate: float = 15000.0, solver: str = "default",
            batch_duration: float = BATCH_DURATION, state_rate: float = STATE_RATE,
            progress: bool | None = None, oversample: int | None = None,
-           rk4_step: float | None = None) -> dict:
+           rk4_step: float | None = None, *, settings: SettingNames = API_SETTINGS) -> dict:
     """Render ``duration`` seconds of ``scene`` (Scene, shipped name or YAML path) to ``out``.
 
     ``oversample``: integration steps per output sample (None: each tier's own; see
@@ -360,12 +360,19 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
     bytes, wall time (s), real-time factor, tier (at the end), tier_values (``tier_values``: the
     tier switches of ``fidelity="auto"``), path, solver_unused.  Where the skidding solver
     diverges, the signal up to the batch that diverged is kept at ``out``, finalised, and
-    ``SolverDiverged`` raised with ``recording``: where the file stands, in words."""
+    ``SolverDiverged`` raised with ``recording``: where the file stands, in words.
+
+    ``settings``: how the one-line errors name the arguments, the keyword arguments
+    (``duration = 0: ...``, ``rk4_step = 1e-05 s: applies to solver='rk4' only``) or the
+    CLI's options (``render_command``: ``--duration = 0: ...``).  What the file records (its
+    command, a divergence's words) is in the CLI's words either way, so that both make the same
+    bytes."""
     from .. import Simulator
     from ..physics.skidding import SolverDiverged
     from ..scene import changes_since_loaded, load_scene, scene_argument
     from .recorder import Recorder, recording_metadata
 
+    name, assign = settings.name, settings.assign
     if not hasattr(scene, "bearing"):
         scene = load_scene(scene)
     # the file records the scene's YAML and a command that loads it: of a scene changed since,
@@ -379,17 +386,18 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
     # bool is an int to Python, but render(..., True) is a slip, not one second
     if isinstance(duration, bool) or not (isinstance(duration, numbers.Real) and math.isfinite(duration)
                                           and duration > 0):
-        raise UserError(f"--duration = {duration!r}: expected a finite number of seconds > 0")
-    output_file(out, "--out", keep=[scene.source_path])      # before the work, not after it
+        raise UserError(f"{name('duration')} = {duration!r}: expected a finite number of seconds > 0")
+    output_file(out, name("out"), keep=[scene.source_path])      # before the work, not after it
     if rk4_step is not None and solver != "rk4":
-        raise UserError(f"--rk4-step = {rk4_step:g} s: applies to --solver rk4 only (given --solver {solver})")
+        raise UserError(f"{name('rk4_step')} = {rk4_step:g} s: applies to {assign('solver', 'rk4')} only "
+                        f"(given {assign('solver', solver)})")
     if solver != "default" and (scene.fidelity if fidelity == "auto" else fidelity) == "kinematic":
-        # said in the CLI's words before the Simulator says it in the API's
-        given = f"--solver {solver}" + (f" --rk4-step {float(rk4_step)!r}" if rk4_step is not None else "")
-        asked_by = ("--fidelity kinematic" if fidelity == "kinematic"
+        # said in the caller's words before the Simulator says it in the API's
+        given = assign("solver", solver) + (f" {assign('rk4_step', float(rk4_step))}" if rk4_step is not None else "")
+        asked_by = (assign("fidelity", "kinematic") if fidelity == "kinematic"
                     else f"scene {scene.name}'s fidelity.tier: kinematic")
         raise UserError(f"{given}: the solver applies to the skidding tier only, and {asked_by} runs the "
-                        f"kinematic tier; drop {given.split(' ', 1)[0]} or use --fidelity skidding")
+                        f"kinematic tier; drop {name('solver')} or use {assign('fidelity', 'skidding')}")
     sim = Simulator(scene, sample_rate=sample_rate, fidelity=fidelity, seed=seed, solver=solver,
                     oversample=oversample, rk4_step=rk4_step)
     # the node's rule for its parameters of the same names (a render's batching also runs live);
@@ -398,7 +406,7 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
     if reason:
         raise UserError(reason)
     # a file without a single table, which report and play then refuse
-    reason = duration_error("--duration", duration, sample_rate)
+    reason = duration_error(name("duration"), duration, sample_rate)
     if reason:
         raise UserError(reason)
     total = int(round(duration * sample_rate))
@@ -495,7 +503,7 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
             # the partial file opened, and its topics added, where a signal is only noted: raised
             # between its opening and the loop (SIGTERM, SIGHUP; Ctrl-C where a caller's handler
             # raised), it left the file behind, never finalised nor removed
-            rec = Recorder(out, meta, attachments, start_time_ns=0, argument="--out", keep=[scene.source_path],
+            rec = Recorder(out, meta, attachments, start_time_ns=0, argument=name("out"), keep=[scene.source_path],
                            replace_when_done=True, when_full="wait")
             for topic in topics:
                 rec.add_topic(topic, TYPES[topic], _qos_for(topic, batch_duration))
@@ -567,9 +575,9 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
     wall = time.perf_counter() - t_wall0
     status = rec.status
     if not status["ok"]:
-        raise UserError(f"--out = {str(out)!r}: {status['error']}")
+        raise UserError(f"{name('out')} = {str(out)!r}: {status['error']}")
     if dropped:
-        raise UserError(f"--out = {str(out)!r}: {dropped} messages were not recorded; "
+        raise UserError(f"{name('out')} = {str(out)!r}: {dropped} messages were not recorded; "
                         f"nothing written, {str(out)!r} left as it was")
     return {"messages": status["messages"], "bytes": status["bytes"], "wall_s": wall,
             "signal_s": total / sample_rate, "real_time_factor": (total / sample_rate) / max(wall, 1e-9),
@@ -600,7 +608,7 @@ def render_command(args) -> int:
             scene = load_scene(args.scene)
             summary = render(scene, float(args.duration), out, fidelity=args.fidelity, seed=int(args.seed),
                              sample_rate=float(args.sample_rate), solver=args.solver,
-                             oversample=args.oversample, rk4_step=args.rk4_step)
+                             oversample=args.oversample, rk4_step=args.rk4_step, settings=CLI_SETTINGS)
     except KeyboardInterrupt as exc:
         # 130 / 143: the file holds less than asked, and a script should know
         if not getattr(exc, "reported", False):
