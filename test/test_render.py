@@ -392,7 +392,9 @@ def test_a_duration_that_is_not_seconds_is_refused_in_one_line(tmp_path, duratio
      "the kinematic tier; drop --solver or use --fidelity skidding"),
     ({"out": ""}, "out = '': expected the path of an .mcap file", ["--out", ""],
      "--out = '': expected the path of an .mcap file"),
-], ids=["duration", "rk4_step", "solver", "out"])
+    ({"rk4_step": "1e-5"}, "rk4_step = '1e-5' s: applies to solver='rk4' only", ["--rk4-step", "1e-5"],
+     "--rk4-step = 1e-05 s: applies to --solver rk4 only"),         # a ValueError from the format before
+], ids=["duration", "rk4_step", "solver", "out", "rk4_step_text"])
 def test_render_names_its_arguments_in_the_callers_words(tmp_path, capsys, kwargs, api, cli_args, cli):
     """``render()`` from Python names its keyword arguments (``duration = ...``,
     ``solver='rk4'``), ``bearing-sim render`` its options (``--duration = ...``, ``--solver rk4``):

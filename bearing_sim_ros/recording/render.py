@@ -389,7 +389,8 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
         raise UserError(f"{name('duration')} = {duration!r}: expected a finite number of seconds > 0")
     output_file(out, name("out"), keep=[scene.source_path])      # before the work, not after it
     if rk4_step is not None and solver != "rk4":
-        raise UserError(f"{name('rk4_step')} = {rk4_step:g} s: applies to {assign('solver', 'rk4')} only "
+        shown = f"{rk4_step:g}" if isinstance(rk4_step, numbers.Real) else repr(rk4_step)   # '1e-5': no :g
+        raise UserError(f"{name('rk4_step')} = {shown} s: applies to {assign('solver', 'rk4')} only "
                         f"(given {assign('solver', solver)})")
     if solver != "default" and (scene.fidelity if fidelity == "auto" else fidelity) == "kinematic":
         # said in the caller's words before the Simulator says it in the API's
