@@ -918,7 +918,7 @@ def test_a_second_clock_beside_publish_clock_is_said_and_a_remapped_clock_is_not
 
 
 def test_a_second_node_given_the_same_record_path_ends_with_one_line_and_the_first_records_whole(
-        started, ros_env, bearing_sim_exe, tmp_path):
+        started, listener, ros_env, bearing_sim_exe, tmp_path):
     """Two rigs given one ``record`` path (``/**: record: run.mcap`` in a parameters file for both)
     both wrote into the one file and both logged ``recording run.mcap: 1804 messages`` and exited
     0: the file held one rig's recording, the other's was lost.  The second now ends at start with
@@ -929,7 +929,8 @@ def test_a_second_node_given_the_same_record_path_ends_with_one_line_and_the_fir
     r = subprocess.run([bearing_sim_exe, "node", "--ros-args", "-r", "__ns:=/right", "-p", f"record:={out}",
                         "-p", "duration:=2.0"], env=ros_env, capture_output=True, text=True, timeout=60)
     assert_one_error_line(r, [f"record = '{out}'", "another recording is being written to this file"])
-    time.sleep(1.0)
+    # a second of tables (a fixed sleep gave 99 on a loaded machine)
+    listener.wait_for(lambda: len(listener.accel) >= 100, 30, "a second of tables")
     left.send(signal.SIGINT)
     assert left.wait(20) == 0, left.output()
     topics, _meta = read_recording(out)
@@ -939,7 +940,7 @@ def test_a_second_node_given_the_same_record_path_ends_with_one_line_and_the_fir
 
 
 def test_a_render_and_a_node_given_one_path_the_second_ends_with_one_line_and_the_first_records_whole(
-        started, ros_env, bearing_sim_exe, tmp_path, capsys):
+        started, listener, ros_env, bearing_sim_exe, tmp_path, capsys):
     """A render to the path a node records to, or a node given the path a render writes: the
     render moved its file onto the path when it was done, and the node's recording was lost
     (replaced under it) or the render's (the node's file moved onto it after).  The second of the
@@ -954,7 +955,8 @@ def test_a_render_and_a_node_given_one_path_the_second_ends_with_one_line_and_th
     err = capsys.readouterr().err
     assert err == (f"error: --out = '{out}': another recording is being written to this file (two renders, nodes "
                    "or runs given the same path?); give each its own, or wait until the other ends\n"), err
-    time.sleep(1.0)
+    # a second of tables (a fixed sleep gave 99 on a loaded machine)
+    listener.wait_for(lambda: len(listener.accel) >= 100, 30, "a second of tables")
     node.send(signal.SIGINT)
     assert node.wait(20) == 0, node.output()
     topics, meta = read_recording(out)
