@@ -755,9 +755,11 @@ def test_diagnostics_go_on_each_second_after_real_time_is_switched_off_and_on(st
     resumed = time.monotonic()
     listener.wait_for(lambda: float(listener.diagnostics[-1][3]["simulated_s"]) > 10.0, 5.0,
                       "the signal to run ahead")        # the test can fail: it did run ahead
-    time.sleep(3.5)
+    # three within 6 s (a loaded machine may delay one; the old schedule gave none for the 10 s
+    # the signal had run ahead)
+    listener.wait_for(lambda: len([d for d in listener.diagnostics if d[0] > resumed + 0.2]) >= 3,
+                      resumed + 6.0 - time.monotonic(), "three /diagnostics after real_time:=true")
     after = [d for d in listener.diagnostics if d[0] > resumed + 0.2]
-    assert len(after) >= 3, [(round(d[0] - resumed, 2), d[3]["simulated_s"]) for d in listener.diagnostics[-5:]]
     assert all(d[3]["real_time"] == "true" for d in after[1:])
 
 
