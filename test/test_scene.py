@@ -811,3 +811,15 @@ def test_the_shafts_weight_on_the_balls_is_there_only_with_gravity():
     scene = load_scene("er16k_outer_race")
     assert scene.gravity and scene.shaft_weight == pytest.approx(scene.structure.shaft_mass * 9.80665, rel=1e-12)
     assert dataclasses.replace(scene, gravity=False).shaft_weight == 0.0
+
+
+def test_a_scene_without_sensor_slip_or_gravity_keys_takes_the_documented_defaults():
+    """README: the sensor saturates at +-50 g (490.3 m/s^2) "unless it says otherwise" and its
+    frame is ``bearing_accel``; an omitted sensor is ideal (no resonance, no noise) on both axes
+    in x, y order; no ``random_slip`` is no jitter of the ball passes and no ``gravity`` key
+    is the shaft's weight acting."""
+    scene = scene_from_dict(load_yaml(GOOD))
+    s = scene.sensor
+    assert (s.axes, s.resonance_hz, s.noise_density, s.frame_id) == (("x", "y"), 0.0, 0.0, "bearing_accel")
+    assert s.range == pytest.approx(50 * 9.80665, abs=0.05)
+    assert scene.random_slip == 0.0 and scene.gravity is True
