@@ -1568,3 +1568,16 @@ def test_the_static_capacity_carries_the_contact_angles_cosine():
     assert angular.static_capacity == pytest.approx(14.7 * 9 * 7.94 ** 2 * math.cos(math.radians(40.0)), rel=1e-12)
     assert angular.max_load == pytest.approx(2 * angular.static_capacity, rel=1e-12)
     assert angular.max_speed == radial.max_speed              # n d_m: the pitch circle alone
+
+
+def test_the_bounds_beyond_every_bearings_own_are_60000_rpm_and_1_mn():
+    """README: never more than a scene may ask for, 60 000 rpm and 1 MN, in numbers (the test
+    above compares with the module's constants, which a changed constant moves with it): a
+    4 mm pitch circle's n d_m would allow 250 000 rpm, a 20 x 150 mm ball set's 2 x C0 13 MN."""
+    from bearing_sim_ros.catalog import bearing_from_mapping
+
+    tiny = bearing_from_mapping("tiny", {"balls": 6, "ball_diameter_mm": 1.0, "pitch_diameter_mm": 4.0})
+    huge = bearing_from_mapping("huge", {"balls": 20, "ball_diameter_mm": 150.0, "pitch_diameter_mm": 1200.0})
+    assert InputLimits(tiny).max_speed == pytest.approx(60000 * 2 * math.pi / 60, rel=1e-12)
+    assert InputLimits(huge).static_capacity == pytest.approx(14.7 * 20 * 150.0 ** 2, rel=1e-12)
+    assert InputLimits(huge).max_load == 1.0e6
