@@ -425,3 +425,20 @@ def test_a_tier_asked_for_is_the_tier_used_with_its_estimate_still_reported():
         assert chosen.tier == auto, chosen
         assert (asked.tier, asked.reason) == (request, f"{request} requested")
         assert asked.estimated_error == chosen.estimated_error and asked.skid_index == chosen.skid_index
+
+
+def test_a_low_traction_lubricant_keeps_its_own_peak_down_to_1e_3():
+    """mu_max is the curve's own down to 1e-3 (``traction_peak``): a flat mu = 0.03, within the
+    0.02 - 0.1 of lubricated contacts, is 0.03 (a floor at 0.1 would halve chi and so the
+    skidding the estimate sees); a curve of 0 everywhere is held at 1e-3, not a division by 0."""
+    from bearing_sim_ros.fidelity import traction_peak
+    from bearing_sim_ros.scene import Lubrication
+
+    flat = Lubrication(traction_a=0.0, traction_b=0.0, traction_c=0.0, traction_d=0.03)
+    assert traction_peak(flat) == pytest.approx(0.03, rel=1e-12)
+    assert traction_peak(replace(flat, traction_d=0.0)) == 1e-3
+    scene = load_scene("er16k_healthy")
+    chi = [skid_index(replace(scene, lubrication=replace(scene.lubrication, traction_a=0.0, traction_b=0.0,
+                                                         traction_c=0.0, traction_d=d)), 3000 * RPM, (0.0, -200.0))
+           for d in (0.03, 0.09)]
+    assert chi[0] == pytest.approx(3 * chi[1], rel=1e-12)
