@@ -399,3 +399,46 @@ def total_over_share(scene, load):
     from bearing_sim_ros.fidelity import bearing_load
 
     return (load + scene.structure.shaft_mass * 9.80665) / bearing_load(scene, (0.0, -load))
+
+
+def test_the_traction_peak_is_the_curves_largest_value_up_to_a_slip_of_20_m_s():
+    """``traction_peak`` takes mu_max over slips of 0 - 20 m/s: a curve that keeps rising, mu = 0.01
+    v (A = D = 0, B = 0.01, C = 0), peaks there at 0.2, not at the 1.0 it reaches at the 100 m/s
+    the scene's check looks up to; the default curve's peak, at v = 1 / C - A / B = 6.67 m/s,
+    is (A + B v) exp(-C v) + D = 0.1 + 0.3 exp(-4/3) = 0.179."""
+    from bearing_sim_ros.fidelity import traction_peak
+    from bearing_sim_ros.scene import Lubrication
+
+    rising = Lubrication(traction_a=0.0, traction_b=0.01, traction_c=0.0, traction_d=0.0)
+    assert traction_peak(rising) == pytest.approx(0.2, rel=1e-12)
+    assert traction_peak(Lubrication()) == pytest.approx(0.1 + 0.3 * np.exp(-4.0 / 3.0), rel=1e-12)
+
+
+def test_a_tier_asked_for_is_the_tier_used_with_its_estimate_still_reported():
+    """A tier named by the caller is used as asked, even where auto would take the other: the
+    kinematic tier at 10000 rpm and 10 N (auto: skidding, estimate above 5 %) and the skidding
+    tier at 1000 rpm and 2000 N (auto: kinematic); the estimate is the one auto would judge."""
+    scene = load_scene("er16k_healthy")
+    for request, rpm, load, auto in (("kinematic", 10000, 10.0, "skidding"), ("skidding", 1000, 2000.0, "kinematic")):
+        chosen = select_tier(scene, "auto", rpm * RPM, (0.0, -load), 0.05)
+        asked = select_tier(scene, request, rpm * RPM, (0.0, -load), 0.05)
+        assert chosen.tier == auto, chosen
+        assert (asked.tier, asked.reason) == (request, f"{request} requested")
+        assert asked.estimated_error == chosen.estimated_error and asked.skid_index == chosen.skid_index
+
+
+def test_a_low_traction_lubricant_keeps_its_own_peak_down_to_1e_3():
+    """mu_max is the curve's own down to 1e-3 (``traction_peak``): a flat mu = 0.03, within the
+    0.02 - 0.1 of lubricated contacts, is 0.03 (a floor at 0.1 would halve chi and so the
+    skidding the estimate sees); a curve of 0 everywhere is held at 1e-3, not a division by 0."""
+    from bearing_sim_ros.fidelity import traction_peak
+    from bearing_sim_ros.scene import Lubrication
+
+    flat = Lubrication(traction_a=0.0, traction_b=0.0, traction_c=0.0, traction_d=0.03)
+    assert traction_peak(flat) == pytest.approx(0.03, rel=1e-12)
+    assert traction_peak(replace(flat, traction_d=0.0)) == 1e-3
+    scene = load_scene("er16k_healthy")
+    chi = [skid_index(replace(scene, lubrication=replace(scene.lubrication, traction_a=0.0, traction_b=0.0,
+                                                         traction_c=0.0, traction_d=d)), 3000 * RPM, (0.0, -200.0))
+           for d in (0.03, 0.09)]
+    assert chi[0] == pytest.approx(3 * chi[1], rel=1e-12)

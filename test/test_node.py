@@ -1543,3 +1543,48 @@ def test_a_scene_that_diverges_as_the_node_is_made_ends_it_in_one_line(ros_env, 
     assert_one_error_line(r, ["the skidding tier's default solver diverged at t = 0.0004", "(20000 rpm, radial load "
                               "[0, -200] N)", "try -p fidelity:=kinematic"])
     assert not (tmp_path / "live.mcap").exists()
+
+
+def test_an_axial_load_adds_to_what_the_balls_carry_with_the_shafts_weight():
+    """``load.force.z`` (axial) counts in the magnitude the balls carry together with the shaft's
+    weight, as it counts in the load alone: (0, -5000, 10000) N on a 1000 kg shaft (9806.65 N
+    down) is |F| = sqrt(14806.65^2 + 10000^2) = 17867 N on the balls, beyond 2 x C0 = 16681 N
+    of the ER-16K, though the load alone (11180 N) and its radial part with the weight (14807 N)
+    are within it."""
+    scene = load_scene("er16k_outer_race")
+    heavy = replace(scene, structure=replace(scene.structure, shaft_mass=1000.0))
+    lim = InputLimits(heavy.bearing, heavy.shaft_weight)
+    on_balls = math.sqrt((5000.0 + 1000.0 * 9.80665) ** 2 + 10000.0 ** 2)
+    assert math.hypot(5000.0, 10000.0) < lim.max_load < on_balls
+    reason = check_load(0.0, -5000.0, 10000.0, lim)
+    assert reason is not None and reason[0] == "out_of_range", reason
+    assert f"|F| on the balls = {on_balls:.6g} N" in reason[1], reason
+    assert check_load(0.0, -5000.0, 3000.0, lim) is None        # sqrt(14806.65^2 + 3000^2) = 15108 N
+
+
+def test_the_static_capacity_carries_the_contact_angles_cosine():
+    """ISO 76: C0 = f0 Z Dw^2 cos(alpha) (N, mm) with f0 = 14.7: an angular-contact geometry at
+    40 deg has cos(40 deg) = 0.766 of the deep-groove one's C0 and load limit (every catalog
+    bearing has alpha = 0, where the cosine is 1 and its loss unseen)."""
+    from bearing_sim_ros.catalog import bearing_from_mapping
+
+    geometry = {"balls": 9, "ball_diameter_mm": 7.94, "pitch_diameter_mm": 38.5}
+    radial = InputLimits(bearing_from_mapping("radial", geometry))
+    angular = InputLimits(bearing_from_mapping("angular", {**geometry, "contact_angle_deg": 40.0}))
+    assert radial.static_capacity == pytest.approx(14.7 * 9 * 7.94 ** 2, rel=1e-12)
+    assert angular.static_capacity == pytest.approx(14.7 * 9 * 7.94 ** 2 * math.cos(math.radians(40.0)), rel=1e-12)
+    assert angular.max_load == pytest.approx(2 * angular.static_capacity, rel=1e-12)
+    assert angular.max_speed == radial.max_speed              # n d_m: the pitch circle alone
+
+
+def test_the_bounds_beyond_every_bearings_own_are_60000_rpm_and_1_mn():
+    """README: never more than a scene may ask for, 60 000 rpm and 1 MN, in numbers (the test
+    above compares with the module's constants, which a changed constant moves with it): a
+    4 mm pitch circle's n d_m would allow 250 000 rpm, a 20 x 150 mm ball set's 2 x C0 13 MN."""
+    from bearing_sim_ros.catalog import bearing_from_mapping
+
+    tiny = bearing_from_mapping("tiny", {"balls": 6, "ball_diameter_mm": 1.0, "pitch_diameter_mm": 4.0})
+    huge = bearing_from_mapping("huge", {"balls": 20, "ball_diameter_mm": 150.0, "pitch_diameter_mm": 1200.0})
+    assert InputLimits(tiny).max_speed == pytest.approx(60000 * 2 * math.pi / 60, rel=1e-12)
+    assert InputLimits(huge).static_capacity == pytest.approx(14.7 * 20 * 150.0 ** 2, rel=1e-12)
+    assert InputLimits(huge).max_load == 1.0e6

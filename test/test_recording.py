@@ -1104,3 +1104,30 @@ def test_opening_a_truncated_recording_makes_no_message_record(three_chunks, tmp
     with open_recording(cut) as rec:
         assert rec.message_count == len(messages) and made == []
         assert list(rec.messages()) == messages and len(made) == len(messages)
+
+
+def test_sample_times_are_the_index_over_the_rate_to_the_mhz_rounded_down_to_the_ns():
+    """``sample_time_ns``: index / rate from the index itself.  1024.1 Hz is 1024100 mHz, though
+    1024.1 * 1000 is 1024099.99.. in floating point (taken as 1024099 mHz, sample 10241 came
+    9764 ns after 10 s); a day at 15 kHz ends exactly a day on; 1 / 15 kHz = 66666.6 ns is
+    66666 ns."""
+    from bearing_sim_ros.waveform import NS, sample_time_ns
+
+    assert sample_time_ns(0, 10241, 1024.1) == 10 * NS
+    start = 1_700_000_000 * NS
+    assert sample_time_ns(start, 15000 * 86400, 15000.0) == start + 86400 * NS
+    assert [sample_time_ns(start, k, 15000.0) - start for k in (0, 1, 2, 3)] == [0, 66666, 133333, 200000]
+
+
+def test_a_table_with_more_data_than_its_width_says_is_not_a_waveform_table(sim_msgs):
+    """Data longer than width x point_step (a width that undercounts its samples) is refused in
+    the reader's own line, as data shorter is, not numpy's "cannot reshape array"."""
+    from bearing_sim_ros.waveform import to_pointcloud2
+
+    _scene, sim, _msgs = sim_msgs
+    b = sim.advance(20)
+    m = to_pointcloud2(b.accel, ["accel_x", "accel_y"], 0, "f")
+    m.width = 19
+    with pytest.raises(ValueError, match=r"^not a waveform table: 160 bytes of data, expected width 19 x "
+                                         r"point_step 8 = 152$"):
+        from_pointcloud2(m)

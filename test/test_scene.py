@@ -732,3 +732,94 @@ def test_a_bearing_changed_in_python_is_held_to_the_catalogs_limits(change, line
                               f"scene er16k_outer_race: {line} (a Bearing checked in the catalog's units: mm, deg, GPa)")
     other = dataclasses.replace(scene.bearing, balls=np.int64(8), contact_angle=math.radians(45.0), ball_mass=0.004)
     assert np.isfinite(Simulator(dataclasses.replace(scene, bearing=other), fidelity="kinematic").advance(150).accel).all()
+
+
+@pytest.mark.parametrize("old, new, line", [
+    ("clock: 6}\n", "clock: 6}\nwaviness:\n  - {race: inner, order: 2.5, amplitude_um: 1}\n",
+     "waviness[0].order = 2.5: expected a whole number in [1, 200]"),
+    ("kind: outer, width_mm: 0.6", "kind: ball, ball: 1.5, width_mm: 0.6",
+     "defects[0].ball = 1.5: expected a whole number in [0, 8]"),
+])
+def test_a_fraction_where_a_whole_number_goes_is_refused_not_truncated(old, new, line):
+    """A waviness order of 2.5 or a defect on ball 1.5 is a mistake, refused in one line; int()
+    would have made them order 2 and ball 1 without a word."""
+    with pytest.raises(SceneError) as exc:
+        scene_from_dict(load_yaml(GOOD.replace(old, new)))
+    assert str(exc.value) == line
+
+
+def test_a_scene_exactly_at_the_bearings_limits_runs():
+    """The limits are inclusive ("up to", as the node's check_speed and check_load): a speed of
+    exactly n d_m = 1e6 rpm mm and a load of exactly 2 x C0 (no gravity, so nothing adds to it)
+    are a scene that runs; a hair more is not."""
+    from bearing_sim_ros.limits import InputLimits
+
+    scene = dataclasses.replace(load_scene("er16k_outer_race"), gravity=False)
+    limits = InputLimits(scene.bearing)
+    assert limits.max_speed == pytest.approx(1e6 / 38.5 * RPM, rel=1e-12)
+    assert limits.max_load == pytest.approx(2 * 14.7 * 9 * 7.94 ** 2, rel=1e-12)
+    edge = dataclasses.replace(scene, shaft_speed=-limits.max_speed, radial_load=(0.0, -limits.max_load))
+    assert edge.radial_load == (0.0, -limits.max_load)
+    for beyond in ({"shaft_speed": -limits.max_speed * (1 + 1e-12)},
+                   {"radial_load": (0.0, -limits.max_load * (1 + 1e-12))}):
+        with pytest.raises(SceneError, match="beyond"):
+            dataclasses.replace(edge, **beyond)
+
+
+def test_a_contact_angle_changed_in_python_is_held_to_45_degrees():
+    """A Bearing holds its contact angle in rad and is checked in the catalog's degrees (0 - 45):
+    50 deg (0.873 rad) is refused as 50 deg, not taken for 0.873 deg; 45 deg runs (the test
+    above)."""
+    scene = load_scene("er16k_outer_race")
+    said = r"bearing\.contact_angle_deg = 50(\.0)?: allowed range is \[0(\.0)?, 45(\.0)?\]"
+    with pytest.raises(SceneError, match=said):
+        dataclasses.replace(scene, bearing=dataclasses.replace(scene.bearing, contact_angle=math.radians(50.0)))
+
+
+def test_sensor_axes_in_any_order_are_x_then_y():
+    """``sensor.axes: [y, x]`` is the two axes in the contract's channel order (accel_x, accel_y:
+    INTERFACE.md), not a table whose first column is the vertical one."""
+    scene = scene_from_dict(load_yaml(GOOD + "sensor: {axes: [y, x]}\n"))
+    assert scene.sensor.axes == ("x", "y")
+    assert Simulator(scene, fidelity="kinematic").accel_channels == ("accel_x", "accel_y")
+
+
+def test_a_profile_changed_in_python_must_have_increasing_times():
+    """Two knots at one time in a profile made in Python are refused as the YAML's are (a jump
+    of speed or load in no time)."""
+    scene = load_scene("er16k_outer_race")
+    knots = (ProfilePoint(1.0, 1000 * RPM, (0.0, -50.0)), ProfilePoint(1.0, 2000 * RPM, (0.0, -50.0)))
+    with pytest.raises(SceneError) as exc:
+        dataclasses.replace(scene, profile=knots)
+    assert str(exc.value) == "scene er16k_outer_race: profile[1].t = 1 s: times must increase (previous 1)"
+
+
+def test_a_critically_damped_resonator_at_the_yamls_bound_loads():
+    """``damping_ratio: 1.0`` is within the YAML's bound; the scene's own check recomputes the
+    ratio from the stiffness and damping it became, where sqrt(k / m) can come back one bit
+    below 2 pi f (0.05 kg at 3000 Hz): such a scene loads, at a ratio of 1 to 1e-12."""
+    text = GOOD.replace("damping: 2210}", "damping: 2210}\n  resonator: {mass: 0.05, frequency_hz: 3000, "
+                                          "damping_ratio: 1.0}")
+    st = scene_from_dict(load_yaml(text)).structure
+    assert st.resonator_damping / (2 * math.sqrt(st.resonator_stiffness * st.resonator_mass)) == pytest.approx(
+        1.0, rel=1e-12)
+
+
+def test_the_shafts_weight_on_the_balls_is_there_only_with_gravity():
+    """``Scene.shaft_weight`` (what the node's limits add to a load) is m g with gravity and 0
+    without: a 1 kg ER-16K shaft weighs 9.80665 N."""
+    scene = load_scene("er16k_outer_race")
+    assert scene.gravity and scene.shaft_weight == pytest.approx(scene.structure.shaft_mass * 9.80665, rel=1e-12)
+    assert dataclasses.replace(scene, gravity=False).shaft_weight == 0.0
+
+
+def test_a_scene_without_sensor_slip_or_gravity_keys_takes_the_documented_defaults():
+    """README: the sensor saturates at +-50 g (490.3 m/s^2) "unless it says otherwise" and its
+    frame is ``bearing_accel``; an omitted sensor is ideal (no resonance, no noise) on both axes
+    in x, y order; no ``random_slip`` is no jitter of the ball passes and no ``gravity`` key
+    is the shaft's weight acting."""
+    scene = scene_from_dict(load_yaml(GOOD))
+    s = scene.sensor
+    assert (s.axes, s.resonance_hz, s.noise_density, s.frame_id) == (("x", "y"), 0.0, 0.0, "bearing_accel")
+    assert s.range == pytest.approx(50 * 9.80665, abs=0.05)
+    assert scene.random_slip == 0.0 and scene.gravity is True
