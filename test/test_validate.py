@@ -494,3 +494,74 @@ def test_a_recording_longer_than_one_advance_is_simulated_in_chunks(monkeypatch)
     monkeypatch.setattr(simulator, "MAX_ADVANCE_INTERNAL", 8 * 100)     # 100 samples at 12 kHz
     chunked = V.simulate("cwru_6205_ir007", 12000.0, 1797.0, 250)
     assert chunked.shape == (250,) and np.array_equal(chunked, whole)
+
+
+
+def test_the_averaged_envelope_spectrum_is_welchs_over_half_overlapping_hann_segments():
+    """``segment`` averages the power of Hann segments that overlap by half, each with its own
+    mean removed, over every segment that fits (the last one, which ends with the record,
+    included): the amplitude spectrum sqrt(2 P) of scipy's Welch power spectrum P with the same
+    window, overlap and detrending (``scaling="spectrum"``, one-sided).  An offset (an envelope's
+    mean) leaks into no bin above 0 Hz."""
+    from scipy.signal import welch
+
+    rate, seconds = 1000.0, 3.0                    # 1 s segments: 5 of them, starting 0, 0.5 .. 2 s
+    x = 5.0 + np.random.default_rng(11).standard_normal(int(rate * seconds))
+    x[-300:] += 4.0 * np.sin(2 * np.pi * 120.0 * np.arange(300) / rate)     # only the last segment holds it
+    freqs, amplitude = env.averaged_spectrum(x, rate, 400.0, segment=1.0)
+    f, power = welch(x, rate, window=np.hanning(1000), nperseg=1000, noverlap=500, detrend="constant",
+                     scaling="spectrum")
+    keep = f <= 400.0
+    np.testing.assert_allclose(freqs, f[keep])
+    np.testing.assert_allclose(amplitude[1:], np.sqrt(2.0 * power[keep][1:]), rtol=1e-9)
+
+
+def test_the_envelope_spectrum_of_a_whole_record_has_no_line_at_0_hz():
+    """The envelope is a magnitude, its mean the carrier's amplitude (1 here, against a
+    modulation of 0.3): removed (``envelope``: "mean removed"), the one-FFT spectrum of the whole
+    record (the report's plots) starts at the floor, not at a line at 0 Hz three times the fault
+    line's height."""
+    fs, f_mod, a = 12000.0, 107.0, 0.3
+    t = np.arange(int(2 * fs)) / fs
+    x = (1.0 + a * np.cos(2 * np.pi * f_mod * t)) * np.sin(2 * np.pi * 3400.0 * t)
+    assert abs(env.envelope(x, fs).mean()) < 1e-12
+    f, s = env.envelope_spectrum(x, fs, max_freq=300.0)
+    assert np.max(s[f < 50.0]) < 0.01 * a
+
+
+def test_a_line_between_two_bins_is_found_at_its_frequency():
+    """The peak's frequency is interpolated between bins (a parabola through the log spectrum at
+    the largest bin and its two neighbours): a modulation at 107.3 Hz on 1 Hz bins is found within
+    0.1 Hz of 107.3, on the side of the larger neighbour, not at 107 Hz or mirrored to 106.7 Hz."""
+    fs, f_mod, a = 12000.0, 107.3, 0.3
+    t = np.arange(int(6 * fs)) / fs
+    x = (1.0 + a * np.cos(2 * np.pi * f_mod * t)) * np.sin(2 * np.pi * 3400.0 * t)
+    f, s = env.envelope_spectrum(x, fs, max_freq=300.0, segment=1.0)
+    line = env.line_at(f, s, 107.0)
+    assert abs(line.found_hz - f_mod) < 0.1, line
+
+
+def test_the_search_window_is_at_least_one_and_a_half_bins_wide():
+    """+-1 % of a low line (FTF at 12.6 Hz: 0.13 Hz) is narrower than a bin: the search takes at
+    least +-1.5 bins, so the line in the bin 1.4 bins away (the cage's slip moves it) is found."""
+    freqs = np.arange(0.0, 100.0, 1.0)
+    spec = np.full(freqs.size, 0.1)
+    spec[14] = 1.0
+    line = env.line_at(freqs, spec, 12.6)
+    assert line.found_hz == 14.0 and line.prominence == pytest.approx(10.0), line
+
+
+def test_a_lines_prominence_leaves_its_skirt_out_of_the_median():
+    """The prominence compares the line with the median of its +-20 Hz neighbourhood without the
+    search window and two bins more on either side, where a windowed line's skirt still stands
+    (Hann: the bins next to it): with 1 Hz bins and a search of +-1.5 bins, the median of the bins
+    4-20 bins away, not of those 2-20 away (the skirt at 2-3 bins is high)."""
+    freqs = np.arange(0.0, 200.0, 1.0)
+    floor = np.random.default_rng(2).uniform(0.5, 1.5, freqs.size)
+    spec = floor.copy()
+    spec[100] = 50.0
+    spec[[98, 99, 101, 102]] = 20.0
+    spec[[97, 103]] = 8.0                                # skirt: the two bins beyond the search window
+    line = env.line_at(freqs, spec, 100.0)
+    far = np.r_[80:97, 104:121]                          # 4 .. 20 bins away
+    assert line.prominence == pytest.approx(50.0 / np.median(floor[far]), rel=1e-12)
