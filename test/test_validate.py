@@ -565,3 +565,64 @@ def test_a_lines_prominence_leaves_its_skirt_out_of_the_median():
     line = env.line_at(freqs, spec, 100.0)
     far = np.r_[80:97, 104:121]                          # 4 .. 20 bins away
     assert line.prominence == pytest.approx(50.0 / np.median(floor[far]), rel=1e-12)
+
+
+
+def test_the_spread_of_a_reversed_shaft_is_that_of_the_forward_one():
+    """``spread`` is relative to |mean|: the speeds of a shaft turned the other way (negative, as
+    the state gives them) move as much as the forward ones; a negative spread called every ramp of
+    a reversed shaft steady (a verdict on smeared lines, never "unknown")."""
+    ramp = np.linspace(100.0, 200.0, 101)
+    assert env.spread(-ramp) == env.spread(ramp) == pytest.approx((195.0 - 105.0) / 150.0)
+
+
+def test_the_cages_fault_lines_are_rates_whichever_way_the_shaft_turns():
+    """``with_cage`` puts FTF, BPFO and BPFI where the cage ran: FTF = |cage|, BPFO = Z |cage|, BPFI =
+    Z (|shaft| - |cage|), the same for a reversed shaft (negative speeds, as the state gives them):
+    a skidding ER-16K at 10000 rpm whose cage runs 7 % slow."""
+    shaft_hz, cage_hz, balls = 10000 / 60, 0.93 * 0.397 * 10000 / 60, 9
+    nominal = {"ftf": 66.2, "bpfo": 595.5, "bpfi": 904.5, "bsf": 388.0}
+    forward = env.with_cage(nominal, balls, shaft_hz, cage_hz)
+    assert forward == pytest.approx({"ftf": cage_hz, "bpfo": balls * cage_hz, "bpfi": balls * (shaft_hz - cage_hz),
+                                     "bsf": 388.0})
+    assert env.with_cage(nominal, balls, -shaft_hz, -cage_hz) == pytest.approx(forward)
+
+
+def test_a_score_at_the_threshold_is_a_fault_and_the_cage_line_never_a_verdict():
+    """A fault whose line stands exactly DETECTION_THRESHOLD over its floor is detected ("at least");
+    the cage's line (FTF) is measured but names no fault, however high it stands."""
+    def lines(**prominence):
+        return {key: env.Line(1.0, 1.0, 1.0, prominence.get(key, 1.0)) for key in ("bpfo", "bpfi", "2bsf", "ftf")}
+
+    assert env.verdict_of(lines(bpfi=env.DETECTION_THRESHOLD))["verdict"] == "inner"
+    assert env.verdict_of(lines(bpfi=0.999 * env.DETECTION_THRESHOLD))["verdict"] == "healthy"
+    tall_cage = env.verdict_of(lines(ftf=100.0, bpfo=5.0))
+    assert tall_cage["verdict"] == "outer" and set(tall_cage["scores"]) == {"outer", "inner", "ball"}
+
+
+def test_no_note_for_a_verdict_that_names_no_fault():
+    """``no_defect_note`` explains a fault verdict on a scene without a defect; "healthy" and
+    "unknown" (a stretch whose speed moved) name none: nothing to explain."""
+    assert env.no_defect_note("healthy") is None and env.no_defect_note("unknown") is None
+    assert "BPFO (x7)" in env.no_defect_note("outer", 7.0)[0]
+
+
+def test_the_statistics_are_of_the_vibration_about_the_mean():
+    """A channel that carries gravity (9.81 m/s^2 on y) or a sensor offset: RMS, kurtosis and
+    crest factor are those of the vibration about its mean (a sine of amplitude 3: 3 / sqrt 2,
+    1.5, sqrt 2), not of the offset; the peak-to-peak is 6 either way."""
+    t = np.arange(12000) / 12000.0
+    st = env.statistics(9.81 + 3.0 * np.sin(2 * np.pi * 50 * t))
+    assert st["rms"] == pytest.approx(3 / math.sqrt(2), rel=1e-6)
+    assert st["kurtosis"] == pytest.approx(1.5, rel=1e-6) and st["crest_factor"] == pytest.approx(math.sqrt(2), rel=1e-6)
+    assert st["peak_to_peak"] == pytest.approx(6.0, rel=1e-6)
+
+
+def test_band_rms_puts_a_tone_on_an_edge_in_the_band_that_starts_there():
+    """Bands are [lo, hi): a tone exactly at 1000 Hz (the Welch bin on the edge holds 2/3 of its
+    power with a Hann window, 1/6 in each neighbour) counts 5/6 in [1000, 2000) and 1/6 in
+    [0, 1000)."""
+    fs = 8192.0
+    t = np.arange(int(4 * fs)) / fs
+    bands = env.band_rms(2.0 * np.sin(2 * np.pi * 1000.0 * t), fs)
+    assert bands[1] ** 2 == pytest.approx(5 / 6 * 2.0, rel=0.01) and bands[0] ** 2 == pytest.approx(1 / 6 * 2.0, rel=0.01)
