@@ -1282,3 +1282,12 @@ def test_ground_truth_reading_at_the_edges_of_the_messages():
     assert gt.appearances(rounded, t0, slack) == []
     exact = gt.Appearance("outer", 2.0, 2.0)
     assert gt.first_detection([(1.5, "healthy"), (2.0, "outer"), (2.5, "outer")], exact) == (2.5, 1)
+
+
+def test_the_simulators_status_name_has_no_leading_slash():
+    """``/diagnostics`` statuses are named ``<node>: simulator`` with the node's full name without
+    its leading slash (README: ``rig1/bearing_sim: simulator``), as a node's fully qualified name
+    gives it with one."""
+    from bearing_sim_ros.ground_truth import status_name
+
+    assert status_name("/rig1/bearing_sim") == status_name("rig1/bearing_sim") == "rig1/bearing_sim: simulator"

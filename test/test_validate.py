@@ -626,3 +626,16 @@ def test_band_rms_puts_a_tone_on_an_edge_in_the_band_that_starts_there():
     t = np.arange(int(4 * fs)) / fs
     bands = env.band_rms(2.0 * np.sin(2 * np.pi * 1000.0 * t), fs)
     assert bands[1] ** 2 == pytest.approx(5 / 6 * 2.0, rel=0.01) and bands[0] ** 2 == pytest.approx(1 / 6 * 2.0, rel=0.01)
+
+
+def test_the_highest_fault_line_is_searched_above_its_frequency_too():
+    """The spectrum the detector computes reaches beyond its highest line (BPFI), so that line has
+    its +-1 % search window and its neighbourhood on both sides: a line 0.8 % above the
+    catalog's BPFI (the balls' slip) is found there, standing as high as a line at any other."""
+    fs, bpfi = 12000.0, 162.0
+    frequencies = {"ftf": 12.0, "bpfo": 107.0, "bpfi": bpfi, "bsf": 70.0}
+    t = np.arange(int(4 * fs)) / fs
+    x = (1.0 + 0.3 * np.cos(2 * np.pi * 1.008 * bpfi * t)) * np.sin(2 * np.pi * 3400.0 * t)
+    x += 0.05 * np.random.default_rng(4).standard_normal(t.size)
+    line = env.fault_lines(x, fs, frequencies)["bpfi"]
+    assert line.found_hz == pytest.approx(1.008 * bpfi, abs=0.2) and line.prominence > 10 * env.DETECTION_THRESHOLD, line
