@@ -221,3 +221,35 @@ def test_a_ball_count_that_is_not_a_whole_number_is_a_one_line_error(value):
         bearing_from_mapping("custom", dict(CUSTOM, balls=value))
     msg = str(exc.value)
     assert "\n" not in msg and msg.startswith(f"bearing.balls = {value!r}: "), msg
+
+
+def test_cage_and_ball_spin_speeds_are_the_fault_frequencies_in_rad_s():
+    """Pure rolling with the outer race fixed (Harris): the cage turns at w / 2 (1 - g) and a ball
+    spins relative to the cage at w D_m / (2 d) (1 - g^2), g = d cos(a) / D_m, the FTF and BSF (Hz)
+    times 2 pi; a bearing with a 15 deg contact angle tells (1 - g^2) from (1 - g) and cos from none."""
+    b = bearing_from_mapping("custom", dict(CUSTOM, contact_angle_deg=15.0))
+    g = 7.94 / 38.5 * math.cos(math.radians(15.0))
+    w = 2 * math.pi * 25.0
+    assert b.cage_speed(w) == pytest.approx(0.5 * w * (1 - g), rel=1e-12)
+    assert b.ball_spin_speed(w) == pytest.approx(w * 38.5 / (2 * 7.94) * (1 - g * g), rel=1e-12)
+    f = b.fault_frequencies(25.0)
+    assert b.cage_speed(w) == pytest.approx(2 * math.pi * f["ftf"], rel=1e-12)
+    assert b.ball_spin_speed(w) == pytest.approx(2 * math.pi * f["bsf"], rel=1e-12)
+
+
+def test_a_custom_bearings_defaults_and_limits_of_fit():
+    """What a bearing typed into a scene gets without the optional keys: grooves of conformity
+    0.52 (PHYSICS_NOTES), balls of ``density`` (silicon nitride, 3200 kg/m^3: 0.84 g for 7.94 mm);
+    as many balls as fit on the pitch circle (15 of 7.94 mm on 38.5 mm: sin(pi / 15) x 38.5 =
+    7.99 mm) are taken; races whose radial gap misses twice the ball diameter by more than 5 % of
+    a ball (0.5 mm here, 0.4 mm allowed) are refused, 0.3 mm is taken."""
+    b = bearing_from_mapping("custom", CUSTOM)
+    assert (b.inner_groove_conformity, b.outer_groove_conformity) == (0.52, 0.52)
+    ceramic = bearing_from_mapping("custom", dict(CUSTOM, density=3200.0))
+    assert ceramic.ball_mass == pytest.approx(3200.0 * math.pi * 7.94e-3 ** 3 / 6, rel=1e-12)
+    assert bearing_from_mapping("custom", dict(CUSTOM, balls=15)).balls == 15
+    d, dm = 7.94, 38.5
+    near = dict(CUSTOM, inner_race_diameter_mm=dm - d, outer_race_diameter_mm=dm + d + 0.3)
+    assert bearing_from_mapping("custom", near).outer_race_diameter == pytest.approx((dm + d + 0.3) * 1e-3)
+    with pytest.raises(SceneError, match="outer minus inner race diameter must be close to twice the ball diameter"):
+        bearing_from_mapping("custom", dict(near, outer_race_diameter_mm=dm + d + 0.5))

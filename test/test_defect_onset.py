@@ -331,3 +331,47 @@ def test_defect_sizes_at_names_a_sample_that_is_not_a_whole_number(sample):
         sim.defect_sizes_at(sample)
     assert str(exc.value) == f"sample = {sample!r}: expected a whole number (an output sample index)"
     assert sim.defect_sizes_at(np.int64(149)) == (0.0,) and sim.defect_sizes_at(150) == (1.0,)
+
+
+def test_a_pits_largest_drop_is_the_sag_of_its_half_width_on_either_race():
+    """The ball sinks into a pit from both edges at once, so its largest drop is the sagitta of
+    half the pit's width on the contact's radius rho = 1 / (1/r +- 1/R_race) (convex inner race
+    "+", concave outer "-"): for the ER-16K's 0.6 mm pits 14.3 um on the inner race and 9.4 um on
+    the outer one (``physics.defects``), far less than their 0.25 mm depth."""
+    from bearing_sim_ros.catalog import get_bearing
+    from bearing_sim_ros.physics.defects import D_HMAX_I, D_HMAX_O, defect_table
+
+    b = get_bearing("ER-16K")
+    row = defect_table([Defect("inner", 0.6e-3, 0.25e-3, 0.6e-3)], b)[0]
+    assert row[D_HMAX_I] == pytest.approx(14.3e-6, abs=0.05e-6) and row[D_HMAX_O] == pytest.approx(9.4e-6, abs=0.05e-6)
+
+
+def test_a_growing_pit_scales_its_width_length_and_depth_together():
+    """A spall grows from a small shallow pit: at half its size it is half as wide, half as long
+    and half as deep (``scaled_defect``), in the table the tiers read too."""
+    from bearing_sim_ros.physics.defects import D_DEPTH, D_HALF, scaled_defect
+
+    b = load_scene("er16k_outer_race").bearing
+    pit = Defect("outer", 0.6e-3, 0.02e-3, 0.8e-3)
+    half = scaled_defect(pit, 0.5)
+    assert (half.width, half.length, half.depth) == pytest.approx((0.3e-3, 0.4e-3, 0.01e-3), rel=1e-12)
+    assert scaled_defect(pit, 1.0) == pit
+    full, grown = active_defect_table([pit], None, b), active_defect_table([pit], (0.5,), b)
+    assert grown[0, D_DEPTH] == pytest.approx(0.5 * full[0, D_DEPTH]) and grown[0, D_HALF] == pytest.approx(0.5 * full[0, D_HALF])
+
+
+def test_a_wandering_ball_defect_is_met_within_the_wider_of_its_two_contact_ellipses():
+    """A ball defect meets both races: it is met while it lies within the wider contact ellipse's
+    transverse semi-axis a (+ half its length) of the rolling track, a = a_coeff Q^(1/3) at the
+    nominal 100 N.  Grooves of 0.51 (inner) and 0.54 (outer) conformity make the two ellipses
+    differ (the closer inner groove's is the wider here)."""
+    from bearing_sim_ros.catalog import bearing_from_mapping
+    from bearing_sim_ros.physics.defects import D_WREACH, NOMINAL_BALL_LOAD, defect_table
+
+    b = bearing_from_mapping("custom", {"balls": 9, "ball_diameter_mm": 7.94, "pitch_diameter_mm": 38.5,
+                                        "inner_groove_conformity": 0.51, "outer_groove_conformity": 0.54})
+    a_inner, a_outer = (c.a_coeff * NOMINAL_BALL_LOAD ** (1 / 3) for c in (b.inner_contact, b.outer_contact))
+    assert a_inner > 1.2 * a_outer
+    length = 0.2e-3
+    row = defect_table([Defect("ball", 0.2e-3, 0.1e-3, length, wander_turns=3.0)], b)[0]
+    assert row[D_WREACH] == pytest.approx((a_inner + 0.5 * length) / (0.5 * b.ball_diameter), rel=1e-12)

@@ -1247,3 +1247,47 @@ def test_the_timeline_names_two_defects_of_one_kind_by_their_place():
     assert report._sizes_text(run, ["ball", "outer"]) == "ball 1, outer 0.5-0.75"
     assert report._sizes_text(run, []) == "#1 1, #2 0.5-0.75"
     assert report._sizes_text([{"defect_sizes": None}], ["outer"]) == "n/a"
+
+
+def test_ground_truth_reading_at_the_edges_of_the_messages():
+    """What a scorer asks of ``ground_truth`` where a time falls on a message's stamp or before
+    the first one, and what the simulator writes for a kind with several defects:
+
+    - a kind's onset is its earliest present defect's, in whatever order the scene lists them;
+    - the faults just before ``t`` leave out a kind whose first sample is the one at ``t``, though
+      the message stamped ``t`` lists it;
+    - without onsets, the message stamped at ``t`` itself is the latest at or before ``t``;
+    - ``truth_before`` a time before the first message is the first message (its defect sizes);
+    - ``forget_before`` keeps the latest message at or before ``t``, which later times still read;
+    - a fault there from the first sample, its onset 0.4 us after it by the rounding of
+      ``simulated_s``, did not appear;
+    - a window that ends on an exact onset (its last sample the one before the defect's first)
+      does not call it."""
+    from bearing_sim_ros import ground_truth as gt
+
+    written = gt.diagnostics_values(["outer", "outer"], (1.0, 1.0), (2.5, 4.0))
+    assert written["fault_onsets_s"] == "outer=2.500000"
+    on_stamp = [gt.Truth(2.0, ("outer",), (1.0,), {"outer": 2.0})]
+    assert gt.faults_at(on_stamp, 2.0) == () and gt.faults_at(on_stamp, 2.000001) == ("outer",)
+    plain = [gt.Truth(1.0, (), (0.0,), None), gt.Truth(2.0, ("outer",), (1.0,), None),
+             gt.Truth(3.0, ("outer",), (1.0,), None)]
+    assert gt.faults_at(plain, 2.0) == ("outer",) and gt.faults_at(plain, 1.9) == ()
+    assert gt.truth_before(plain, 2.0) is plain[1] and gt.truth_before(plain, 0.5) is plain[0]
+    assert gt.truth_before([], 0.5) is None
+    kept = list(plain)
+    gt.forget_before(kept, 2.5)
+    assert kept == plain[1:] and gt.faults_at(kept, 2.6) == ("outer",)
+    t0, slack = 500_000_000, 1_000
+    rounded = [gt.Truth(t0 + k * 1_000_000_000, ("outer",), (1.0,), {"outer": t0 + 400}) for k in (1, 2)]
+    assert gt.appearances(rounded, t0, slack) == []
+    exact = gt.Appearance("outer", 2.0, 2.0)
+    assert gt.first_detection([(1.5, "healthy"), (2.0, "outer"), (2.5, "outer")], exact) == (2.5, 1)
+
+
+def test_the_simulators_status_name_has_no_leading_slash():
+    """``/diagnostics`` statuses are named ``<node>: simulator`` with the node's full name without
+    its leading slash (README: ``rig1/bearing_sim: simulator``), as a node's fully qualified name
+    gives it with one."""
+    from bearing_sim_ros.ground_truth import status_name
+
+    assert status_name("/rig1/bearing_sim") == status_name("rig1/bearing_sim") == "rig1/bearing_sim: simulator"

@@ -494,3 +494,148 @@ def test_a_recording_longer_than_one_advance_is_simulated_in_chunks(monkeypatch)
     monkeypatch.setattr(simulator, "MAX_ADVANCE_INTERNAL", 8 * 100)     # 100 samples at 12 kHz
     chunked = V.simulate("cwru_6205_ir007", 12000.0, 1797.0, 250)
     assert chunked.shape == (250,) and np.array_equal(chunked, whole)
+
+
+
+def test_the_averaged_envelope_spectrum_is_welchs_over_half_overlapping_hann_segments():
+    """``segment`` averages the power of Hann segments that overlap by half, each with its own
+    mean removed, over every segment that fits (the last one, which ends with the record,
+    included): the amplitude spectrum sqrt(2 P) of scipy's Welch power spectrum P with the same
+    window, overlap and detrending (``scaling="spectrum"``, one-sided).  An offset (an envelope's
+    mean) leaks into no bin above 0 Hz."""
+    from scipy.signal import welch
+
+    rate, seconds = 1000.0, 3.0                    # 1 s segments: 5 of them, starting 0, 0.5 .. 2 s
+    x = 5.0 + np.random.default_rng(11).standard_normal(int(rate * seconds))
+    x[-300:] += 4.0 * np.sin(2 * np.pi * 120.0 * np.arange(300) / rate)     # only the last segment holds it
+    freqs, amplitude = env.averaged_spectrum(x, rate, 400.0, segment=1.0)
+    f, power = welch(x, rate, window=np.hanning(1000), nperseg=1000, noverlap=500, detrend="constant",
+                     scaling="spectrum")
+    keep = f <= 400.0
+    np.testing.assert_allclose(freqs, f[keep])
+    np.testing.assert_allclose(amplitude[1:], np.sqrt(2.0 * power[keep][1:]), rtol=1e-9)
+
+
+def test_the_envelope_spectrum_of_a_whole_record_has_no_line_at_0_hz():
+    """The envelope is a magnitude, its mean the carrier's amplitude (1 here, against a
+    modulation of 0.3): removed (``envelope``: "mean removed"), the one-FFT spectrum of the whole
+    record (the report's plots) starts at the floor, not at a line at 0 Hz three times the fault
+    line's height."""
+    fs, f_mod, a = 12000.0, 107.0, 0.3
+    t = np.arange(int(2 * fs)) / fs
+    x = (1.0 + a * np.cos(2 * np.pi * f_mod * t)) * np.sin(2 * np.pi * 3400.0 * t)
+    assert abs(env.envelope(x, fs).mean()) < 1e-12
+    f, s = env.envelope_spectrum(x, fs, max_freq=300.0)
+    assert np.max(s[f < 50.0]) < 0.01 * a
+
+
+def test_a_line_between_two_bins_is_found_at_its_frequency():
+    """The peak's frequency is interpolated between bins (a parabola through the log spectrum at
+    the largest bin and its two neighbours): a modulation at 107.3 Hz on 1 Hz bins is found within
+    0.1 Hz of 107.3, on the side of the larger neighbour, not at 107 Hz or mirrored to 106.7 Hz."""
+    fs, f_mod, a = 12000.0, 107.3, 0.3
+    t = np.arange(int(6 * fs)) / fs
+    x = (1.0 + a * np.cos(2 * np.pi * f_mod * t)) * np.sin(2 * np.pi * 3400.0 * t)
+    f, s = env.envelope_spectrum(x, fs, max_freq=300.0, segment=1.0)
+    line = env.line_at(f, s, 107.0)
+    assert abs(line.found_hz - f_mod) < 0.1, line
+
+
+def test_the_search_window_is_at_least_one_and_a_half_bins_wide():
+    """+-1 % of a low line (FTF at 12.6 Hz: 0.13 Hz) is narrower than a bin: the search takes at
+    least +-1.5 bins, so the line in the bin 1.4 bins away (the cage's slip moves it) is found."""
+    freqs = np.arange(0.0, 100.0, 1.0)
+    spec = np.full(freqs.size, 0.1)
+    spec[14] = 1.0
+    line = env.line_at(freqs, spec, 12.6)
+    assert line.found_hz == 14.0 and line.prominence == pytest.approx(10.0), line
+
+
+def test_a_lines_prominence_leaves_its_skirt_out_of_the_median():
+    """The prominence compares the line with the median of its +-20 Hz neighbourhood without the
+    search window and two bins more on either side, where a windowed line's skirt still stands
+    (Hann: the bins next to it): with 1 Hz bins and a search of +-1.5 bins, the median of the bins
+    4-20 bins away, not of those 2-20 away (the skirt at 2-3 bins is high)."""
+    freqs = np.arange(0.0, 200.0, 1.0)
+    floor = np.random.default_rng(2).uniform(0.5, 1.5, freqs.size)
+    spec = floor.copy()
+    spec[100] = 50.0
+    spec[[98, 99, 101, 102]] = 20.0
+    spec[[97, 103]] = 8.0                                # skirt: the two bins beyond the search window
+    line = env.line_at(freqs, spec, 100.0)
+    far = np.r_[80:97, 104:121]                          # 4 .. 20 bins away
+    assert line.prominence == pytest.approx(50.0 / np.median(floor[far]), rel=1e-12)
+
+
+
+def test_the_spread_of_a_reversed_shaft_is_that_of_the_forward_one():
+    """``spread`` is relative to |mean|: the speeds of a shaft turned the other way (negative, as
+    the state gives them) move as much as the forward ones; a negative spread called every ramp of
+    a reversed shaft steady (a verdict on smeared lines, never "unknown")."""
+    ramp = np.linspace(100.0, 200.0, 101)
+    assert env.spread(-ramp) == env.spread(ramp) == pytest.approx((195.0 - 105.0) / 150.0)
+
+
+def test_the_cages_fault_lines_are_rates_whichever_way_the_shaft_turns():
+    """``with_cage`` puts FTF, BPFO and BPFI where the cage ran: FTF = |cage|, BPFO = Z |cage|, BPFI =
+    Z (|shaft| - |cage|), the same for a reversed shaft (negative speeds, as the state gives them):
+    a skidding ER-16K at 10000 rpm whose cage runs 7 % slow."""
+    shaft_hz, cage_hz, balls = 10000 / 60, 0.93 * 0.397 * 10000 / 60, 9
+    nominal = {"ftf": 66.2, "bpfo": 595.5, "bpfi": 904.5, "bsf": 388.0}
+    forward = env.with_cage(nominal, balls, shaft_hz, cage_hz)
+    assert forward == pytest.approx({"ftf": cage_hz, "bpfo": balls * cage_hz, "bpfi": balls * (shaft_hz - cage_hz),
+                                     "bsf": 388.0})
+    assert env.with_cage(nominal, balls, -shaft_hz, -cage_hz) == pytest.approx(forward)
+
+
+def test_a_score_at_the_threshold_is_a_fault_and_the_cage_line_never_a_verdict():
+    """A fault whose line stands exactly DETECTION_THRESHOLD over its floor is detected ("at least");
+    the cage's line (FTF) is measured but names no fault, however high it stands."""
+    def lines(**prominence):
+        return {key: env.Line(1.0, 1.0, 1.0, prominence.get(key, 1.0)) for key in ("bpfo", "bpfi", "2bsf", "ftf")}
+
+    assert env.verdict_of(lines(bpfi=env.DETECTION_THRESHOLD))["verdict"] == "inner"
+    assert env.verdict_of(lines(bpfi=0.999 * env.DETECTION_THRESHOLD))["verdict"] == "healthy"
+    tall_cage = env.verdict_of(lines(ftf=100.0, bpfo=5.0))
+    assert tall_cage["verdict"] == "outer" and set(tall_cage["scores"]) == {"outer", "inner", "ball"}
+
+
+def test_no_note_for_a_verdict_that_names_no_fault():
+    """``no_defect_note`` explains a fault verdict on a scene without a defect; "healthy" and
+    "unknown" (a stretch whose speed moved) name none: nothing to explain."""
+    assert env.no_defect_note("healthy") is None and env.no_defect_note("unknown") is None
+    assert "BPFO (x7)" in env.no_defect_note("outer", 7.0)[0]
+
+
+def test_the_statistics_are_of_the_vibration_about_the_mean():
+    """A channel that carries gravity (9.81 m/s^2 on y) or a sensor offset: RMS, kurtosis and
+    crest factor are those of the vibration about its mean (a sine of amplitude 3: 3 / sqrt 2,
+    1.5, sqrt 2), not of the offset; the peak-to-peak is 6 either way."""
+    t = np.arange(12000) / 12000.0
+    st = env.statistics(9.81 + 3.0 * np.sin(2 * np.pi * 50 * t))
+    assert st["rms"] == pytest.approx(3 / math.sqrt(2), rel=1e-6)
+    assert st["kurtosis"] == pytest.approx(1.5, rel=1e-6) and st["crest_factor"] == pytest.approx(math.sqrt(2), rel=1e-6)
+    assert st["peak_to_peak"] == pytest.approx(6.0, rel=1e-6)
+
+
+def test_band_rms_puts_a_tone_on_an_edge_in_the_band_that_starts_there():
+    """Bands are [lo, hi): a tone exactly at 1000 Hz (the Welch bin on the edge holds 2/3 of its
+    power with a Hann window, 1/6 in each neighbour) counts 5/6 in [1000, 2000) and 1/6 in
+    [0, 1000)."""
+    fs = 8192.0
+    t = np.arange(int(4 * fs)) / fs
+    bands = env.band_rms(2.0 * np.sin(2 * np.pi * 1000.0 * t), fs)
+    assert bands[1] ** 2 == pytest.approx(5 / 6 * 2.0, rel=0.01) and bands[0] ** 2 == pytest.approx(1 / 6 * 2.0, rel=0.01)
+
+
+def test_the_highest_fault_line_is_searched_above_its_frequency_too():
+    """The spectrum the detector computes reaches beyond its highest line (BPFI), so that line has
+    its +-1 % search window and its neighbourhood on both sides: a line 0.8 % above the
+    catalog's BPFI (the balls' slip) is found there, standing as high as a line at any other."""
+    fs, bpfi = 12000.0, 162.0
+    frequencies = {"ftf": 12.0, "bpfo": 107.0, "bpfi": bpfi, "bsf": 70.0}
+    t = np.arange(int(4 * fs)) / fs
+    x = (1.0 + 0.3 * np.cos(2 * np.pi * 1.008 * bpfi * t)) * np.sin(2 * np.pi * 3400.0 * t)
+    x += 0.05 * np.random.default_rng(4).standard_normal(t.size)
+    line = env.fault_lines(x, fs, frequencies)["bpfi"]
+    assert line.found_hz == pytest.approx(1.008 * bpfi, abs=0.2) and line.prominence > 10 * env.DETECTION_THRESHOLD, line
