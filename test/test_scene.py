@@ -823,3 +823,12 @@ def test_a_scene_without_sensor_slip_or_gravity_keys_takes_the_documented_defaul
     assert (s.axes, s.resonance_hz, s.noise_density, s.frame_id) == (("x", "y"), 0.0, 0.0, "bearing_accel")
     assert s.range == pytest.approx(50 * 9.80665, abs=0.05)
     assert scene.random_slip == 0.0 and scene.gravity is True
+
+
+def test_an_operating_point_without_a_load_is_the_shafts_weight_alone():
+    """README: ``operating_point.radial_load`` is [0, 0] N when omitted (the balls then carry the
+    shaft's weight alone, with gravity on), while ``shaft_speed_rpm`` is required."""
+    scene = scene_from_dict(load_yaml(GOOD.replace(", radial_load: [0.0, -50.0]", "")))
+    assert scene.radial_load == (0.0, 0.0)
+    with pytest.raises(SceneError, match="operating_point.shaft_speed_rpm"):
+        scene_from_dict(load_yaml(GOOD.replace("shaft_speed_rpm: 1600, ", "")))
