@@ -1236,6 +1236,44 @@ def test_a_split_recording_whose_folder_goes_away_stops_at_the_next_piece_and_sa
     assert sorted(p.name for p in moved.iterdir()) == ["run_000.mcap", "run_001.mcap"]
 
 
+def test_a_render_to_a_finished_piece_of_a_running_split_recording_is_refused(started, ros_env, bearing_sim_exe,
+                                                                             tmp_path, capsys):
+    """A node splits its recording (``record_max_duration:=0.5``) and holds only the piece it
+    writes: a render given ``run_000.mcap`` while the node wrote ``run_002.mcap`` replaced that
+    finished piece, and the recording lost it without a word.  Now the render ends at start with
+    one line naming the piece being written, exit 2, and the piece is untouched; once the node has
+    ended, rendering over an old piece is a choice the user may make, as over any recording."""
+    from bearing_sim_ros import cli
+
+    folder = tmp_path / "runs"
+    folder.mkdir()
+    node = started({"scene": "er16k_outer_race", "fidelity": "kinematic", "duration": 60.0,
+                    "record": str(folder / "run.mcap"), "record_max_duration": 0.5})
+    deadline = time.monotonic() + FIRST_TABLE_S
+    while not (folder / "run_002.mcap").exists() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert (folder / "run_002.mcap").exists(), node.output()
+    first = folder / "run_000.mcap"
+    before = first.read_bytes()
+    argv = ["render", "er16k_healthy", "--duration", "0.2", "--fidelity", "kinematic", "--out", str(first)]
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"error: --out = '{first}': a piece of a split recording that is still being written "
+                          "(now to run_00"), err
+    assert first.read_bytes() == before and not list(folder.glob("*.partial"))
+    second = folder / "run_001.mcap"                 # a node given a piece: the same
+    kept = second.read_bytes()
+    r = subprocess.run([bearing_sim_exe, "node", "--ros-args", "-r", "__ns:=/other", "-p", f"record:={second}",
+                        "-p", "duration:=1.0"], env=ros_env, capture_output=True, text=True, timeout=60)
+    assert_one_error_line(r, [f"record = '{second}'", "a piece of a split recording that is still being written"])
+    assert second.read_bytes() == kept
+    node.send(signal.SIGINT)
+    assert node.wait(20) == 0, node.output()
+    assert read_recording(first)[1]["bearing_sim"]["file_index"] == "0"
+    assert cli.main(argv) == 0, capsys.readouterr().err
+    assert "file_index" not in read_recording(first)[1]["bearing_sim"]
+
+
 def test_a_failed_recording_says_itself_first_and_the_seconds_warnings_after(started, listener, tmp_path):
     """A sensor whose range (+-20 m/s^2) the outer race's impacts exceed: each second's
     ``/diagnostics`` warns ``accelerometer saturated: ...``.  Once the recording fails (its file

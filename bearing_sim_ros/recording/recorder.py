@@ -49,7 +49,8 @@ grows under its own name while it is written.
 One writer per name: each holds the file it writes (the name, or its partial file) with a lock,
 and a recorder whose name another is writing (a render's held partial file, a node's held file)
 ends at start with a UserError, before it writes anything (``_open_held``); the partial file of a
-render killed hard (held by nobody, its process gone) is removed then.
+render killed hard (held by nobody, its process gone) is removed then.  A finished piece of a
+split recording whose writer holds a later piece counts as written too (``_later_piece_held``).
 """
 from __future__ import annotations
 
@@ -166,9 +167,32 @@ def files_text(status: dict) -> str:
 _PARTIAL_SUFFIX = re.compile(r"\.(\d+)\.partial")   # after the final name: replace_when_done's <name>.<pid>.partial
 
 
-def _busy(where: str) -> UserError:
+def _busy(where: str, later_piece: Path | None = None) -> UserError:
+    if later_piece is not None:
+        return UserError(f"{where}: a piece of a split recording that is still being written (now to "
+                         f"{later_piece.name}); give another path, or wait until that recording ends")
     return UserError(f"{where}: another recording is being written to this file (two renders, nodes or runs "
                      "given the same path?); give each its own, or wait until the other ends")
+
+
+_PIECE_NAME = re.compile(r"(.+)_(\d{3,})(\.[^.]*)?")     # rotated_path's run_003.mcap
+
+
+def _later_piece_held(final: Path) -> Path | None:
+    """Where ``final`` is named as a piece of a split recording (``run_001.mcap``, ``rotated_path``)
+    and a later piece of it (``run_004.mcap``) is held by its writer, that piece, else None.  The
+    node holds only the piece it writes: a render or a node given a finished piece of a recording
+    still running replaced it, and the recording lost it without a word."""
+    match = _PIECE_NAME.fullmatch(final.name)
+    if match is None:
+        return None
+    index = int(match.group(2))
+    base = final.with_name(match.group(1) + (match.group(3) or ""))
+    for piece in existing_pieces(base):
+        later = _PIECE_NAME.fullmatch(piece.name)
+        if int(later.group(2)) > index and _held(piece):
+            return piece
+    return None
 
 
 def _held(path: Path) -> bool:
@@ -263,11 +287,12 @@ def _open_held(path: Path, where: str, final: Path | None = None):
                 raise _busy(where) from None
         if stat.S_ISREG(mode):
             # a node's file moved aside by a render finishing meanwhile is not at its name any more
-            if _other_writer(final, path) or not _at(path, fd):
+            later_piece = _later_piece_held(final)
+            if _other_writer(final, path) or later_piece is not None or not _at(path, fd):
                 if path != final:       # our partial file (its name is our pid's); a node's new
                     with contextlib.suppress(OSError):     # empty file stays: a render may be
                         path.unlink()                      # moving its own onto the name
-                raise _busy(where)
+                raise _busy(where, later_piece)
             os.ftruncate(fd, 0)
         return os.fdopen(fd, "wb")
     except BaseException:
