@@ -312,8 +312,8 @@ class AccelerometerChain:
             # the resonance's lift over the band, folded into the taps (until 2026-11-30 left out
             # without a word: a 30 kHz sensor at 15 kHz lost its 4 % at 6 kHz, 26 kHz kept 5.6 %).
             # The FIR sums taps[t] x[n - half + t], so g's k (x[n - k]) is t - half = -k: g
-            # reversed.  Its reach padded to whole output samples, the delay stays one (the
-            # lookahead, half / m, covers it)
+            # reversed.  Its reach is padded to whole output samples, so that the delay stays a
+            # whole number of them (design_antialias's rule), which the lookahead, half / m, covers
             reach = -(-RESONANCE_TAPS_REACH // self.m) * self.m
             g = np.zeros(2 * reach + 1)
             g[reach - RESONANCE_TAPS_REACH:reach + RESONANCE_TAPS_REACH + 1] = resonance_band_taps(

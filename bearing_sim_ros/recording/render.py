@@ -388,13 +388,15 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
                                           and duration > 0):
         raise UserError(f"{name('duration')} = {duration!r}: expected a finite number of seconds > 0")
     output_file(out, name("out"), keep=[scene.source_path])      # before the work, not after it
+    step_is_number = isinstance(rk4_step, numbers.Real)      # a text ('1e-5') has no :g and no float()
     if rk4_step is not None and solver != "rk4":
-        shown = f"{rk4_step:g}" if isinstance(rk4_step, numbers.Real) else repr(rk4_step)   # '1e-5': no :g
+        shown = f"{rk4_step:g}" if step_is_number else repr(rk4_step)
         raise UserError(f"{name('rk4_step')} = {shown} s: applies to {assign('solver', 'rk4')} only "
                         f"(given {assign('solver', solver)})")
     if solver != "default" and (scene.fidelity if fidelity == "auto" else fidelity) == "kinematic":
         # said in the caller's words before the Simulator says it in the API's
-        given = assign("solver", solver) + (f" {assign('rk4_step', float(rk4_step))}" if rk4_step is not None else "")
+        step = float(rk4_step) if step_is_number else rk4_step
+        given = assign("solver", solver) + (f" {assign('rk4_step', step)}" if rk4_step is not None else "")
         asked_by = (assign("fidelity", "kinematic") if fidelity == "kinematic"
                     else f"scene {scene.name}'s fidelity.tier: kinematic")
         raise UserError(f"{given}: the solver applies to the skidding tier only, and {asked_by} runs the "
