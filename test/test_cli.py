@@ -188,6 +188,9 @@ def test_non_finite_inputs_are_named_with_plain_numbers():
         sim.advance(150, radial_load=(math.nan, 0.0))
     assert str(speed.value) == "shaft_speed = nan rad/s: must be a finite number"
     assert str(load.value) == "radial_load = (nan, 0.0) N: must be finite numbers"
+    with pytest.raises(UserError) as load_y:         # each of the two, not only x
+        sim.advance(150, radial_load=(0.0, -math.inf))
+    assert str(load_y.value) == "radial_load = (0.0, -inf) N: must be finite numbers"
     assert "np." not in str(speed.value) + str(load.value)
 
 
@@ -293,6 +296,32 @@ def test_an_advance_too_large_to_hold_in_memory_is_refused_in_one_line(sample_ra
     assert sim.index == 0
 
 
+@pytest.mark.parametrize("n", [0, -1])
+def test_an_advance_of_no_samples_or_fewer_is_refused_in_one_line(n):
+    """``advance`` takes 1 - ``max_advance`` samples: 0 is a mistake (a loop's count that came
+    out empty), said as one, not an empty batch."""
+    sim = Simulator("er16k_healthy", fidelity="kinematic")
+    with pytest.raises(UserError) as exc:
+        sim.advance(n)
+    assert str(exc.value) == f"n = {n}: expected a whole number of samples > 0"
+    assert sim.index == 0
+
+
+def test_an_advance_of_exactly_max_advance_samples_is_taken(monkeypatch):
+    """``advance`` takes 1 - ``max_advance`` samples (its docstring, the error's "at most"): the
+    bound itself runs and one more is refused.  The memory bound is made small here (the real one
+    is 70 s of signal) by the module's ``MAX_ADVANCE_INTERNAL``, which ``max_advance`` reads."""
+    from bearing_sim_ros import simulator
+
+    sim = Simulator("er16k_healthy", fidelity="kinematic")
+    monkeypatch.setattr(simulator, "MAX_ADVANCE_INTERNAL", 300 * sim.chain_oversample)
+    assert sim.max_advance == 300
+    assert sim.advance(300).n == 300
+    with pytest.raises(UserError, match=r"^n = 301: at most 300 samples \(0.02 s\)"):
+        sim.advance(301)
+    assert sim.index == 300
+
+
 @pytest.mark.parametrize("call, message", [
     # True is an int to Python: advance(True) advanced one sample, oversample=np.int64(4) was refused
     (lambda: Simulator("er16k_healthy", fidelity="kinematic").advance(True),
@@ -327,6 +356,18 @@ def test_solver_settings_that_would_do_nothing_are_named(call, message):
     with pytest.raises(UserError) as exc:
         call()
     assert str(exc.value) == message
+
+
+def test_oversample_takes_1_2_and_the_multiples_of_4_up_to_64_and_auto_up_to_4():
+    """The allowed values as the README and the error say them, bounds included: 64 is the
+    largest, 4 the largest where fidelity auto may switch tiers (both tiers then share the chain's
+    rate); 8 with auto is refused in one line naming the way on."""
+    from bearing_sim_ros.simulator import OversampleForAuto, oversample_allowed
+
+    assert [v for v in range(0, 70) if oversample_allowed(v)] == [1, 2] + list(range(4, 65, 4))
+    assert Simulator("er16k_healthy", oversample=4).oversample == 4           # auto: kinematic here
+    with pytest.raises(OversampleForAuto, match=r"^oversample = 8: with fidelity auto allowed values are 1, 2 or 4 "):
+        Simulator("er16k_healthy", oversample=8)
 
 
 def test_numpy_integers_are_whole_numbers():

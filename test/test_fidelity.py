@@ -442,3 +442,22 @@ def test_a_low_traction_lubricant_keeps_its_own_peak_down_to_1e_3():
                                                          traction_c=0.0, traction_d=d)), 3000 * RPM, (0.0, -200.0))
            for d in (0.03, 0.09)]
     assert chi[0] == pytest.approx(3 * chi[1], rel=1e-12)
+
+
+def test_the_callers_tolerance_chooses_the_tier_and_a_load_change_in_y_alone_reselects_it():
+    """``Simulator(tolerance=...)`` is the error allowed to the kinematic tier in place of the
+    scene's 5 %: on the ER-16K at 1600 rpm the estimate is 0.47 % at 50 N and 0.70 % at 2 N, so
+    a tolerance between the two starts on the kinematic tier, and a command that lightens the
+    load (y only; x stays 0) moves the estimate past it and switches to the skidding tier; one
+    below both starts on the skidding tier.  The scene's own tolerance would keep both runs on the
+    kinematic tier, and a change of the load's y left out of "a new operating point" too."""
+    scene = load_scene("er16k_outer_race")
+    speed, heavy, light = scene.shaft_speed, tuple(scene.radial_load), (0.0, -2.0)
+    est_heavy, est_light = (kinematic_error_estimate(scene, speed, load)[0] for load in (heavy, light))
+    assert heavy[0] == 0.0 and est_heavy < est_light < 0.2 * scene.fidelity_tolerance
+    between = float(np.sqrt(est_heavy * est_light))
+    sim = Simulator(scene, tolerance=between)
+    assert sim.tier == "kinematic"
+    sim.advance(30, radial_load=light)
+    assert sim.tier == "skidding" and sim.tier_switches == 1
+    assert Simulator(scene, tolerance=0.5 * est_heavy).tier == "skidding"

@@ -267,6 +267,38 @@ def test_batch_shapes_channels_and_static_load():
     np.testing.assert_array_equal(inner, outer)
 
 
+@pytest.mark.parametrize("sample_rate", [15000.0, 5000.0])      # 5 kHz: 3 physics samples to an output one
+def test_a_later_batchs_times_load_columns_and_cage_speed_are_its_own_samples(sample_rate):
+    """What a user reads from a batch after the first, on a speed and load ramp: ``t0`` and
+    ``times`` are its samples' (index / rate, s), ``radial_load`` is (x, y) each ramping from the
+    old to the new command over the call (k / n of the way at row k, as ``shaft_speed``, late by
+    the chain's lookahead), and the kinematic tier's ``cage_speed`` is pure rolling's,
+    (1 - d/dm cos a) / 2 of the same row's shaft speed (eq. of the FTF).  The first batch alone
+    (t0 = 0, a static operating point) could not tell a batch's rows shifted by one sample, nor
+    the y load ramped as x; below 15 kHz, a row is the physics sample at its own time, the first of
+    its ``physics_per_sample``."""
+    sim = Simulator("er16k_outer_race", fidelity="kinematic", sample_rate=sample_rate)
+    fs = sim.sample_rate
+    sim.advance(150)
+    w0, (f0x, f0y) = sim.shaft_speed, sim.radial_load
+    w1, f1x, f1y = 1.2 * w0, 30.0, -80.0
+    b = sim.advance(150, shaft_speed=w1, radial_load=(f1x, f1y))
+    assert b.index0 == 150 and b.t0 == 150 / fs
+    np.testing.assert_allclose(b.times, (150 + np.arange(150)) / fs, rtol=1e-15)
+    lag = sim.chain.lookahead_samples
+    ramp = np.clip((np.arange(150) - lag) / 150, 0.0, None)     # of the way at each row
+    np.testing.assert_allclose(b.shaft_speed, w0 + (w1 - w0) * ramp, rtol=1e-12)
+    np.testing.assert_allclose(b.radial_load[:, 0], f0x + (f1x - f0x) * ramp, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(b.radial_load[:, 1], f0y + (f1y - f0y) * ramp, rtol=0, atol=1e-12)
+    b = sim.advance(150)
+    assert b.t0 == 300 / fs and b.times[-1] == pytest.approx(449 / fs, rel=1e-15)
+    d = sim.bearing
+    pure_rolling = 0.5 * (1.0 - d.ball_diameter / d.pitch_diameter * math.cos(d.contact_angle))
+    for batch in (b, sim.advance(150, shaft_speed=w0)):
+        assert np.ptp(batch.shaft_speed) > 0.01 * w0               # a ramp: rows tell apart
+        np.testing.assert_allclose(batch.cage_speed, pure_rolling * batch.shaft_speed, rtol=1e-9)
+
+
 def test_contact_forces_vanish_out_of_the_load_zone():
     """With 45 um clearance and 50 N at most three balls are in contact at any time.  The others
     carry at most the squeeze film of their approach across the gap (a few hundredths of a

@@ -207,6 +207,20 @@ def test_the_verdict_line_says_when_a_scene_defect_appears():
         "verdict: outer-race fault (threshold x4 the local floor; the scene's defects: outer)"]
 
 
+def test_a_defect_appearing_at_an_end_of_the_analysed_stretch_is_placed_on_the_right_side():
+    """The signal spans [0, end) and the stretch analysed [end - analysed, end): a defect whose
+    first sample is at ``end`` is after the run (the verdict never saw it), and one whose first
+    sample is the stretch's first was there through all of it, as one from earlier."""
+    from bearing_sim_ros import load_scene
+    from bearing_sim_ros.run import _verdict_lines
+
+    growing, healthy = load_scene("cwru_6205_or007_6_growing"), {"verdict": "healthy"}
+    assert _verdict_lines(growing, healthy, 5.0, 3.0)[0].endswith("outer (from 5 s, after this run))")
+    assert _verdict_lines(growing, healthy, 8.0, 3.0)[0].endswith("outer (from 5 s))")
+    assert _verdict_lines(growing, healthy, 8.0, 3.0 + 1e-9)[0].endswith(
+        "outer (from 5 s, inside the analysed stretch))")
+
+
 def test_a_fault_verdict_on_a_healthy_scene_is_explained_in_the_reports_words():
     """An inner-race verdict on a scene without a defect: the summary says what the detector said
     and then, in ``report``'s own words (``analysis.envelope.no_defect_note``), what the line is
@@ -319,6 +333,8 @@ def test_the_summary_looks_for_the_lines_where_the_cage_of_state_puts_them(skidd
     assert "verdict: outer-race fault" in text, text
     expected, found = map(float, re.search(r"BPFO +([\d.]+) +([\d.]+)", text).groups())
     assert abs(expected - found) < 1.0 and expected < 560, text
+    # the shaft's frequency said is the recorded speed's, 10000 rpm = 166.67 Hz (rad/s over 2 pi)
+    assert "at shaft 166.67 Hz (10000 rpm)" in text, text
 
 
 def test_the_summary_of_a_stretch_whose_speed_stepped_is_in_orders(tmp_path):

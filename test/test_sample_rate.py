@@ -71,3 +71,19 @@ def test_a_low_output_rate_is_chunk_invariant():
     _, parts = _run(scene, 2000.0, "kinematic", 0.5, chunk=37)
     for key in ("accel", "contact_forces", "cage_speed"):
         assert np.array_equal(getattr(whole[0], key), np.concatenate([getattr(p, key) for p in parts]))
+
+
+def test_a_low_output_rates_skid_ratios_are_those_of_its_own_rows():
+    """Below 15 kHz each output row is the physics sample at its own time (the first of its
+    ``physics_per_sample``), the skidding tier's extras too: each row's cage skid is the row's
+    cage speed against pure rolling (skidding.py's eq. 37), on a speed ramp where neighbouring
+    physics samples differ.  Extras from another physics sample than the other series passed."""
+    from bearing_sim_ros.scene import RPM
+
+    scene = replace(load_scene("er16k_healthy"), shaft_speed=10000 * RPM, radial_load=(0.0, -10.0))
+    sim = Simulator(scene, fidelity="skidding", sample_rate=5000.0)
+    assert sim.physics_per_sample == 3
+    sim.advance(100)
+    b = sim.advance(100, shaft_speed=9000 * RPM)
+    pure = 0.5 * b.shaft_speed * (1.0 - scene.bearing.diameter_ratio)
+    np.testing.assert_allclose(b.extras["cage_skid"], 100.0 * (pure - b.cage_speed) / pure, rtol=0, atol=1e-6)
