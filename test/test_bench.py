@@ -359,3 +359,15 @@ def test_only_the_seconds_after_settling_are_timed(monkeypatch):
     cfg = SimpleNamespace(simulator=lambda scene, sample_rate, seed: Sim())
     cpu, batch = bench._timed_run(cfg, None, 1000.0, settle=0.2, seconds=0.5)
     assert batch.samples == 500 and cpu == pytest.approx(0.5)
+
+
+def test_the_quick_study_runs_the_quick_skidding_settings_and_the_full_one_adds_the_papers_rk4():
+    """``--quick`` runs the skidding tier's settings named in QUICK_CONFIGS (whatever their place
+    in the tier's list); the full study runs them all, with RK4 at the papers' 1e-5 s first."""
+    from bearing_sim_ros.bench import QUICK_CONFIGS, skidding_configs
+    from bearing_sim_ros.physics.skidding import BENCH_CONFIGS
+
+    assert sorted(c.label for c in skidding_configs(quick=True)) == sorted(QUICK_CONFIGS)
+    full = skidding_configs(quick=False)
+    assert [c.label for c in full[1:]] == [label for label, _, _ in BENCH_CONFIGS]
+    assert full[0].family == "skidding rk4" and dict(full[0].kwargs) == {"solver": "rk4", "rk4_step": 1e-5}

@@ -728,6 +728,12 @@ def test_the_rms_ratio_brings_the_healthy_recording_to_the_faulty_ones_rate():
     assert rows[0]["rms_ratio"] is None
     assert rows[1]["rms_ratio"]["real"] == pytest.approx(2.0, rel=5e-3)
     assert rows[1]["healthy_rms_at_rate"]["sim"] == pytest.approx(np.sqrt(0.5), rel=5e-3)
+    # a healthy file analysed alone (no scene for it) is no reference: the one with a simulation is
+    alone = {"condition": "normal", "sample_rate": 48000.0, "real": {"stats": {"rms": 9.0}}, "sim": None,
+             "signals": {"real": 9.0 * healthy, "sim": None}}
+    rows = [alone, row("normal", 48000.0, healthy), row("inner", 12000.0, faulty)]
+    V.add_rms_ratios(rows)
+    assert rows[2]["rms_ratio"]["real"] == pytest.approx(2.0, rel=5e-3)
     down = V._resampled(healthy, 48000.0, 12000.0)
     assert down.size == 24000 and env.statistics(down)["rms"] == pytest.approx(np.sqrt(0.5), rel=5e-3)
 
@@ -820,3 +826,11 @@ def test_a_compared_recording_analyses_both_signals_at_its_shaft_speed_over_the_
     row = V.compare_recording(rec, seconds=0.5)
     assert row["seconds"] == 0.5 and row["signals"]["real"].size == 6000
     assert asked == [(6000, 12000.0, pytest.approx(1772 / 60.0))] * 2
+
+
+def test_the_recordings_in_a_folder_are_found_whatever_the_case_of_their_suffix(tmp_path):
+    """``find_recordings`` lists a folder's .mat files, sorted, also those named .MAT (Windows
+    copies of the data set), and nothing else."""
+    for name in ("b.MAT", "a.mat", "notes.txt"):
+        (tmp_path / name).write_text("x")
+    assert [p.name for p in find_recordings(tmp_path)] == ["a.mat", "b.MAT"]
