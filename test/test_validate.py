@@ -639,3 +639,198 @@ def test_the_highest_fault_line_is_searched_above_its_frequency_too():
     x += 0.05 * np.random.default_rng(4).standard_normal(t.size)
     line = env.fault_lines(x, fs, frequencies)["bpfi"]
     assert line.found_hz == pytest.approx(1.008 * bpfi, abs=0.2) and line.prominence > 10 * env.DETECTION_THRESHOLD, line
+
+
+# ---- mutation audit: the reader's checks, the rate check, the criteria and the RMS ratio -----
+def test_read_recording_rejects_a_channel_of_999_samples_or_a_non_finite_one(tmp_path):
+    """The reader needs a finite drive-end channel of at least 1000 samples: 999 is refused,
+    1000 read; a NaN anywhere is refused (it would poison every statistic)."""
+    from scipy.io import savemat
+
+    path = tmp_path / "12k_Drive_End_IR007_0_105.mat"
+    savemat(str(path), {"X105_DE_time": np.zeros((999, 1)), "X105RPM": np.array([[1797]])})
+    with pytest.raises(UserError, match="999 samples"):
+        read_recording(path)
+    x = np.sin(np.arange(1000.0))[:, None]
+    savemat(str(path), {"X105_DE_time": x, "X105RPM": np.array([[1797]])})
+    assert read_recording(path).accel.size == 1000
+    x[500] = np.nan
+    savemat(str(path), {"X105_DE_time": x, "X105RPM": np.array([[1797]])})
+    with pytest.raises(UserError, match="non-finite"):
+        read_recording(path)
+
+
+def test_a_twelve_o_clock_outer_race_file_names_its_scene():
+    """CWRU's outer-race faults sit at 3, 6 and 12 o'clock: a two-digit clock is read."""
+    info = parse_name("12k_Drive_End_OR007@12_0_156.mat")
+    assert (info.condition, info.clock, info.scene) == ("outer", 12, "cwru_6205_or007_12")
+
+
+def _shaft_harmonics(fs, seconds, rpm, orders=range(1, 35), seed=0):
+    """Shaft harmonics k x rpm/60 Hz (amplitude 1/k) on faint noise: a machine's low-frequency
+    vibration, sampled at ``fs``."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(int(fs * seconds)) / fs
+    x = 1e-4 * rng.standard_normal(t.size)
+    for k in orders:
+        x += np.sin(2 * np.pi * k * rpm / 60.0 * t + k) / k
+    return x
+
+
+def test_the_shaft_order_check_scores_whole_orders_among_the_strongest_lines():
+    """Whole shaft orders sampled at 48 kHz: read at 48 kHz all 30 strongest lines (orders 1-30)
+    are whole orders; read at 12 kHz they fall on quarter orders, and only orders 4, 8, ..., 28
+    of the strongest 30 in the window above 0.5 x (2-31) stay whole: 7/30."""
+    x = _shaft_harmonics(48000.0, 2.0, 1797.0)
+    check = shaft_order_check(x, 48000.0, 1797.0)
+    assert check["best_rate"] == 48000.0
+    assert check["scores"] == {"12000": round(7 / 30, 2), "48000": 1.0}
+
+
+def test_the_criteria_compare_the_conditions_own_line_and_kurtosis_within_a_factor_2():
+    """For an inner-race file the line compared is BPFI (not BPFO), within x10 and required;
+    kurtosis within x2 (2.1 x apart fails); the verdicts must be equal; for a ball fault the line
+    is compared but not required (the ball fault is known to be hard)."""
+    def side(kurt, verdict, bpfi, bpfo, bsf):
+        return {"verdict": verdict, "stats": {"kurtosis": kurt},
+                "lines": {"bpfi": {"height": bpfi}, "bpfo": {"height": bpfo}, "2bsf": {"height": bsf}}}
+
+    row = {"condition": "inner", "real": side(3.0, "inner", 1.0, 1.0, 1.0),
+           "sim": side(6.3, "outer", 5.0, 50.0, 1.0)}
+    c = V.criteria(row)
+    assert not c["kurtosis"]["ok"] and c["kurtosis"]["required"]
+    assert c["line_height"]["ok"] and c["line_height"]["sim"] == 5.0 and c["line_height"]["required"]
+    assert not c["verdict"]["ok"] and c["verdict"]["required"]
+    same = V.criteria({**row, "sim": side(6.0, "inner", 5.0, 50.0, 1.0)})
+    assert same["kurtosis"]["ok"] and same["verdict"]["ok"]
+    ball = V.criteria({**row, "condition": "ball", "sim": side(3.0, "inner", 1.0, 1.0, 20.0)})
+    assert not ball["line_height"]["ok"] and not ball["line_height"]["required"]
+    assert not ball["verdict"]["required"]
+    assert V._within(1.0, 2.0, 2.0) and V._within(10.0, 1.0, 10.0)      # the factor itself is within
+
+
+def test_the_rms_ratio_brings_the_healthy_recording_to_the_faulty_ones_rate():
+    """A 48 kHz healthy recording with a 10 kHz tone (beyond a 12 kHz acquisition's band) and a
+    100 Hz one of amplitude 1; a 12 kHz faulty one with a 100 Hz tone of amplitude 2: at the
+    faulty file's rate the healthy RMS is that of its 100 Hz tone alone, and the ratio
+    faulty/healthy is 2 (2 / sqrt(2) without resampling).  The healthy row has no ratio."""
+    t48 = np.arange(96000) / 48000.0
+    t12 = np.arange(24000) / 12000.0
+    healthy = np.sin(2 * np.pi * 100 * t48) + np.sin(2 * np.pi * 10000 * t48)
+    faulty = 2.0 * np.sin(2 * np.pi * 100 * t12)
+
+    def row(cond, fs, x):
+        stats = {"stats": env.statistics(x)}
+        return {"condition": cond, "sample_rate": fs, "real": stats, "sim": stats, "signals": {"real": x, "sim": x}}
+
+    rows = [row("normal", 48000.0, healthy), row("inner", 12000.0, faulty)]
+    V.add_rms_ratios(rows)
+    assert rows[0]["rms_ratio"] is None
+    assert rows[1]["rms_ratio"]["real"] == pytest.approx(2.0, rel=5e-3)
+    assert rows[1]["healthy_rms_at_rate"]["sim"] == pytest.approx(np.sqrt(0.5), rel=5e-3)
+    # a healthy file analysed alone (no scene for it) is no reference: the one with a simulation is
+    alone = {"condition": "normal", "sample_rate": 48000.0, "real": {"stats": {"rms": 9.0}}, "sim": None,
+             "signals": {"real": 9.0 * healthy, "sim": None}}
+    rows = [alone, row("normal", 48000.0, healthy), row("inner", 12000.0, faulty)]
+    V.add_rms_ratios(rows)
+    assert rows[2]["rms_ratio"]["real"] == pytest.approx(2.0, rel=5e-3)
+    down = V._resampled(healthy, 48000.0, 12000.0)
+    assert down.size == 24000 and env.statistics(down)["rms"] == pytest.approx(np.sqrt(0.5), rel=5e-3)
+
+
+def test_the_wide_bands_reach_the_nyquist_frequency_and_no_further():
+    """Band RMS adds the 12-24 kHz edges only where the signal has them: at 12 kHz the bands end at
+    6 kHz; at 24 kHz the 12 kHz edge (its Nyquist frequency) is added; at 48 kHz both."""
+    x = np.random.default_rng(1).standard_normal(24000)
+    edges = {fs: V.analyse(x, fs, 29.95, BEARING)["band_edges_hz"] for fs in (12000.0, 24000.0, 48000.0)}
+    assert edges[12000.0] == list(V.BAND_EDGES)
+    assert edges[24000.0] == list(V.BAND_EDGES) + [12000.0]
+    assert edges[48000.0] == list(V.BAND_EDGES) + [12000.0, 24000.0]
+
+
+def test_the_sideband_ratio_is_the_shaft_rate_modulation_of_the_fault_line():
+    """Impacts at BPFI whose amplitude is modulated by 1 + m cos(2 pi f_r t) have envelope
+    sidebands at BPFI +- f_r (Hz, not rad/s) each m/2 of the line: the ratio reported is m/2."""
+    fs, seconds, fr, m = 12000.0, 8.0, 29.95, 0.6
+    f_fault = BEARING.fault_frequencies(fr)["bpfi"]
+    t = np.arange(int(0.02 * fs)) / fs
+    ring = 5.0 * np.exp(-0.02 * 2 * np.pi * 3400.0 * t) * np.sin(2 * np.pi * 3400.0 * t)
+    x = 0.01 * np.random.default_rng(0).standard_normal(int(fs * seconds))
+    for k in np.arange(0.0, seconds - 0.02, 1.0 / f_fault):
+        i = int(round(k * fs))
+        x[i:i + ring.size] += (1.0 + m * np.cos(2 * np.pi * fr * k)) * ring
+    ratio = V.analyse(x, fs, fr, BEARING)["sideband_ratio"]["bpfi"]
+    assert ratio == pytest.approx(m / 2, rel=0.15)
+
+
+def test_the_simulation_runs_at_the_recordings_speed_after_settling_on_the_vertical_axis(monkeypatch):
+    """``simulate`` drives the scene at ``rpm`` as rad/s (2 pi / 60 per rpm), drops ``SETTLE_S``
+    of start-up before the ``n`` samples it returns, reads accel_y (the CWRU sensor at 12
+    o'clock) unless told, and passes the radial load on (a simulator made up here records it)."""
+    import bearing_sim_ros.simulator as simulator_module
+
+    calls = []
+
+    class Recorder:
+        accel_channels = ("accel_x", "accel_y")
+        max_advance = 10_000
+
+        def __init__(self, scene, sample_rate, fidelity, seed):
+            pass
+
+        def advance(self, n, shaft_speed, radial_load):
+            calls.append((n, shaft_speed, radial_load))
+            return type("Batch", (), {"accel": np.column_stack([np.zeros(n), np.ones(n)])})
+
+    monkeypatch.setattr(simulator_module, "Simulator", Recorder)
+    x = V.simulate("cwru_6205_normal", 12000.0, 1797.0, 500, radial_load=(0.0, -250.0))
+    assert np.array_equal(x, np.ones(500))
+    assert [n for n, _, _ in calls] == [int(V.SETTLE_S * 12000.0), 500]
+    assert all(w == pytest.approx(1797.0 * 2 * math.pi / 60, rel=1e-12) and load == (0.0, -250.0)
+               for _, w, load in calls)
+    assert np.array_equal(V.simulate("cwru_6205_normal", 12000.0, 1797.0, 10, channel="accel_x"), np.zeros(10))
+
+
+def test_the_robustness_and_load_zone_checks_set_the_load_down_and_the_defect_where_the_clock_says(monkeypatch):
+    """The heavier-load case adds HEAVY_LOAD (200 N more downward, -y) to the scene's load; the
+    load-zone check puts the outer-race defect at 6 (-y), 3 (+x) and 12 o'clock (+y)."""
+    seen = []
+
+    def fake_simulate(scene, fs, rpm, n, seed=V.SEED, radial_load=None, channel=V.CHANNEL):
+        seen.append((scene, radial_load))
+        return np.zeros(4)
+
+    stub = {"stats": {"rms": 1.0, "kurtosis": 3.0}, "verdict": "healthy", "scores": {"bpfo": 1.0},
+            "lines": {k: {"height": 1.0, "prominence": 1.0} for k in ("bpfo", "bpfi", "2bsf")}}
+    monkeypatch.setattr(V, "simulate", fake_simulate)
+    monkeypatch.setattr(V, "analyse", lambda *a, **k: stub)
+    rows = V.robustness(scenes=("cwru_6205_normal",), seconds=0.01)
+    base = np.asarray(load_scene("cwru_6205_normal").radial_load, dtype=float)
+    heavy = [r for r in rows if r["radial_load"] != list(base)]
+    assert len(heavy) == 1 and heavy[0]["radial_load"] == pytest.approx(list(base + [0.0, -200.0]))
+    seen.clear()
+    V.load_zone_check(None, seconds=0.01)
+    where = [(round(math.cos(s.defects[0].angle), 9), round(math.sin(s.defects[0].angle), 9)) for s, _ in seen]
+    assert list(dict.fromkeys(where)) == [(0.0, -1.0), (1.0, 0.0), (0.0, 1.0)]     # each read on two axes
+
+
+def test_a_compared_recording_analyses_both_signals_at_its_shaft_speed_over_the_seconds_asked(tmp_path, monkeypatch):
+    """``compare_recording`` with ``seconds`` takes that many seconds of the recording (and says
+    so), simulates as many samples, and analyses both at the recording's shaft speed in Hz."""
+    path = tmp_path / "12k_Drive_End_IR007_1_123.mat"
+    _write_mat(path, seconds=2.0)
+    rec = read_recording(path)
+    asked = []
+    monkeypatch.setattr(V, "simulate", lambda scene, fs, rpm, n, seed=V.SEED: np.zeros(n))
+    monkeypatch.setattr(V, "analyse", lambda x, fs, shaft_hz, bearing: asked.append((x.size, fs, shaft_hz)) or {})
+    row = V.compare_recording(rec, seconds=0.5)
+    assert row["seconds"] == 0.5 and row["signals"]["real"].size == 6000
+    assert asked == [(6000, 12000.0, pytest.approx(1772 / 60.0))] * 2
+
+
+def test_the_recordings_in_a_folder_are_found_whatever_the_case_of_their_suffix(tmp_path):
+    """``find_recordings`` lists a folder's .mat files, sorted, also those named .MAT (Windows
+    copies of the data set), and nothing else."""
+    for name in ("b.MAT", "a.mat", "notes.txt"):
+        (tmp_path / name).write_text("x")
+    assert [p.name for p in find_recordings(tmp_path)] == ["a.mat", "b.MAT"]
