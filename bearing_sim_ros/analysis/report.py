@@ -714,7 +714,7 @@ def first_detection(timeline: list):
                 None)
 
 
-def verdict_timeline(d: "_Data", x, scene, window_s: float, mean_speed_rad_s: float, reread=None) -> list:
+def verdict_timeline(d: "_Data", x, scene, window_s: float, mean_speed_rad_s: float, windows_beyond=None) -> list:
     """``score_windows`` over the whole recording's channel ``x`` of ``d`` in windows of
     ``window_s`` s, each at its own speed (the ``shaft_speed`` commands in the window, else
     ``state``, else ``mean_speed_rad_s``) and fault frequencies (pure rolling at that speed, with
@@ -722,7 +722,7 @@ def verdict_timeline(d: "_Data", x, scene, window_s: float, mean_speed_rad_s: fl
     cage of ``state`` in it, ``with_state_cage``), those whose lines move within it
     (``line_spread``) in orders of the shaft (``order_tracked``) where they can be, else unscored.
     ``x`` holds the first samples (``MAX_ANALYSIS_S``); the windows beyond it come from
-    ``reread(bounds)`` (``_windows_spooled``).  Without a scene, the recorded ``/diagnostics``
+    ``windows_beyond(bounds)`` (``_windows_spooled``).  Without a scene, the recorded ``/diagnostics``
     alone (``line_frequencies``); [] where they do not give all four lines either."""
     if scene is None and not line_frequencies({}, d.signal_frequencies):
         return []
@@ -743,9 +743,9 @@ def verdict_timeline(d: "_Data", x, scene, window_s: float, mean_speed_rad_s: fl
         recorded = periods.frequencies(t0, t1, abs(speed) / (2 * math.pi))
         freqs.append(line_frequencies(rolling, with_state_cage(recorded, d, scene, t0, t1)))
         spreads.append(line_spread(d, t0, t1))
-    held = [b for b in bounds if b[1] <= x.size]          # the windows in memory; the rest from reread
+    held = [b for b in bounds if b[1] <= x.size]          # the windows in memory; the rest from windows_beyond
     rest = bounds[len(held):]
-    windows = itertools.chain((x[i0:i1] for i0, i1 in held), reread(rest) if rest else ())
+    windows = itertools.chain((x[i0:i1] for i0, i1 in held), windows_beyond(rest) if rest else ())
     return score_windows(windows, fs, times, freqs, d.truth, speeds, spreads,
                          lambda xw, times_s: order_tracked(d, xw, times_s, scene, periods))
 
