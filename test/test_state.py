@@ -19,7 +19,7 @@ def _twins(fidelity):
     return Simulator(scene, fidelity=fidelity), Simulator(scene, fidelity=fidelity)
 
 
-@pytest.mark.parametrize("fidelity, ramp_tol, speed_tol", [("kinematic", 1e-9, 1e-9), ("skidding", 1e-4, 5e-3)])
+@pytest.mark.parametrize("fidelity, ramp_tol, speed_tol", [("kinematic", 1e-9, 1e-9), ("skidding", 1e-4, 5e-4)])
 def test_the_snapshot_is_at_the_next_output_sample_steady_and_on_a_ramp(fidelity, ramp_tol, speed_tol):
     sim, twin = _twins(fidelity)
     ahead = sim.chain.lookahead_samples
@@ -51,8 +51,10 @@ def test_the_snapshot_is_at_the_next_output_sample_steady_and_on_a_ramp(fidelity
     assert got.cage_angle == pytest.approx(want.cage_angle, abs=ramp_tol)
     np.testing.assert_allclose(got.ball_angles, want.ball_angles, atol=ramp_tol)
     # the speeds too: the cage's of the stamp, and each ball's moved with it (the ramp changes the
-    # cage's speed by over 1 % across the lookahead, so a slip in the sign of that move shows; the
-    # skidding tier's cage series and its own snapshot differ by 0.2 % at the stamp, measured)
+    # cage's speed by over 1 % across the lookahead, so a slip in the sign of that move shows).  The
+    # skidding tier's own snapshot carries the speeds from its step grid, up to a step (33 us)
+    # before the stamp, with their accelerations: within 1e-4 of the cage series at the stamp and
+    # 2e-4 for the balls (measured; held, they were 0.22 % low)
     assert abs(want.cage_speed / sim._pending["cage_speed"][-1] - 1) > 0.01
     assert got.cage_speed == pytest.approx(want.cage_speed, rel=speed_tol)
     np.testing.assert_allclose(got.ball_speeds, want.ball_speeds, rtol=speed_tol)
