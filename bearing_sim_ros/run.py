@@ -22,7 +22,8 @@ import numpy as np
 
 from .errors import SettingNames, UserError
 from .paths import output_file
-from .teardown import command_signals, say
+from .stale_dds_ports import clear_before_start
+from .teardown import command_signals, say, say_on_stderr
 
 ANALYSIS_MAX_S = 30.0       # s of signal (the end of the recording) that the summary analyses
 # what a divergence's advice offers: run has no --fidelity, the scene's fidelity.tier does it
@@ -278,6 +279,7 @@ def run_command(args) -> int:
     signals.on_held = say_held(lambda: node)
     try:
         signals.check()
+        clear_before_start(say_on_stderr)
         rclpy.init(args=[], signal_handler_options=SignalHandlerOptions.NO)
         node = build_node(lambda: BearingSimNode(record_argument="--out", settings=RUN_SETTINGS,
                                                  parameter_overrides=overrides))

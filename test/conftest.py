@@ -16,6 +16,8 @@ from pathlib import Path
 
 import pytest
 
+from bearing_sim_ros.stale_dds_ports import clear_half_made_ports
+
 REPO = Path(__file__).resolve().parent.parent
 
 # The suite sends SIGINT and SIGHUP to the commands it starts, and they inherit what this
@@ -70,6 +72,9 @@ def ros_env(monkeypatch):
     this machine holds while this one runs; also applied to this process (call ``rclpy.init``
     after requesting the fixture)."""
     domain, lock = _claim_domain()
+    # a port file of this domain that a killed process left half made (an earlier test's, or an
+    # earlier run's) hung every participant that took it, and with it the suite
+    clear_half_made_ports(domain)
     domain = str(domain)
     env = dict(os.environ)
     env.update({

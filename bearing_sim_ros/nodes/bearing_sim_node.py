@@ -42,6 +42,7 @@ from rclpy.node import Node
 from ..errors import NODE_SETTINGS, SettingNames, UserError
 from ..limits import LOAD_MULTIPLE_C0, NDM_LIMIT, STATIC_F0, InputLimits, load_on_balls  # noqa: F401 (names kept here)
 from ..teardown import EXIT_INTERRUPTED, SIGNAL_NAMES, command_signals, say_on_stderr, teardown_watchdog
+from ..stale_dds_ports import clear_before_start
 
 NODE_NAME = "bearing_sim"
 OVERSAMPLE_ZERO = "each tier's own"       # what the parameter oversample's default 0 means
@@ -1400,6 +1401,7 @@ def main(argv=None) -> int:
             signals.check()             # a signal while Python imported numpy, numba, rclpy
             # the signals are CommandSignals' alone: rclpy's would shut its context down under the
             # running node at the first one, and raise KeyboardInterrupt wherever Python is
+            clear_before_start(say_on_stderr)     # else a killed node's half-made port hangs us
             rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
             stray = remove_ros_args(args)[1:]
             if stray:           # `ros2 run ... bearing_sim_node --bogus` ran the node regardless

@@ -95,7 +95,8 @@ from .. import ground_truth
 from ..analysis.envelope import DETECTION_THRESHOLD, FAULT_LINES, STEADY_LINES, diagnose, spread, with_cage
 from ..analysis.orders import order_diagnose
 from ..messages import RUN_ENDED, RUN_KEY, TOPIC_ACCEL, TOPIC_DIAGNOSTICS, TOPIC_STATE, waveform_qos
-from ..teardown import command_signals, say, teardown_watchdog
+from ..stale_dds_ports import clear_before_start
+from ..teardown import command_signals, say, say_on_stderr, teardown_watchdog
 from .bearing_sim_node import NODE_NAME as SIMULATOR_NODE, PEER_CHECK_S
 from ..waveform import NS, from_pointcloud2
 
@@ -939,6 +940,7 @@ def main(args, ros_args=()) -> int:
     try:
         try:
             signals.check()
+            clear_before_start(say_on_stderr)
             rclpy.init(args=["bearing-sim monitor", *ros_args], signal_handler_options=SignalHandlerOptions.NO)
             end_wait = getattr(args, "end_wait", None)
             if end_wait is None and args.count:

@@ -42,7 +42,8 @@ import time
 
 from ..errors import UserError
 from ..messages import DISCOVERY_GRACE_S, END_DELIVERY_GRACE_S, deliver_the_end
-from ..teardown import say, teardown_watchdog
+from ..stale_dds_ports import clear_before_start
+from ..teardown import say, say_on_stderr, teardown_watchdog
 from ..waveform import NS
 from .reader import deserialize, get_message, open_recording
 from .schemas import qos_from_yaml
@@ -148,6 +149,7 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
 
         # our own handlers (play_command) set ``stop``: the loop ends between two messages and
         # the node is destroyed and the context shut down in order
+        clear_before_start(say_on_stderr)
         rclpy.init(args=None, signal_handler_options=SignalHandlerOptions.NO)
         node = rclpy.create_node("bearing_sim")
         try:
