@@ -240,7 +240,8 @@ def test_loop_keeps_tables_contiguous_and_sigint_ends_cleanly(recording, bearing
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         sub.wait(timeout=60)
-        assert play.poll() is None            # still looping
+        if play.poll() is not None:           # it must still be looping: say why it is not
+            pytest.fail(f"play ended by itself, status {play.returncode}: {play.communicate()[1][-3000:]}")
         play.send_signal(signal.SIGINT)
         _, err = play.communicate(timeout=30)
     finally:
