@@ -6,6 +6,7 @@ localhost, both in this process's environment and in the environment handed to s
 """
 from __future__ import annotations
 
+import faulthandler
 import fcntl
 import itertools
 import os
@@ -36,6 +37,36 @@ def pytest_configure(config):
     # late and a process sent SIGTERM 0.1 s after launch had not reached its first line yet
     config.addinivalue_line("markers", "wall_clock: measures against the steady clock (pacing, a signal "
                                        "in a process's first moments); `make test` runs these alone")
+
+
+# A test that hangs (a participant waiting for ever on a broken shared-memory port: one did, for
+# 20 minutes, until its worker was killed by hand) prints every thread's stack and ends its
+# process after this long, so the run ends with a failure that says where, not at CI's time limit.
+# The slowest test takes under 20 s on a quiet 2-core machine, a minute or two loaded or compiling.
+# (Code under test that sets a timer of its own, teardown_watchdog, replaces this one for the
+# rest of that test.)
+HUNG_TEST_S = 300.0
+_uncaptured_stderr = None      # the stacks go where pytest's own lines go, not into a test's capture
+
+
+def pytest_sessionstart(session):
+    global _uncaptured_stderr
+    capman = session.config.pluginmanager.getplugin("capturemanager")
+    if capman is not None:
+        with capman.global_and_fixture_disabled():
+            _uncaptured_stderr = os.fdopen(os.dup(2), "w")
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_protocol(item, nextitem):
+    out = _uncaptured_stderr or sys.stderr
+    faulthandler.dump_traceback_later(HUNG_TEST_S, exit=True, file=out)
+    try:
+        yield
+    finally:
+        faulthandler.cancel_dump_traceback_later()
+
+
 VENV_BIN = Path(sys.executable).parent
 
 # domain ids 1..101 are valid for Fast DDS on localhost; start from the pid to keep parallel
