@@ -975,6 +975,8 @@ def test_a_render_and_a_node_given_one_path_the_second_ends_with_one_line_and_th
         r = subprocess.run([bearing_sim_exe, "node", "--ros-args", "-p", f"record:={rendered}", "-p", "duration:=2.0"],
                            env=ros_env, capture_output=True, text=True, timeout=60)
         assert_one_error_line(r, [f"record = '{rendered}'", "another recording is being written to this file"])
+        # and made no file of its own there (it left an empty one, until the render moved its own onto it)
+        assert not rendered.exists()
         stop_render(render)
     topics, meta = read_recording(rendered)
     assert meta["bearing_sim"]["seed"] == "7" and len(topics["/accel"]) > 0

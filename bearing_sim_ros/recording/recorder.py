@@ -275,6 +275,13 @@ def _open_held(path: Path, where: str, final: Path | None = None):
     import fcntl
 
     final = path if final is None else final
+    if not os.path.lexists(path):
+        # a writer known already refuses this one before it makes a file: a node refused so left
+        # an empty file at its record path.  The same check after the lock (below) stays, for a
+        # writer that starts in between
+        later_piece = _later_piece_held(final)
+        if later_piece is not None or _other_writer(final, path):
+            raise _busy(where, later_piece)
     fd = os.open(path, os.O_WRONLY | os.O_CREAT, 0o666)
     try:
         mode = os.fstat(fd).st_mode
