@@ -56,6 +56,7 @@ from __future__ import annotations
 
 import atexit
 import contextlib
+import errno
 import glob
 import json
 import math
@@ -69,6 +70,7 @@ from pathlib import Path
 
 from ..errors import UserError
 from ..paths import MCAP_MAGIC, check_replaceable, output_file
+from ..teardown import say_on_stderr, signal_noted
 from .cdr import zero_padding
 from .schemas import message_definition, qos_to_yaml
 
@@ -80,6 +82,8 @@ WHEN_FULL = ("drop", "wait")          # what ``write`` does when the queue holds
 CHUNK_BYTES = 1024 * 1024             # MCAP chunk size (uncompressed)
 _POLL_S = 0.02                        # writer thread wake-up period (s)
 _WAIT_POLL_S = 0.002                  # a waiting producer's wake-up period (when_full="wait", s)
+PIPE_NOTICE_S = 1.0                   # s without a reader of a named pipe before saying the recording waits
+_PIPE_POLL_S = 0.05                   # how often a named pipe is tried for a reader (s)
 CHECK_PATH_S = 1.0                    # how often the writer thread looks whether its file was deleted (s)
 # a split recording's files (the node's record_max_size, run's --max-file-size; bytes on disk):
 # below this one would hold little more than the metadata and the attached scene (a scene with a
@@ -256,7 +260,37 @@ def _is_recording_or_empty(path: Path) -> bool:
         return False
 
 
-def _open_held(path: Path, where: str, final: Path | None = None):
+def _open_for_writing(path: Path, where: str, stopped, say) -> int:
+    """A descriptor of ``path`` opened for writing (created if missing), blocking as usual once
+    open.  A named pipe without a reader is waited for: a plain open waits in the kernel until a
+    program opens it for reading, without a word, and the commands' signal handlers only note a
+    signal (Python then opens again): ``render --out pipe`` and ``node -p record:=pipe`` with
+    nobody reading sat there through Ctrl-C and SIGTERM, for ever.  So it is tried without
+    blocking every ``_PIPE_POLL_S``; after ``PIPE_NOTICE_S`` ``say`` tells, once, that the
+    recording waits for a reader; once ``stopped()`` (a signal noted) the wait ends with an
+    InterruptedError."""
+    started = time.monotonic()
+    told = False
+    while True:
+        try:
+            fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_NONBLOCK, 0o666)
+        except OSError as exc:
+            # ENXIO: a pipe without a reader, or a socket (which never opens: said as it is)
+            if exc.errno != errno.ENXIO or not stat.S_ISFIFO(os.stat(path).st_mode):
+                raise
+        else:
+            os.set_blocking(fd, True)
+            return fd
+        if stopped():
+            raise InterruptedError(errno.EINTR, "stopped while it waited for a reader of the pipe")
+        if not told and time.monotonic() - started >= PIPE_NOTICE_S:
+            say(f"{where}: a named pipe that no program reads yet; the recording waits for one to "
+                "open it (Ctrl-C to stop)")
+            told = True
+        time.sleep(_PIPE_POLL_S)
+
+
+def _open_held(path: Path, where: str, final: Path | None = None, stopped=signal_noted, say=say_on_stderr):
     """``path`` opened for writing from its start, a regular file held with an exclusive lock
     (``flock``, released as it is closed) and emptied only once it is held.  Two nodes given one
     ``record`` path (a parameters file for several, ``/**: record: run.mcap``) both wrote into the
@@ -271,11 +305,12 @@ def _open_held(path: Path, where: str, final: Path | None = None):
     node was writing there.  So once ``path`` is held, another writer of the name
     (``_other_writer``) refuses this one, before it empties anything.  Each looks only after
     taking its own lock, so two starting at once cannot both miss each other: then both may
-    refuse, which loses nothing."""
+    refuse, which loses nothing.  A named pipe without a reader is waited for, said after a second
+    (``say``) and ended by ``stopped()`` (``_open_for_writing``)."""
     import fcntl
 
     final = path if final is None else final
-    fd = os.open(path, os.O_WRONLY | os.O_CREAT, 0o666)
+    fd = _open_for_writing(path, where, stopped, say)
     try:
         mode = os.fstat(fd).st_mode
         if stat.S_ISREG(mode) or stat.S_ISFIFO(mode):
@@ -322,7 +357,10 @@ class Recorder:
     ``record`` parameter, render's ``--out``); keep: paths never written (the scene's file);
     replace_when_done: write each file under a temporary name and move it onto its own once
     finalised (see the module docstring); when_full: "drop" (count) or "wait" (back-pressure) once
-    max_queue_bytes (bytes of serialised messages; default MAX_QUEUE_BYTES) wait for the disk.
+    max_queue_bytes (bytes of serialised messages; default MAX_QUEUE_BYTES) wait for the disk;
+    stopped: a callable, true once the caller was asked to stop (default: a signal noted by the
+    command's ``teardown.CommandSignals``), which ends a wait for a named pipe's reader with a
+    KeyboardInterrupt (``_open_for_writing``: said on stderr after ``PIPE_NOTICE_S``).
     Each file is checked as it is opened (``paths.check_replaceable``): an existing file that is
     not an MCAP recording is not replaced (the first file: a UserError; a rotated one: the
     recording stops with that error).  With rotation, existing pieces of that name are a
@@ -333,7 +371,7 @@ class Recorder:
                  rotate_bytes: int = 0, rotate_seconds: float = 0.0,
                  start_time_ns: int | None = None, argument: str = "record", keep=(),
                  replace_when_done: bool = False, when_full: str = "drop",
-                 max_queue_bytes: int | None = None):
+                 max_queue_bytes: int | None = None, stopped=signal_noted):
         if when_full not in WHEN_FULL:
             raise ValueError(f"when_full = {when_full!r}: allowed values are {', '.join(WHEN_FULL)}")
         if rotate_bytes < 0 or not math.isfinite(rotate_seconds) or rotate_seconds < 0:
@@ -347,6 +385,7 @@ class Recorder:
         self._discard = False
         self._rotate = bool(rotate_bytes or rotate_seconds)
         self._wait_when_full = when_full == "wait"
+        self._stopped = stopped
         self._max_queue_bytes = MAX_QUEUE_BYTES if max_queue_bytes is None else int(max_queue_bytes)
         self._rotate_bytes = int(rotate_bytes)
         self._rotate_ns = int(round(rotate_seconds * 1e9))
@@ -375,6 +414,8 @@ class Recorder:
             self._refuse_earlier_pieces()
         try:
             self._open_file()
+        except InterruptedError:
+            raise KeyboardInterrupt from None     # stopped while a named pipe waited for its reader
         except OSError as exc:
             # a missing folder by its name, and the system's reason without the file's: render's
             # error named its temporary <out>.<pid>.partial, a path the user never gave
@@ -511,7 +552,9 @@ class Recorder:
         written = path
         if self._replace_when_done and (not path.exists() or path.is_file()):
             written = path.with_name(f"{path.name}.{os.getpid()}.partial")
-        stream = _open_held(written, self._where(path), final=path)
+        # rotating (the writer thread), a close ends a wait for a pipe's reader too: as a write error
+        stream = _open_held(written, self._where(path), final=path,
+                            stopped=lambda: self._closing or self._stopped())
         if not stream.seekable():
             stream = _Counted(stream)     # a pipe: the MCAP writer asks where each record starts
         self._writing = (written, path)
