@@ -1131,3 +1131,45 @@ def test_a_table_with_more_data_than_its_width_says_is_not_a_waveform_table(sim_
     with pytest.raises(ValueError, match=r"^not a waveform table: 160 bytes of data, expected width 19 x "
                                          r"point_step 8 = 152$"):
         from_pointcloud2(m)
+
+
+def test_a_close_that_waits_for_a_pipes_reader_says_what_it_waits_for(tmp_path, capsys):
+    """A recording into a pipe whose reader stopped reading (SIGSTOP, a stalled consumer) or onto a
+    stalled disk: the node's Ctrl-C waited in ``close`` for as long as it stalled, without a
+    word (30 s and more).  The file's end is still waited for, but after ``FINISH_NOTICE_S`` one
+    line says what for; and once the reader reads, the recording ends whole."""
+    import os
+    import threading
+
+    from mcap.reader import make_reader
+    from std_msgs.msg import String
+
+    from bearing_sim_ros.recording.recorder import FINISH_NOTICE_S
+
+    fifo = tmp_path / "pipe.mcap"
+    os.mkfifo(fifo)
+    reader = os.open(fifo, os.O_RDONLY | os.O_NONBLOCK)       # there, but it reads nothing yet
+    try:
+        rec = Recorder(fifo, {"a": "b"})
+        rec.add_topic("/x", "std_msgs/msg/String", 10)
+        for i in range(8):              # 1.6 MB that zstd cannot shrink much: more than a pipe holds
+            rec.write("/x", String(data=os.urandom(100_000).hex()), i + 1)
+        closer = threading.Thread(target=rec.close, daemon=True)
+        closer.start()
+        said = ""
+        deadline = time.monotonic() + FINISH_NOTICE_S + 30
+        while "still finishing" not in said and time.monotonic() < deadline:
+            said += capsys.readouterr().err
+            time.sleep(0.1)
+        assert closer.is_alive()
+        assert f"recording {fifo}: still finishing after {FINISH_NOTICE_S:g} s (" in said, said
+        assert "waiting for the disk, or for the pipe's reader, to take the rest" in said, said
+        os.set_blocking(reader, True)
+        data = b"".join(iter(lambda: os.read(reader, 1 << 20), b""))
+        closer.join(30)
+    finally:
+        os.close(reader)
+    assert not closer.is_alive() and rec.status["ok"], rec.status
+    (tmp_path / "copy.mcap").write_bytes(data)
+    with open(tmp_path / "copy.mcap", "rb") as f:
+        assert make_reader(f).get_summary().statistics.message_count == 8

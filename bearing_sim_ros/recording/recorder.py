@@ -84,6 +84,7 @@ _POLL_S = 0.02                        # writer thread wake-up period (s)
 _WAIT_POLL_S = 0.002                  # a waiting producer's wake-up period (when_full="wait", s)
 PIPE_NOTICE_S = 1.0                   # s without a reader of a named pipe before saying the recording waits
 _PIPE_POLL_S = 0.05                   # how often a named pipe is tried for a reader (s)
+FINISH_NOTICE_S = 2.0                 # s a close waits for the writer thread before saying what it waits for
 CHECK_PATH_S = 1.0                    # how often the writer thread looks whether its file was deleted (s)
 # a split recording's files (the node's record_max_size, run's --max-file-size; bytes on disk):
 # below this one would hold little more than the metadata and the attached scene (a scene with a
@@ -492,7 +493,16 @@ class Recorder:
         self._closing = True
         self._queue.append(("close", None, None, 0))
         if threading.current_thread() is not self._thread:
-            self._thread.join()
+            # the file's end must be written, however long that takes (a kill loses it), but not
+            # without a word: a pipe whose reader stopped reading held a node's Ctrl-C for as long
+            # as it stopped, and the node said nothing
+            self._thread.join(FINISH_NOTICE_S)
+            if self._thread.is_alive():
+                queued_mb = (self._enqueued_bytes - self._drained_bytes) / 1e6
+                say_on_stderr(f"recording {self._current_path()}: still finishing after {FINISH_NOTICE_S:g} s "
+                              f"({queued_mb:.1f} MB queued): waiting for the disk, or for the pipe's reader, "
+                              "to take the rest (killed now, the file would have no end)")
+                self._thread.join()
         self._closed = True
         try:
             atexit.unregister(self.close)
