@@ -1173,3 +1173,52 @@ def test_a_close_that_waits_for_a_pipes_reader_says_what_it_waits_for(tmp_path, 
     (tmp_path / "copy.mcap").write_bytes(data)
     with open(tmp_path / "copy.mcap", "rb") as f:
         assert make_reader(f).get_summary().statistics.message_count == 8
+
+
+def test_a_write_that_waits_for_a_stalled_pipe_ends_once_a_stop_is_asked_for(tmp_path):
+    """``when_full="wait"`` (render) into a pipe whose reader stopped reading: once the queue was
+    full, ``write`` waited for the reader, and render's Ctrl-C and SIGTERM (only noted, acted on
+    at the batch's end) were not heard: 30 s after a Ctrl-C the render still ran, without a word.
+    ``stopped()`` now ends the wait; the message is queued all the same, and the file comes out
+    whole once the reader reads."""
+    import os
+    import threading
+
+    from mcap.reader import make_reader
+    from std_msgs.msg import String
+
+    fifo = tmp_path / "pipe.mcap"
+    os.mkfifo(fifo)
+    reader = os.open(fifo, os.O_RDONLY | os.O_NONBLOCK)       # there, but it reads nothing yet
+    stop = threading.Event()
+    written = []
+    try:
+        rec = Recorder(fifo, {"a": "b"}, when_full="wait", max_queue_bytes=1_000_000, stopped=stop.is_set)
+        rec.add_topic("/x", "std_msgs/msg/String", 10)
+
+        def produce():
+            for i in range(40):         # 8 MB that zstd cannot shrink much: the queue fills
+                rec.write("/x", String(data=os.urandom(100_000).hex()), i + 1)
+                written.append(i)
+
+        producer = threading.Thread(target=produce, daemon=True)
+        producer.start()
+        before = -1
+        while len(written) != before:   # until it stops making progress: waiting on the full queue
+            before = len(written)
+            producer.join(1.0)
+        assert producer.is_alive() and len(written) < 40, len(written)
+        stop.set()
+        producer.join(10)
+        assert not producer.is_alive(), "write still waits after the stop"
+        closer = threading.Thread(target=rec.close, daemon=True)
+        closer.start()
+        os.set_blocking(reader, True)
+        data = b"".join(iter(lambda: os.read(reader, 1 << 20), b""))
+        closer.join(30)
+    finally:
+        os.close(reader)
+    assert rec.status["ok"] and rec.status["dropped"] == 0, rec.status
+    (tmp_path / "copy.mcap").write_bytes(data)
+    with open(tmp_path / "copy.mcap", "rb") as f:
+        assert make_reader(f).get_summary().statistics.message_count == 40

@@ -26,7 +26,8 @@ A disk slower than the producer: once ``max_queue_bytes`` (default ``MAX_QUEUE_B
 serialised messages wait for it, ``when_full`` decides.  ``"drop"`` (the live node, which must
 never hold up a real-time batch): the message is dropped and counted (``status["dropped"]``).
 ``"wait"`` (``render``, which has no deadline and must lose nothing): ``write`` waits until the
-writer thread has drained the queue below the limit (back-pressure; polled, no lock).
+writer thread has drained the queue below the limit (back-pressure; polled, no lock), or until
+``stopped()`` (a signal noted), and then queues the message beyond the limit.
 
 Rotation (optional): ``rotate_bytes`` (bytes on disk per file, as rosbag2's ``--max-bag-size``)
 and ``rotate_seconds`` (log-time span per file, as ``--max-bag-duration``) start a new file
@@ -466,8 +467,11 @@ class Recorder:
                 self._dropped += 1
                 return
             # the writer thread drains the queue (or, once recording has failed, discards it) and
-            # ends only after close: nothing else to wait for
-            while self._queue_full() and self._thread.is_alive():
+            # ends only after close; a stop asked for (a signal that render only notes) ends the
+            # wait too: into a pipe whose reader stopped reading, render sat deaf to Ctrl-C and
+            # SIGTERM.  The message is queued all the same (the file stays whole), and close says
+            # what it waits for
+            while self._queue_full() and self._thread.is_alive() and not self._stopped():
                 time.sleep(_WAIT_POLL_S)
             if self._closing or self._error:
                 self._dropped += 1
