@@ -227,6 +227,12 @@ def command_signals() -> CommandSignals:
     return _COMMAND_SIGNALS
 
 
+def signal_noted() -> bool:
+    """Whether this process's ``CommandSignals`` (a command that runs a node) noted a signal: a
+    wait that the handler does not interrupt (it never raises) asks it to end."""
+    return _COMMAND_SIGNALS is not None and _COMMAND_SIGNALS.first is not None
+
+
 @contextmanager
 def node_signals():
     """``command_signals()`` for the block, the first thing a command that runs a node does; the

@@ -13,6 +13,8 @@ import os
 import signal
 import sys
 import tempfile
+import threading
+import time
 from pathlib import Path
 
 import pytest
@@ -46,7 +48,56 @@ def pytest_configure(config):
 # (Code under test that sets a timer of its own, teardown_watchdog, replaces this one for the
 # rest of that test.)
 HUNG_TEST_S = 300.0
+# A hung test's processes are ended with it: a node it started runs until it is stopped, and a
+# test process that just ended left it running for ever (an orphan of init, on a domain whose lock
+# went with the test, so the next test to claim that domain met it).  Where the hang holds the GIL
+# the timer thread that does this cannot run; faulthandler ends the process this much later.
+HUNG_EXIT_GRACE_S = 30.0
 _uncaptured_stderr = None      # the stacks go where pytest's own lines go, not into a test's capture
+
+
+def _children() -> list:
+    """The pids of this process's children (from /proc: ``pid (name) state ppid ...``)."""
+    me = str(os.getpid())
+    found = []
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry}/stat") as f:
+                fields = f.read().rsplit(")", 1)[1].split()    # the name may hold spaces and brackets
+        except (OSError, IndexError):
+            continue
+        if fields[1] == me:
+            found.append(int(entry))
+    return found
+
+
+def _signal_children(sig) -> None:
+    """``sig`` to each child, and to its process group where it leads one (``start_new_session``)."""
+    for pid in _children():
+        try:
+            if os.getpgid(pid) == pid:
+                os.killpg(pid, sig)
+            else:
+                os.kill(pid, sig)
+        except OSError:
+            pass                    # gone meanwhile
+
+
+def _end_hung_test(out) -> None:
+    """The test has run ``HUNG_TEST_S``: every thread's stack to ``out``, the processes it started
+    stopped (SIGTERM: a node finalises its recording; SIGKILL for what is left after 3 s), and this
+    process ended, status 1."""
+    out.write(f"\ntest still running after {HUNG_TEST_S:g} s: its stacks, then its processes ended\n")
+    faulthandler.dump_traceback(file=out, all_threads=True)
+    _signal_children(signal.SIGTERM)
+    deadline = time.monotonic() + 3.0
+    while _children() and time.monotonic() < deadline:
+        time.sleep(0.1)
+    _signal_children(signal.SIGKILL)
+    out.flush()
+    os._exit(1)
 
 
 def pytest_sessionstart(session):
@@ -60,10 +111,14 @@ def pytest_sessionstart(session):
 @pytest.hookimpl(hookwrapper=True)
 def pytest_runtest_protocol(item, nextitem):
     out = _uncaptured_stderr or sys.stderr
-    faulthandler.dump_traceback_later(HUNG_TEST_S, exit=True, file=out)
+    hung = threading.Timer(HUNG_TEST_S, _end_hung_test, args=(out,))
+    hung.daemon = True
+    hung.start()
+    faulthandler.dump_traceback_later(HUNG_TEST_S + HUNG_EXIT_GRACE_S, exit=True, file=out)
     try:
         yield
     finally:
+        hung.cancel()
         faulthandler.cancel_dump_traceback_later()
 
 

@@ -1007,6 +1007,21 @@ def test_a_node_started_with_hangups_ignored_runs_on_through_one(ros_env, bearin
     assert len(topics["/accel"]) == 300, (len(topics["/accel"]), log.read_text())
 
 
+def test_a_node_recording_into_a_pipe_nobody_reads_says_it_waits_and_stops_on_ctrl_c(started, tmp_path):
+    """``record:=`` a named pipe that no program read: the node waited at start in the kernel's
+    open, without a word, and its Ctrl-C and SIGTERM were only noted (Python opened again), so it
+    never ended.  Now it says after a second that the recording waits for a reader, and Ctrl-C
+    ends it, status 0."""
+    fifo = tmp_path / "pipe.mcap"
+    os.mkfifo(fifo)
+    node = started({"scene": "er16k_outer_race", "fidelity": "kinematic", "record": str(fifo)})
+    node.wait_for_output(f"record = '{fifo}': a named pipe that no program reads yet; the recording waits "
+                         "for one to open it (Ctrl-C to stop)", 120)
+    node.send(signal.SIGINT)
+    assert node.wait(30) == 0, node.output()
+    assert "Traceback" not in node.output(), node.output()
+
+
 def test_a_second_ctrl_c_while_the_recording_is_finalised_keeps_it_and_exits_130(started, tmp_path):
     """A second Ctrl-C while the node finalised its recording raised KeyboardInterrupt into the
     wait for the writer: the process ended at once (status 0 by ``bearing-sim node``, a traceback

@@ -1131,3 +1131,94 @@ def test_a_table_with_more_data_than_its_width_says_is_not_a_waveform_table(sim_
     with pytest.raises(ValueError, match=r"^not a waveform table: 160 bytes of data, expected width 19 x "
                                          r"point_step 8 = 152$"):
         from_pointcloud2(m)
+
+
+def test_a_close_that_waits_for_a_pipes_reader_says_what_it_waits_for(tmp_path, capsys):
+    """A recording into a pipe whose reader stopped reading (SIGSTOP, a stalled consumer) or onto a
+    stalled disk: the node's Ctrl-C waited in ``close`` for as long as it stalled, without a
+    word (30 s and more).  The file's end is still waited for, but after ``FINISH_NOTICE_S`` one
+    line says what for; and once the reader reads, the recording ends whole."""
+    import os
+    import threading
+
+    from mcap.reader import make_reader
+    from std_msgs.msg import String
+
+    from bearing_sim_ros.recording.recorder import FINISH_NOTICE_S
+
+    fifo = tmp_path / "pipe.mcap"
+    os.mkfifo(fifo)
+    reader = os.open(fifo, os.O_RDONLY | os.O_NONBLOCK)       # there, but it reads nothing yet
+    try:
+        rec = Recorder(fifo, {"a": "b"})
+        rec.add_topic("/x", "std_msgs/msg/String", 10)
+        for i in range(8):              # 1.6 MB that zstd cannot shrink much: more than a pipe holds
+            rec.write("/x", String(data=os.urandom(100_000).hex()), i + 1)
+        closer = threading.Thread(target=rec.close, daemon=True)
+        closer.start()
+        said = ""
+        deadline = time.monotonic() + FINISH_NOTICE_S + 30
+        while "still finishing" not in said and time.monotonic() < deadline:
+            said += capsys.readouterr().err
+            time.sleep(0.1)
+        assert closer.is_alive()
+        assert f"recording {fifo}: still finishing after {FINISH_NOTICE_S:g} s (" in said, said
+        assert "waiting for the disk, or for the pipe's reader, to take the rest" in said, said
+        os.set_blocking(reader, True)
+        data = b"".join(iter(lambda: os.read(reader, 1 << 20), b""))
+        closer.join(30)
+    finally:
+        os.close(reader)
+    assert not closer.is_alive() and rec.status["ok"], rec.status
+    (tmp_path / "copy.mcap").write_bytes(data)
+    with open(tmp_path / "copy.mcap", "rb") as f:
+        assert make_reader(f).get_summary().statistics.message_count == 8
+
+
+def test_a_write_that_waits_for_a_stalled_pipe_ends_once_a_stop_is_asked_for(tmp_path):
+    """``when_full="wait"`` (render) into a pipe whose reader stopped reading: once the queue was
+    full, ``write`` waited for the reader, and render's Ctrl-C and SIGTERM (only noted, acted on
+    at the batch's end) were not heard: 30 s after a Ctrl-C the render still ran, without a word.
+    ``stopped()`` now ends the wait; the message is queued all the same, and the file comes out
+    whole once the reader reads."""
+    import os
+    import threading
+
+    from mcap.reader import make_reader
+    from std_msgs.msg import String
+
+    fifo = tmp_path / "pipe.mcap"
+    os.mkfifo(fifo)
+    reader = os.open(fifo, os.O_RDONLY | os.O_NONBLOCK)       # there, but it reads nothing yet
+    stop = threading.Event()
+    written = []
+    try:
+        rec = Recorder(fifo, {"a": "b"}, when_full="wait", max_queue_bytes=1_000_000, stopped=stop.is_set)
+        rec.add_topic("/x", "std_msgs/msg/String", 10)
+
+        def produce():
+            for i in range(40):         # 8 MB that zstd cannot shrink much: the queue fills
+                rec.write("/x", String(data=os.urandom(100_000).hex()), i + 1)
+                written.append(i)
+
+        producer = threading.Thread(target=produce, daemon=True)
+        producer.start()
+        before = -1
+        while len(written) != before:   # until it stops making progress: waiting on the full queue
+            before = len(written)
+            producer.join(1.0)
+        assert producer.is_alive() and len(written) < 40, len(written)
+        stop.set()
+        producer.join(10)
+        assert not producer.is_alive(), "write still waits after the stop"
+        closer = threading.Thread(target=rec.close, daemon=True)
+        closer.start()
+        os.set_blocking(reader, True)
+        data = b"".join(iter(lambda: os.read(reader, 1 << 20), b""))
+        closer.join(30)
+    finally:
+        os.close(reader)
+    assert rec.status["ok"] and rec.status["dropped"] == 0, rec.status
+    (tmp_path / "copy.mcap").write_bytes(data)
+    with open(tmp_path / "copy.mcap", "rb") as f:
+        assert make_reader(f).get_summary().statistics.message_count == 40

@@ -6,8 +6,10 @@ from __future__ import annotations
 import math
 import os
 import re
+import signal
 import subprocess
 import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -685,6 +687,63 @@ def test_a_pipe_or_a_device_at_out_gets_a_complete_recording(tmp_path):
     with open(tmp_path / "copy.mcap", "rb") as f:
         summary = make_reader(f).get_summary()    # footer, summary: the file was finalised
     assert summary is not None and summary.statistics.channel_message_counts
+    with open_recording(tmp_path / "copy.mcap") as rec:
+        assert rec.topics()["/accel"].count == 5
+
+
+def test_a_render_into_a_pipe_nobody_reads_says_it_waits_and_ends_on_a_signal_or_writes_once_read(tmp_path,
+                                                                                                    ros_env):
+    """A render to a named pipe that no program read waited in the kernel's open, without a word
+    and for ever: the SIGTERM of ``timeout 90`` was only noted (Python opened again), and the
+    process sat there ten minutes until it was killed.  Now it says after a second that it waits
+    for a reader; SIGTERM then ends it (143, nothing rendered), and a reader that comes gets the
+    whole recording."""
+    import select
+    import sys
+
+    from mcap.reader import make_reader
+
+    fifo = tmp_path / "pipe.mcap"
+    os.mkfifo(fifo)
+    args = [sys.executable, "-m", "bearing_sim_ros.cli", "render", "er16k_healthy", "--duration", "0.05",
+            "--out", str(fifo)]
+    waiting = f"--out = '{fifo}': a named pipe that no program reads yet; the recording waits for one to open it"
+
+    def waits(proc):
+        deadline = time.monotonic() + 120               # imports, and kernels compiled on a cold cache
+        said = ""
+        while time.monotonic() < deadline and proc.poll() is None and waiting not in said:
+            if select.select([proc.stderr], [], [], 1.0)[0]:     # a silent wait must not hold the test
+                said += os.read(proc.stderr.fileno(), 4096).decode()
+        return said
+
+    proc = subprocess.Popen(args, env=ros_env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    try:
+        said = waits(proc)
+        assert waiting in said, said
+        proc.send_signal(signal.SIGTERM)
+        rest = proc.communicate(timeout=30)[1].decode()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(10)
+    assert proc.returncode == 143, said + rest
+    assert f"interrupted (SIGTERM): nothing rendered, '{fifo}' left as it was" in rest, rest
+    assert "Traceback" not in said + rest
+
+    proc = subprocess.Popen(args, env=ros_env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    try:
+        assert waiting in waits(proc)
+        with open(fifo, "rb") as pipe:
+            data = pipe.read()
+        assert proc.wait(30) == 0, proc.communicate()[1]
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(10)
+    (tmp_path / "copy.mcap").write_bytes(data)
+    with open(tmp_path / "copy.mcap", "rb") as f:
+        assert make_reader(f).get_summary() is not None          # finalised
     with open_recording(tmp_path / "copy.mcap") as rec:
         assert rec.topics()["/accel"].count == 5
 

@@ -26,7 +26,8 @@ A disk slower than the producer: once ``max_queue_bytes`` (default ``MAX_QUEUE_B
 serialised messages wait for it, ``when_full`` decides.  ``"drop"`` (the live node, which must
 never hold up a real-time batch): the message is dropped and counted (``status["dropped"]``).
 ``"wait"`` (``render``, which has no deadline and must lose nothing): ``write`` waits until the
-writer thread has drained the queue below the limit (back-pressure; polled, no lock).
+writer thread has drained the queue below the limit (back-pressure; polled, no lock), or until
+``stopped()`` (a signal noted), and then queues the message beyond the limit.
 
 Rotation (optional): ``rotate_bytes`` (bytes on disk per file, as rosbag2's ``--max-bag-size``)
 and ``rotate_seconds`` (log-time span per file, as ``--max-bag-duration``) start a new file
@@ -56,6 +57,7 @@ from __future__ import annotations
 
 import atexit
 import contextlib
+import errno
 import glob
 import json
 import math
@@ -69,6 +71,7 @@ from pathlib import Path
 
 from ..errors import UserError
 from ..paths import MCAP_MAGIC, check_replaceable, output_file
+from ..teardown import say_on_stderr, signal_noted
 from .cdr import zero_padding
 from .schemas import message_definition, qos_to_yaml
 
@@ -80,6 +83,9 @@ WHEN_FULL = ("drop", "wait")          # what ``write`` does when the queue holds
 CHUNK_BYTES = 1024 * 1024             # MCAP chunk size (uncompressed)
 _POLL_S = 0.02                        # writer thread wake-up period (s)
 _WAIT_POLL_S = 0.002                  # a waiting producer's wake-up period (when_full="wait", s)
+PIPE_NOTICE_S = 1.0                   # s without a reader of a named pipe before saying the recording waits
+_PIPE_POLL_S = 0.05                   # how often a named pipe is tried for a reader (s)
+FINISH_NOTICE_S = 2.0                 # s a close waits for the writer thread before saying what it waits for
 CHECK_PATH_S = 1.0                    # how often the writer thread looks whether its file was deleted (s)
 # a split recording's files (the node's record_max_size, run's --max-file-size; bytes on disk):
 # below this one would hold little more than the metadata and the attached scene (a scene with a
@@ -256,7 +262,37 @@ def _is_recording_or_empty(path: Path) -> bool:
         return False
 
 
-def _open_held(path: Path, where: str, final: Path | None = None):
+def _open_for_writing(path: Path, where: str, stopped, say) -> int:
+    """A descriptor of ``path`` opened for writing (created if missing), blocking as usual once
+    open.  A named pipe without a reader is waited for: a plain open waits in the kernel until a
+    program opens it for reading, without a word, and the commands' signal handlers only note a
+    signal (Python then opens again): ``render --out pipe`` and ``node -p record:=pipe`` with
+    nobody reading sat there through Ctrl-C and SIGTERM, for ever.  So it is tried without
+    blocking every ``_PIPE_POLL_S``; after ``PIPE_NOTICE_S`` ``say`` tells, once, that the
+    recording waits for a reader; once ``stopped()`` (a signal noted) the wait ends with an
+    InterruptedError."""
+    started = time.monotonic()
+    told = False
+    while True:
+        try:
+            fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_NONBLOCK, 0o666)
+        except OSError as exc:
+            # ENXIO: a pipe without a reader, or a socket (which never opens: said as it is)
+            if exc.errno != errno.ENXIO or not stat.S_ISFIFO(os.stat(path).st_mode):
+                raise
+        else:
+            os.set_blocking(fd, True)
+            return fd
+        if stopped():
+            raise InterruptedError(errno.EINTR, "stopped while it waited for a reader of the pipe")
+        if not told and time.monotonic() - started >= PIPE_NOTICE_S:
+            say(f"{where}: a named pipe that no program reads yet; the recording waits for one to "
+                "open it (Ctrl-C to stop)")
+            told = True
+        time.sleep(_PIPE_POLL_S)
+
+
+def _open_held(path: Path, where: str, final: Path | None = None, stopped=signal_noted, say=say_on_stderr):
     """``path`` opened for writing from its start, a regular file held with an exclusive lock
     (``flock``, released as it is closed) and emptied only once it is held.  Two nodes given one
     ``record`` path (a parameters file for several, ``/**: record: run.mcap``) both wrote into the
@@ -271,7 +307,8 @@ def _open_held(path: Path, where: str, final: Path | None = None):
     node was writing there.  So once ``path`` is held, another writer of the name
     (``_other_writer``) refuses this one, before it empties anything.  Each looks only after
     taking its own lock, so two starting at once cannot both miss each other: then both may
-    refuse, which loses nothing."""
+    refuse, which loses nothing.  A named pipe without a reader is waited for, said after a second
+    (``say``) and ended by ``stopped()`` (``_open_for_writing``)."""
     import fcntl
 
     final = path if final is None else final
@@ -282,7 +319,7 @@ def _open_held(path: Path, where: str, final: Path | None = None):
         later_piece = _later_piece_held(final)
         if later_piece is not None or _other_writer(final, path):
             raise _busy(where, later_piece)
-    fd = os.open(path, os.O_WRONLY | os.O_CREAT, 0o666)
+    fd = _open_for_writing(path, where, stopped, say)
     try:
         mode = os.fstat(fd).st_mode
         if stat.S_ISREG(mode) or stat.S_ISFIFO(mode):
@@ -329,7 +366,10 @@ class Recorder:
     ``record`` parameter, render's ``--out``); keep: paths never written (the scene's file);
     replace_when_done: write each file under a temporary name and move it onto its own once
     finalised (see the module docstring); when_full: "drop" (count) or "wait" (back-pressure) once
-    max_queue_bytes (bytes of serialised messages; default MAX_QUEUE_BYTES) wait for the disk.
+    max_queue_bytes (bytes of serialised messages; default MAX_QUEUE_BYTES) wait for the disk;
+    stopped: a callable, true once the caller was asked to stop (default: a signal noted by the
+    command's ``teardown.CommandSignals``), which ends a wait for a named pipe's reader with a
+    KeyboardInterrupt (``_open_for_writing``: said on stderr after ``PIPE_NOTICE_S``).
     Each file is checked as it is opened (``paths.check_replaceable``): an existing file that is
     not an MCAP recording is not replaced (the first file: a UserError; a rotated one: the
     recording stops with that error).  With rotation, existing pieces of that name are a
@@ -340,7 +380,7 @@ class Recorder:
                  rotate_bytes: int = 0, rotate_seconds: float = 0.0,
                  start_time_ns: int | None = None, argument: str = "record", keep=(),
                  replace_when_done: bool = False, when_full: str = "drop",
-                 max_queue_bytes: int | None = None):
+                 max_queue_bytes: int | None = None, stopped=signal_noted):
         if when_full not in WHEN_FULL:
             raise ValueError(f"when_full = {when_full!r}: allowed values are {', '.join(WHEN_FULL)}")
         if rotate_bytes < 0 or not math.isfinite(rotate_seconds) or rotate_seconds < 0:
@@ -354,6 +394,7 @@ class Recorder:
         self._discard = False
         self._rotate = bool(rotate_bytes or rotate_seconds)
         self._wait_when_full = when_full == "wait"
+        self._stopped = stopped
         self._max_queue_bytes = MAX_QUEUE_BYTES if max_queue_bytes is None else int(max_queue_bytes)
         self._rotate_bytes = int(rotate_bytes)
         self._rotate_ns = int(round(rotate_seconds * 1e9))
@@ -382,6 +423,8 @@ class Recorder:
             self._refuse_earlier_pieces()
         try:
             self._open_file()
+        except InterruptedError:
+            raise KeyboardInterrupt from None     # stopped while a named pipe waited for its reader
         except OSError as exc:
             # a missing folder by its name, and the system's reason without the file's: render's
             # error named its temporary <out>.<pid>.partial, a path the user never gave
@@ -431,8 +474,11 @@ class Recorder:
                 self._dropped += 1
                 return
             # the writer thread drains the queue (or, once recording has failed, discards it) and
-            # ends only after close: nothing else to wait for
-            while self._queue_full() and self._thread.is_alive():
+            # ends only after close; a stop asked for (a signal that render only notes) ends the
+            # wait too: into a pipe whose reader stopped reading, render sat deaf to Ctrl-C and
+            # SIGTERM.  The message is queued all the same (the file stays whole), and close says
+            # what it waits for
+            while self._queue_full() and self._thread.is_alive() and not self._stopped():
                 time.sleep(_WAIT_POLL_S)
             if self._closing or self._error:
                 self._dropped += 1
@@ -458,7 +504,16 @@ class Recorder:
         self._closing = True
         self._queue.append(("close", None, None, 0))
         if threading.current_thread() is not self._thread:
-            self._thread.join()
+            # the file's end must be written, however long that takes (a kill loses it), but not
+            # without a word: a pipe whose reader stopped reading held a node's Ctrl-C for as long
+            # as it stopped, and the node said nothing
+            self._thread.join(FINISH_NOTICE_S)
+            if self._thread.is_alive():
+                queued_mb = (self._enqueued_bytes - self._drained_bytes) / 1e6
+                say_on_stderr(f"recording {self._current_path()}: still finishing after {FINISH_NOTICE_S:g} s "
+                              f"({queued_mb:.1f} MB queued): waiting for the disk, or for the pipe's reader, "
+                              "to take the rest (killed now, the file would have no end)")
+                self._thread.join()
         self._closed = True
         try:
             atexit.unregister(self.close)
@@ -518,7 +573,9 @@ class Recorder:
         written = path
         if self._replace_when_done and (not path.exists() or path.is_file()):
             written = path.with_name(f"{path.name}.{os.getpid()}.partial")
-        stream = _open_held(written, self._where(path), final=path)
+        # rotating (the writer thread), a close ends a wait for a pipe's reader too: as a write error
+        stream = _open_held(written, self._where(path), final=path,
+                            stopped=lambda: self._closing or self._stopped())
         if not stream.seekable():
             stream = _Counted(stream)     # a pipe: the MCAP writer asks where each record starts
         self._writing = (written, path)

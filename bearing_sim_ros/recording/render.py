@@ -494,9 +494,9 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
             elif rec is not None:       # None: a caller's own handler raised before it was open
                 rec.discard()
         bar.done()
-        st = rec.status
-        if not done:
+        if not done:        # rec may be None: stopped before its file was open
             return f"nothing rendered, {str(out)!r} left as it was"
+        st = rec.status
         if st["ok"]:
             return f"{str(out)!r} holds the first {done / sample_rate:g} s, finalised"
         return st["error"]
@@ -506,8 +506,14 @@ def render(scene, duration: float, out, fidelity: str = "auto", seed: int = 0,
             # the partial file opened, and its topics added, where a signal is only noted: raised
             # between its opening and the loop (SIGTERM, SIGHUP; Ctrl-C where a caller's handler
             # raised), it left the file behind, never finalised nor removed
-            rec = Recorder(out, meta, attachments, start_time_ns=0, argument=name("out"), keep=[scene.source_path],
-                           replace_when_done=True, when_full="wait")
+            try:
+                rec = Recorder(out, meta, attachments, start_time_ns=0, argument=name("out"),
+                               keep=[scene.source_path], replace_when_done=True, when_full="wait",
+                               stopped=lambda: stop.signum is not None)
+            except KeyboardInterrupt:
+                if stop.signum is None:
+                    raise
+                raise _interruption(stop.signum) from None      # while a pipe at out waited for a reader
             for topic in topics:
                 rec.add_topic(topic, TYPES[topic], _qos_for(topic, batch_duration))
             while done < total:
