@@ -100,8 +100,11 @@ def clear_half_made_ports(domain: int | None, shm_dir: Path = SHM_DIR, made_with
 def removed_text(removed: list, domain: int) -> str:
     """One line for the user about the files ``clear_half_made_ports`` removed."""
     names = ", ".join(str(path) for path in removed)
-    return (f"removed {names}: a Fast DDS shared-memory port that a killed process left half made "
-            f"(every participant on ROS domain {domain} that took it hung at start)")
+    if len(removed) == 1:
+        return (f"removed {names}: a Fast DDS shared-memory port that a killed process left half made "
+                f"(every participant on ROS domain {domain} that took it hung at start)")
+    return (f"removed {names}: Fast DDS shared-memory ports that killed processes left half made "
+            f"(every participant on ROS domain {domain} that took one hung at start)")
 
 
 def clear_before_start(say) -> None:

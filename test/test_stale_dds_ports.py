@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 from bearing_sim_ros.stale_dds_ports import (DOMAIN_GAIN, PORT_BASE, SHM_DIR, clear_half_made_ports,
-                                             domain_from_env)
+                                             domain_from_env, removed_text)
 from bearing_sim_ros.recording.reader import open_recording
 
 STATE_MADE = struct.pack("<I", 2)
@@ -47,6 +47,11 @@ def test_only_the_domains_unmade_ports_are_removed(tmp_path):
     assert {p.name for p in tmp_path.iterdir()} == {made.name, other_domain.name, below.name, lock.name, data.name}
     assert clear_half_made_ports(None, shm_dir=tmp_path) == []
     assert clear_half_made_ports(8, shm_dir=tmp_path) == [other_domain]
+    assert removed_text([other_domain], 8) == (f"removed {other_domain}: a Fast DDS shared-memory port that a killed "
+                                               "process left half made (every participant on ROS domain 8 that "
+                                               "took it hung at start)")
+    assert removed_text([unmade, making], 7).startswith(f"removed {unmade}, {making}: Fast DDS shared-memory ports "
+                                                        "that killed processes left half made")
 
 
 def test_a_port_being_made_now_is_waited_for_and_kept(tmp_path):
