@@ -30,6 +30,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from ..stale_dds_ports import clear_half_made_ports, removed_text
+
 DEFAULT_SCENES = {"kinematic": "er16k_outer_race", "skidding": "er16k_skidding"}
 
 
@@ -103,6 +105,10 @@ def bench_tier(tier: str, scene: str, duration: float, subscribers: int, record:
     cmd = [sys.executable, "-m", "bearing_sim_ros.cli", "node", "--ros-args"]
     for k, v in params.items():
         cmd += ["-p", f"{k}:={v}"]
+    # before the subscribers start, which the node's own clearing would come too late for
+    removed = clear_half_made_ports(domain)
+    if removed:
+        print(removed_text(removed, domain), file=sys.stderr)
     subs = [subprocess.Popen([sys.executable, "-m", "bearing_sim_ros.nodes.node_bench", "--subscriber"],
                              env=env, stdout=subprocess.PIPE, text=True) for _ in range(subscribers)]
     time.sleep(1.0)                   # let the subscribers come up: the node's first tables reach them
