@@ -1984,7 +1984,7 @@ class SkiddingModel:
         on the trapezoid of the two speeds (the shaft's angle and speed are the chunk end's
         already).  Held instead, the speeds were a step old: 0.22 % low on a ramp from 1600 to
         3800 rpm in 10 ms.  The RK4 engines keep no derivative; their grid is at most one of their
-        steps (the reference's 0.5 us, RK4's 1-6 us) behind, and the speeds are held."""
+        steps (the reference's 0.5 us, RK4's ``rk4_step``, 10 us by default) behind, and the speeds are held."""
         y = self.y
         lag = self._state_lag()
         has_slope = self.method.kind == SPLIT and self.counters[3] > 0
