@@ -45,8 +45,8 @@ def pytest_configure(config):
 # 20 minutes, until its worker was killed by hand) prints every thread's stack and ends its
 # process after this long, so the run ends with a failure that says where, not at CI's time limit.
 # The slowest test takes under 20 s on a quiet 2-core machine, a minute or two loaded or compiling.
-# (Code under test that sets a timer of its own, teardown_watchdog, replaces this one for the
-# rest of that test.)
+# (Code under test that sets a faulthandler timer of its own, teardown_watchdog, replaces the
+# faulthandler backstop below for the rest of that test; the timer thread stays.)
 HUNG_TEST_S = 300.0
 # A hung test's processes are ended with it: a node it started runs until it is stopped, and a
 # test process that just ended left it running for ever (an orphan of init, on a domain whose lock
