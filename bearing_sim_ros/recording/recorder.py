@@ -201,6 +201,16 @@ def _later_piece_held(final: Path) -> Path | None:
     return None
 
 
+def _writer_of(final: Path, mine: Path, where: str) -> UserError | None:
+    """The refusal (``_busy``) where another recording is being written to ``final`` beside ours
+    (``_other_writer``) or ``final`` is a finished piece of a split recording still running
+    (``_later_piece_held``), else None."""
+    later_piece = _later_piece_held(final)
+    if later_piece is not None or _other_writer(final, mine):
+        return _busy(where, later_piece)
+    return None
+
+
 def _held(path: Path) -> bool:
     """Whether the regular file ``path`` is held by a writer (``_open_held``'s lock): tried with a
     lock of our own, released at once.  A file that cannot be opened is not taken for held."""
@@ -316,9 +326,9 @@ def _open_held(path: Path, where: str, final: Path | None = None, stopped=signal
         # a writer known already refuses this one before it makes a file: a node refused so left
         # an empty file at its record path.  The same check after the lock (below) stays, for a
         # writer that starts in between
-        later_piece = _later_piece_held(final)
-        if later_piece is not None or _other_writer(final, path):
-            raise _busy(where, later_piece)
+        refusal = _writer_of(final, path, where)
+        if refusal is not None:
+            raise refusal
     fd = _open_for_writing(path, where, stopped, say)
     try:
         mode = os.fstat(fd).st_mode
@@ -331,12 +341,12 @@ def _open_held(path: Path, where: str, final: Path | None = None, stopped=signal
                 raise _busy(where) from None
         if stat.S_ISREG(mode):
             # a node's file moved aside by a render finishing meanwhile is not at its name any more
-            later_piece = _later_piece_held(final)
-            if _other_writer(final, path) or later_piece is not None or not _at(path, fd):
+            refusal = _writer_of(final, path, where) or (None if _at(path, fd) else _busy(where))
+            if refusal is not None:
                 if path != final:       # our partial file (its name is our pid's); a node's new
                     with contextlib.suppress(OSError):     # empty file stays: a render may be
                         path.unlink()                      # moving its own onto the name
-                raise _busy(where, later_piece)
+                raise refusal
             os.ftruncate(fd, 0)
         return os.fdopen(fd, "wb")
     except BaseException:
