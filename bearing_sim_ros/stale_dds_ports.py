@@ -107,10 +107,11 @@ def removed_text(removed: list, domain: int) -> str:
             f"(every participant on ROS domain {domain} that took one hung at start)")
 
 
-def clear_before_start(say) -> None:
-    """Before this process's first participant: clear its domain's half-made ports
-    (``ROS_DOMAIN_ID``, ``RMW_IMPLEMENTATION`` of the environment) and ``say`` what was removed."""
-    domain = domain_from_env()
+def clear_before_start(say, env=None) -> None:
+    """Before the first participant of this process (or of processes given ``env``): clear its
+    domain's half-made ports (``ROS_DOMAIN_ID``, ``RMW_IMPLEMENTATION`` of the environment) and
+    ``say`` what was removed."""
+    domain = domain_from_env(env)
     removed = clear_half_made_ports(domain)
     if removed:
         say(removed_text(removed, domain))

@@ -30,7 +30,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from ..stale_dds_ports import clear_half_made_ports, removed_text
+from ..stale_dds_ports import clear_before_start
+from ..teardown import say_on_stderr
 
 DEFAULT_SCENES = {"kinematic": "er16k_outer_race", "skidding": "er16k_skidding"}
 
@@ -106,9 +107,7 @@ def bench_tier(tier: str, scene: str, duration: float, subscribers: int, record:
     for k, v in params.items():
         cmd += ["-p", f"{k}:={v}"]
     # before the subscribers start, which the node's own clearing would come too late for
-    removed = clear_half_made_ports(domain)
-    if removed:
-        print(removed_text(removed, domain), file=sys.stderr)
+    clear_before_start(say_on_stderr, env)
     subs = [subprocess.Popen([sys.executable, "-m", "bearing_sim_ros.nodes.node_bench", "--subscriber"],
                              env=env, stdout=subprocess.PIPE, text=True) for _ in range(subscribers)]
     time.sleep(1.0)                   # let the subscribers come up: the node's first tables reach them
