@@ -6,6 +6,7 @@ No per-sample Python objects: waveform tables are built from arrays (see ``wavef
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 
@@ -69,8 +70,6 @@ def deliver_the_end(publishers, grace_s: float, going_on) -> list:
     a reader's answer to a heartbeat, often the periodic one).  ``publishers`` the frequent topics
     first: their heartbeats come with their messages, so they take little of the grace.  Stops
     once ``going_on()`` is false (the context shut down, a stop asked for)."""
-    import time
-
     from rclpy.duration import Duration
 
     deadline = time.monotonic() + grace_s

@@ -33,6 +33,7 @@ import shlex
 import sys
 import threading
 import time
+from collections import deque
 from pathlib import Path
 
 import rclpy
@@ -695,8 +696,6 @@ class BearingSimNode(Node):
         next publication.  An overrun is a batch whose computation ended after its due time;
         the node then publishes it at once and computes on without waiting until it is ahead
         again (catch up; the schedule is fixed by the sample index, so it never drifts)."""
-        from collections import deque
-
         from rosgraph_msgs.msg import Clock
 
         from ..physics.skidding import SolverDiverged
@@ -1136,8 +1135,6 @@ class _FallingBehind:
     caught up again; ``worst_s``: how far behind it fell since then."""
 
     def __init__(self):
-        from collections import deque
-
         self._periods = deque(maxlen=FALLING_BEHIND_PERIODS)     # (signal s, steady-clock s, s behind at its end)
         self.said_at = None
         self.worst_s = 0.0
