@@ -9,6 +9,8 @@ healthy would be a test of the wrong thing.  The CWRU 6205 scene carries its loa
 """
 from __future__ import annotations
 
+import contextlib
+import io
 import os
 import re
 import subprocess
@@ -26,6 +28,40 @@ from bearing_sim_ros.nodes.monitor_node import (SLACK_NS, TRUTH_GRACE_S, Monitor
                                                  score_lines, simulator_name, source_start_line, truth_at, truth_text,
                                                  verdict)
 from bearing_sim_ros.recording.render import render
+
+
+@contextlib.contextmanager
+def _monitor_in_process(scene, window=1.0, out=None, args=None, **options):
+    """A ``MonitorNode`` of ``scene`` in this process, on a context of its own (``ROS_DOMAIN_ID``
+    from ``ros_env``; ``args`` the process's ROS arguments), printing into ``out`` (a new
+    ``io.StringIO`` when None, as ``node.out``); the tests feed it by calling its callbacks.
+    Leaving destroys it (the analyses it queued finish first) and shuts the context down."""
+    import rclpy
+
+    ctx = rclpy.Context()
+    rclpy.init(args=args, context=ctx)
+    try:
+        node = MonitorNode(scene, window=window, out=io.StringIO() if out is None else out, context=ctx, **options)
+        try:
+            yield node
+        finally:
+            node.destroy_node()
+    finally:
+        rclpy.shutdown(context=ctx)
+
+
+@contextlib.contextmanager
+def _rig_node(name):
+    """An rclpy node ``name`` in this process, on a context of its own (``ROS_DOMAIN_ID`` from
+    ``ros_env``), to publish to a monitor as a rig would; the context shut down on leaving."""
+    import rclpy
+
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx)
+    try:
+        yield rclpy.create_node(name, context=ctx)
+    finally:
+        rclpy.try_shutdown(context=ctx)
 
 
 def test_window_gathers_contiguous_tables_and_restarts_on_a_gap():
@@ -235,16 +271,10 @@ def test_a_verdict_waits_for_the_diagnostics_stamped_at_its_window_end(ros_env):
     they come 0.15 s later and say the pit appeared half a second before the window's end, so
     ``truth=outer``, where the message before said none.  Without a message at the end, the
     verdict goes out after the grace with the latest truth there is."""
-    import io
     import threading
 
-    import rclpy
-
-    ctx = rclpy.Context()
-    rclpy.init(context=ctx)
-    out = io.StringIO()
-    node = MonitorNode(load_scene("er16k_outer_race"), window=1.0, out=out, context=ctx)
-    try:
+    with _monitor_in_process(load_scene("er16k_outer_race")) as node:
+        out = node.out
         x = np.random.default_rng(0).normal(size=(15000, 2))
         shaft = 1600 * 2 * np.pi / 60
         verdict(x, ["accel_x", "accel_y"], 15000.0, node.scene.bearing, shaft / (2 * np.pi))   # imports scipy
@@ -260,9 +290,6 @@ def test_a_verdict_waits_for_the_diagnostics_stamped_at_its_window_end(ros_env):
         node._analyse(3 * NS, x, ["accel_x", "accel_y"], 15000.0, shaft, time.monotonic() + TRUTH_GRACE_S)
         assert time.monotonic() - t >= TRUTH_GRACE_S
         assert [line.split(" truth=")[1].split()[0] for line in out.getvalue().splitlines()] == ["outer", "outer"]
-    finally:
-        node.destroy_node()
-        rclpy.shutdown(context=ctx)
 
 
 def test_a_monitor_left_running_keeps_little_per_verdict(ros_env):
@@ -273,48 +300,41 @@ def test_a_monitor_left_running_keeps_little_per_verdict(ros_env):
     made through the package's code count: under pytest-xdist the worker's message thread takes
     the tests the controller hands it meanwhile (worksteal), and counted, they once made it 637 B."""
     import gc
-    import io
     import tracemalloc
-
-    import rclpy
 
     class Discard(io.TextIOBase):
         def write(self, text):
             return len(text)
 
-    ctx = rclpy.Context()
-    rclpy.init(context=ctx)
-    node = MonitorNode(load_scene("er16k_outer_race"), window=1.0, out=Discard(), context=ctx)
-    x = np.random.default_rng(0).normal(size=(15000, 2))
-    shaft = 1600 * 2 * np.pi / 60
-    node.run.t0 = NS
-    node.run.reports.extend(_reports(((1000, "none"),), onsets={}))
+    with _monitor_in_process(load_scene("er16k_outer_race"), out=Discard()) as node:
+        x = np.random.default_rng(0).normal(size=(15000, 2))
+        shaft = 1600 * 2 * np.pi / 60
+        node.run.t0 = NS
+        node.run.reports.extend(_reports(((1000, "none"),), onsets={}))
 
-    def analyse(k):
-        node._analyse((2 + k) * NS, x, ["accel_x", "accel_y"], 15000.0, shaft, 0.0)
+        def analyse(k):
+            node._analyse((2 + k) * NS, x, ["accel_x", "accel_y"], 15000.0, shaft, 0.0)
 
-    package = os.path.dirname(bearing_sim_ros.__file__)        # not a folder of that name above .venv
-    through_the_package = [tracemalloc.Filter(True, os.path.join(package, "*"), all_frames=True)]
+        package = os.path.dirname(bearing_sim_ros.__file__)        # not a folder of that name above .venv
+        through_the_package = [tracemalloc.Filter(True, os.path.join(package, "*"), all_frames=True)]
 
-    def held() -> int:
-        # what is kept, not garbage in reference cycles that the collector has not freed yet:
-        # when it runs depends on every object allocated before, and two lambdas more in the
-        # monitor (its subscription callbacks) measured 800-1750 B a verdict (140-215 B collected)
-        gc.collect()
-        return sum(trace.size for trace in tracemalloc.take_snapshot().filter_traces(through_the_package).traces)
+        def held() -> int:
+            # what is kept, not garbage in reference cycles that the collector has not freed yet:
+            # when it runs depends on every object allocated before, and two lambdas more in the
+            # monitor (its subscription callbacks) measured 800-1750 B a verdict (140-215 B collected)
+            gc.collect()
+            return sum(trace.size for trace in tracemalloc.take_snapshot().filter_traces(through_the_package).traces)
 
-    tracemalloc.start(4)    # frames enough to reach the package from numpy's Python (64: 5x slower)
-    try:
-        for k in range(100):
-            analyse(k)
-        before = held()
-        for k in range(100, 200):
-            analyse(k)
-        per_verdict = (held() - before) / 100
-    finally:
-        tracemalloc.stop()
-        node.destroy_node()
-        rclpy.shutdown(context=ctx)
+        tracemalloc.start(4)    # frames enough to reach the package from numpy's Python (64: 5x slower)
+        try:
+            for k in range(100):
+                analyse(k)
+            before = held()
+            for k in range(100, 200):
+                analyse(k)
+            per_verdict = (held() - before) / 100
+        finally:
+            tracemalloc.stop()
     assert len(node.verdicts) == 200 and per_verdict < 600, per_verdict
 
 
@@ -728,7 +748,6 @@ def test_the_score_counts_the_truth_the_verdict_lines_printed(ros_env, bearing_s
     diagnostics tell (it did: the line said none, the score counted outer).  The test publishes,
     as a simulator would: diagnostics at 1.0 s (none), the window 1.0-1.5 s (noise), then, once
     its line is out, diagnostics at 2.5 s (outer since 1.2 s) and the window 1.5-2.0 s."""
-    import rclpy
     from diagnostic_msgs.msg import DiagnosticArray
     from sensor_msgs.msg import PointCloud2
 
@@ -745,10 +764,7 @@ def test_the_score_counts_the_truth_the_verdict_lines_printed(ros_env, bearing_s
     x = np.random.default_rng(0).normal(size=(15000, 2))
     monitor = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / "monitor.log",
                           command=("monitor", "--window", "0.5", "--count", "2"))
-    context = rclpy.Context()
-    rclpy.init(context=context)
-    try:
-        node = rclpy.create_node("rig", context=context)
+    with contextlib.closing(monitor), _rig_node("rig") as node:
         accel = node.create_publisher(PointCloud2, TOPIC_ACCEL, waveform_qos(0.01))
         diag = node.create_publisher(DiagnosticArray, TOPIC_DIAGNOSTICS, 10)
         _wait_for_subscribers(monitor, accel, diag)
@@ -761,9 +777,6 @@ def test_the_score_counts_the_truth_the_verdict_lines_printed(ros_env, bearing_s
                 monitor.wait_for_output("t=0.50s")
         assert monitor.wait(30) == 0, monitor.output()
         out = monitor.output()
-    finally:
-        monitor.close()
-        rclpy.try_shutdown(context=context)
     lines = VERDICT.findall(out)
     assert [truth for _t, _v, truth in lines] == ["none", "outer"], out
     agree = sum(v == {"none": "healthy"}.get(truth, truth) for _t, v, truth in lines)
@@ -848,7 +861,6 @@ def test_monitor_rejects_a_bad_table_and_keeps_going(ros_env, bearing_sim_exe, t
     """Tables that are no waveform table (wrong point step) or hold a NaN, from another
     publisher, are skipped, logged and counted; the recording played after them still gives its
     verdict."""
-    import rclpy
     from sensor_msgs.msg import PointCloud2
 
     from bearing_sim_ros.messages import TOPIC_ACCEL, waveform_qos
@@ -858,10 +870,7 @@ def test_monitor_rejects_a_bad_table_and_keeps_going(ros_env, bearing_sim_exe, t
     render("er16k_outer_race", 2.0, recording, fidelity="kinematic", seed=3, progress=False)
     monitor = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / "monitor.log",
                           command=("monitor", "--window", "1", "--count", "1"))
-    context = rclpy.Context()
-    rclpy.init(context=context)
-    try:
-        node = rclpy.create_node("bad_tables", context=context)
+    with contextlib.closing(monitor), _rig_node("bad_tables") as node:
         pub = node.create_publisher(PointCloud2, TOPIC_ACCEL, waveform_qos(0.01))
         _wait_for_subscribers(monitor, pub)
         channels = ["accel_x", "accel_y"]
@@ -872,9 +881,6 @@ def test_monitor_rejects_a_bad_table_and_keeps_going(ros_env, bearing_sim_exe, t
             pub.publish(msg)
         time.sleep(1.0)                     # reliable: delivered before the recording's tables
         out = _play_into(monitor, bearing_sim_exe, recording, ros_env)
-    finally:
-        monitor.close()
-        rclpy.try_shutdown(context=context)
     assert "accel table rejected (not a waveform table" in out, out
     verdicts = [ln for ln in out.splitlines() if "verdict=" in ln]
     assert len(verdicts) == 1 and "verdict=outer" in verdicts[0], out
@@ -974,28 +980,16 @@ def test_the_line_on_another_simulators_ground_truth_says_whose_truth_is_taken(r
     ``--simulator``; it had given none, and the default resolves in the namespace of the accel
     topic.  The line now says whose truth is taken and why: the simulator of /rig1/accel, or the
     one ``--simulator`` names where it was given; and that ``--simulator NAME`` takes another."""
-    import io
-
-    import rclpy
-
     recording = tmp_path / "root.mcap"
     render("er16k_outer_race", 1.0, recording, fidelity="kinematic", seed=1, progress=False)
     diagnostics = _recorded_diagnostics(recording)
     said = {}
     for given in (None, "sim"):
-        ctx = rclpy.Context()
-        rclpy.init(args=["--ros-args", "-r", "__ns:=/rig1"], context=ctx)
-        try:
-            out = io.StringIO()
-            node = MonitorNode(load_scene("er16k_outer_race"), window=1.0, out=out, context=ctx, simulator=given)
-            try:
-                for msg in diagnostics:
-                    node._on_diagnostics(msg)
-            finally:
-                node.destroy_node()
-        finally:
-            rclpy.shutdown(context=ctx)
-        said[given] = out.getvalue().splitlines()
+        with _monitor_in_process(load_scene("er16k_outer_race"), args=["--ros-args", "-r", "__ns:=/rig1"],
+                                 simulator=given) as node:
+            for msg in diagnostics:
+                node._on_diagnostics(msg)
+        said[given] = node.out.getvalue().splitlines()
     assert said[None] == [
         "monitor: ground truth of 'bearing_sim: simulator' ignored: truth= is that of 'rig1/bearing_sim: "
         "simulator', the simulator of /rig1/accel (--simulator NAME takes another's)"], said[None]
@@ -1029,23 +1023,17 @@ def _fed_monitor(recording, scene, window=1.0, after=None, drop=None):
     /diagnostics were fed to its callbacks in log-time order (no DDS between), each message
     followed by ``after(node, topic, msg)``, those for which ``drop(topic, index on that topic)``
     is true left out, and its windows analysed; the node destroyed."""
-    import io
-
-    import rclpy
     from diagnostic_msgs.msg import DiagnosticArray
     from rclpy.serialization import deserialize_message
     from sensor_msgs.msg import JointState, PointCloud2
 
     from bearing_sim_ros.recording.reader import open_recording
 
-    ctx = rclpy.Context()
-    rclpy.init(context=ctx)
-    out = io.StringIO()
-    node = MonitorNode(scene, window=window, out=out, context=ctx)
-    feed = {"/accel": (PointCloud2, node._on_accel), "/state": (JointState, node._on_state),
-            "/diagnostics": (DiagnosticArray, node._on_diagnostics)}
-    counts = dict.fromkeys(feed, -1)
-    try:
+    with _monitor_in_process(scene, window=window) as node:
+        out = node.out
+        feed = {"/accel": (PointCloud2, node._on_accel), "/state": (JointState, node._on_state),
+                "/diagnostics": (DiagnosticArray, node._on_diagnostics)}
+        counts = dict.fromkeys(feed, -1)
         with open_recording(recording) as rec:
             for topic, _type, _log_ns, data in rec.messages(list(feed)):
                 counts[topic] += 1
@@ -1059,9 +1047,6 @@ def _fed_monitor(recording, scene, window=1.0, after=None, drop=None):
         deadline = time.monotonic() + 60.0
         while node.windows_done < node.windows_queued and time.monotonic() < deadline:
             time.sleep(0.01)            # destroy_node drops the windows still queued
-    finally:
-        node.destroy_node()
-        rclpy.shutdown(context=ctx)
     return node, out
 
 
@@ -1178,9 +1163,6 @@ def test_a_run_started_by_diagnostics_that_go_back_keeps_each_runs_latency(ros_e
     new run (one line), its tables then do not start another, and each run has its own latency
     line on its own t= clock; before, the second appearance at the same stamps was no appearance
     at all (one latency line), and the first run's diagnostics answered for the second's windows."""
-    import io
-
-    import rclpy
     from diagnostic_msgs.msg import DiagnosticArray
     from rclpy.serialization import deserialize_message
     from sensor_msgs.msg import PointCloud2
@@ -1196,12 +1178,9 @@ def test_a_run_started_by_diagnostics_that_go_back_keeps_each_runs_latency(ros_e
         messages = [(topic, data) for topic, _type, _log_ns, data in rec.messages(["/accel", "/diagnostics"])]
     first_diagnostics = next(k for k, (topic, _data) in enumerate(messages) if topic == "/diagnostics")
     again = [messages[first_diagnostics]] + messages[:first_diagnostics] + messages[first_diagnostics + 1:]
-    ctx = rclpy.Context()
-    rclpy.init(context=ctx)
-    out = io.StringIO()
-    node = MonitorNode(load_scene(str(scene)), window=1.0, out=out, context=ctx)
-    feed = {"/accel": (PointCloud2, node._on_accel), "/diagnostics": (DiagnosticArray, node._on_diagnostics)}
-    try:
+    with _monitor_in_process(load_scene(str(scene))) as node:
+        out = node.out
+        feed = {"/accel": (PointCloud2, node._on_accel), "/diagnostics": (DiagnosticArray, node._on_diagnostics)}
         for fed in (messages, again):
             for topic, data in fed:
                 cls, callback = feed[topic]
@@ -1209,9 +1188,6 @@ def test_a_run_started_by_diagnostics_that_go_back_keeps_each_runs_latency(ros_e
             deadline = time.monotonic() + 30.0      # as in real time: each recording judged as it plays
             while len(node.verdicts) < node.windows_queued and time.monotonic() < deadline:
                 time.sleep(0.005)
-    finally:
-        node.destroy_node()             # the analyses queued finish first
-        rclpy.shutdown(context=ctx)
     text = out.getvalue()
     assert len(re.findall(r"^monitor: run \d+: ", text, re.M)) == 1, text
     assert re.search(r"^monitor: run 2: a /diagnostics stamped 1\.000000000 s after one stamped 2\.000000000 s: "
@@ -1228,9 +1204,6 @@ def test_two_sources_interleaving_do_not_flood_the_output(ros_env, tmp_path):
     goes back and starts a run.  The run lines were throttled (one in 5 s), but each run's "first
     table stamped" line was not: hundreds of lines in a few seconds (408 in 12 s with two live
     nodes).  Now a run whose start goes unsaid leaves its first table unsaid too."""
-    import io
-
-    import rclpy
     from rclpy.serialization import deserialize_message, serialize_message
     from sensor_msgs.msg import PointCloud2
 
@@ -1240,19 +1213,13 @@ def test_two_sources_interleaving_do_not_flood_the_output(ros_env, tmp_path):
     render("er16k_outer_race", 1.0, recording, fidelity="kinematic", seed=1, progress=False)
     with open_recording(recording) as rec:
         tables = [deserialize_message(data, PointCloud2) for _t, _type, _ns, data in rec.messages(["/accel"])]
-    ctx = rclpy.Context()
-    rclpy.init(context=ctx)
-    out = io.StringIO()
-    node = MonitorNode(load_scene("er16k_outer_race"), window=1.0, out=out, context=ctx)
-    try:
+    with _monitor_in_process(load_scene("er16k_outer_race")) as node:
+        out = node.out
         for msg in tables:
             node._on_accel(msg)
             behind = deserialize_message(serialize_message(msg), PointCloud2)
             behind.header.stamp.sec -= 1            # the second simulator, a second behind
             node._on_accel(behind)
-    finally:
-        node.destroy_node()
-        rclpy.shutdown(context=ctx)
     text = out.getvalue()
     assert node.run.number > 50, text                   # the test can fail: runs did start
     firsts = re.findall(r"^monitor: first table stamped ", text, re.M)
@@ -1285,31 +1252,21 @@ def test_the_monitor_says_the_simulators_trouble_as_it_begins_and_ends(ros_env):
     node that fell behind real time (every verdict later and later), went unsaid while it ran.
     Now each is said once as it begins and once as it ends; overruns of a second and other WARNs
     are not (a loaded machine has them), nor another simulator's trouble."""
-    import io
-
-    import rclpy
-
     from bearing_sim_ros.recording.render import diagnostics_message
 
-    ctx = rclpy.Context()
-    rclpy.init(context=ctx)
-    out = io.StringIO()
-    node = MonitorNode(load_scene("er16k_outer_race"), window=1.0, out=out, context=ctx)
-    failed = "recording failed: recording to run.mcap stopped: the file was deleted while it was written"
-    behind = "falling behind real time: x0.55 over the last 5 s, 2.25 s behind and further each second"
-    sequence = [(0, "ok", {}), (1, "3 overruns in the last second", {}), (2, failed, {}), (2, failed, {}),
-                (0, "ok", {}), (1, behind, {"falling_behind": "true"}), (1, behind, {"falling_behind": "true"}),
-                (0, "ok", {"falling_behind": "false"})]
-    try:
+    with _monitor_in_process(load_scene("er16k_outer_race")) as node:
+        out = node.out
+        failed = "recording failed: recording to run.mcap stopped: the file was deleted while it was written"
+        behind = "falling behind real time: x0.55 over the last 5 s, 2.25 s behind and further each second"
+        sequence = [(0, "ok", {}), (1, "3 overruns in the last second", {}), (2, failed, {}), (2, failed, {}),
+                    (0, "ok", {}), (1, behind, {"falling_behind": "true"}), (1, behind, {"falling_behind": "true"}),
+                    (0, "ok", {"falling_behind": "false"})]
         for k, (level, message, extra) in enumerate(sequence):
             values = {"faults_present": "outer", "defect_sizes": "1", "simulated_s": f"{k + 1:.6f}",
                       "run": "running", **extra}
             node._on_diagnostics(diagnostics_message((k + 1) * NS, values, level, message))
         node._on_diagnostics(diagnostics_message(10 * NS, {"faults_present": "none", "simulated_s": "1.000000"},
                                                  2, failed, "rig9/bearing_sim"))
-    finally:
-        node.destroy_node()
-        rclpy.shutdown(context=ctx)
     said = [line for line in out.getvalue().splitlines() if line.startswith("monitor: bearing_sim")]
     assert said == [f"monitor: bearing_sim says (ERROR): {failed}",
                     "monitor: bearing_sim: no error again (ok)",
