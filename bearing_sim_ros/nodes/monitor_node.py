@@ -602,6 +602,13 @@ class MonitorNode(Node):
             return False
         return now - max(self._gone_since, self._last_table_at) >= self.end_wait
 
+    def _until(self, awaited: str) -> str:
+        """What ends the wait for ``awaited`` (a table) that a waiting line names: ``end_wait``
+        or, without it, Ctrl-C."""
+        if self.end_wait is None:
+            return "Ctrl-C ends the monitor"
+        return f"without {awaited} for {self.end_wait:g} s the monitor ends"
+
     def _whose_truth(self) -> str:
         """Why the truth is that simulator's, for the line on another one's: the default is the
         simulator of the watched accel topic, which a user who gave no --simulator did not choose
@@ -659,12 +666,8 @@ class MonitorNode(Node):
                 # the simulator's end status (its last /diagnostics): the tables stopped because the
                 # run is complete (or was stopped), not because it crashed or discovery lost it
                 self._ended = (stamp, time.monotonic())
-                if self.end_wait is None:
-                    until = "Ctrl-C ends the monitor"
-                else:
-                    until = f"without a table for {self.end_wait:g} s the monitor ends"
                 say(f"monitor: {self.simulator}: {status.message}; waiting for more (a node started "
-                    f"again, the next pass of play --loop; {until})", self.out)
+                    f"again, the next pass of play --loop; {self._until('a table')})", self.out)
             if self.run.source_start is None and ground_truth.TIME_KEY in values:
                 try:
                     self.run.source_start = stamp - round(float(values[ground_truth.TIME_KEY]) * NS)
@@ -889,12 +892,8 @@ class MonitorNode(Node):
         elif self._gone_since is None:
             self._gone_since = time.monotonic()
             self._lost = True
-            if self.end_wait is None:
-                until = "Ctrl-C ends the monitor"
-            else:
-                until = f"without one for {self.end_wait:g} s the monitor ends"
             say(f"monitor: no publisher on {topic} any more and no end status from {self.simulator} "
-                f"({SOURCE_LOST_CAUSES}); waiting for one (a node started again; {until})", self.out)
+                f"({SOURCE_LOST_CAUSES}); waiting for one (a node started again; {self._until('one')})", self.out)
         # a publisher that sends no tables interleaves none: a node killed and started again
         # within DDS's lease leaves its dead publisher in the graph (the tables switched once, to
         # the new one); said where they switched back and forth since the last look, or without
