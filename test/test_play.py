@@ -391,13 +391,17 @@ def test_waiting_for_a_subscriber_is_said_and_so_is_playing_to_nobody(recording,
 
 
 @pytest.mark.parametrize("args, named", [(["--wait", "-1"], "--wait"), (["--wait", "soon"], "--wait"),
-                                         (["--rate", "0"], "--rate")])
+                                         (["--rate", "0"], "--rate"),
+                                         # 1e-9 was taken: one second of recording took 31 years
+                                         (["--rate", "1e-9"], "allowed range is [0.01, 100]"),
+                                         (["--rate", "1e9"], "allowed range is [0.01, 100]")])
 def test_bad_arguments_exit_2_with_one_line(args, named, recording, bearing_sim_exe, ros_env):
     path, _, _ = recording
     r = subprocess.run([bearing_sim_exe, "play", str(path), *args], env=ros_env, capture_output=True,
                        text=True, timeout=60)
     lines = r.stderr.strip().splitlines()
     assert r.returncode == 2 and len(lines) == 1 and named in lines[0] and args[1] in lines[0], r.stderr
+    assert args[0] in lines[0], r.stderr
 
 
 def test_a_hung_teardown_ends_with_the_stacks_and_status_1(recording, ros_env, tmp_path):
@@ -462,12 +466,14 @@ def test_shifting_a_stamp_moves_headers_and_clocks_with_the_carry():
 
 
 @pytest.mark.parametrize("kwargs, named", [({"rate": 0.0}, "--rate"), ({"rate": math.nan}, "--rate"),
+                                           ({"rate": 1e-9}, "--rate"), ({"rate": 1e9}, "--rate"),
                                            ({"wait_for_subscribers": -1.0}, "--wait"),
                                            ({"wait_for_subscribers": math.nan}, "--wait")])
 def test_play_refuses_a_rate_or_wait_it_cannot_use(kwargs, named, recording):
-    """play() itself (not only the command line's parser) refuses a rate that is not > 0 (0 would
-    divide by zero in the pacing) and a negative or NaN wait (a NaN wait never ends), in one
-    line naming the option.  ``stop`` is set: were a value taken, play would return at once."""
+    """play() itself (not only the command line's parser) refuses a rate outside [0.01, 100] (0
+    would divide by zero in the pacing, 1e-9 takes 31 years a second) and a negative or NaN wait
+    (a NaN wait never ends), in one line naming the option, the value and, for the rate, its range.
+    ``stop`` is set: were a value taken, play would return at once."""
     import threading
 
     from bearing_sim_ros.errors import UserError
@@ -479,6 +485,8 @@ def test_play_refuses_a_rate_or_wait_it_cannot_use(kwargs, named, recording):
     with pytest.raises(UserError, match=f"^{named} = ") as exc:
         play(path, stop=stop, log=lambda text: None, **kwargs)
     assert "\n" not in str(exc.value)
+    if "rate" in kwargs:
+        assert str(exc.value) == f"--rate = {kwargs['rate']!r}: expected a multiple of real time in [0.01, 100]"
 
 
 def test_with_clock_a_recorded_clock_is_replaced_not_published_too(ros_env, tmp_path):
