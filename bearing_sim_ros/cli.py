@@ -73,14 +73,16 @@ def _nonnegative(kind, hi: float = math.inf):
 
 
 def _in_range(lo: float, hi: float, unit: str):
-    """argparse type: a number within [lo, hi] (in ``unit``)."""
+    """argparse type: a number within [lo, hi] (in ``unit``; "" for a pure number, a ratio)."""
+    unit = f" {unit}" if unit else ""
+
     def parse(text):
         try:
             value = float(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
         if not lo <= value <= hi:
-            raise argparse.ArgumentTypeError(f"{text} {unit}: allowed range is [{lo:g}, {hi:g}] {unit}")
+            raise argparse.ArgumentTypeError(f"{text}{unit}: allowed range is [{lo:g}, {hi:g}]{unit}")
         return value
     return parse
 
@@ -134,6 +136,7 @@ def build_parser() -> argparse.ArgumentParser:
     from .simulator import AUTO_OVERSAMPLE_MAX, DURATION_MAX_S, OVERSAMPLE_ALLOWED, SAMPLE_RATE_RANGE, SEED_RANGE
     from .messages import BATCH_DURATION
     from .analysis.report import DEFAULT_WINDOW_S, WINDOW_RANGE_S
+    from .recording.play import PLAY_RATE_RANGE
     from .recording.recorder import SPLIT_MAX_BYTES, SPLIT_MIN_BYTES
 
     p = _Parser(prog="bearing-sim", description="Virtual bearing accelerometer for ROS 2.")
@@ -200,8 +203,9 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("play", help="republish a recording on its topics")
     s.add_argument("file", metavar="F.mcap", nargs="+",
                    help=f"the recording to republish; {SPLIT_FILES_HELP}")
-    s.add_argument("--rate", type=_positive(float), default=1.0, metavar="X",
-                   help="playback speed, a multiple of real time, > 0 (default: %(default)g)")
+    s.add_argument("--rate", type=_in_range(*PLAY_RATE_RANGE, ""), default=1.0, metavar="X",
+                   help=f"playback speed, a multiple of real time, {PLAY_RATE_RANGE[0]:g} to {PLAY_RATE_RANGE[1]:g}; "
+                        "where that asks for more than the machine can send, as fast as it can (default: %(default)g)")
     s.add_argument("--loop", action="store_true",
                    help="start again from the beginning at the end, until Ctrl-C (default: play once)")
     s.add_argument("--clock", action="store_true",

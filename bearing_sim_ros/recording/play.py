@@ -51,6 +51,12 @@ from .schemas import qos_from_yaml
 WAIT_FOR_SUBSCRIBERS = 5.0    # s, the default of --wait: one missed 3 s announcement period and margin
 WAIT_NOTICE = 1.0             # s without a subscriber before saying that play is waiting for one
 WAVEFORM_TYPE = "sensor_msgs/msg/PointCloud2"
+# --rate, a multiple of real time: 0.01 plays a 10 ms table interval in 1 s (below it a recording's
+# seconds become hours: 1e-9 was accepted, and one second took 31 years); 100 plays a second in 10
+# ms.  Where a rate asks for more messages a second than play can send, it sends them as fast as
+# it can (``_sleep_until`` does not pause once it is behind), so a higher bound would promise
+# nothing more
+PLAY_RATE_RANGE = (0.01, 100.0)
 
 
 def _shift_stamp(msg, offset_ns: int) -> None:
@@ -100,13 +106,15 @@ class _Span:
 def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
          wait_for_subscribers: float = WAIT_FOR_SUBSCRIBERS, log=None, stop=None) -> int:
     """Republish ``path`` (one file, or the pieces of a split recording: ``open_recording``);
-    returns the number of messages published.  ``stop``: a ``threading.Event`` that ends
+    returns the number of messages published.  ``rate``: a multiple of real time, within
+    ``PLAY_RATE_RANGE``.  ``wait_for_subscribers``: s.  ``stop``: a ``threading.Event`` that ends
     playback between two messages (set by the signal handlers)."""
     import rclpy
     from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-    if not rate > 0:
-        raise UserError(f"--rate = {rate!r}: expected a number > 0")
+    lo, hi = PLAY_RATE_RANGE
+    if not lo <= rate <= hi:            # NaN too
+        raise UserError(f"--rate = {rate!r}: expected a multiple of real time in [{lo:g}, {hi:g}]")
     if not wait_for_subscribers >= 0:
         raise UserError(f"--wait = {wait_for_subscribers!r}: expected seconds >= 0")
     # teardown.say: a line written as the terminal closes goes nowhere (an EIO was an internal error)
