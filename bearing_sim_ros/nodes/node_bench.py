@@ -211,16 +211,37 @@ def table(results) -> str:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python -m bearing_sim_ros.nodes.node_bench", description=__doc__.split("\n")[0])
-    p.add_argument("--duration", type=float, default=60.0, help="seconds of real-time signal per tier")
+    """The command.  A mistake (a duration that is not a positive number, a misspelt --scene) is
+    one line on stderr and exit status 2, as for ``bearing-sim``, before any node starts: a
+    negative --duration ran and printed a table of nan, a misspelt scene a table of tiers
+    "skipped", both with exit status 0."""
+    from ..cli import EXIT_USER, _Parser, _in_range, _nonnegative, _positive
+    from ..errors import UserError
+
+    p = _Parser(prog="python -m bearing_sim_ros.nodes.node_bench", description=__doc__.split("\n")[0])
+    p.add_argument("--duration", type=_positive(float), default=60.0, help="seconds of real-time signal per tier, > 0")
     p.add_argument("--tiers", nargs="+", default=["kinematic", "skidding"], choices=["kinematic", "skidding"])
     p.add_argument("--scene", default=None, help="one scene for every tier (default: er16k_outer_race / er16k_skidding)")
-    p.add_argument("--subscribers", type=int, default=2)
+    p.add_argument("--subscribers", type=_nonnegative(int), default=2)
     p.add_argument("--no-record", action="store_true")
-    p.add_argument("--compute-ahead", type=float, default=None, help="the node's compute_ahead (s); default: the node's")
+    # the node's compute_ahead parameter's range, so that the node does not refuse it after the start
+    p.add_argument("--compute-ahead", type=_in_range(0.0, 2.0, "s"), default=None,
+                   help="the node's compute_ahead (s, 0 to 2); default: the node's")
     p.add_argument("--out", default=None, help="folder for node_bench.md and node_bench.json")
     p.add_argument("--subscriber", action="store_true", help=argparse.SUPPRESS)
-    args = p.parse_args(argv)
+    try:
+        args = p.parse_args(argv)
+        if args.scene is not None and not args.subscriber:
+            from ..scene import load_scene
+
+            load_scene(args.scene)      # a scene that does not load is a mistake, not a tier to skip
+        if args.out and not args.subscriber:
+            from ..paths import output_folder
+
+            output_folder(args.out)     # before the minutes of the run, not after them
+    except UserError as exc:
+        say_on_stderr(f"error: {exc}")
+        return EXIT_USER
     if args.subscriber:
         return subscriber_main()
     domain = 60 + os.getpid() % 30
