@@ -312,8 +312,43 @@ def _params_file_scenes(ros_args: list) -> list:
     return found
 
 
+# the commands that load rcl (the ROS client library), which rclpy's serialisation needs too:
+# render and report write and read the messages with it
+RCL_COMMANDS = ("node", "run", "monitor", "play", "render", "report")
+
+
+def rmw_error(environ=None) -> str:
+    """'' unless ``RMW_IMPLEMENTATION`` names a middleware that the environment's ament index
+    (each AMENT_PREFIX_PATH entry's, and the Python environment's, where ROS 2's wheels put it)
+    does not list, else the one line that says so.  rcl ends the process as it loads such a
+    setting, render's and report's too, with exit status 102 and "Expected RMW implementation
+    identifier of 'rmw_cyclonedds_cpp' but instead found 'rmw_fastrtps_cpp'", which names no
+    variable: a shell of an apt ROS 2 that exports another middleware is a usual way to meet it.
+    Where no index lists any middleware, nothing is said (rcl's line then stands)."""
+    import os
+    from pathlib import Path
+
+    environ = os.environ if environ is None else environ
+    wanted = environ.get("RMW_IMPLEMENTATION", "").strip()
+    if not wanted:
+        return ""
+    prefixes = [p for p in environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep) if p] + [sys.prefix]
+    installed = set()
+    for prefix in prefixes:
+        index = Path(prefix) / "share" / "ament_index" / "resource_index" / "rmw_typesupport"
+        if index.is_dir():
+            # rmw_implementation, the loader, is listed there too, and is none of them
+            installed.update(entry.name for entry in index.iterdir() if entry.name != "rmw_implementation")
+    if not installed or wanted in installed:
+        return ""
+    return (f"RMW_IMPLEMENTATION = {environ['RMW_IMPLEMENTATION']!r}: not installed here (this environment "
+            f"has {', '.join(sorted(installed))}); unset it or give one of those")
+
+
 def _dispatch(args, rest) -> int:
     cmd = args.command
+    if cmd in RCL_COMMANDS and rmw_error():
+        raise UserError(rmw_error())
     if cmd == "scenes":
         return _scenes(args)
     if cmd == "node":
@@ -388,6 +423,9 @@ def node_main() -> int:
     """``bearing_sim_node`` (``ros2 run bearing_sim_ros bearing_sim_node``): the node, as
     ``bearing-sim node`` runs it."""
     def run():
+        if rmw_error():         # before the node's module loads rcl, which ends the process there
+            say_on_stderr(f"error: {rmw_error()}")
+            return EXIT_USER
         from .nodes.bearing_sim_node import main as run_node
 
         return run_node()

@@ -179,8 +179,10 @@ class AppearanceLog:
     signal started over (a recording played with ``--loop``, each pass's stamps moved on): its
     next appearance counts again.  A kind that stays while its onset moves past a message that
     already had it was there on both sides of such a seam (from the recording's first sample): no
-    new appearance; its first stays.  Within one time line the onsets the messages give agree to
-    their rounding (1 us of ``simulated_s``), far less than the time between two messages.
+    new appearance; its first stays (a move to the stamp of that message itself too: a recording's
+    last message, its end status, is stamped at its very end, where the next pass starts).  Within
+    one time line the onsets the messages give agree to their rounding (1 us of ``simulated_s``),
+    far less than the time between two messages.
     ``slack``: times this close count as equal."""
 
     def __init__(self, slack=0):
@@ -203,8 +205,15 @@ class AppearanceLog:
                 if have is None:
                     self._current[kind] = [on, truth.t, True]
                     continue
-                if on > have[1] + self.slack:
-                    have[2] = False             # a seam with the fault on both sides: not new
+                # a message shows a kind only once its onset is past (at least a sample before the
+                # message's stamp, the end of the signal then), so an onset at or after the stamp of
+                # the last message with it is another time line: a seam with the fault on both
+                # sides, not new.  At the stamp itself is the usual seam: a recording's last
+                # /diagnostics is its end status, at its very end, where the next pass begins.
+                # 2 slack: an onset carries the rounding of two 1 us numbers (simulated_s and its
+                # own); a sample (5 us at 200 kHz) is more
+                if on >= have[1] - 2 * self.slack:
+                    have[2] = False
                 elif have[2]:
                     have[0] = on                # the latest message's, as it was
                 have[1] = truth.t

@@ -37,6 +37,23 @@ MADE_WITHIN_S = 2.0              # s: older and still unmade, its maker is gone
 FAST_DDS_RMWS = ("", "rmw_fastrtps_cpp", "rmw_fastrtps_dynamic_cpp")
 
 
+# the RTPS port formula's limit (PORT_BASE + DOMAIN_GAIN x 232 + offsets stays below 65536), rcl's too
+DOMAIN_MAX = 232
+
+
+def domain_id_error(env=None) -> str:
+    """'' where ``ROS_DOMAIN_ID`` of ``env`` (default os.environ) is unset, empty or a whole number
+    0 - DOMAIN_MAX, else the one line that says what is wrong.  rclpy took "abc" for a ROS
+    argument it could not parse, 300 failed in Fast DDS with exit status 1 (an internal error)
+    and -1 ran on domain 0."""
+    env = os.environ if env is None else env
+    text = env.get("ROS_DOMAIN_ID", "").strip()
+    if not text or (text.isdigit() and int(text) <= DOMAIN_MAX):
+        return ""
+    return (f"ROS_DOMAIN_ID = {env['ROS_DOMAIN_ID']!r}: expected a whole number 0 - {DOMAIN_MAX} "
+            "(0 - 101 keeps clear of Linux's ephemeral ports), the same in every terminal of one setup")
+
+
 def domain_from_env(env=None) -> int | None:
     """The ROS domain id of ``env`` (default os.environ; unset or empty: 0), or None where
     ``ROS_DOMAIN_ID`` is not a whole number (rclpy says what is wrong with it) or the RMW is not
@@ -108,9 +125,15 @@ def removed_text(removed: list, domain: int) -> str:
 
 
 def clear_before_start(say, env=None) -> None:
-    """Before the first participant of this process (or of processes given ``env``): clear its
-    domain's half-made ports (``ROS_DOMAIN_ID``, ``RMW_IMPLEMENTATION`` of the environment) and
-    ``say`` what was removed."""
+    """Before the first participant of this process (or of processes given ``env``): a
+    ``ROS_DOMAIN_ID`` that no participant can take is a UserError (``domain_id_error``); else
+    clear its domain's half-made ports (``ROS_DOMAIN_ID``, ``RMW_IMPLEMENTATION`` of the
+    environment) and ``say`` what was removed."""
+    error = domain_id_error(env)
+    if error:
+        from .errors import UserError
+
+        raise UserError(error)
     domain = domain_from_env(env)
     removed = clear_half_made_ports(domain)
     if removed:

@@ -643,3 +643,29 @@ def test_a_line_lost_to_an_eio_of_a_file_is_an_error_and_one_of_a_terminal_is_no
     finally:
         os.close(leader)
         os.close(terminal)
+
+
+RMW_CASES = [("bearing-sim", "render", "er16k_healthy", "--duration", "0.05", "--out", "x.mcap"),
+             ("bearing-sim", "report", "x.mcap", "--out", "r"),
+             ("bearing-sim", "run", "--duration", "0.2", "--out", "x.mcap"),
+             ("bearing-sim", "node", "--ros-args", "-p", "duration:=0.2"),
+             ("bearing_sim_node", "--ros-args", "-p", "duration:=0.2")]
+
+
+@pytest.mark.parametrize("command", RMW_CASES, ids=[" ".join(c[:2]) for c in RMW_CASES])
+def test_a_middleware_not_installed_is_one_line(ros_env, bearing_sim_exe, tmp_path, command):
+    """``RMW_IMPLEMENTATION`` naming a middleware this environment does not have (a shell of an
+    apt ROS 2 that exports rmw_cyclonedds_cpp) is one line and exit status 2 in every command that
+    loads rcl, render and report too: rcl ended them with status 102 and a line that names no
+    variable.  A command without rcl (scenes) runs on."""
+    from pathlib import Path
+
+    exe = str(Path(bearing_sim_exe).parent / command[0])
+    env = dict(ros_env, RMW_IMPLEMENTATION="rmw_cyclonedds_cpp")
+    r = subprocess.run([exe, *command[1:]], env=env, cwd=tmp_path, capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2, r.stdout + r.stderr
+    assert r.stderr.splitlines() == ["error: RMW_IMPLEMENTATION = 'rmw_cyclonedds_cpp': not installed here (this "
+                                     "environment has rmw_fastrtps_cpp); unset it or give one of those"], r.stderr
+    assert not (tmp_path / "x.mcap").exists()
+    scenes = subprocess.run([bearing_sim_exe, "scenes"], env=env, capture_output=True, text=True, timeout=60)
+    assert scenes.returncode == 0 and "er16k_outer_race" in scenes.stdout, scenes.stderr

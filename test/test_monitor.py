@@ -245,6 +245,13 @@ def test_each_pass_of_a_looped_recording_scores_the_fault_that_appears_in_it():
     always = _looped(3, 5, [(t, "outer") for t in range(1, 6)], onsets={"outer": 0.5})
     assert ground_truth.appearances(always, NS // 2, SLACK_NS) == []
     assert ground_truth.appearances(always, NS // 2 - 2 * SLACK_NS, SLACK_NS) == [("outer", t0, t0)]
+    # the same where the recording's last message is its end status, at its very end (a render's,
+    # a node's): the next pass's first message puts the onset at that message's stamp, which is
+    # the seam, not a new appearance (it was: "outer appeared at t=5.00s" after two passes)
+    ended = [ground_truth.parse({"faults_present": "outer", "defect_sizes": "1", "simulated_s": f"{t:.6f}",
+                                 "fault_onsets_s": "outer=0.000000"}, (t + k * 5) * NS, NS)
+             for k in range(3) for t in range(1, 6)]
+    assert ground_truth.appearances(ended, 0, SLACK_NS) == []
     # within one time line the messages' onsets agree to their rounding: one appearance, the last's
     jitter = [ground_truth.Truth(t * NS, ("outer",), (), {"outer": 2_200_000_000 + d})
               for t, d in ((3, 0), (4, 700), (5, -400))]
@@ -584,6 +591,9 @@ def test_a_monitor_with_a_count_goes_on_across_the_seams_of_play_loop(ros_env, b
     assert out.count("run ended: duration 1 s reached") >= 2, out
     assert "monitor: 3 verdicts from 300 tables, 0 gaps" in out and "of --count" not in out, out
     assert "monitor: run " not in out, out      # the passes of one recording are one run
+    # the pit is there from the recording's first sample: it appears in no pass (the end status at
+    # each pass's end, stamped where the next begins, made it "appear" at the start of each)
+    assert "latency" not in out and "score 3 of 3 verdicts agree" in out, out
 
 
 def test_a_monitor_with_a_count_ends_when_its_node_is_killed(ros_env, bearing_sim_exe, tmp_path):

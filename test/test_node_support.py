@@ -15,7 +15,9 @@ NS = 1_000_000_000
 
 
 # how long a node may take to its first table: on a cold cache it compiles the kinematic tier's
-# kernels (about 16 s) and, with fidelity auto, the skidding tier's (about 12 s) first
+# kernels (about 16 s on the AMD host) and, with fidelity auto, the skidding tier's (about 12 s)
+# first; 70-160 s together on a busy 2-core Intel Xeon, which is why `make test` compiles them
+# before the tests (Makefile, WARM_KERNELS)
 FIRST_TABLE_S = 60.0
 
 

@@ -109,3 +109,28 @@ def test_a_node_after_a_killed_one_starts_and_says_what_it_removed(ros_env, bear
     with open_recording([tmp_path / "live.mcap"]) as rec:
         counts = {t: c.count for t, c in rec.topics().items()}
     assert counts["/accel"] == 100
+
+
+DOMAIN_CASES = [("node", "300", ("--ros-args", "-p", "duration:=0.2")), ("run", "300", ("--out", "x.mcap")),
+                ("monitor", "300", ("--count", "1")), ("play", "300", ("rec.mcap", "--wait", "0")),
+                ("node", "abc", ("--ros-args", "-p", "duration:=0.2")),
+                ("node", "-1", ("--ros-args", "-p", "duration:=0.2"))]
+
+
+@pytest.mark.parametrize("command,value,args", DOMAIN_CASES, ids=[f"{c} {v}" for c, v, _ in DOMAIN_CASES])
+def test_a_ros_domain_id_no_participant_can_take_is_one_line(ros_env, bearing_sim_exe, tmp_path, command, value, args):
+    """Every command that starts a participant refuses a ``ROS_DOMAIN_ID`` that is not a whole
+    number 0 - 232 in one line, exit status 2, before it starts: 300 failed in Fast DDS with exit
+    status 1 (an internal error), 'abc' was called a ROS argument rcl could not parse, -1 ran on
+    domain 0."""
+    if command == "play":
+        from bearing_sim_ros.recording.render import render
+
+        render("er16k_outer_race", 0.05, tmp_path / "rec.mcap", progress=False)
+    env = dict(ros_env, ROS_DOMAIN_ID=value)
+    r = subprocess.run([bearing_sim_exe, command, *args], env=env, cwd=tmp_path, capture_output=True, text=True,
+                       timeout=60)
+    assert r.returncode == 2, r.stdout + r.stderr
+    assert r.stderr.splitlines() == [f"error: ROS_DOMAIN_ID = '{value}': expected a whole number 0 - 232 (0 - 101 "
+                                     "keeps clear of Linux's ephemeral ports), the same in every terminal of one setup"], r.stderr
+    assert not (tmp_path / "x.mcap").exists()

@@ -202,26 +202,50 @@ def scan_clearance(cwru, seconds: float = 2.0, values: dict | None = None,
     return out
 
 
+def _finite(text):
+    """argparse type of a --start value: any finite number (the scene checks its range)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"{text!r} must be a finite number")
+    return value
+
+
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python -m bearing_sim_ros.analysis.validate_fit", description=__doc__,
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--cwru", default="../shared/validation/cwru", help="folder of the CWRU recordings")
-    p.add_argument("--seconds", type=float, default=2.0, help="seconds of each recording compared")
-    p.add_argument("--maxfev", type=int, default=300, help="most objective evaluations")
-    p.add_argument("--start", nargs=len(PARAMS), type=float, metavar="V",
+    """The command; a mistake (a bad number, no CWRU folder where --cwru points: its default is
+    relative to the repository's root) is one line on stderr and exit status 2, as for
+    ``bearing-sim``, not a traceback from deep in the first evaluation."""
+    from ..cli import EXIT_USER, _Parser, _nonnegative, _positive
+    from ..errors import UserError
+    from ..teardown import say_on_stderr
+
+    p = _Parser(prog="python -m bearing_sim_ros.analysis.validate_fit", description=__doc__,
+                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--cwru", default="../shared/validation/cwru",
+                   help="folder of the CWRU recordings (default: ../shared/validation/cwru, from the repository's root)")
+    p.add_argument("--seconds", type=_positive(float), default=2.0, help="seconds of each recording compared, > 0")
+    p.add_argument("--maxfev", type=_positive(int), default=300, help="most objective evaluations, >= 1")
+    p.add_argument("--start", nargs=len(PARAMS), type=_finite, metavar="V",
                    help="start values instead of the shipped ones, in the order " + " ".join(PARAMS))
     p.add_argument("--fix", nargs="*", default=list(FIXED), choices=PARAMS, metavar="NAME",
                    help=f"hold these at their start values (default: {' '.join(FIXED)}; "
                         "--fix alone: fit all seven)")
-    p.add_argument("--line-weight", type=float, default=LINE_WEIGHT, help="weight of the line-height term")
+    p.add_argument("--line-weight", type=_nonnegative(float), default=LINE_WEIGHT,
+                   help="weight of the line-height term, >= 0")
     p.add_argument("--scan-clearance", action="store_true",
                    help="no fit: step the clearance of the start values from -2 to 0 um and say where the checks hold")
-    args = p.parse_args(argv)
-    start = dict(zip(PARAMS, args.start)) if args.start else None
-    if args.scan_clearance:
-        scan_clearance(args.cwru, args.seconds, start)
-    else:
-        fit(args.cwru, args.seconds, args.maxfev, start, args.fix, args.line_weight)
+    try:
+        args = p.parse_args(argv)
+        start = dict(zip(PARAMS, args.start)) if args.start else None
+        if args.scan_clearance:
+            scan_clearance(args.cwru, args.seconds, start)
+        else:
+            fit(args.cwru, args.seconds, args.maxfev, start, args.fix, args.line_weight)
+    except UserError as exc:
+        say_on_stderr(f"error: {exc}")
+        return EXIT_USER
     return 0
 
 

@@ -3,7 +3,8 @@
     python -m bearing_sim_ros.nodes.node_bench --duration 60 --out bench_out/node
     python -m bearing_sim_ros.nodes.node_bench --duration 600 --tiers skidding     # the 10-min aim
 
-For each tier it starts ``bearing-sim node`` in real time (``fidelity`` forced to the tier,
+For each tier, one after the other on the user's ``ROS_DOMAIN_ID`` (where it is unset, on one of
+60-89 each), it starts ``bearing-sim node`` in real time (``fidelity`` forced to the tier,
 recording to a temporary MCAP unless ``--no-record``) and ``--subscribers`` subscriber processes
 that decode every ``accel`` and ``contact_forces`` table (two by default: the issue's target is
 zero overruns over ten minutes with the skidding tier, recording and two subscribers on this
@@ -88,6 +89,20 @@ def subscriber_main() -> int:
         rclpy.try_shutdown()
     print(json.dumps({t: {"tables": c[0], "gaps": c[1]} for t, c in counts.items()}), flush=True)
     return 0
+
+
+def _users_domain(environ) -> int | None:
+    """The ROS domain id that ``ROS_DOMAIN_ID`` gives (README: every terminal of one setup gets
+    the same), None where it is unset.  The bench ran on 60-89 by its pid whatever the user set:
+    ids the test suite takes too, so a bench beside ``make test`` could meet its nodes."""
+    from ..errors import UserError
+    from ..stale_dds_ports import domain_id_error
+
+    error = domain_id_error(environ)
+    if error:
+        raise UserError(error)
+    text = environ.get("ROS_DOMAIN_ID", "").strip()
+    return int(text) if text else None
 
 
 def bench_tier(tier: str, scene: str, duration: float, subscribers: int, record: bool, domain: int,
@@ -211,19 +226,40 @@ def table(results) -> str:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python -m bearing_sim_ros.nodes.node_bench", description=__doc__.split("\n")[0])
-    p.add_argument("--duration", type=float, default=60.0, help="seconds of real-time signal per tier")
+    """The command.  A mistake (a duration that is not a positive number, a misspelt --scene) is
+    one line on stderr and exit status 2, as for ``bearing-sim``, before any node starts: a
+    negative --duration ran and printed a table of nan, a misspelt scene a table of tiers
+    "skipped", both with exit status 0."""
+    from ..cli import EXIT_USER, _Parser, _in_range, _nonnegative, _positive
+    from ..errors import UserError
+
+    p = _Parser(prog="python -m bearing_sim_ros.nodes.node_bench", description=__doc__.split("\n")[0])
+    p.add_argument("--duration", type=_positive(float), default=60.0, help="seconds of real-time signal per tier, > 0")
     p.add_argument("--tiers", nargs="+", default=["kinematic", "skidding"], choices=["kinematic", "skidding"])
     p.add_argument("--scene", default=None, help="one scene for every tier (default: er16k_outer_race / er16k_skidding)")
-    p.add_argument("--subscribers", type=int, default=2)
+    p.add_argument("--subscribers", type=_nonnegative(int), default=2)
     p.add_argument("--no-record", action="store_true")
-    p.add_argument("--compute-ahead", type=float, default=None, help="the node's compute_ahead (s); default: the node's")
+    # the node's compute_ahead parameter's range, so that the node does not refuse it after the start
+    p.add_argument("--compute-ahead", type=_in_range(0.0, 2.0, "s"), default=None,
+                   help="the node's compute_ahead (s, 0 to 2); default: the node's")
     p.add_argument("--out", default=None, help="folder for node_bench.md and node_bench.json")
     p.add_argument("--subscriber", action="store_true", help=argparse.SUPPRESS)
-    args = p.parse_args(argv)
+    try:
+        args = p.parse_args(argv)
+        if args.scene is not None and not args.subscriber:
+            from ..scene import load_scene
+
+            load_scene(args.scene)      # a scene that does not load is a mistake, not a tier to skip
+        if args.out and not args.subscriber:
+            from ..paths import output_folder
+
+            output_folder(args.out)     # before the minutes of the run, not after them
+        domain = _users_domain(os.environ)
+    except UserError as exc:
+        say_on_stderr(f"error: {exc}")
+        return EXIT_USER
     if args.subscriber:
         return subscriber_main()
-    domain = 60 + os.getpid() % 30
     results = []
     for k, tier in enumerate(args.tiers):
         scene = args.scene or DEFAULT_SCENES[tier]
@@ -232,9 +268,12 @@ def main(argv=None) -> int:
             results.append({"tier": tier, "scene": scene, "skipped": why})
             print(f"{tier}: skipped ({why})", flush=True)
             continue
+        # one tier after the other, the processes of the one before ended: the user's domain
+        # serves them all; without one, each its own, as before
+        tier_domain = domain if domain is not None else 60 + os.getpid() % 30 + k
         print(f"{tier}: {scene}, {args.duration:g} s real time, {args.subscribers} subscribers, "
-              f"recording {'off' if args.no_record else 'on'} ...", flush=True)
-        results.append(bench_tier(tier, scene, args.duration, args.subscribers, not args.no_record, domain + k,
+              f"recording {'off' if args.no_record else 'on'}, ROS domain {tier_domain} ...", flush=True)
+        results.append(bench_tier(tier, scene, args.duration, args.subscribers, not args.no_record, tier_domain,
                                   args.compute_ahead))
     text = table(results)
     print(text)

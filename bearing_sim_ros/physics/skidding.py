@@ -2093,8 +2093,34 @@ def speed_study(seconds: float = 0.2, settle: float = 0.05, scenarios=None, samp
     return rows
 
 
-if __name__ == "__main__":  # pragma: no cover
-    import sys
+# seconds of signal per run of the speed study: 10 ms is the shortest whose RMS means something;
+# 60 s already takes the reference solver (0.1x real time) ten minutes per scenario
+STUDY_SECONDS_RANGE = (0.01, 60.0)
 
-    args = [a for a in sys.argv[1:] if not a.startswith("--")]
-    speed_study(float(args[0]) if args else 0.2, squeeze_film="--no-squeeze-film" not in sys.argv)
+
+def study_main(argv=None) -> int:
+    """``python -m bearing_sim_ros.physics.skidding [seconds] [--no-squeeze-film]``: the speed
+    study.  A mistake is one line on stderr and exit status 2, as for ``bearing-sim`` (a word for
+    the seconds ended in float()'s traceback, a negative number in numpy's; another option was
+    ignored)."""
+    from ..cli import EXIT_USER, _in_range, _Parser
+    from ..errors import UserError
+    from ..teardown import say_on_stderr
+
+    p = _Parser(prog="python -m bearing_sim_ros.physics.skidding",
+                description="speed and error of the skidding tier's solvers (README, \"The skidding tier\")")
+    p.add_argument("seconds", nargs="?", type=_in_range(*STUDY_SECONDS_RANGE, "s"), default=0.2,
+                   help="seconds of signal per run, after 0.05 s of settling (default: 0.2)")
+    p.add_argument("--no-squeeze-film", action="store_true",
+                   help="remove the squeeze-film damping from every run, the reference's too")
+    try:
+        args = p.parse_args(argv)
+    except UserError as exc:
+        say_on_stderr(f"error: {exc}")
+        return EXIT_USER
+    speed_study(args.seconds, squeeze_film=not args.no_squeeze_film)
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    raise SystemExit(study_main())
