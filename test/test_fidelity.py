@@ -267,14 +267,6 @@ def study_estimate():
               f"{e['cage']:.2%}, RMS {e['rms']:.2%}, largest {e['error']:.2%}", flush=True)
 
 
-if __name__ == "__main__":
-    import sys
-
-    if sys.argv[1:] != ["estimate"]:
-        sys.exit("usage: python test/test_fidelity.py estimate")
-    study_estimate()
-
-
 def test_prepare_switches_loads_the_other_tiers_kernels_and_changes_nothing():
     """``Simulator.prepare_switches`` (the live node calls it before its first batch) loads the
     tier that auto may switch to, in a fresh process: its stepping kernel and the hand-over's
@@ -461,3 +453,13 @@ def test_the_callers_tolerance_chooses_the_tier_and_a_load_change_in_y_alone_res
     sim.advance(30, radial_load=light)
     assert sim.tier == "skidding" and sim.tier_switches == 1
     assert Simulator(scene, tolerance=0.5 * est_heavy).tier == "skidding"
+
+
+if __name__ == "__main__":
+    import sys
+
+    if sys.argv[1:] != ["estimate"]:
+        print(f"usage: python test/test_fidelity.py estimate (given: {' '.join(sys.argv[1:]) or 'nothing'})",
+              file=sys.stderr)
+        sys.exit(2)
+    study_estimate()

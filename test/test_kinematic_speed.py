@@ -330,5 +330,6 @@ if __name__ == "__main__":
 
     studies = {"bearing-mode": study_bearing_mode, "convergence": study_convergence, "film": study_film}
     if sys.argv[1:] and sys.argv[1] not in studies:
-        sys.exit(f"unknown study {sys.argv[1]!r}: expected one of {', '.join(studies)} or none")
+        print(f"unknown study {sys.argv[1]!r}: expected one of {', '.join(studies)} or none", file=sys.stderr)
+        sys.exit(2)
     studies[sys.argv[1]]() if sys.argv[1:] else study()
