@@ -141,16 +141,17 @@ def duration_error(name: str, duration: float, sample_rate: float, no_end: bool 
             + (f"0 (no end) or {least}" if no_end else least))
 
 
-def batch_qos_depth(batch_duration: float) -> int:
-    """Keep-last depth holding about one second of batches."""
-    return max(10, int(math.ceil(1.0 / batch_duration)))
+def batch_qos_depth(batch_duration: float, seconds: float = 1.0) -> int:
+    """Keep-last depth holding about ``seconds`` (s) of batches of ``batch_duration`` (s), and
+    at least 10."""
+    return max(10, int(math.ceil(seconds / batch_duration)))
 
 
-def waveform_qos(batch_duration: float):
-    """Reliable, volatile, keep-last about one second of batches."""
+def waveform_qos(batch_duration: float, seconds: float = 1.0):
+    """Reliable, volatile, keep-last about ``seconds`` (s) of batches of ``batch_duration`` (s)."""
     from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=batch_qos_depth(batch_duration),
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=batch_qos_depth(batch_duration, seconds),
                       reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
 
 

@@ -13,6 +13,7 @@ import contextlib
 import io
 import os
 import re
+import signal
 import subprocess
 import threading
 import time
@@ -812,6 +813,38 @@ def _play_into(monitor, bearing_sim_exe, recording, env, *options) -> str:
     assert play.returncode == 0, play.stderr
     assert monitor.wait(30) == 0, monitor.output()
     return monitor.output()
+
+
+@pytest.mark.wall_clock
+def test_a_monitor_stopped_for_0_8_s_under_a_4x_play_loses_no_table(ros_env, bearing_sim_exe, tmp_path):
+    """A busy machine stalls a subscriber now and then; played at 4x, 0.8 s of stall is 320
+    tables.  The monitor's subscription kept 1 s of 10 ms tables (100) and play offered the
+    recorded depth (the node's 1 s: 0.25 s at 4x), and a monitor stopped (SIGSTOP) for 0.8 s lost
+    tables on both sides (2 gaps and 1 verdict of 3; with either fixed alone, 1 or 2 gaps).  Now the
+    monitor keeps 5 s of tables and play scales the depth by its rate: none lost.  (In CI, the 4x
+    test above once lost 26 tables the same way beside other work.)"""
+    recording = tmp_path / "four_seconds.mcap"
+    render("er16k_outer_race", 4.0, recording, fidelity="kinematic", seed=3, progress=False)
+    monitor = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / "monitor.log",
+                          command=("monitor", "--window", "1", "--count", "3"))
+    play = subprocess.Popen([bearing_sim_exe, "play", str(recording), "--rate", "4", "--wait", "15"], env=ros_env,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    try:
+        monitor.wait_for_output("first table stamped")      # play matched it and publishes
+        time.sleep(0.1)                     # into the 1 s the recording takes at 4x
+        monitor.send(signal.SIGSTOP)
+        time.sleep(0.8)
+        monitor.send(signal.SIGCONT)
+        _, err = play.communicate(timeout=60)
+        assert play.returncode == 0, err
+        assert monitor.wait(30) == 0, monitor.output()
+        out = monitor.output()
+    finally:
+        if play.poll() is None:
+            play.kill()
+            play.communicate()
+        monitor.close()
+    assert "monitor: 3 verdicts from 300 tables, 0 gaps" in out, out
 
 
 def test_a_recording_played_after_another_starts_a_new_run_of_its_own(ros_env, bearing_sim_exe, tmp_path):

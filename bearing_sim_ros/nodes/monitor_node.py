@@ -47,8 +47,8 @@ source without ``fault_onsets_s``, a recording made before that key, a fault is 
 appeared only between two diagnostics, up to 1 s apart: then the line gives both.)
 
 The analysis runs on a thread of its own, and the callbacks only decode and queue: the
-subscription keeps a bounded number of tables (``waveform_qos``: 1 s of signal, 0.5 s when a
-recording plays at 2x), and an analysis on the executor thread (the first one imports scipy,
+subscription keeps a bounded number of tables (``waveform_qos``: ``MONITOR_QUEUE_S`` of 10 ms
+tables, 5 s of signal, 1.25 s when a recording plays at 4x), and an analysis on the executor thread (the first one imports scipy,
 about 1 s) would let it overflow and lose tables.  On exit the monitor prints how many tables
 it took and how many gaps it saw.  ``t=`` in its lines counts from the first table it took, whose
 stamp it prints (``monitor: first table stamped 1764392867.120000000 s, t=0 below``): the
@@ -106,6 +106,7 @@ FAULT_NAMES = {"outer": "outer-race fault", "inner": "inner-race fault", "ball":
 WARM_UP_RATE, WARM_UP_SAMPLES = 15000.0, 15000    # Hz and samples: the window analysed at start
 TRUTH_GRACE_S = 0.25        # wall s a verdict waits for the diagnostics stamped at its window's end
 SLACK_NS = 1000             # stamps this close count as the same instant (rounding to the ns)
+MONITOR_QUEUE_S = 5.0       # s of 10 ms tables the accel subscription keeps (``waveform_qos``)
 # what leaves no publisher on accel and no end status (a play stopped by a signal sends none either)
 SOURCE_LOST_CAUSES = "killed, crashed, a play stopped, or lost to discovery"
 
@@ -570,12 +571,15 @@ class MonitorNode(Node):
         # the node missed its first 0.12 and 1.53 s in two of eight runs under load)
         warm = np.random.default_rng(0).standard_normal((WARM_UP_SAMPLES, 1))
         verdict(warm, ("warm_up",), WARM_UP_RATE, scene.bearing, scene.shaft_hz)
-        # reliable like the node offers; depth = 1 s of 10 ms batches: plenty while the
-        # executor thread only decodes tables
+        # reliable like the node offers; depth = MONITOR_QUEUE_S of 10 ms batches: the executor
+        # thread only decodes tables, but on a busy machine it can stall for a fraction of a second,
+        # and 1 s of them (0.25 s of a recording played at 4x) then overflowed: a table lost and a
+        # window restarted, in about 1 run in 8 of test_monitor's 4x play beside other work
         # (the callbacks of accel and /diagnostics take the message info too, for the publication
         # sequence number that tells a new publisher: rclpy gives it to a callback of two arguments)
         self.create_subscription(PointCloud2, TOPIC_ACCEL,
-                                 lambda msg, info: self._on_accel(msg, publication_number(info)), waveform_qos(0.01))
+                                 lambda msg, info: self._on_accel(msg, publication_number(info)),
+                                 waveform_qos(0.01, MONITOR_QUEUE_S))
         self.create_subscription(JointState, TOPIC_STATE, self._on_state, 10)
         self.create_subscription(DiagnosticArray, TOPIC_DIAGNOSTICS,
                                  lambda msg, info: self._on_diagnostics(msg, publication_number(info)), 10)

@@ -2,7 +2,8 @@
 
 The node is named ``bearing_sim`` like the live node and publishes every recorded topic under its
 recorded (fully qualified) name with the recorded type and the QoS read from the channel's
-``offered_qos_profiles``, paced by the log times (= the live node's publish times) divided by
+``offered_qos_profiles`` (above 1x a keep-last depth times ``--rate``, so that it holds as much
+wall-clock time as recorded), paced by the log times (= the live node's publish times) divided by
 ``--rate``.  Messages keep their recorded stamps, so a subscriber sees what it would have seen
 from the live node: contiguous waveform tables, state, diagnostics.
 
@@ -36,6 +37,7 @@ A test or pipeline that needs every message even after two missed periods passes
 """
 from __future__ import annotations
 
+import math
 import sys
 import threading
 import time
@@ -166,6 +168,11 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
                 if clock and topic == "/clock":
                     continue
                 qos = qos_from_yaml(info.qos_yaml) or QoSProfile(depth=10)
+                if rate > 1.0 and qos.history == HistoryPolicy.KEEP_LAST:
+                    # the recorded depth is the node's 1 s of batches; played faster, the same
+                    # depth holds less time for a subscriber that stalls (0.25 s at 4x: a monitor
+                    # stopped for 0.8 s lost tables), so it holds the same wall-clock time
+                    qos.depth = math.ceil(qos.depth * rate)
                 pubs[topic] = node.create_publisher(classes[topic], topic, qos)
             clock_pub = None
             if clock:
