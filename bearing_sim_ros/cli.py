@@ -19,6 +19,7 @@ from contextlib import contextmanager
 # SIGNAL_COMMANDS, the commands that run a node: their Ctrl-C and SIGTERM are handled from the
 # first line (teardown.CommandSignals), before the imports of numpy, numba and rclpy, where one was
 # lost; the console scripts (entry) note them before this module loads
+from . import compile_notice
 from .entry import SIGNAL_COMMANDS
 from .errors import UserError
 from .teardown import EXIT_INTERRUPTED, point_at_devnull, say_on_stderr, signal_handlers
@@ -347,6 +348,8 @@ def rmw_error(environ=None) -> str:
 
 def _dispatch(args, rest) -> int:
     cmd = args.command
+    # numba is loaded already (the parser's physics import): a cold cache's compiling is said
+    compile_notice.enable()
     if cmd in RCL_COMMANDS and rmw_error():
         raise UserError(rmw_error())
     if cmd == "scenes":
@@ -428,6 +431,7 @@ def node_main() -> int:
             return EXIT_USER
         from .nodes.bearing_sim_node import main as run_node
 
+        compile_notice.enable()
         return run_node()
 
     return _signal_command(run)
