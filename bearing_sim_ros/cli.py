@@ -19,6 +19,7 @@ from contextlib import contextmanager
 # SIGNAL_COMMANDS, the commands that run a node: their Ctrl-C and SIGTERM are handled from the
 # first line (teardown.CommandSignals), before the imports of numpy, numba and rclpy, where one was
 # lost; the console scripts (entry) note them before this module loads
+from . import compile_notice
 from .entry import SIGNAL_COMMANDS
 from .errors import UserError
 from .teardown import EXIT_INTERRUPTED, point_at_devnull, say_on_stderr, signal_handlers
@@ -136,7 +137,7 @@ def build_parser() -> argparse.ArgumentParser:
     from .simulator import AUTO_OVERSAMPLE_MAX, DURATION_MAX_S, OVERSAMPLE_ALLOWED, SAMPLE_RATE_RANGE, SEED_RANGE
     from .messages import BATCH_DURATION
     from .analysis.report import DEFAULT_WINDOW_S, WINDOW_RANGE_S
-    from .recording.play import PLAY_RATE_RANGE
+    from .recording.play import PLAY_RATE_RANGE, PLAY_WAIT_MAX
     from .recording.recorder import SPLIT_MAX_BYTES, SPLIT_MIN_BYTES
 
     p = _Parser(prog="bearing-sim", description="Virtual bearing accelerometer for ROS 2.")
@@ -210,9 +211,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="start again from the beginning at the end, until Ctrl-C (default: play once)")
     s.add_argument("--clock", action="store_true",
                    help="publish /clock from the recording's stamps (default: off)")
-    s.add_argument("--wait", type=_nonnegative(float), default=5.0, metavar="SECONDS",
-                   help="wait up to this long for a first subscriber before publishing (default %(default)g; "
-                        "DDS discovery can take one 3 s announcement period)")
+    s.add_argument("--wait", type=_in_range(0.0, PLAY_WAIT_MAX, "s"), default=5.0, metavar="SECONDS",
+                   help=f"wait up to this long for a first subscriber before publishing, 0 to {PLAY_WAIT_MAX:g} s "
+                        "(default %(default)g; DDS discovery can take one 3 s announcement period)")
 
     s = sub.add_parser("report", help="PNG plots and a summary of a recording")
     s.add_argument("file", metavar="F.mcap", nargs="+", help=f"the recording to analyse; {SPLIT_FILES_HELP}")
@@ -347,6 +348,8 @@ def rmw_error(environ=None) -> str:
 
 def _dispatch(args, rest) -> int:
     cmd = args.command
+    # numba is loaded already (the parser's physics import): a cold cache's compiling is said
+    compile_notice.enable()
     if cmd in RCL_COMMANDS and rmw_error():
         raise UserError(rmw_error())
     if cmd == "scenes":
@@ -428,6 +431,7 @@ def node_main() -> int:
             return EXIT_USER
         from .nodes.bearing_sim_node import main as run_node
 
+        compile_notice.enable()
         return run_node()
 
     return _signal_command(run)

@@ -25,6 +25,7 @@ import numpy as np
 from numba import njit
 
 from . import physics  # noqa: F401 - sets numba's cache folder before _ramp below asks for it
+from .compile_notice import Notice
 from .errors import UserError
 from .scene import RPM, Scene, _load_and_weight_error, _operating_point_error, load_scene
 
@@ -302,8 +303,12 @@ class Simulator:
         # the sizes in force are the running tier's ``defect_sizes``
         self._defect_schedule = DefectSchedule(scene.defects, self.sample_rate)
         self._physics_index = 0
-        self._model = self._build_model(self.tier, self._defect_schedule.sizes(0))
-        self._build_chain()
+        # on a cold cache: one line on stderr from the commands while the tier's kernels compile,
+        # here and in the first advance (its main kernel), and their time after it
+        self._compiling = Notice()
+        with self._compiling.within(self._tier_kernels):
+            self._model = self._build_model(self.tier, self._defect_schedule.sizes(0))
+            self._build_chain()
 
     def __copy__(self):
         """An independent simulator that continues from here bit for bit, as ``copy.deepcopy``
@@ -314,6 +319,10 @@ class Simulator:
         return copy.deepcopy(self)
 
     # ---- construction ---------------------------------------------------------------------
+    def _tier_kernels(self) -> str:
+        """What a compilation for the running tier is said to compile."""
+        return f"the {self.tier} tier's kernels"
+
     def _build_model(self, tier: str, defect_sizes: tuple, ellipse_ball_load: float | None = None,
                      takes_over_from=None):
         """The ``tier``'s model at the present operating point with the defects at
@@ -527,9 +536,11 @@ class Simulator:
                                    self.scene.gravity, "the scene's structure.shaft_mass")
         if error:
             raise UserError(error)
-        self.maybe_switch_tier(s1, (l1x, l1y))
         n = int(n)
-        series, accel = self._run(n, s0, s1, l0x, l0y, l1x, l1y, self.index)
+        with self._compiling.within(self._tier_kernels):    # a switch's new tier too
+            self.maybe_switch_tier(s1, (l1x, l1y))
+            series, accel = self._run(n, s0, s1, l0x, l0y, l1x, l1y, self.index)
+        self._compiling.finish()
         self._pending = {k: v[n:] for k, v in series.items()}
         self._shaft_speed = s1
         self._radial_load = np.array([l1x, l1y])
@@ -623,16 +634,19 @@ class Simulator:
         import copy
 
         other = "skidding" if self.tier == "kinematic" else "kinematic"
-        # the hand-over too (it reads the old tier's films); from a copy, which it may update
-        model = self._build_model(other, self._model.defect_sizes, self._model.ellipse_ball_load,
-                                  takes_over_from=copy.deepcopy(self._model))
-        w, load = self._shaft_speed, self._radial_load.copy()
-        from .physics.skidding import SolverDiverged
+        notice = Notice()           # its own: the node runs this beside its start
+        with notice.within(f"the {other} tier's kernels", " in the background, for a switch of tier"):
+            # the hand-over too (it reads the old tier's films); from a copy, which it may update
+            model = self._build_model(other, self._model.defect_sizes, self._model.ellipse_ball_load,
+                                      takes_over_from=copy.deepcopy(self._model))
+            w, load = self._shaft_speed, self._radial_load.copy()
+            from .physics.skidding import SolverDiverged
 
-        try:
-            model.advance(8 * self.chain_oversample, w, w, load, load)     # 8 output samples
-        except SolverDiverged:
-            pass        # the kernels are loaded all the same; the throwaway's signal is nothing
+            try:
+                model.advance(8 * self.chain_oversample, w, w, load, load)     # 8 output samples
+            except SolverDiverged:
+                pass        # the kernels are loaded all the same; the throwaway's signal is nothing
+        notice.finish()
 
     # ---- state for the JointState topic ----------------------------------------------------
     def snapshot(self):

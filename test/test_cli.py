@@ -209,7 +209,9 @@ def _user_mistake(capsys, argv):
     (["render", "er16k_healthy", "--duration", "inf"], ["--duration", "'inf'", "finite number > 0"]),
     (["render", "er16k_healthy", "--duration", "1e400"], ["--duration", "'1e400'", "finite number > 0"]),
     (["play", "x.mcap", "--rate", "inf"], ["--rate", "inf", "allowed range is [0.01, 100]"]),
-    (["play", "x.mcap", "--wait", "inf"], ["--wait", "'inf'", "finite number >= 0"]),
+    (["play", "x.mcap", "--wait", "inf"], ["--wait", "inf s", "allowed range is [0, 3600] s"]),
+    # finite, but a wait for a subscriber that never ends in practice
+    (["play", "x.mcap", "--wait", "1e300"], ["--wait", "1e300 s", "allowed range is [0, 3600] s"]),
     (["monitor", "--window", "inf"], ["--window", "inf s", "allowed range is [0.5, 120] s"]),
     # a window of 0.1 ms gave "x inf" prominences and a fault verdict on anything
     (["monitor", "--window", "0.0001"], ["--window", "0.0001 s", "allowed range is [0.5, 120] s"]),

@@ -467,7 +467,10 @@ def test_waiting_for_a_subscriber_is_said_and_so_is_playing_to_nobody(recording,
                                          (["--rate", "0"], "--rate"),
                                          # 1e-9 was taken: one second of recording took 31 years
                                          (["--rate", "1e-9"], "allowed range is [0.01, 100]"),
-                                         (["--rate", "1e9"], "allowed range is [0.01, 100]")])
+                                         (["--rate", "1e9"], "allowed range is [0.01, 100]"),
+                                         # 1e300 was taken: a wait that never ends in practice
+                                         (["--wait", "1e300"], "allowed range is [0, 3600] s"),
+                                         (["--wait", "3600.5"], "allowed range is [0, 3600] s")])
 def test_bad_arguments_exit_2_with_one_line(args, named, recording, bearing_sim_exe, ros_env):
     path, _, _ = recording
     r = subprocess.run([bearing_sim_exe, "play", str(path), *args], env=ros_env, capture_output=True,
@@ -541,11 +544,12 @@ def test_shifting_a_stamp_moves_headers_and_clocks_with_the_carry():
 @pytest.mark.parametrize("kwargs, named", [({"rate": 0.0}, "--rate"), ({"rate": math.nan}, "--rate"),
                                            ({"rate": 1e-9}, "--rate"), ({"rate": 1e9}, "--rate"),
                                            ({"wait_for_subscribers": -1.0}, "--wait"),
-                                           ({"wait_for_subscribers": math.nan}, "--wait")])
+                                           ({"wait_for_subscribers": math.nan}, "--wait"),
+                                           ({"wait_for_subscribers": 1e300}, "--wait")])
 def test_play_refuses_a_rate_or_wait_it_cannot_use(kwargs, named, recording):
     """play() itself (not only the command line's parser) refuses a rate outside [0.01, 100] (0
-    would divide by zero in the pacing, 1e-9 takes 31 years a second) and a negative or NaN wait
-    (a NaN wait never ends), in one line naming the option, the value and, for the rate, its range.
+    would divide by zero in the pacing, 1e-9 takes 31 years a second) and a wait outside [0, 3600]
+    s (a NaN or 1e300 s wait never ends), in one line naming the option, the value and its range.
     ``stop`` is set: were a value taken, play would return at once."""
     import threading
 
@@ -560,6 +564,8 @@ def test_play_refuses_a_rate_or_wait_it_cannot_use(kwargs, named, recording):
     assert "\n" not in str(exc.value)
     if "rate" in kwargs:
         assert str(exc.value) == f"--rate = {kwargs['rate']!r}: expected a multiple of real time in [0.01, 100]"
+    else:
+        assert str(exc.value) == f"--wait = {kwargs['wait_for_subscribers']!r}: expected seconds in [0, 3600]"
 
 
 def test_with_clock_a_recorded_clock_is_replaced_not_published_too(ros_env, tmp_path):

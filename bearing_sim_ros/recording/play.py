@@ -59,6 +59,9 @@ WAVEFORM_TYPE = "sensor_msgs/msg/PointCloud2"
 # it can (``_sleep_until`` does not pause once it is behind), so a higher bound would promise
 # nothing more
 PLAY_RATE_RANGE = (0.01, 100.0)
+# --wait, s: an hour is far beyond any discovery (seconds) and covers a subscriber started by hand;
+# 1e300 was taken, a wait that never ends in practice, where a mistyped value should be said
+PLAY_WAIT_MAX = 3600.0
 
 
 def _shift_stamp(msg, offset_ns: int) -> None:
@@ -109,7 +112,7 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
          wait_for_subscribers: float = WAIT_FOR_SUBSCRIBERS, log=None, stop=None) -> int:
     """Republish ``path`` (one file, or the pieces of a split recording: ``open_recording``);
     returns the number of messages published.  ``rate``: a multiple of real time, within
-    ``PLAY_RATE_RANGE``.  ``wait_for_subscribers``: s.  ``stop``: a ``threading.Event`` that ends
+    ``PLAY_RATE_RANGE``.  ``wait_for_subscribers``: s, 0 to ``PLAY_WAIT_MAX``.  ``stop``: a ``threading.Event`` that ends
     playback between two messages (set by the signal handlers)."""
     import rclpy
     from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -117,8 +120,8 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
     lo, hi = PLAY_RATE_RANGE
     if not lo <= rate <= hi:            # NaN too
         raise UserError(f"--rate = {rate!r}: expected a multiple of real time in [{lo:g}, {hi:g}]")
-    if not wait_for_subscribers >= 0:
-        raise UserError(f"--wait = {wait_for_subscribers!r}: expected seconds >= 0")
+    if not 0 <= wait_for_subscribers <= PLAY_WAIT_MAX:         # NaN too
+        raise UserError(f"--wait = {wait_for_subscribers!r}: expected seconds in [0, {PLAY_WAIT_MAX:g}]")
     # teardown.say: a line written as the terminal closes goes nowhere (an EIO was an internal error)
     log = log or (lambda text: say(text, sys.stderr))
     stop = stop or threading.Event()
