@@ -503,7 +503,9 @@ def _main(argv: list) -> int:
             # known args first, so that a stray one is named with its command, as `node` does
             args, rest = parser.parse_known_args(argv)
             if rest:
-                raise UserError(f"bearing-sim {args.command}: unrecognized arguments: {' '.join(rest)}")
+                # the monitor takes ROS arguments too, as the node does, and says where they go
+                hint = " (ROS arguments follow --ros-args)" if args.command == "monitor" else ""
+                raise UserError(f"bearing-sim {args.command}: unrecognized arguments: {' '.join(rest)}{hint}")
         return int(_dispatch(args, rest) or EXIT_OK)
     except UserError as exc:
         say_on_stderr(f"error: {exc}")

@@ -797,6 +797,7 @@ def test_the_score_counts_the_truth_the_verdict_lines_printed(ros_env, bearing_s
 @pytest.mark.parametrize("args, words", [
     (["--ros-args", "--bogus"], ["ROS arguments: unknown --bogus", "-r from:=to"]),
     (["--ros-args", "-r", "__ns:=rig1"], ["ROS arguments:", "'-r __ns:=rig1'"]),   # not absolute
+    (["-r", "__ns:=/rig1"], ["unrecognized arguments: -r __ns:=/rig1 (ROS arguments follow --ros-args)"]),
 ])
 def test_bad_ros_arguments_end_the_monitor_with_one_error_line(ros_env, bearing_sim_exe, args, words):
     """The monitor takes ROS arguments (a namespace, remaps) after ``--ros-args`` like the node,

@@ -112,8 +112,8 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
          wait_for_subscribers: float = WAIT_FOR_SUBSCRIBERS, log=None, stop=None) -> int:
     """Republish ``path`` (one file, or the pieces of a split recording: ``open_recording``);
     returns the number of messages published.  ``rate``: a multiple of real time, within
-    ``PLAY_RATE_RANGE``.  ``wait_for_subscribers``: s, 0 to ``PLAY_WAIT_MAX``.  ``stop``: a ``threading.Event`` that ends
-    playback between two messages (set by the signal handlers)."""
+    ``PLAY_RATE_RANGE``.  ``wait_for_subscribers``: s, 0 to ``PLAY_WAIT_MAX``.  ``stop``: a
+    ``threading.Event`` that ends playback between two messages (set by the signal handlers)."""
     import rclpy
     from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
