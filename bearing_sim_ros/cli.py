@@ -350,8 +350,9 @@ def _dispatch(args, rest) -> int:
     cmd = args.command
     # numba is loaded already (the parser's physics import): a cold cache's compiling is said
     compile_notice.enable()
-    if cmd in RCL_COMMANDS and rmw_error():
-        raise UserError(rmw_error())
+    missing_rmw = rmw_error() if cmd in RCL_COMMANDS else ""
+    if missing_rmw:
+        raise UserError(missing_rmw)
     if cmd == "scenes":
         return _scenes(args)
     if cmd == "node":
@@ -426,8 +427,9 @@ def node_main() -> int:
     """``bearing_sim_node`` (``ros2 run bearing_sim_ros bearing_sim_node``): the node, as
     ``bearing-sim node`` runs it."""
     def run():
-        if rmw_error():         # before the node's module loads rcl, which ends the process there
-            say_on_stderr(f"error: {rmw_error()}")
+        missing_rmw = rmw_error()    # before the node's module loads rcl, which ends the process there
+        if missing_rmw:
+            say_on_stderr(f"error: {missing_rmw}")
             return EXIT_USER
         from .nodes.bearing_sim_node import main as run_node
 

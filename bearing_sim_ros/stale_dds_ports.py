@@ -56,8 +56,8 @@ def domain_id_error(env=None) -> str:
 
 def domain_from_env(env=None) -> int | None:
     """The ROS domain id of ``env`` (default os.environ; unset or empty: 0), or None where
-    ``ROS_DOMAIN_ID`` is not a whole number (rclpy says what is wrong with it) or the RMW is not
-    Fast DDS."""
+    ``ROS_DOMAIN_ID`` is not a whole number (``domain_id_error`` says what is wrong with it) or
+    the RMW is not Fast DDS."""
     env = os.environ if env is None else env
     if env.get("RMW_IMPLEMENTATION", "") not in FAST_DDS_RMWS:
         return None

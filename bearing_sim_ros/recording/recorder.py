@@ -272,13 +272,13 @@ def _is_recording_or_empty(path: Path) -> bool:
         return False
 
 
-def _open_for_writing(path: Path, where: str, stopped, say) -> int:
+def _open_for_writing(path: Path, where: str, stopped) -> int:
     """A descriptor of ``path`` opened for writing (created if missing), blocking as usual once
     open.  A named pipe without a reader is waited for: a plain open waits in the kernel until a
     program opens it for reading, without a word, and the commands' signal handlers only note a
     signal (Python then opens again): ``render --out pipe`` and ``node -p record:=pipe`` with
     nobody reading sat there through Ctrl-C and SIGTERM, for ever.  So it is tried without
-    blocking every ``_PIPE_POLL_S``; after ``PIPE_NOTICE_S`` ``say`` tells, once, that the
+    blocking every ``_PIPE_POLL_S``; after ``PIPE_NOTICE_S`` one line on stderr tells that the
     recording waits for a reader; once ``stopped()`` (a signal noted) the wait ends with an
     InterruptedError."""
     started = time.monotonic()
@@ -296,13 +296,13 @@ def _open_for_writing(path: Path, where: str, stopped, say) -> int:
         if stopped():
             raise InterruptedError(errno.EINTR, "stopped while it waited for a reader of the pipe")
         if not told and time.monotonic() - started >= PIPE_NOTICE_S:
-            say(f"{where}: a named pipe that no program reads yet; the recording waits for one to "
-                "open it (Ctrl-C to stop)")
+            say_on_stderr(f"{where}: a named pipe that no program reads yet; the recording waits for one "
+                          "to open it (Ctrl-C to stop)")
             told = True
         time.sleep(_PIPE_POLL_S)
 
 
-def _open_held(path: Path, where: str, final: Path | None = None, stopped=signal_noted, say=say_on_stderr):
+def _open_held(path: Path, where: str, final: Path, stopped):
     """``path`` opened for writing from its start, a regular file held with an exclusive lock
     (``flock``, released as it is closed) and emptied only once it is held.  Two nodes given one
     ``record`` path (a parameters file for several, ``/**: record: run.mcap``) both wrote into the
@@ -312,16 +312,15 @@ def _open_held(path: Path, where: str, final: Path | None = None, stopped=signal
     as it is.
 
     ``final``: the name that ``path``, a partial file (``replace_when_done``), is moved onto at
-    the end.  Two renders to one ``--out`` held two partial files and moved each onto the name:
+    the end (``path`` itself where it is no partial file).  Two renders to one ``--out`` held two partial files and moved each onto the name:
     the last was kept, the other lost without a word; and a render moved its file onto the one a
     node was writing there.  So once ``path`` is held, another writer of the name
     (``_other_writer``) refuses this one, before it empties anything.  Each looks only after
     taking its own lock, so two starting at once cannot both miss each other: then both may
     refuse, which loses nothing.  A named pipe without a reader is waited for, said after a second
-    (``say``) and ended by ``stopped()`` (``_open_for_writing``)."""
+    and ended by ``stopped()`` (``_open_for_writing``)."""
     import fcntl
 
-    final = path if final is None else final
     if not os.path.lexists(path):
         # a writer known already refuses this one before it makes a file: a node refused so left
         # an empty file at its record path.  The same check after the lock (below) stays, for a
@@ -329,7 +328,7 @@ def _open_held(path: Path, where: str, final: Path | None = None, stopped=signal
         refusal = _writer_of(final, path, where)
         if refusal is not None:
             raise refusal
-    fd = _open_for_writing(path, where, stopped, say)
+    fd = _open_for_writing(path, where, stopped)
     try:
         mode = os.fstat(fd).st_mode
         if stat.S_ISREG(mode) or stat.S_ISFIFO(mode):
