@@ -433,7 +433,7 @@ def node_main() -> int:
             return EXIT_USER
         from .nodes.bearing_sim_node import main as run_node
 
-        compile_notice.enable()
+        compile_notice.enable("bearing_sim_node")     # its lines named as the user started it
         return run_node()
 
     return _signal_command(run)

@@ -18,6 +18,7 @@ from contextlib import contextmanager
 _local = threading.local()      # .current: (Notice, label, note) of this thread; .depth: nesting
 _lock = threading.Lock()
 _enabled = False
+_program = "bearing-sim"        # the lines' first word: the command the user typed
 
 
 class Notice:
@@ -51,10 +52,12 @@ class Notice:
 _UNNAMED = Notice()             # compilations outside any notice: said once per process
 
 
-def enable() -> None:
-    """Say the compilations of this process from now on (idempotent)."""
-    global _enabled
+def enable(program: str = "bearing-sim") -> None:
+    """Say the compilations of this process from now on (idempotent), each line beginning with
+    ``program``: the name the user started it by (``bearing-sim``, ``bearing_sim_node``)."""
+    global _enabled, _program
     with _lock:
+        _program = program
         if _enabled:
             return
         import numba.core.event as ev
@@ -105,4 +108,4 @@ def _ended() -> None:
 def _say(text: str) -> None:
     from .teardown import say_on_stderr
 
-    say_on_stderr(f"bearing-sim: {text}")
+    say_on_stderr(f"{_program}: {text}")

@@ -622,6 +622,25 @@ class Simulator:
 
         return _auto_reselects(self.scene, self.requested_fidelity) and not needs_skidding(self.scene)
 
+    def load_kernels(self) -> None:
+        """Load (on a cold cache: compile) the rest of the running tier's kernels now, those that
+        its first ``advance`` would load (the sensor chain's output), by advancing a copy by one
+        sample; on a cold cache the commands' line ``the ... tier's kernels compiled in N s`` is
+        said here.  The live node calls it before its start line and before ``prepare_switches``,
+        whose background tier's lines then follow it instead of coming before it.  Nothing of
+        this simulator changes (the copy is independent: ``__copy__``)."""
+        import copy
+
+        from .physics.skidding import SolverDiverged
+
+        twin = copy.deepcopy(self)      # its notice is a copy of this one's: said once, by it
+        try:
+            twin.advance(1)
+        except SolverDiverged:
+            pass        # the kernels are loaded all the same; the real run says the divergence
+        twin._compiling.finish()        # nothing where its advance said it
+        self._compiling = twin._compiling
+
     def prepare_switches(self) -> None:
         """Load (on a cold cache: compile) the other tier's kernels now, by handing a copy of the
         running tier's state to a throwaway model of the other one and running it for a few

@@ -84,3 +84,58 @@ def test_a_warm_render_says_nothing_on_stderr(tmp_path, bearing_sim_exe, ros_env
     (tmp_path / "x.mcap").unlink()
     second = subprocess.run(argv, env=ros_env, capture_output=True, text=True, timeout=120)
     assert second.returncode == 0 and second.stderr == "", second.stderr
+
+
+def _cache_without(tmp_path, pattern):
+    """A copy of this checkout's compiled kernels (warm: ``make test`` compiles them first) less
+    the files of ``pattern``: a process that uses it compiles those kernels for real, and only
+    those, in seconds instead of a tier's minute."""
+    import shutil
+
+    import numba.core.config as nb_config
+
+    import bearing_sim_ros.physics  # noqa: F401 - sets numba's cache folder, as a command does
+
+    cache = tmp_path / "cache"
+    # the package keeps them in a folder of its own under NUMBA_CACHE_DIR (per checkout)
+    shutil.copytree(nb_config.CACHE_DIR, cache / os.path.basename(nb_config.CACHE_DIR))
+    removed = list(cache.rglob(pattern))
+    assert removed, f"no {pattern} in {nb_config.CACHE_DIR}: the test would compile nothing"
+    for f in removed:
+        f.unlink()
+    return cache
+
+
+def test_the_nodes_lines_name_bearing_sim_node_and_its_tier_is_compiled_before_its_start_line(
+        tmp_path, ros_env):
+    """``bearing_sim_node`` on a cache without the sensor chain's main kernel (a cold cache, for
+    that kernel alone): its lines begin with its own name, not ``bearing-sim``, and the running
+    tier's "compiled in N s" comes before the start line (until 2026-11-30 it came after the first
+    batch, behind the other tier's background lines, and both began ``bearing-sim:``)."""
+    cache = _cache_without(tmp_path, "sensor._commit-*")
+    node = os.path.join(os.path.dirname(sys.executable), "bearing_sim_node")
+    r = subprocess.run([node, "--ros-args", "-p", "scene:=er16k_healthy", "-p", "duration:=0.1"],
+                       env={**ros_env, "NUMBA_CACHE_DIR": str(cache)}, capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    lines = r.stderr.splitlines()
+    said = [i for i, ln in enumerate(lines) if "kernels" in ln]
+    start = [i for i, ln in enumerate(lines) if "inputs accepted" in ln]
+    assert len(said) == 2 and len(start) == 1, r.stderr
+    assert lines[said[0]].startswith("bearing_sim_node: compiling the kinematic tier's kernels ("), r.stderr
+    assert re.fullmatch(r"bearing_sim_node: the kinematic tier's kernels compiled in \d+ s", lines[said[1]]), r.stderr
+    assert said[1] < start[0], r.stderr
+
+
+def test_loading_the_kernels_ahead_changes_no_sample():
+    """``Simulator.load_kernels`` (the node calls it before its start line) advances a copy: the
+    simulator's own samples are the same bits with and without it."""
+    import numpy as np
+
+    from bearing_sim_ros import Simulator
+
+    plain, loaded = Simulator("er16k_outer_race", seed=3), Simulator("er16k_outer_race", seed=3)
+    loaded.load_kernels()
+    for _ in range(3):
+        a, b = plain.advance(150), loaded.advance(150)
+        assert a.index0 == b.index0 == loaded.index - 150
+        assert np.array_equal(a.accel, b.accel) and np.array_equal(a.contact_forces, b.contact_forces)

@@ -354,6 +354,9 @@ class BearingSimNode(Node):
             raise UserError(exc.worded("oversample", "fidelity", zero=OVERSAMPLE_ZERO)) from None
         except SolverDiverged as exc:          # its first steps, run ahead as it is made
             raise UserError(exc.worded(self._settings)) from None
+        # the rest of the running tier's kernels before the start line: on a cold cache its
+        # "compiled in N s" came after the first batch, behind the other tier's background lines
+        self.sim.load_kernels()
         self.limits = InputLimits(self.scene.bearing, self.scene.shaft_weight)
         self.n_batch = int(round(cfg["sample_rate"] * cfg["batch_duration"]))
         self.batch_duration = self.n_batch / self.sim.sample_rate
