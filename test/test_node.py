@@ -619,7 +619,10 @@ def test_a_burst_of_rejected_inputs_is_counted_in_the_log_too(started, listener)
     for _ in range(5):
         listener.publish_speed(float("nan"))
     listener.publish_load(0.0, -50.0, frame_id="base_link")     # one alone: its line, no more
+    for _ in range(2):
+        listener.publish_speed(1e9)                             # two: its line, then "1 more input"
     node.wait_for_output("4 more inputs rejected (not_finite) since the last such line", timeout=3 * 2.0 + 5)
+    node.wait_for_output("1 more input rejected (out_of_range) since the last such line", timeout=5)
     log = node.output()
     assert log.count("input rejected (not_finite)") == 1, log
     assert "shaft_speed = nan rad/s" in log.split("4 more inputs rejected (not_finite)")[1].splitlines()[0], log

@@ -485,7 +485,7 @@ class BearingSimNode(Node):
             if since and (at_end or now - last >= REJECT_LOG_PERIOD):
                 self._reject_log[key] = (now, 0, "")
                 (logger or self.get_logger()).warning(
-                    f"{since} more inputs rejected ({key}) since the last such line, keeping "
+                    f"{since} more input{'s' if since > 1 else ''} rejected ({key}) since the last such line, keeping "
                     f"{self._cmd_speed:.6g} rad/s, load {self._cmd_load}; the latest: {held}")
 
     def _on_speed(self, msg):
