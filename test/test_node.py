@@ -901,6 +901,40 @@ def test_a_second_publisher_on_accel_is_said_by_the_node_its_diagnostics_and_the
     assert said == [c == 1 for c in counts], (said, counts)
 
 
+def test_a_publisher_of_another_type_on_an_input_is_said_in_the_log(started, listener):
+    """A ``std_msgs/Float32`` on ``shaft_speed`` or a ``geometry_msgs/Wrench`` (no stamp) on
+    ``load`` never matches the node's subscriptions: the commands were lost and neither side said
+    a word (an in-the-loop user's rig ran on at the old speed).  Now the node names each such
+    publisher in its log within a look at the graph (``PEER_CHECK_S``), once, and says when none is
+    left; a publisher of the right type is not named."""
+    import rclpy
+    from geometry_msgs.msg import Wrench
+    from std_msgs.msg import Float32
+
+    node = started({"fidelity": "kinematic"})
+    listener.wait_matched()
+    # a participant of its own: DDS holds one type per topic within one (the listener's Float64)
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx)
+    user = rclpy.create_node("wrong_types", context=ctx)
+    try:
+        user.create_publisher(Float32, "shaft_speed", 10).publish(Float32(data=100.0))
+        user.create_publisher(Wrench, "load", 10)
+        node.wait_for_output("/wrong_types publishes std_msgs/msg/Float32 on /shaft_speed, which takes "
+                             "std_msgs/msg/Float64: its messages never reach this node", 20)
+        node.wait_for_output("/wrong_types publishes geometry_msgs/msg/Wrench on /load, which takes "
+                             "geometry_msgs/msg/WrenchStamped: its messages never reach this node", 5)
+    finally:
+        user.destroy_node()             # its participant leaves the graph
+        rclpy.shutdown(context=ctx)
+    node.wait_for_output("no publisher of another type on /load any more", 20)
+    node.send(signal.SIGINT)
+    assert node.wait(20) == 0, node.output()
+    log = node.output()
+    assert log.count("publishes std_msgs/msg/Float32") == 1 and "publishes std_msgs/msg/Float64" not in log, log
+    assert "no publisher of another type on /shaft_speed any more" in log, log
+
+
 def test_a_second_clock_beside_publish_clock_is_said_and_a_remapped_clock_is_not(started):
     """Two rigs in two namespaces with publish_clock both published the one /clock (under sim
     time each from 0 at its own start) and every node on sim time followed both time lines

@@ -62,7 +62,7 @@ TIME_LINE_JUMP = 1.0           # s: a load stamp further back than this behind t
                                # starts a new time line (a recording played again, a publisher
                                # restarted with other stamps); closer, it is out of order
 WAIT_FOR_SUBSCRIBERS_MAX = 1000    # the parameter's range: 0 - this many subscribers
-PEER_CHECK_S = 2.0             # s between looks at the graph for another publisher on accel
+PEER_CHECK_S = 2.0             # s between looks at the graph (another publisher on accel, inputs of another type)
 SWITCH_COST_GUESS_S = 0.02     # s: a tier switch's batch before the first is measured (8 ms for
                                # kinematic -> skidding on the AMD host; more on a loaded machine)
 # A node that cannot keep up with real time falls further behind for ever (each batch an overrun,
@@ -401,6 +401,7 @@ class BearingSimNode(Node):
         self.failure = None
         self.accel_peers = 0                     # other publishers on accel: _check_peers
         self.clock_peers = 0                     # other publishers on this node's /clock: _check_peers
+        self.input_strangers = {}                # input topic -> {(publisher node, type)} of another type
         self.stats = _Stats(self.sim.sample_rate, self.sim.bearing, self.scene.sensor.range)
         self._behind = _FallingBehind()
         self._thread = threading.Thread(target=self._run, name="bearing-sim", daemon=True)
@@ -547,11 +548,32 @@ class BearingSimNode(Node):
             self.pub_accel.topic_name, self.accel_peers,
             "subscribers get their tables interleaved with this node's; give each simulator its own "
             "namespace (-r __ns:=/rig1) or ROS_DOMAIN_ID")
+        self._check_input_types()
         if self.pub_clock is not None:
             self.clock_peers = self._other_publishers(
                 self.pub_clock.topic_name, self.clock_peers,
                 "nodes on sim time follow both clocks interleaved; give each rig's clock its own name "
                 "(-r /clock:=/rig1/clock, and the same remap for the rig's consumers) or ROS_DOMAIN_ID")
+
+    def _check_input_types(self) -> None:
+        """A publisher on ``shaft_speed`` or ``load`` of another type (``std_msgs/Float32``, a
+        ``geometry_msgs/Wrench`` without a stamp) never matches, and neither side said a word: the
+        commands were lost and the signal ran on at the old operating point.  Said in the log, once
+        per such publisher, and when none is left."""
+        from ..messages import TOPIC_LOAD, TOPIC_SHAFT_SPEED, TYPES
+
+        for role, sub in ((TOPIC_SHAFT_SPEED, self.sub_speed), (TOPIC_LOAD, self.sub_load)):
+            topic, want = sub.topic_name, TYPES[role]
+            seen = {(f"{info.node_namespace.rstrip('/')}/{info.node_name}", info.topic_type)
+                    for info in self.get_publishers_info_by_topic(topic) if info.topic_type != want}
+            known = self.input_strangers.get(topic, set())
+            for node, kind in sorted(seen - known):
+                self.get_logger().warning(
+                    f"{node} publishes {kind} on {topic}, which takes {want}: its messages never reach "
+                    f"this node")
+            if known and not seen:
+                self.get_logger().info(f"no publisher of another type on {topic} any more")
+            self.input_strangers[topic] = seen
 
     def _other_publishers(self, topic: str, known: int, advice: str) -> int:
         """The number of publishers on ``topic`` besides this node's, logged (with ``advice``)
