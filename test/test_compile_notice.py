@@ -3,7 +3,8 @@
 The first run after an install sat silent for minutes while numba compiled the tiers' kernels
 (95 s before the node's start line, 65 s more after it, on a busy 2-core machine): a newcomer took
 it for a hang.  A tier compiles for 30-70 s here, too long for a test; the mechanism is tested on a
-kernel of its own, compiled for real into an empty cache, and the commands' silence on a warm one.
+kernel of its own, compiled for real into an empty cache, the node on a copy of the warm cache
+less one small kernel (compiled for real in seconds), and the commands' silence on a warm one.
 """
 import os
 import re
