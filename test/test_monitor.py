@@ -26,8 +26,8 @@ from test_node_support import NS, NodeProcess, assert_one_error_line, read_recor
 import bearing_sim_ros
 from bearing_sim_ros import ground_truth, load_scene
 from bearing_sim_ros.nodes.monitor_node import (SLACK_NS, TRUTH_GRACE_S, MonitorNode, Publishers, Window, agrees,
-                                                 score_lines, simulator_name, source_start_line, truth_at, truth_text,
-                                                 verdict)
+                                                 score_lines, simulator_name, source_start_line, spin_share_of, truth_at,
+                                                 truth_text, verdict)
 from bearing_sim_ros.recording.render import render
 
 
@@ -1221,6 +1221,23 @@ def test_the_monitor_looks_for_a_ball_pit_where_the_balls_spin_puts_it(ros_env, 
         found, expected, height = map(float, re.search(r"2bsf ([\d.]+)/([\d.]+)Hz x([\d.]+)", line).groups())
         assert abs(found - expected) < 1.0 and 0.97 * pure < expected < 0.99 * pure and height > 10, (pure, line)
     assert score == "monitor: score 2 of 2 verdicts agree with the truth, 0 truth=unknown", score
+
+
+@pytest.mark.parametrize("values, share", [
+    ({"bsf_hz": "75.644", "cage_hz": "13.1708", "bpfi_hz": "181.463"}, 0.9776),     # 2000 rpm, ball skid 2.24 %
+    ({"bsf_hz": "77.3772", "cage_hz": "13.2294", "bpfi_hz": "180.935"}, 1.0),        # kinematic: pure rolling
+    ({"cage_hz": "13.2711", "bpfi_hz": "180.944"}, None),       # a recording made before bsf_hz
+    ({"bsf_hz": "fast", "cage_hz": "13.27", "bpfi_hz": "180.9"}, None),    # another tool's text
+    ({"bsf_hz": "nan", "cage_hz": "13.27", "bpfi_hz": "180.9"}, None),
+    ({"bsf_hz": "0", "cage_hz": "0", "bpfi_hz": "0"}, None),                # a stopped shaft
+])
+def test_the_balls_spin_share_comes_from_the_diagnostics_or_is_none(values, share):
+    """``spin_share_of``: bsf_hz over pure rolling's spin at the period's shaft speed (cage_hz +
+    bpfi_hz / Z), None where the diagnostics do not give it (then the monitor looks at pure
+    rolling's 2xBSF), never an exception for a value that is not a number."""
+    bearing = load_scene("er16k_skidding").bearing
+    got = spin_share_of(values, bearing)
+    assert (got is None) if share is None else got == pytest.approx(share, abs=2e-5), got
 
 
 def test_a_run_started_by_diagnostics_that_go_back_keeps_each_runs_latency(ros_env, tmp_path):
