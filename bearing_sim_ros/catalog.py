@@ -55,9 +55,13 @@ def hertz_point_contact(rx: float, ry: float, e_eff: float) -> HertzContact:
 class Bearing:
     """A deep-groove ball bearing.  All lengths in m.
 
-    ``radial_clearance`` is the total radial play C_r: with both races centred, the gap between a
-    ball and its races summed over the inner and the outer contact (seed 000 eq. 3 gives each
-    contact half of it; eq. 4 follows).  A negative value is a preload.
+    ``radial_clearance`` is seed 000's C_r: with both races centred, the gap between a ball and
+    its races summed over the inner and the outer contact (seed 000 eq. 3 gives each contact half
+    of it; eq. 4 follows), so a ball touches when the races are offset by C_r towards it.  That is
+    half of what bearing makers and ISO 5753-1 call the radial internal clearance (the play of one
+    ring from one extreme to the other, Harris' diametral clearance P_d: C_r = P_d / 2): a 6205
+    of the normal group (CN, 5-20 um for a 24-30 mm bore) has C_r 2.5-10 um.  A negative value
+    is a preload.
     """
 
     name: str

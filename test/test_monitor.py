@@ -26,8 +26,8 @@ from test_node_support import NS, NodeProcess, assert_one_error_line, read_recor
 import bearing_sim_ros
 from bearing_sim_ros import ground_truth, load_scene
 from bearing_sim_ros.nodes.monitor_node import (SLACK_NS, TRUTH_GRACE_S, MonitorNode, Publishers, Window, agrees,
-                                                 score_lines, simulator_name, source_start_line, truth_at, truth_text,
-                                                 verdict)
+                                                 score_lines, simulator_name, source_start_line, spin_share_of, truth_at,
+                                                 truth_text, verdict)
 from bearing_sim_ros.recording.render import render
 
 
@@ -1198,6 +1198,46 @@ def test_the_monitor_looks_for_the_lines_where_the_cage_of_state_puts_them(ros_e
     assert len(lines) == 2 and all(" verdict=outer truth=outer " in line for line in lines), lines
     found, expected = map(float, re.search(r"bpfo ([\d.]+)/([\d.]+)Hz", lines[0]).groups())
     assert abs(found - expected) < 1.0 and expected < 0.95 * load_scene(str(scene)).fault_frequencies()["bpfo"], lines
+
+
+def test_the_monitor_looks_for_a_ball_pit_where_the_balls_spin_puts_it(ros_env, tmp_path):
+    """A ball pit strikes both races once per spin turn: its line is 2xBSF of the balls' spin as
+    it runs.  On the skidding tier at 2000 rpm / 200 N (seed 000's skid case) the balls spin 2.2 %
+    slower than pure rolling, so the line sits at 151.3 Hz, not at 154.75 (outside the detector's
+    +-1 % search), and looking at pure rolling the monitor called the pit healthy (2bsf x0.9).
+    Now it takes the spin from the simulator's ``bsf_hz`` in ``/diagnostics``: ball, the line
+    where it looks, 2.2 % below pure rolling."""
+    scene = tmp_path / "ball_skid.yaml"
+    text = load_scene("er16k_skidding").source_text
+    pitted = text.replace("defects: []", "defects: [{kind: ball, width_mm: 0.6, depth_mm: 0.25, angle_deg: 0}]")
+    assert pitted != text, "er16k_skidding.yaml's defects line moved: update this test"
+    scene.write_text(pitted)
+    recording = tmp_path / "ball_skid.mcap"
+    render(str(scene), 2.0, recording, fidelity="skidding", progress=False)
+    lines, score = _verdicts_of_a_recording(recording, load_scene(str(scene)))
+    assert [(v, truth) for _t, v, truth in VERDICT.findall("\n".join(lines))] == [("ball", "ball")] * 2, lines
+    pure = 2 * load_scene(str(scene)).fault_frequencies()["bsf"]
+    for line in lines:
+        found, expected, height = map(float, re.search(r"2bsf ([\d.]+)/([\d.]+)Hz x([\d.]+)", line).groups())
+        assert abs(found - expected) < 1.0 and 0.97 * pure < expected < 0.99 * pure and height > 10, (pure, line)
+    assert score == "monitor: score 2 of 2 verdicts agree with the truth, 0 truth=unknown", score
+
+
+@pytest.mark.parametrize("values, share", [
+    ({"bsf_hz": "75.644", "cage_hz": "13.1708", "bpfi_hz": "181.463"}, 0.9776),     # 2000 rpm, ball skid 2.24 %
+    ({"bsf_hz": "77.3772", "cage_hz": "13.2294", "bpfi_hz": "180.935"}, 1.0),        # kinematic: pure rolling
+    ({"cage_hz": "13.2711", "bpfi_hz": "180.944"}, None),       # a recording made before bsf_hz
+    ({"bsf_hz": "fast", "cage_hz": "13.27", "bpfi_hz": "180.9"}, None),    # another tool's text
+    ({"bsf_hz": "nan", "cage_hz": "13.27", "bpfi_hz": "180.9"}, None),
+    ({"bsf_hz": "0", "cage_hz": "0", "bpfi_hz": "0"}, None),                # a stopped shaft
+])
+def test_the_balls_spin_share_comes_from_the_diagnostics_or_is_none(values, share):
+    """``spin_share_of``: bsf_hz over pure rolling's spin at the period's shaft speed (cage_hz +
+    bpfi_hz / Z), None where the diagnostics do not give it (then the monitor looks at pure
+    rolling's 2xBSF), never an exception for a value that is not a number."""
+    bearing = load_scene("er16k_skidding").bearing
+    got = spin_share_of(values, bearing)
+    assert (got is None) if share is None else got == pytest.approx(share, abs=2e-5), got
 
 
 def test_a_run_started_by_diagnostics_that_go_back_keeps_each_runs_latency(ros_env, tmp_path):

@@ -320,6 +320,30 @@ def test_report_files_are_written(compared):
     assert md.count("\n| 12k_Drive_End_") >= 3 and "normal_0_97.mat" in md
 
 
+def test_the_report_says_how_the_one_calibration_splits_outer_and_inner_race(compared):
+    """Both races are fitted with one calibration; the recordings stand apart (outer 3.5x inner by
+    line height) and the model's two races do not.  The report said "4/4" of each and left the
+    split to the README; now it says it with numbers: each race's outer/inner ratio in recording and
+    simulation, and each race's simulation over recording, here computed from the rows."""
+    rows, out = compared
+    outer, inner = rows["cwru_6205_or007_6"], rows["cwru_6205_ir007"]
+    g = V._g
+    height = {k: outer[k]["lines"]["bpfo"]["height"] / inner[k]["lines"]["bpfi"]["height"] for k in ("real", "sim")}
+    assert height["real"] > 2.5 and height["sim"] < 1.5, height      # the split the calibration cannot make
+    md = (out / "validation.md").read_text()
+    assert "## Outer against inner race: one calibration for both" in md
+    assert (f"The recording's outer-race defect stands {g(height['real'])}x its inner-race one by line height, "
+            f"the simulation's {g(height['sim'])}x") in md, md
+    rms = {k: outer["rms_ratio"][k] / inner["rms_ratio"][k] for k in ("real", "sim")}
+    assert f"| faulty/healthy RMS | {g(rms['real'])} | {g(rms['sim'])} | {g(rms['sim'] / rms['real'])} |" in md, md
+    outer_miss = outer["sim"]["lines"]["bpfo"]["height"] / outer["real"]["lines"]["bpfo"]["height"]
+    inner_miss = inner["sim"]["stats"]["rms"] / inner["real"]["stats"]["rms"]
+    assert f"outer race fault-line height (BPFO, BPFI) x{g(outer_miss)}, " in md, md
+    assert f"inner race fault-line height (BPFO, BPFI) x" in md and f", RMS x{g(inner_miss)}, " in md, md
+    data = json.loads((out / "validation.json").read_text())
+    assert data["race_split"]["line_height"] == pytest.approx(height)
+
+
 def test_read_recording_rejects_a_short_channel(tmp_path):
     from scipy.io import savemat
 

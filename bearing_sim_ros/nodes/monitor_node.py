@@ -11,7 +11,8 @@ into a float32 array (no per-sample objects), and checks that the tables are con
 with a hole in it would smear the lines.  Every ``window`` seconds of signal it runs the shared
 envelope detector (:func:`bearing_sim_ros.analysis.envelope.diagnose`) on each accelerometer axis
 at the fault frequencies of the scene's bearing at the measured shaft speed (cage, BPFO and BPFI
-from the cage's speed in ``state``, where a skidding cage puts them), and prints one line:
+from the cage's speed in ``state``, where a skidding cage puts them; 2xBSF from the balls' spin in
+the simulator's ``/diagnostics``, ``bsf_hz``, where skidding balls put it), and prints one line:
 
     t=4.00s shaft=1600rpm verdict=outer truth=outer | bpfo 95.2/95.3Hz x266 | bpfi 144.8/144.7Hz x1.0 | ...
 
@@ -190,16 +191,22 @@ class Window:
 
 
 def verdict(data: np.ndarray, channels, sample_rate: float, bearing, shaft_hz: float,
-            cage_hz: float | None = None) -> dict:
+            cage_hz: float | None = None, spin_share: float | None = None) -> dict:
     """Envelope verdict over the axes of ``data`` (n, channels): for each fault the highest
     prominence over the axes wins.  Returns {"verdict", "axis", "scores", "lines", "theory"}.
     The lines at pure rolling at ``shaft_hz`` (Hz), or with ``cage_hz`` (the cage's speed in
     ``state``, Hz) the cage, BPFO and BPFI where the cage put them (``envelope.with_cage``): at
     10000 rpm / 10 N the ER-16K's cage skids 7 %, and looking at pure rolling's BPFO the monitor
-    called an outer-race pit a ball fault (2xBSF x215)."""
+    called an outer-race pit a ball fault (2xBSF x215).  ``spin_share``: the balls' spin as a
+    share of pure rolling's (``spin_share_of``; None: pure rolling), which moves BSF and so the
+    ball pit's 2xBSF line: on the skidding tier at 2000 rpm / 200 N the balls spin 2.2 % slow, the
+    line falls outside the +-1 % search at pure rolling's, and the monitor called a ball pit
+    healthy (x0.9)."""
     freqs = bearing.fault_frequencies(shaft_hz)
     if cage_hz:
         freqs = with_cage(freqs, bearing.balls, shaft_hz, cage_hz)
+    if spin_share:
+        freqs = {**freqs, "bsf": freqs["bsf"] * spin_share}
     result = _highest_over_axes(channels, lambda k: diagnose(data[:, k].astype(float), sample_rate, freqs))
     return {**result, "theory": freqs, "shaft_hz": shaft_hz}
 
@@ -220,7 +227,8 @@ def _highest_over_axes(channels, diagnose_axis) -> dict:
             "scores": scores, "axis": per_fault[top][1], "lines": per_fault[top][2]}
 
 
-def order_verdict(data: np.ndarray, channels, sample_rate: float, times_s, bearing, states) -> tuple:
+def order_verdict(data: np.ndarray, channels, sample_rate: float, times_s, bearing, states,
+                  spin_share: float | None = None) -> tuple:
     """The envelope verdict over the axes of ``data`` (n, channels; sample ``k`` at signal time
     ``times_s[k]``, s) in orders of the shaft (``orders.order_diagnose``), for a stretch whose
     speeds moved, where one spectrum in Hz smears every line: ``(result, "")`` with ``verdict``'s
@@ -228,9 +236,12 @@ def order_verdict(data: np.ndarray, channels, sample_rate: float, times_s, beari
     stretch tracked, or ``(None, why not)`` (``orders.untrackable``).  ``states``: the ``state``
     samples that span the stretch, (stamp s on ``times_s``' clock, shaft angle rad, shaft speed
     rad/s, cage angle rad, cage speed rad/s) arrays, NaN for an angle not given; a cage speed of
-    NaN (a ``state`` without the cage) is pure rolling's, as ``verdict`` takes then."""
+    NaN (a ``state`` without the cage) is pure rolling's, as ``verdict`` takes then;
+    ``spin_share`` moves BSF as there."""
     state_t, shaft_angle, shaft_w, cage_angle, cage_w = (np.asarray(a, dtype=float) for a in states)
     per_shaft_hz = bearing.fault_frequencies(1.0)
+    if spin_share:
+        per_shaft_hz = {**per_shaft_hz, "bsf": per_shaft_hz["bsf"] * spin_share}
     if not np.all(np.isfinite(cage_w)):
         cage_w, cage_angle = shaft_w * per_shaft_hz["ftf"], np.full_like(shaft_w, np.nan)
     tracked = []            # order_diagnose's result of each axis
@@ -244,6 +255,22 @@ def order_verdict(data: np.ndarray, channels, sample_rate: float, times_s, beari
     first = tracked[0]          # the stretch, speeds and orders are the same on every axis
     return {**_highest_over_axes(channels, tracked.__getitem__), "theory": first["orders"],
             "shaft_rpm": first["shaft_rpm"], "revolutions": first["revolutions"]}, ""
+
+
+def spin_share_of(values: dict, bearing) -> float | None:
+    """The balls' mean spin as a share of pure rolling's by a simulator's ``/diagnostics``
+    ``values``: ``bsf_hz`` over the pure-rolling spin of ``bearing`` at the period's shaft speed
+    (``cage_hz`` + ``bpfi_hz`` / Z, Hz).  1 on the kinematic tier, 1 - ``ball_skid_ratio`` / 100
+    on the skidding tier (0.978 at 2000 rpm / 200 N on the ER-16K).  None where they do not give
+    it (a real sensor, a recording made before ``bsf_hz``, a stopped shaft): then pure rolling."""
+    try:
+        bsf, cage, bpfi = (float(values[key]) for key in ("bsf_hz", "cage_hz", "bpfi_hz"))
+    except (KeyError, ValueError):
+        return None
+    shaft = cage + bpfi / bearing.balls
+    rolling = bearing.fault_frequencies(shaft)["bsf"] if np.isfinite(shaft) and shaft > 0 else 0.0
+    share = bsf / rolling if rolling > 0 else float("nan")
+    return share if np.isfinite(share) and share > 0 else None
 
 
 def window_states(states, start_ns: int) -> tuple:
@@ -416,6 +443,26 @@ class SourceRun:
         self.windows = 0            # its windows queued for analysis
         self.last_table = None      # stamp (ns) of its latest table
         self.last_report = None     # stamp (ns) of its simulator's latest /diagnostics
+        # (stamp ns, the balls' spin share: ``spin_share_of``) of its simulator's /diagnostics that
+        # windows still to come may ask about: where the balls skid, a ball pit's 2xBSF line is
+        # off pure rolling's
+        self.spins = []
+
+    def spin_share(self, start_ns: int, end_ns: int) -> float | None:
+        """The balls' spin share over the window ``start_ns`` - ``end_ns``: the mean of the
+        diagnostics stamped in it (each the mean of the second before its stamp), else the latest
+        before it; None without any (pure rolling)."""
+        spins = list(self.spins)        # the executor thread appends to it
+        inside = [share for stamp, share in spins if start_ns + SLACK_NS < stamp <= end_ns + SLACK_NS]
+        before = [share for stamp, share in spins if stamp <= start_ns + SLACK_NS][-1:]
+        chosen = inside or before
+        return float(np.mean(chosen)) if chosen else None
+
+    def forget_spins_before(self, t_ns: int) -> None:
+        """Drop the spins that no window ending after ``t_ns`` reads: all before the latest stamped
+        at or before it (as ``ground_truth.forget_before`` does with the truth)."""
+        k = sum(1 for stamp, _share in list(self.spins) if stamp <= t_ns + SLACK_NS)
+        del self.spins[:max(0, k - 1)]
 
     def exit_lines(self) -> list:
         """Where its first table was on the source's signal (where the diagnostics say), then the
@@ -666,6 +713,9 @@ class MonitorNode(Node):
             self.run.appeared.add(truth)
             self._check_scene(values)
             self._say_trouble(status, values)
+            share = spin_share_of(values, self.scene.bearing)
+            if share is not None:
+                self.run.spins.append((stamp, share))
             if values.get(RUN_KEY) == RUN_ENDED:
                 # the simulator's end status (its last /diagnostics): the tables stopped because the
                 # run is complete (or was stopped), not because it crashed or discovery lost it
@@ -792,11 +842,11 @@ class MonitorNode(Node):
             self.windows_queued += 1
             self.run.windows += 1
             self._analysis.submit(self._analyse, end, self.window.take(), channels, fs, shaft,
-                                  time.monotonic() + TRUTH_GRACE_S, self.run, cage, moved, states)
+                                  time.monotonic() + TRUTH_GRACE_S, self.run, cage, moved, states, start)
 
     def _analyse(self, end: int, x: np.ndarray, channels, fs: float, shaft: float, grace: float,
                  run: SourceRun | None = None, cage: float | None = None, moved: float = 0.0,
-                 states=None) -> None:
+                 states=None, start: int | None = None) -> None:
         """On the analysis thread: one verdict with the truth at the window's ``end`` (ns),
         printed.  ``grace``: until when (monotonic s) to wait for the diagnostics stamped there;
         ``run``: the run of the source the window is of (default the current one), whose clock
@@ -804,9 +854,10 @@ class MonitorNode(Node):
         ``shaft``, ``cage``: their mean speeds in the window (rad/s; ``cage`` None without it in
         ``state``); ``moved``: how far they moved in it (``envelope.spread``), beyond
         ``STEADY_LINES`` the verdict in orders of the shaft (``order_verdict`` with ``states``,
-        ``window_states``), or where that cannot be, none (``unknown``)."""
+        ``window_states``), or where that cannot be, none (``unknown``); ``start``: the stamp (ns)
+        of the window's first sample, for the balls' spin of the diagnostics stamped in it."""
         try:
-            self._verdict_line(end, x, channels, fs, shaft, grace, run or self.run, cage, moved, states)
+            self._verdict_line(end, x, channels, fs, shaft, grace, run or self.run, cage, moved, states, start)
         except OSError as exc:
             # the reader of the lines went away (``monitor | head -3``: BrokenPipeError) or their
             # file could not take them (ENOSPC of a full disk, EIO of a failing one): raised on
@@ -823,33 +874,37 @@ class MonitorNode(Node):
             raise self.output_failed
 
     def _verdict_line(self, end: int, x: np.ndarray, channels, fs: float, shaft: float, grace: float,
-                      run: SourceRun, cage: float | None = None, moved: float = 0.0, states=None) -> None:
+                      run: SourceRun, cage: float | None = None, moved: float = 0.0, states=None,
+                      start: int | None = None) -> None:
         """``_analyse``'s work: the verdict on the window of ``run`` that ends at ``end``, printed."""
         t = (end - run.t0) / NS
         shaft_hz = abs(shaft) / (2 * np.pi)
+        reports = run.reports
+        while time.monotonic() < grace and not (reports and reports[-1].t >= end - SLACK_NS):
+            time.sleep(0.01)        # the diagnostics stamped at ``end`` (if any) are not in yet
+        spin = run.spin_share(end if start is None else start, end)
         try:
             if moved > STEADY_LINES:
                 # a step or ramp in the window smeared its lines in Hz ("healthy" of an outer-race
                 # pit): in orders of the shaft they hold still
-                tracked, why = (order_verdict(x, channels, fs, np.arange(x.shape[0]) / fs, self.scene.bearing, states)
+                tracked, why = (order_verdict(x, channels, fs, np.arange(x.shape[0]) / fs, self.scene.bearing, states,
+                                              spin)
                                 if states is not None else (None, "no state samples in the window"))
                 result = ({**tracked, "shaft_hz": shaft_hz, "moved": moved} if tracked is not None else
                           {"verdict": "unknown", "shaft_hz": shaft_hz, "moved": moved, "untracked": why})
             else:
                 result = verdict(x, channels, fs, self.scene.bearing, shaft_hz,
-                                 None if cage is None else abs(cage) / (2 * np.pi))
+                                 None if cage is None else abs(cage) / (2 * np.pi), spin)
         except Exception as exc:  # noqa: BLE001 - a failed analysis must not end the monitor silently
             self.get_logger().error(f"envelope analysis at t={t:.2f}s failed: {exc}")
             return
-        reports = run.reports
-        while time.monotonic() < grace and not (reports and reports[-1].t >= end - SLACK_NS):
-            time.sleep(0.01)        # the diagnostics stamped at ``end`` (if any) are not in yet
         result.update(end_ns=end, truth=truth_at(reports, end))
         scored = (end, result["verdict"], result["truth"])
         self.verdicts.append(scored)
         run.verdicts.append(scored)
         say(format_verdict(t, result), self.out)
         ground_truth.forget_before(reports, end, SLACK_NS)      # the next windows end later
+        run.forget_spins_before(end)
 
     def _start_run(self, why: str) -> None:
         """A new run of the source, for ``why`` (``went_back``, ``started_again``).  The run before
