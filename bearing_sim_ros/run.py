@@ -40,7 +40,9 @@ def _record_tail(paths, max_s: float) -> dict:
     whole recording (percent; the skidding tier's ``/diagnostics``).  For order tracking where
     the speeds moved: ``times_s``, the signal time of each sample (s from the stretch's first,
     by its table's stamp), and ``states``, the ``state`` samples that span the stretch (with the
-    last before it) as ``monitor_node.order_verdict`` takes them."""
+    last before it) as ``monitor_node.order_verdict`` takes them.  ``diagnostics``: the values
+    ({key: text}) of each ``/diagnostics`` message stamped in the stretch (each the mean of the
+    second before its stamp), where the balls' spin is (``bsf_hz``)."""
     from rclpy.serialization import deserialize_message
 
     from .analysis.envelope import STEADY_LINES, spread
@@ -57,6 +59,7 @@ def _record_tail(paths, max_s: float) -> dict:
     before = []                     # the last state before the stretch (its angles where it begins)
     starts: deque = deque()         # the stamp of each table in parts
     skids: dict = {}
+    diagnostics: deque = deque()    # (stamp ns, {key: text}) of each /diagnostics message
     channels, rate = None, None
     prev = None
     with open_recording(paths) as rec:          # a split recording's pieces in order, as one
@@ -77,6 +80,8 @@ def _record_tail(paths, max_s: float) -> dict:
             if topic == diag_topic:
                 for key, percent in skid_ratios(msg).items():
                     skids.setdefault(key, []).append(percent)
+                diagnostics.append((msg.header.stamp.sec * NS + msg.header.stamp.nanosec,
+                                    {kv.key: kv.value for status in msg.status for kv in status.values}))
                 continue
             if topic == state_topic:
                 names = list(msg.name)
@@ -101,6 +106,8 @@ def _record_tail(paths, max_s: float) -> dict:
                     speeds.popleft()
                 while states and states[0][0] <= starts[0]:     # before the stretch's first sample
                     before = [states.popleft()]
+                while diagnostics and diagnostics[0][0] <= starts[0]:
+                    diagnostics.popleft()
         meta = dict(rec.metadata)
         counts = {t: c.count for t, c in topics.items()}
     data = np.concatenate(list(parts)) if parts else np.zeros((0, 0), np.float32)
@@ -113,7 +120,7 @@ def _record_tail(paths, max_s: float) -> dict:
             "states": window_states(before + list(states), t0),
             "shaft_speed": float(np.mean(speeds)) if speeds else None,
             "cage_speed": float(np.mean([s[2] for s in states])) if states else None, "speed_spread": moved,
-            "metadata": meta,
+            "metadata": meta, "diagnostics": [values for _stamp, values in diagnostics],
             "counts": counts, "skid_percent": {k: float(np.mean(v)) for k, v in sorted(skids.items())}}
 
 
@@ -169,7 +176,7 @@ def summarise(scene, tail: dict, node_figures: dict, path, out: str | None = Non
     recording (``recording_argument``); ``out``: the name it was made to (default ``path``),
     whose stem names the report's folder."""
     from .analysis.envelope import DETECTION_THRESHOLD, STEADY_LINES
-    from .nodes.monitor_node import order_verdict, verdict
+    from .nodes.monitor_node import order_verdict, spin_share_of, verdict
     from .recording.render import tier_summary
 
     lines = []
@@ -191,12 +198,18 @@ def summarise(scene, tail: dict, node_figures: dict, path, out: str | None = Non
         shaft_hz = abs(speed) / (2 * math.pi)
         cage = tail.get("cage_speed")
         moved = tail.get("speed_spread", 0.0)
+        # the balls' spin from the simulator's /diagnostics in the stretch: on the skidding tier
+        # they spin 1-3 % slower than pure rolling, and a ball pit's 2xBSF line with them,
+        # outside the detector's +-1 % search at pure rolling's (a ball pit was called healthy)
+        shares = [share for share in (spin_share_of(values, scene.bearing) for values in tail.get("diagnostics", ()))
+                  if share is not None]
+        spin = float(np.mean(shares)) if shares else None
         tracked, untracked = None, ""
         if moved > STEADY_LINES:
             # a speed step or ramp (commands to the node) smeared the lines in Hz: in orders of
             # the shaft they hold still
             tracked, untracked = order_verdict(x, tail["channels"], fs, tail["times_s"], scene.bearing,
-                                               tail["states"])
+                                               tail["states"], spin)
         if moved > STEADY_LINES and tracked is None:
             lines.append(f"envelope analysis of the last {x.shape[0] / fs:.1f} s: no verdict: the shaft and cage "
                          f"speeds moved by {100 * moved:.0f} % in it (a speed step or ramp, a load step that "
@@ -216,7 +229,7 @@ def summarise(scene, tail: dict, node_figures: dict, path, out: str | None = Non
                 # ER-16K) the lines are there, and at pure rolling's this said "ball fault" of an
                 # outer-race pit
                 res, unit, digits = verdict(x, tail["channels"], fs, scene.bearing, shaft_hz,
-                                            None if cage is None else abs(cage) / (2 * math.pi)), "Hz", 2
+                                            None if cage is None else abs(cage) / (2 * math.pi), spin), "Hz", 2
                 lines.append(f"envelope analysis of the last {x.shape[0] / fs:.1f} s ({', '.join(tail['channels'])}, "
                              f"band 2-5 kHz) at shaft {shaft_hz:.2f} Hz ({shaft_hz * 60:.0f} rpm), axis {res['axis']}:")
             theory, found = f"theory {unit}", f"found {unit}"

@@ -211,18 +211,33 @@ def skidding_outer_race(tmp_path_factory):
     """(scene path, recording path): er16k_outer_race moved to 10000 rpm / 10 N, where its cage
     skids about 7 % (the outer-race line sits 7 % below the catalog's pure-rolling BPFO, 552
     against 595 Hz), rendered once for 2 s on the skidding tier (test_render, test_report)."""
+    return _skidding_variant(tmp_path_factory, "er16k_outer_race", "{shaft_speed_rpm: 1600, radial_load: [0.0, -50.0]}",
+                             "{shaft_speed_rpm: 10000, radial_load: [0.0, -10.0]}")
+
+
+def _skidding_variant(tmp_path_factory, shipped: str, old: str, new: str):
+    """(scene path, recording path): the shipped scene ``shipped`` with its text ``old``
+    replaced by ``new``, rendered for 2 s on the skidding tier."""
     from bearing_sim_ros.recording.render import render
 
-    text = (REPO / "config" / "scenes" / "er16k_outer_race.yaml").read_text()
-    fast = text.replace("{shaft_speed_rpm: 1600, radial_load: [0.0, -50.0]}",
-                        "{shaft_speed_rpm: 10000, radial_load: [0.0, -10.0]}")
-    assert fast != text, "er16k_outer_race.yaml's operating point moved: update this fixture"
-    folder = tmp_path_factory.mktemp("skidding_outer_race")
-    path = folder / "skidding_outer_race.yaml"
-    path.write_text(fast)
-    recording = folder / "fast.mcap"
+    text = (REPO / "config" / "scenes" / f"{shipped}.yaml").read_text()
+    changed = text.replace(old, new)
+    assert changed != text, f"{shipped}.yaml no longer has {old!r}: update this fixture"
+    folder = tmp_path_factory.mktemp(shipped)
+    path = folder / f"{shipped}_variant.yaml"
+    path.write_text(changed)
+    recording = folder / "variant.mcap"
     render(str(path), 2.0, recording, fidelity="skidding", progress=False)
     return path, recording
+
+
+@pytest.fixture(scope="session")
+def skidding_ball_pit(tmp_path_factory):
+    """(scene path, recording path): er16k_skidding (2000 rpm / 200 N) with a 0.6 mm ball pit,
+    rendered once for 2 s on the skidding tier, whose balls spin 2.2 % slower than pure rolling:
+    the pit's 2xBSF line sits at 151.3 Hz, not pure rolling's 154.75 (test_monitor, test_run)."""
+    return _skidding_variant(tmp_path_factory, "er16k_skidding", "defects: []",
+                             "defects: [{kind: ball, width_mm: 0.6, depth_mm: 0.25, angle_deg: 0}]")
 
 
 # A scene within every bound on which the skidding tier's default solver diverges, 10 - 60 ms

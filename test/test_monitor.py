@@ -1200,20 +1200,14 @@ def test_the_monitor_looks_for_the_lines_where_the_cage_of_state_puts_them(ros_e
     assert abs(found - expected) < 1.0 and expected < 0.95 * load_scene(str(scene)).fault_frequencies()["bpfo"], lines
 
 
-def test_the_monitor_looks_for_a_ball_pit_where_the_balls_spin_puts_it(ros_env, tmp_path):
+def test_the_monitor_looks_for_a_ball_pit_where_the_balls_spin_puts_it(ros_env, skidding_ball_pit):
     """A ball pit strikes both races once per spin turn: its line is 2xBSF of the balls' spin as
     it runs.  On the skidding tier at 2000 rpm / 200 N (seed 000's skid case) the balls spin 2.2 %
     slower than pure rolling, so the line sits at 151.3 Hz, not at 154.75 (outside the detector's
     +-1 % search), and looking at pure rolling the monitor called the pit healthy (2bsf x0.9).
     Now it takes the spin from the simulator's ``bsf_hz`` in ``/diagnostics``: ball, the line
     where it looks, 2.2 % below pure rolling."""
-    scene = tmp_path / "ball_skid.yaml"
-    text = load_scene("er16k_skidding").source_text
-    pitted = text.replace("defects: []", "defects: [{kind: ball, width_mm: 0.6, depth_mm: 0.25, angle_deg: 0}]")
-    assert pitted != text, "er16k_skidding.yaml's defects line moved: update this test"
-    scene.write_text(pitted)
-    recording = tmp_path / "ball_skid.mcap"
-    render(str(scene), 2.0, recording, fidelity="skidding", progress=False)
+    scene, recording = skidding_ball_pit
     lines, score = _verdicts_of_a_recording(recording, load_scene(str(scene)))
     assert [(v, truth) for _t, v, truth in VERDICT.findall("\n".join(lines))] == [("ball", "ball")] * 2, lines
     pure = 2 * load_scene(str(scene)).fault_frequencies()["bsf"]

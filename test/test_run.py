@@ -337,6 +337,23 @@ def test_the_summary_looks_for_the_lines_where_the_cage_of_state_puts_them(skidd
     assert "at shaft 166.67 Hz (10000 rpm)" in text, text
 
 
+def test_the_summary_looks_for_a_ball_pit_where_the_balls_spin_puts_it(skidding_ball_pit):
+    """On the skidding tier at 2000 rpm / 200 N the ER-16K's balls spin 2.2 % slower than pure
+    rolling, and a ball pit's 2xBSF line with them (151.3 Hz, not 154.75: outside the detector's
+    +-1 % search).  The summary looked at pure rolling's and said "healthy" (2xBSF x0.5) of this
+    pit, where report and monitor, which take the spin from /diagnostics' bsf_hz, said ball.  Now
+    it takes it from there too: a ball fault, the line found where it looks, 1-3 % below pure
+    rolling."""
+    from bearing_sim_ros import load_scene
+
+    scene, recording = skidding_ball_pit
+    text = _summary_of(recording, load_scene(str(scene)))
+    assert "\nverdict: ball fault (" in text, text
+    expected, found, height = map(float, re.search(r"2xBSF +([\d.]+) +([\d.]+) +([\d.]+)", text).groups())
+    pure = 2 * load_scene(str(scene)).fault_frequencies()["bsf"]
+    assert abs(expected - found) < 1.0 and 0.97 * pure < expected < 0.99 * pure and height > 10, (pure, text)
+
+
 def test_the_summary_of_a_stretch_whose_speed_stepped_is_in_orders(tmp_path):
     """A speed command from 1600 to 3000 rpm in the analysed stretch smears every envelope line;
     the summary judged it at the lines of the mean speed, where neither half has them, and called
