@@ -218,17 +218,19 @@ def test_play_gives_a_stalled_subscriber_one_grace_at_its_end(recording, ros_env
 def _assert_paced(received, rate):
     """The tables of ``received`` ([stamp, width, crc, monotonic time]; stamps a recording's
     sample times, as its log times, 10 ms apart) arrived at ``rate`` x their stamps' pace, within
-    10 %: the median time between two tables against their stamps', from the tenth to the
-    ninetieth in ten.  Discovery can hold back the first few and the last may wait for a reliable
-    resend, and those held back come at once when they come: measured first to last, their late
-    arrival compressed the span to 0.442 s of 0.495 on a quiet machine, and, from the tenth to the
-    ninetieth in ten, to 0.349 s of 0.395 (the CI run at 6d3ac47).  Tables that all came at once
-    (no pacing) or at their stamps' pace (the rate ignored) still fail."""
-    first, last = len(received) // 10, len(received) - 1 - len(received) // 10
-    arrivals = np.diff([r[3] for r in received[first:last + 1]])
-    stamps = np.diff([r[0] for r in received[first:last + 1]]) / NS
-    pace = float(np.median(arrivals)) / float(np.median(stamps))
-    assert pace == pytest.approx(1 / rate, rel=0.10), (pace, 1 / rate, np.round(arrivals * 1e3, 2).tolist())
+    10 %: the median over the tables k of (arrival of k + n/2 - arrival of k) / (their stamps'
+    difference), each pair half the stretch apart.  Arrivals come in bursts (discovery holds back
+    the first few, the last may wait for a reliable resend, and a loaded machine delivers what
+    queued up at once): measured first to last, the late ones compressed the span to 0.442 s of
+    0.495 on a quiet machine; the median gap between neighbours, which a burst fills with gaps
+    of zero, came to 0.217 of 0.25 at --rate 4 beside two other suites (load 5), twice; a pair
+    half the stretch apart moves by a burst's length over 0.1-0.25 s.  Tables that all came at
+    once (no pacing) or at their stamps' pace (the rate ignored) still fail."""
+    arrivals = np.array([r[3] for r in received], dtype=float)
+    stamps = np.array([r[0] for r in received], dtype=float) / NS
+    half = len(received) // 2
+    pace = float(np.median((arrivals[half:] - arrivals[:-half]) / (stamps[half:] - stamps[:-half])))
+    assert pace == pytest.approx(1 / rate, rel=0.10), (pace, 1 / rate, np.round(np.diff(arrivals) * 1e3, 2).tolist())
 
 
 @pytest.mark.wall_clock
