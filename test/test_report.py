@@ -1291,3 +1291,25 @@ def test_the_simulators_status_name_has_no_leading_slash():
     from bearing_sim_ros.ground_truth import status_name
 
     assert status_name("/rig1/bearing_sim") == status_name("rig1/bearing_sim") == "rig1/bearing_sim: simulator"
+
+
+def test_no_samples_are_kept_past_those_held_where_no_timeline_can_be_made(outer, tmp_path, monkeypatch, capsys):
+    """The samples past ``MAX_ANALYSIS_S`` go to a temporary file in --out for the timeline's
+    windows; a recording that can have no timeline (no scene to take the bearing from and no
+    /diagnostics to give the fault frequencies: another tool's) wrote them all the same, 216 MB an
+    hour at 15 kHz that nothing read.  It writes none now, and its report is the same; the
+    recording with its scene still keeps them."""
+    rec, _ = outer
+    made = []
+    real = report.tempfile.TemporaryFile
+    monkeypatch.setattr(report.tempfile, "TemporaryFile", lambda **kw: made.append(kw) or real(**kw))
+    monkeypatch.setattr(report, "MAX_ANALYSIS_S", 1.0)
+    bare = tmp_path / "bare.mcap"
+    _copy_without(rec, bare, lambda topic, k: topic == "/diagnostics",
+                  metadata=lambda m: {k: v for k, v in m.items() if k not in ("scene_yaml", "scene")})
+    s = _report_without_a_verdict(bare, tmp_path / "o", "no verdict: no bearing to place the fault lines on (the "
+                                  "recording has no bearing_sim scene) and no fault frequencies in its /diagnostics "
+                                  "(cage_hz, bpfo_hz, bpfi_hz, bsf_hz)", capsys)
+    assert made == [] and s["analysed_s"] == pytest.approx(1.0) and s["duration_s"] == pytest.approx(2.0)
+    assert cli.main(["report", str(rec), "--out", str(tmp_path / "p")]) == 0
+    assert len(made) == 1

@@ -1096,9 +1096,21 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
         rec.close()
 
 
+def _lines_placeable(rec) -> bool:
+    """Whether the report of ``rec`` may place the fault lines, and so score a timeline, as far
+    as can be told before its messages are read: a scene it reads, or ``/diagnostics``, which may
+    give the fault frequencies (``line_frequencies``).  Without either there is no verdict and
+    no timeline, and the samples past those held (``_Spool``) are not kept: an hour's recording
+    of another tool wrote 216 MB to --out that nothing read."""
+    if _scene_from_metadata(rec.metadata)[0] is not None:
+        return True
+    return any(c.msg_type == "diagnostic_msgs/msg/DiagnosticArray" and c.count for c in rec.topics().values())
+
+
 def _report(rec, out, window_s: float, spool: _Spool) -> dict:
-    """``build_report`` of the open recording ``rec``, the samples past those it holds kept in ``spool``."""
-    d = _Data(rec, spool)
+    """``build_report`` of the open recording ``rec``, the samples past those it holds kept in
+    ``spool`` where a timeline may be scored (``_lines_placeable``)."""
+    d = _Data(rec, spool if _lines_placeable(rec) else None)
     meta = dict(rec.metadata)
     log_span = (rec.end_ns - rec.start_ns) / NS
     message_count = rec.message_count
