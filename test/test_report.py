@@ -1313,3 +1313,39 @@ def test_no_samples_are_kept_past_those_held_where_no_timeline_can_be_made(outer
     assert made == [] and s["analysed_s"] == pytest.approx(1.0) and s["duration_s"] == pytest.approx(2.0)
     assert cli.main(["report", str(rec), "--out", str(tmp_path / "p")]) == 0
     assert len(made) == 1
+
+
+def test_the_spectrum_shades_the_band_the_envelope_uses_and_says_it_at_1_khz(tmp_path, figures):
+    """At a low sample rate the envelope's band-pass is clipped below Nyquist (1 kHz: 225-450 Hz,
+    ``envelope.envelope_band``); spectrum.png shaded 2 kHz down to 0.45 x the rate instead (the
+    450-500 Hz that were on its axis) and envelope.png's title said "2-5 kHz band"."""
+    rec = tmp_path / "one_khz.mcap"
+    render("er16k_outer_race", 1.0, rec, fidelity="kinematic", seed=1, sample_rate=1000.0, progress=False)
+    assert cli.main(["report", str(rec), "--out", str(tmp_path / "o")]) == 0
+    (ax,) = figures["spectrum.png"].axes
+    (band,) = [p for p in ax.patches if p.get_label() == "envelope band"]
+    xs = band.get_path().transformed(band.get_patch_transform()).vertices[:, 0] \
+        if hasattr(band, "get_patch_transform") else band.get_xy()[:, 0]
+    assert (min(xs), max(xs)) == pytest.approx((0.225, 0.45))           # kHz
+    assert "(0.225-0.45 kHz band)" in figures["envelope.png"].axes[0].get_title()
+
+
+def test_plots_of_the_first_part_of_a_long_recording_say_so(outer, tmp_path, monkeypatch, capsys, figures):
+    """The waveform, the spectra and the one verdict hold the first ``MAX_ANALYSIS_S`` (120 s) of a
+    longer recording; its plots' time axis ended there without a word but summary.md's
+    "analysed".  The titles, the command line and summary.json (``analysed_first_only``) say it;
+    a recording held whole says nothing of it."""
+    rec, _ = outer
+    monkeypatch.setattr(report, "MAX_ANALYSIS_S", 1.0)
+    out = tmp_path / "o"
+    assert cli.main(["report", str(rec), "--out", str(out)]) == 0
+    said = capsys.readouterr().out.splitlines()
+    part = "the first 1.00 s of 2.00 s"
+    assert f"{out}: waveform.png, spectrum.png, envelope.png and the one verdict are of {part} (the most the " \
+           "report holds in memory); the verdict over time (timeline.png) covers all of it" in said, said
+    for name in ("waveform.png", "spectrum.png", "envelope.png"):
+        assert part in figures[name].axes[0].get_title(), name
+    assert json.loads((out / "summary.json").read_text())["analysed_first_only"] is True
+    monkeypatch.setattr(report, "MAX_ANALYSIS_S", 120.0)
+    assert cli.main(["report", str(rec), "--out", str(tmp_path / "p")]) == 0
+    assert "the first" not in capsys.readouterr().out and "the first" not in figures["waveform.png"].axes[0].get_title()

@@ -56,7 +56,7 @@ from ..errors import UserError
 from ..paths import output_folder, replace_file, save_figure, writing_into
 from ..recording.reader import open_recording
 from ..waveform import NS, from_pointcloud2
-from .envelope import (DEFAULT_BAND, DETECTION_THRESHOLD, FAULT_LINES, STEADY_LINES, diagnose,
+from .envelope import (DETECTION_THRESHOLD, FAULT_LINES, STEADY_LINES, diagnose, envelope_band,
                        envelope_spectrum, no_defect_note, spread, statistics, with_cage)
 from .orders import order_diagnose
 
@@ -848,13 +848,27 @@ def _title(meta: dict) -> str:
     return f"{meta.get('scene', '?')} - {meta.get('tier', '?')} tier, seed {meta.get('seed', '?')}"
 
 
+def band_text(fs: float) -> str:
+    """The envelope band at the sample rate ``fs`` (Hz) in words: ``2-5 kHz band``."""
+    lo, hi = envelope_band(fs)
+    return f"{lo / 1e3:.3g}-{hi / 1e3:.3g} kHz band"
+
+
+def held_part(d: _Data) -> str:
+    """The words that say a plot holds the first ``MAX_ANALYSIS_S`` of a longer recording
+    (``", the first 120.00 s of 150.00 s"``); "" where it holds all of it."""
+    held = d.accel.shape[0] / d.sample_rate
+    return f", the first {held:.2f} s of {d.signal_s:.2f} s" if d.truncated_analysis else ""
+
+
 def plot_waveform(d: _Data, freqs: dict, out: Path, meta: dict) -> str:
     plt, fig, (ax_all, ax_zoom) = _figure(2, 3.2)
     fs = d.sample_rate
     t = np.arange(d.accel.shape[0]) / fs + d.t0_ns / NS
     for k, name in enumerate(d.channels):
         ax_all.plot(t, d.accel[:, k], lw=0.4, label=name, alpha=0.85)
-    ax_all.set(xlabel="time (s)", ylabel="acceleration (m/s²)", title=f"Accelerometer - {_title(meta)}")
+    ax_all.set(xlabel="time (s)", ylabel="acceleration (m/s²)",
+               title=f"Accelerometer{held_part(d)} - {_title(meta)}")
     ax_all.legend(loc="upper right", fontsize=8)
     ax_all.grid(alpha=0.3)
     # zoom: about five periods of the slowest race-defect line, at least 20 ms
@@ -885,27 +899,29 @@ def plot_spectrum(d: _Data, out: Path, meta: dict) -> str:
     for k, name in enumerate(d.channels):
         f, p = welch(d.accel[:, k] - d.accel[:, k].mean(), fs=fs, nperseg=nper)
         ax.semilogy(f / 1e3, np.maximum(p, 1e-30), lw=0.8, label=name)
-    lo, hi = DEFAULT_BAND
-    ax.axvspan(lo / 1e3, min(hi, 0.45 * fs) / 1e3, color="0.85", alpha=0.5, label="envelope band")
+    # the band the envelope analysis uses, clipped as it clips it (below 11.1 kHz of sample rate;
+    # at 1 kHz 225-450 Hz, where 2 kHz to 0.45 x the rate shaded the wrong part)
+    lo, hi = envelope_band(fs)
+    ax.axvspan(lo / 1e3, hi / 1e3, color="0.85", alpha=0.5, label="envelope band")
     ax.set(xlabel="frequency (kHz)", ylabel="PSD ((m/s²)²/Hz)", xlim=(0, fs / 2e3),
-           title=f"Spectrum (Welch, {nper} points) - {_title(meta)}")
+           title=f"Spectrum (Welch, {nper} points{held_part(d)}) - {_title(meta)}")
     ax.legend(loc="upper right", fontsize=8)
     ax.grid(alpha=0.3, which="both")
     return _save(plt, fig, out / "spectrum.png")
 
 
 def plot_envelope(x: np.ndarray, fs: float, freqs: dict, verdict: dict, channel: str,
-                  out: Path, meta: dict, instead: str = "") -> str:
+                  out: Path, meta: dict, instead: str = "", held: str = "") -> str:
     """The envelope spectrum of ``x`` with the lines of ``freqs`` and ``verdict``'s prominences;
     ``instead``: the title's words in place of ``verdict``'s where the recording's verdict is
-    not this spectrum's (its lines move: ``one_verdict``)."""
+    not this spectrum's (its lines move: ``one_verdict``); ``held``: ``held_part``."""
     plt, fig, (ax,) = _figure(1, 4.2)
     targets = {"bpfo": freqs["bpfo"], "bpfi": freqs["bpfi"], "2bsf": 2 * freqs["bsf"], "ftf": freqs["ftf"]}
     fmax = min(0.45 * fs, 3.3 * max(targets.values()))
     f, s = envelope_spectrum(x, fs, max_freq=fmax)
     _draw_lines(ax, f, s, targets, verdict["lines"], fmax, "Hz", 2.0)
     ax.set(xlabel="frequency (Hz)",
-           title=(f"Envelope spectrum of {channel} ({DEFAULT_BAND[0] / 1e3:g}-{DEFAULT_BAND[1] / 1e3:g} kHz band) "
+           title=(f"Envelope spectrum of {channel} ({band_text(fs)}{held}) "
                   f"- {instead or 'verdict: ' + verdict['verdict'].upper()}   (×N: line height over local median)"))
     return _save(plt, fig, out / "envelope.png")
 
@@ -1156,7 +1172,7 @@ def _report(rec, out, window_s: float, spool: _Spool) -> dict:
                                        "" if moved <= STEADY_LINES else
                                        f"verdict {overall.upper()} "
                                        f"{'by order tracking' if tracked else 'of the windows'}: the lines move by "
-                                       f"{100 * moved:.0f} % and smear here"))
+                                       f"{100 * moved:.0f} % and smear here", held_part(d)))
         if tracked:
             plots.append(plot_orders(tracked, ch, out, meta))
         if "operating_point.png" not in not_drawn:
@@ -1201,6 +1217,8 @@ def _report(rec, out, window_s: float, spool: _Spool) -> dict:
         "sample_rate_hz": fs,
         "channels": list(d.channels),
         "analysed_s": d.accel.shape[0] / fs,
+        # the plots and the one verdict hold the first MAX_ANALYSIS_S s only (the timeline all of it)
+        "analysed_first_only": d.truncated_analysis,
         "waveform_gaps": d.gaps,
         "statistics": {name: statistics(d.accel[:, k]) for k, name in enumerate(d.channels)},
         "shaft_speed_rpm": speed * RPM,
@@ -1585,6 +1603,11 @@ def report_command(args) -> int:
     print(f"{args.out}: {', '.join(s['plots'])}, summary.md, summary.json; verdict {s['verdict']}"
           + (f" ({', '.join(s['verdict_faults'])})" if s["verdict"] == "mixed" else "")
           + f" (scene defects: {_defects_text(s)}{timing})")
+    if s["analysed_first_only"]:
+        # the plots' time axis ended at 120 s of an hour's recording, said nowhere but summary.md
+        print(f"{args.out}: waveform.png, spectrum.png, envelope.png and the one verdict are of the first "
+              f"{s['analysed_s']:.2f} s of {s['duration_s']:.2f} s (the most the report holds in memory); "
+              "the verdict over time (timeline.png) covers all of it")
     if _from_windows(s) or _from_orders(s):
         print(f"{args.out}: the verdict is that of {s['verdict_from']}")
     if s["verdict_note"]:
