@@ -4,6 +4,7 @@ by window against the recorded ground truth; bad inputs end with exit status 2 a
 from __future__ import annotations
 
 import json
+import math
 import re
 import tracemalloc
 
@@ -1349,3 +1350,40 @@ def test_plots_of_the_first_part_of_a_long_recording_say_so(outer, tmp_path, mon
     monkeypatch.setattr(report, "MAX_ANALYSIS_S", 120.0)
     assert cli.main(["report", str(rec), "--out", str(tmp_path / "p")]) == 0
     assert "the first" not in capsys.readouterr().out and "the first" not in figures["waveform.png"].axes[0].get_title()
+
+
+@pytest.mark.parametrize("value", ["nan", "inf", "-inf"])
+def test_a_diagnostics_message_with_non_finite_fault_frequencies_places_no_line(outer, tmp_path, capsys, value):
+    """Another writer's ``/diagnostics`` may say ``nan`` (or ``inf``) where a frequency is not
+    known.  Taken as a number, one such message made the mean over the recording NaN, every
+    window's recorded lines too (``RecordedPeriods``), and the report ended in an IndexError,
+    "internal error", exit status 1.  Such a message gives no fault frequencies, as one without
+    the keys: the report is that of the other messages."""
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.serialization import deserialize_message, serialize_message
+
+    rec, _ = outer
+    seen = []
+
+    def second_one_not_finite(topic, data):
+        if topic != "/diagnostics":
+            return data
+        msg = deserialize_message(data, DiagnosticArray)
+        seen.append(topic)
+        if len(seen) == 2:
+            for status in msg.status:
+                for kv in status.values:
+                    if kv.key in report.RECORDED_KEYS:
+                        kv.value = value
+        return serialize_message(msg)
+
+    odd = tmp_path / "odd.mcap"
+    _copy_without(rec, odd, lambda topic, k: False, rewrite=second_one_not_finite)
+    assert len(seen) >= 2
+    assert cli.main(["report", str(rec), "--out", str(tmp_path / "a")]) == 0
+    assert cli.main(["report", str(odd), "--out", str(tmp_path / "b")]) == 0, capsys.readouterr().err
+    a, b = (json.loads((tmp_path / k / "summary.json").read_text()) for k in "ab")
+    assert b["verdict"] == a["verdict"] == "outer"
+    assert all(math.isfinite(v) for v in b["fault_frequencies_hz"].values())
+    assert b["fault_frequencies_hz"] == pytest.approx(a["fault_frequencies_hz"], rel=1e-6)
+    assert [w["verdict"] for w in b["timeline"]] == [w["verdict"] for w in a["timeline"]]

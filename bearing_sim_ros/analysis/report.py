@@ -284,6 +284,10 @@ def signal_frequencies(diagnostics) -> dict:
         found = {k: float(v) for k, v in found.items()}
     except ValueError:
         return {}
+    if not all(math.isfinite(v) for v in found.values()):
+        # "nan" or "inf" (another writer's) places no line: taken, one such message made the
+        # mean over the recording NaN, and the report ended in an IndexError, "internal error"
+        return {}
     return found if {"ftf", "bpfo", "bpfi"} <= set(found) else {}
 
 
@@ -449,24 +453,21 @@ class RecordedPeriods:
     of a long recording: the periods' bounds are held as arrays, and a window moves and weighs
     only the periods it overlaps, the others weighing 0 (the same numbers).  Moving and weighing
     all of them in Python for each window made the verdict timeline quadratic in the length:
-    80 s of a 30-min recording's report (1800 windows by 1800 periods), 4 x that for an hour."""
+    80 s of a 30-min recording's report (1800 windows by 1800 periods), 4 x that for an hour.
+    The periods' values are finite: ``signal_frequencies`` takes none that is not (a NaN would
+    make every window's mean NaN in ``recorded_frequencies``, even at weight 0, and only the
+    windows it overlaps here)."""
 
     def __init__(self, periods: list):
         self.periods = periods
         self.starts = np.array([p0 for p0, _, _ in periods], dtype=float)
         self.ends = np.array([p1 for _, p1, _ in periods], dtype=float)
         self.common = sorted(set.intersection(*(set(f) for _, _, f in periods))) if periods else []
-        # a value that is not finite (another writer's "nan") makes every window's mean NaN, even
-        # at weight 0: those recordings take the whole sum as before
-        self.finite = all(math.isfinite(v) for _, _, f in periods for v in f.values())
 
     def frequencies(self, start_s: float, end_s: float, shaft_hz: float | None = None) -> dict:
         """``recorded_frequencies`` over [start_s, end_s) (s) of the periods moved to
         ``shaft_hz`` (Hz, ``at_shaft_speed``; None: as recorded)."""
         moving = shaft_hz is not None and math.isfinite(shaft_hz) and shaft_hz > 0
-        if not self.finite:
-            return recorded_frequencies(at_shaft_speed(self.periods, shaft_hz) if moving else self.periods,
-                                        start_s, end_s)
         if not self.periods:
             return {}
         # recorded_frequencies' weights, element for element (the sum over the same array)
