@@ -1387,3 +1387,20 @@ def test_a_diagnostics_message_with_non_finite_fault_frequencies_places_no_line(
     assert all(math.isfinite(v) for v in b["fault_frequencies_hz"].values())
     assert b["fault_frequencies_hz"] == pytest.approx(a["fault_frequencies_hz"], rel=1e-6)
     assert [w["verdict"] for w in b["timeline"]] == [w["verdict"] for w in a["timeline"]]
+
+
+def test_a_recording_without_a_recorded_sample_rate_is_held_to_the_same_first_part(outer, tmp_path, monkeypatch):
+    """Without the ``bearing_sim`` metadata (rewritten by rosbags) there is no ``sample_rate``
+    parameter, and the report held every sample of the recording, whatever its length (1.3 GB
+    of an hour at 15 kHz), not the first ``MAX_ANALYSIS_S``.  The first two tables' stamps give
+    the rate for that now: it holds what the original's report holds, and its timeline, read
+    past that part, is the original's."""
+    rewritten = _rewritten_by_rosbags(outer[0], tmp_path / "rewritten")
+    monkeypatch.setattr(report, "MAX_ANALYSIS_S", 1.0)
+    s = build_report(rewritten, tmp_path / "a")
+    original = build_report(outer[0], tmp_path / "b")
+    assert original["analysed_s"] == pytest.approx(1.0) and s["analysed_s"] == pytest.approx(1.0)
+    assert s["analysed_first_only"] and s["sample_rate_hz"] == pytest.approx(15000.0)
+    assert [w["verdict"] for w in s["timeline"]] == [w["verdict"] for w in original["timeline"]]
+    for mine, theirs in zip(s["timeline"], original["timeline"]):
+        assert mine["prominences"] == pytest.approx(theirs["prominences"], rel=1e-6)

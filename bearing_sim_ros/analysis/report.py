@@ -109,6 +109,7 @@ class _Data:
             fs_meta = float(rec.parameters().get("sample_rate") or 0) or None
         except (TypeError, ValueError):
             fs_meta = None
+        held_rate = fs_meta             # Hz: the rate that tells when MAX_ANALYSIS_S are held
         for topic, _type, log_ns, data in rec.messages(topics=wanted):
             # another writer's bytes or tables were a traceback and "internal error"
             msg = deserialize(rec.path, topic, topics[topic].msg_type, log_ns, data, classes[topic])
@@ -125,7 +126,12 @@ class _Data:
                 stamps.append(stamp)
                 widths.append(arr.shape[0])
                 self.channels = tuple(names)
-                if fs_meta and samples / fs_meta >= MAX_ANALYSIS_S:
+                if fs_meta is None and len(stamps) == 2 and stamps[1] > stamps[0] and widths[0] > 0:
+                    # no sample_rate in the metadata (another tool's file, rosbags-convert's): the
+                    # first two tables' stamps give it for holding MAX_ANALYSIS_S, where every sample
+                    # was held, 1.3 GB of an hour's recording (the rate reported is all tables')
+                    held_rate = widths[0] * NS / (stamps[1] - stamps[0])
+                if held_rate and samples / held_rate >= MAX_ANALYSIS_S:
                     self.truncated_analysis = True
                     if spool is not None:
                         spool.append(arr[:, self.channels.index(envelope_channel(self.channels))])
