@@ -180,7 +180,12 @@ class Recording:
         first = next(self._records([topic], log_time_order=True), None)
         if first is None:
             return None
-        last = next(self._records([topic], log_time_order=True, reverse=True))
+        if self.summary.chunk_indexes:
+            last = next(self._records([topic], log_time_order=True, reverse=True))
+        else:
+            # messages outside chunks (another writer's, MCAP allows it): the mcap reader streams
+            # them in file order whatever ``reverse`` says, and gave the first as the last
+            *_, last = self._records([topic], log_time_order=True)
         return (first[3], first[4]), (last[3], last[4])
 
     def _records(self, topics=None, log_time_order=False, reverse=False):
