@@ -1319,7 +1319,8 @@ def test_no_samples_are_kept_past_those_held_where_no_timeline_can_be_made(outer
 def test_the_spectrum_shades_the_band_the_envelope_uses_and_says_it_at_1_khz(tmp_path, figures):
     """At a low sample rate the envelope's band-pass is clipped below Nyquist (1 kHz: 225-450 Hz,
     ``envelope.envelope_band``); spectrum.png shaded 2 kHz down to 0.45 x the rate instead (the
-    450-500 Hz that were on its axis) and envelope.png's title said "2-5 kHz band"."""
+    450-500 Hz that were on its axis) and envelope.png's title said "2-5 kHz band".  The summary
+    gives the band (``envelope_band_hz``; summary.md under "Fault lines")."""
     rec = tmp_path / "one_khz.mcap"
     render("er16k_outer_race", 1.0, rec, fidelity="kinematic", seed=1, sample_rate=1000.0, progress=False)
     assert cli.main(["report", str(rec), "--out", str(tmp_path / "o")]) == 0
@@ -1329,6 +1330,8 @@ def test_the_spectrum_shades_the_band_the_envelope_uses_and_says_it_at_1_khz(tmp
         if hasattr(band, "get_patch_transform") else band.get_xy()[:, 0]
     assert (min(xs), max(xs)) == pytest.approx((0.225, 0.45))           # kHz
     assert "(0.225-0.45 kHz band)" in figures["envelope.png"].axes[0].get_title()
+    assert json.loads((tmp_path / "o" / "summary.json").read_text())["envelope_band_hz"] == [225.0, 450.0]
+    assert "The envelope of accel_y, band-passed to 225-450 Hz." in (tmp_path / "o" / "summary.md").read_text()
 
 
 def test_plots_of_the_first_part_of_a_long_recording_say_so(outer, tmp_path, monkeypatch, capsys, figures):

@@ -1235,6 +1235,7 @@ def _report(rec, out, window_s: float, spool: _Spool) -> dict:
         "fault_frequencies_from": frequencies_source(rolling, d.signal_frequencies, scene_problem,
                                                      d.frequency_keys_missing),
         "envelope_channel": ch,
+        "envelope_band_hz": list(envelope_band(fs)),   # the band-pass before the envelope, clipped below Nyquist
         "fault_lines": ({k: {"expected_hz": v.expected_hz, "found_hz": v.found_hz, "height": v.height,
                              "prominence": v.prominence} for k, v in verdict["lines"].items()}
                         if verdict else {}),
@@ -1368,7 +1369,9 @@ def _markdown(s: dict) -> str:
                      "envelope spectrum in orders of the shaft |")
     lines.append("")
     if s["fault_lines"]:
+        lo, hi = s["envelope_band_hz"]
         lines += ["## Fault lines in the envelope spectrum", "",
+                  f"The envelope of {s['envelope_channel']}, band-passed to {lo:g}-{hi:g} Hz.", "",
                   f"Expected at the fault frequencies of {s['fault_frequencies_from']}."
                   + (" The lines move over the analysed stretch: this spectrum of all of it smears them, and "
                      "these prominences are not the verdict ("
