@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 import signal
 import sys
 from contextlib import contextmanager
@@ -41,8 +42,19 @@ SPLIT_FILES_HELP = ("a split recording (the node's record_max_duration / record_
                     "it was recorded to, F.mcap")
 
 
+# what a value that starts with "-" is taken as, not an option: argparse's own (Python 3.11-3.12)
+# takes -5 and -0.5 but not -4.2e8, -1E3 or -inf, which it read as an unknown option ("argument
+# --start: expected 7 arguments", "--duration: expected one argument") where the number was meant
+NEGATIVE_NUMBER = re.compile(r"^-(?:(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|inf|infinity|nan)$", re.IGNORECASE)
+
+
 class _Parser(argparse.ArgumentParser):
-    """argparse that reports a mistake as one line and exit status 2 (its default, too)."""
+    """argparse that reports a mistake as one line and exit status 2 (its default, too), and
+    takes every negative number (``NEGATIVE_NUMBER``) as a value, for its type to accept or name."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = NEGATIVE_NUMBER
 
     def error(self, message):
         raise UserError(f"{self.prog}: {message}")

@@ -215,6 +215,13 @@ def _user_mistake(capsys, argv):
     (["monitor", "--window", "inf"], ["--window", "inf s", "allowed range is [0.5, 120] s"]),
     # a window of 0.1 ms gave "x inf" prominences and a fault verdict on anything
     (["monitor", "--window", "0.0001"], ["--window", "0.0001 s", "allowed range is [0.5, 120] s"]),
+    # a negative number in scientific notation (or -inf) was read by argparse as an unknown
+    # option: "argument --duration: expected one argument", the value never named
+    (["render", "er16k_healthy", "--duration", "-1e3"], ["--duration", "'-1e3'", "finite number > 0"]),
+    (["render", "er16k_healthy", "--duration", "-inf"], ["--duration", "'-inf'", "finite number > 0"]),
+    (["render", "er16k_healthy", "--duration", "0.1", "--seed", "-1E3"], ["--seed", "'-1E3'", "not a whole number"]),
+    (["play", "x.mcap", "--rate", "-2e0"], ["--rate", "-2e0", "allowed range is [0.01, 100]"]),
+    (["report", "x.mcap", "--out", "r", "--window", "-1.5e+1"], ["--window", "-1.5e+1 s", "allowed range is [0.5, 120] s"]),
     # a seed beyond 64 bits ended in an OverflowError traceback (exit 1)
     (["render", "er16k_healthy", "--duration", "0.1", "--seed", "99999999999999999999999"],
      ["--seed", "'99999999999999999999999'", "<= 2147483647"]),

@@ -20,6 +20,14 @@ CASES = [
     # its default --cwru is relative to the repository's root: run from elsewhere, one line
     ("bearing_sim_ros.analysis.validate_fit", ["--maxfev", "1"],
      "--cwru '../shared/validation/cwru': no such folder; give a folder of CWRU .mat files"),
+    # a negative number in scientific notation is a value: argparse took -4.2e8 for an unknown
+    # option ("argument --start: expected 7 arguments"); taken, the run goes on to the folder
+    ("bearing_sim_ros.analysis.validate_fit", ["--start", "-4.2e8", "1", "2", "3", "4", "5", "6", "--maxfev", "1"],
+     "--cwru '../shared/validation/cwru': no such folder; give a folder of CWRU .mat files"),
+    ("bearing_sim_ros.analysis.validate_fit", ["--start", "-1", "1", "2", "3", "4", "5", "-inf"],
+     "argument --start: '-inf' must be a finite number"),
+    ("bearing_sim_ros.physics.skidding", ["-1e-3"],
+     "argument seconds: -1e-3 s: allowed range is [0.01, 60] s"),
     # --scene nope too: where the duration is not refused the old code skipped both tiers
     # (no node started) and printed a table, exit status 0
     ("bearing_sim_ros.nodes.node_bench", ["--duration", "-5", "--scene", "nope"],

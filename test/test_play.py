@@ -628,7 +628,64 @@ def test_a_recording_without_the_optional_statistics_record_is_counted_and_playe
         assert {t: c.count for t, c in rec.topics().items()} == {"/x": 3}
     said = []
     assert play(path, wait_for_subscribers=0.0, log=said.append) == 3
-    assert f"play {path}: 3 messages on 1 topic, 0.02 s at 1x" in said, said     # not "1 topics"
+    assert f"play {path}: 3 messages on 1 topic, 0.02 s of log time at 1x" in said, said     # not "1 topics"
+
+
+def _copied(src, dst, keep=lambda log_ns: True, chunked: bool = True) -> int:
+    """Copy the MCAP ``src`` to ``dst`` (metadata, schemas, channels, the messages whose log time
+    ``keep`` takes), in chunks or (``chunked`` false: another writer's, MCAP allows it) without;
+    how many messages were copied."""
+    from mcap.reader import make_reader
+    from mcap.writer import Writer
+
+    kept = 0
+    with open(src, "rb") as f, open(dst, "wb") as out:
+        reader, writer = make_reader(f), Writer(out, use_chunking=chunked)
+        writer.start("ros2", "test")
+        for m in reader.iter_metadata():
+            writer.add_metadata(m.name, m.metadata)
+        ids = {}
+        for schema, channel, msg in reader.iter_messages():
+            if not keep(msg.log_time):
+                continue
+            if channel.id not in ids:
+                sid = writer.register_schema(schema.name, schema.encoding, schema.data)
+                ids[channel.id] = writer.register_channel(channel.topic, channel.message_encoding, sid,
+                                                          channel.metadata)
+            writer.add_message(ids[channel.id], msg.log_time, msg.data, msg.publish_time)
+            kept += 1
+        writer.finish()
+    return kept
+
+
+def test_the_start_line_gives_the_signals_length_as_report_does(recording, ros_env, tmp_path):
+    """Play's first line gives the recording's length as ``report`` (``duration_s``) and
+    ``render`` give it: the signal's, first table's stamp to the end of the last.  It gave the log
+    times' span, a batch less for a live node's recording, whose first message is logged as its
+    first batch ends ("4.99 s" of a 5 s one; here the render without its commands logged at 0, as
+    the live node logs none before its first batch: "0.99 s"); the same with its messages outside
+    chunks; a file cut by a hard kill is as long as the tables it holds."""
+    from bearing_sim_ros.recording.play import play
+
+    path, counts, accel = recording
+    live = tmp_path / "as_live.mcap"
+    kept = _copied(path, live, keep=lambda log_ns: log_ns != 0)
+    with open_recording(live) as rec:
+        assert (rec.end_ns - rec.start_ns) / NS == pytest.approx(0.99)
+    unchunked = tmp_path / "unchunked.mcap"
+    assert _copied(live, unchunked, chunked=False) == kept
+    for copy in (live, unchunked):
+        said = []
+        assert play(copy, rate=100.0, wait_for_subscribers=0.0, log=said.append) == kept
+        assert said[0] == f"play {copy}: {kept} messages on 6 topics, 1.00 s of signal at 100x", said
+    data = path.read_bytes()
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(data[: len(data) * 9 // 10])
+    with open_recording(cut) as rec:
+        held = rec.topics()["/accel"].count
+    said = []
+    play(cut, rate=100.0, wait_for_subscribers=0.0, log=said.append)
+    assert f"messages on 6 topics, {held * 0.01:.2f} s of signal at 100x" in said[1], said
 
 
 @pytest.mark.parametrize("case", ["one_log_time", "one_message", "clock_only"])

@@ -1157,3 +1157,17 @@ def test_a_signal_as_the_render_opens_its_file_leaves_no_partial_file(tmp_path, 
     assert list(tmp_path.iterdir()) == []
     err = capsys.readouterr().err
     assert err == f"interrupted ({sig}): nothing rendered, {str(out)!r} left as it was\n", err
+
+
+def test_a_render_slower_than_real_time_says_how_much_slower(tmp_path, capsys):
+    """The line's real-time factor had one decimal: a render 70 times slower than real time (the
+    reference solver at 200 kHz) said "= 0.0x real time".  Below 1 it has two significant digits,
+    the signal's seconds over the line's own wall seconds."""
+    out = tmp_path / "slow.mcap"
+    assert cli.main(["render", "er16k_skidding", "--duration", "0.02", "--fidelity", "skidding", "--solver",
+                     "reference", "--sample-rate", "200000", "--out", str(out)]) == 0
+    line = capsys.readouterr().out.strip().splitlines()[-1]
+    found = re.search(r"rendered in ([0-9.]+) s = ([0-9.e-]+)x real time$", line)
+    assert found, line
+    wall, factor = float(found.group(1)), float(found.group(2))
+    assert wall > 0.02 and factor == pytest.approx(0.02 / wall, rel=0.06), line      # 2 digits, and the wall's rounding

@@ -4,6 +4,7 @@ by window against the recorded ground truth; bad inputs end with exit status 2 a
 from __future__ import annotations
 
 import json
+import math
 import re
 import tracemalloc
 
@@ -1291,3 +1292,118 @@ def test_the_simulators_status_name_has_no_leading_slash():
     from bearing_sim_ros.ground_truth import status_name
 
     assert status_name("/rig1/bearing_sim") == status_name("rig1/bearing_sim") == "rig1/bearing_sim: simulator"
+
+
+def test_no_samples_are_kept_past_those_held_where_no_timeline_can_be_made(outer, tmp_path, monkeypatch, capsys):
+    """The samples past ``MAX_ANALYSIS_S`` go to a temporary file in --out for the timeline's
+    windows; a recording that can have no timeline (no scene to take the bearing from and no
+    /diagnostics to give the fault frequencies: another tool's) wrote them all the same, 216 MB an
+    hour at 15 kHz that nothing read.  It writes none now, and its report is the same; the
+    recording with its scene still keeps them."""
+    rec, _ = outer
+    made = []
+    real = report.tempfile.TemporaryFile
+    monkeypatch.setattr(report.tempfile, "TemporaryFile", lambda **kw: made.append(kw) or real(**kw))
+    monkeypatch.setattr(report, "MAX_ANALYSIS_S", 1.0)
+    bare = tmp_path / "bare.mcap"
+    _copy_without(rec, bare, lambda topic, k: topic == "/diagnostics",
+                  metadata=lambda m: {k: v for k, v in m.items() if k not in ("scene_yaml", "scene")})
+    s = _report_without_a_verdict(bare, tmp_path / "o", "no verdict: no bearing to place the fault lines on (the "
+                                  "recording has no bearing_sim scene) and no fault frequencies in its /diagnostics "
+                                  "(cage_hz, bpfo_hz, bpfi_hz, bsf_hz)", capsys)
+    assert made == [] and s["analysed_s"] == pytest.approx(1.0) and s["duration_s"] == pytest.approx(2.0)
+    assert cli.main(["report", str(rec), "--out", str(tmp_path / "p")]) == 0
+    assert len(made) == 1
+
+
+def test_the_spectrum_shades_the_band_the_envelope_uses_and_says_it_at_1_khz(tmp_path, figures):
+    """At a low sample rate the envelope's band-pass is clipped below Nyquist (1 kHz: 225-450 Hz,
+    ``envelope.envelope_band``); spectrum.png shaded 2 kHz down to 0.45 x the rate instead (the
+    450-500 Hz that were on its axis) and envelope.png's title said "2-5 kHz band".  The summary
+    gives the band (``envelope_band_hz``; summary.md under "Fault lines")."""
+    rec = tmp_path / "one_khz.mcap"
+    render("er16k_outer_race", 1.0, rec, fidelity="kinematic", seed=1, sample_rate=1000.0, progress=False)
+    assert cli.main(["report", str(rec), "--out", str(tmp_path / "o")]) == 0
+    (ax,) = figures["spectrum.png"].axes
+    (band,) = [p for p in ax.patches if p.get_label() == "envelope band"]
+    xs = band.get_path().transformed(band.get_patch_transform()).vertices[:, 0] \
+        if hasattr(band, "get_patch_transform") else band.get_xy()[:, 0]
+    assert (min(xs), max(xs)) == pytest.approx((0.225, 0.45))           # kHz
+    assert "(0.225-0.45 kHz band)" in figures["envelope.png"].axes[0].get_title()
+    assert json.loads((tmp_path / "o" / "summary.json").read_text())["envelope_band_hz"] == [225.0, 450.0]
+    assert "The envelope of accel_y, band-passed to 225-450 Hz." in (tmp_path / "o" / "summary.md").read_text()
+
+
+def test_plots_of_the_first_part_of_a_long_recording_say_so(outer, tmp_path, monkeypatch, capsys, figures):
+    """The waveform, the spectra and the one verdict hold the first ``MAX_ANALYSIS_S`` (120 s) of a
+    longer recording; its plots' time axis ended there without a word but summary.md's
+    "analysed".  The titles, the command line and summary.json (``analysed_first_only``) say it;
+    a recording held whole says nothing of it."""
+    rec, _ = outer
+    monkeypatch.setattr(report, "MAX_ANALYSIS_S", 1.0)
+    out = tmp_path / "o"
+    assert cli.main(["report", str(rec), "--out", str(out)]) == 0
+    said = capsys.readouterr().out.splitlines()
+    part = "the first 1.00 s of 2.00 s"
+    assert f"{out}: waveform.png, spectrum.png, envelope.png and the one verdict are of {part} (the most the " \
+           "report holds in memory); the verdict over time (timeline.png) covers all of it" in said, said
+    for name in ("waveform.png", "spectrum.png", "envelope.png"):
+        assert part in figures[name].axes[0].get_title(), name
+    assert json.loads((out / "summary.json").read_text())["analysed_first_only"] is True
+    monkeypatch.setattr(report, "MAX_ANALYSIS_S", 120.0)
+    assert cli.main(["report", str(rec), "--out", str(tmp_path / "p")]) == 0
+    assert "the first" not in capsys.readouterr().out and "the first" not in figures["waveform.png"].axes[0].get_title()
+
+
+@pytest.mark.parametrize("value", ["nan", "inf", "-inf"])
+def test_a_diagnostics_message_with_non_finite_fault_frequencies_places_no_line(outer, tmp_path, capsys, value):
+    """Another writer's ``/diagnostics`` may say ``nan`` (or ``inf``) where a frequency is not
+    known.  Taken as a number, one such message made the mean over the recording NaN, every
+    window's recorded lines too (``RecordedPeriods``), and the report ended in an IndexError,
+    "internal error", exit status 1.  Such a message gives no fault frequencies, as one without
+    the keys: the report is that of the other messages."""
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.serialization import deserialize_message, serialize_message
+
+    rec, _ = outer
+    seen = []
+
+    def second_one_not_finite(topic, data):
+        if topic != "/diagnostics":
+            return data
+        msg = deserialize_message(data, DiagnosticArray)
+        seen.append(topic)
+        if len(seen) == 2:
+            for status in msg.status:
+                for kv in status.values:
+                    if kv.key in report.RECORDED_KEYS:
+                        kv.value = value
+        return serialize_message(msg)
+
+    odd = tmp_path / "odd.mcap"
+    _copy_without(rec, odd, lambda topic, k: False, rewrite=second_one_not_finite)
+    assert len(seen) >= 2
+    assert cli.main(["report", str(rec), "--out", str(tmp_path / "a")]) == 0
+    assert cli.main(["report", str(odd), "--out", str(tmp_path / "b")]) == 0, capsys.readouterr().err
+    a, b = (json.loads((tmp_path / k / "summary.json").read_text()) for k in "ab")
+    assert b["verdict"] == a["verdict"] == "outer"
+    assert all(math.isfinite(v) for v in b["fault_frequencies_hz"].values())
+    assert b["fault_frequencies_hz"] == pytest.approx(a["fault_frequencies_hz"], rel=1e-6)
+    assert [w["verdict"] for w in b["timeline"]] == [w["verdict"] for w in a["timeline"]]
+
+
+def test_a_recording_without_a_recorded_sample_rate_is_held_to_the_same_first_part(outer, tmp_path, monkeypatch):
+    """Without the ``bearing_sim`` metadata (rewritten by rosbags) there is no ``sample_rate``
+    parameter, and the report held every sample of the recording, whatever its length (1.3 GB
+    of an hour at 15 kHz), not the first ``MAX_ANALYSIS_S``.  The first two tables' stamps give
+    the rate for that now: it holds what the original's report holds, and its timeline, read
+    past that part, is the original's."""
+    rewritten = _rewritten_by_rosbags(outer[0], tmp_path / "rewritten")
+    monkeypatch.setattr(report, "MAX_ANALYSIS_S", 1.0)
+    s = build_report(rewritten, tmp_path / "a")
+    original = build_report(outer[0], tmp_path / "b")
+    assert original["analysed_s"] == pytest.approx(1.0) and s["analysed_s"] == pytest.approx(1.0)
+    assert s["analysed_first_only"] and s["sample_rate_hz"] == pytest.approx(15000.0)
+    assert [w["verdict"] for w in s["timeline"]] == [w["verdict"] for w in original["timeline"]]
+    for mine, theirs in zip(s["timeline"], original["timeline"]):
+        assert mine["prominences"] == pytest.approx(theirs["prominences"], rel=1e-6)

@@ -54,6 +54,12 @@ def one_channel(x) -> np.ndarray:
     return x
 
 
+def envelope_band(fs: float, band=DEFAULT_BAND) -> tuple:
+    """(low, high) Hz: the band-pass of the envelope at the sample rate ``fs`` (Hz): ``band``
+    with its top held to 0.9 x Nyquist and its bottom to half its top (1 kHz: 225-450 Hz)."""
+    return _band(fs, band)
+
+
 def _band(fs: float, band) -> tuple:
     lo, hi = band
     nyq = 0.5 * fs

@@ -56,7 +56,7 @@ from ..errors import UserError
 from ..paths import output_folder, replace_file, save_figure, writing_into
 from ..recording.reader import open_recording
 from ..waveform import NS, from_pointcloud2
-from .envelope import (DEFAULT_BAND, DETECTION_THRESHOLD, FAULT_LINES, STEADY_LINES, diagnose,
+from .envelope import (DETECTION_THRESHOLD, FAULT_LINES, STEADY_LINES, diagnose, envelope_band,
                        envelope_spectrum, no_defect_note, spread, statistics, with_cage)
 from .orders import order_diagnose
 
@@ -109,6 +109,7 @@ class _Data:
             fs_meta = float(rec.parameters().get("sample_rate") or 0) or None
         except (TypeError, ValueError):
             fs_meta = None
+        held_rate = fs_meta             # Hz: the rate that tells when MAX_ANALYSIS_S are held
         for topic, _type, log_ns, data in rec.messages(topics=wanted):
             # another writer's bytes or tables were a traceback and "internal error"
             msg = deserialize(rec.path, topic, topics[topic].msg_type, log_ns, data, classes[topic])
@@ -125,7 +126,12 @@ class _Data:
                 stamps.append(stamp)
                 widths.append(arr.shape[0])
                 self.channels = tuple(names)
-                if fs_meta and samples / fs_meta >= MAX_ANALYSIS_S:
+                if fs_meta is None and len(stamps) == 2 and stamps[1] > stamps[0] and widths[0] > 0:
+                    # no sample_rate in the metadata (another tool's file, rosbags-convert's): the
+                    # first two tables' stamps give it for holding MAX_ANALYSIS_S, where every sample
+                    # was held, 1.3 GB of an hour's recording (the rate reported is all tables')
+                    held_rate = widths[0] * NS / (stamps[1] - stamps[0])
+                if held_rate and samples / held_rate >= MAX_ANALYSIS_S:
                     self.truncated_analysis = True
                     if spool is not None:
                         spool.append(arr[:, self.channels.index(envelope_channel(self.channels))])
@@ -283,6 +289,10 @@ def signal_frequencies(diagnostics) -> dict:
     try:
         found = {k: float(v) for k, v in found.items()}
     except ValueError:
+        return {}
+    if not all(math.isfinite(v) for v in found.values()):
+        # "nan" or "inf" (another writer's) places no line: taken, one such message made the
+        # mean over the recording NaN, and the report ended in an IndexError, "internal error"
         return {}
     return found if {"ftf", "bpfo", "bpfi"} <= set(found) else {}
 
@@ -449,24 +459,21 @@ class RecordedPeriods:
     of a long recording: the periods' bounds are held as arrays, and a window moves and weighs
     only the periods it overlaps, the others weighing 0 (the same numbers).  Moving and weighing
     all of them in Python for each window made the verdict timeline quadratic in the length:
-    80 s of a 30-min recording's report (1800 windows by 1800 periods), 4 x that for an hour."""
+    80 s of a 30-min recording's report (1800 windows by 1800 periods), 4 x that for an hour.
+    The periods' values are finite: ``signal_frequencies`` takes none that is not (a NaN would
+    make every window's mean NaN in ``recorded_frequencies``, even at weight 0, and only the
+    windows it overlaps here)."""
 
     def __init__(self, periods: list):
         self.periods = periods
         self.starts = np.array([p0 for p0, _, _ in periods], dtype=float)
         self.ends = np.array([p1 for _, p1, _ in periods], dtype=float)
         self.common = sorted(set.intersection(*(set(f) for _, _, f in periods))) if periods else []
-        # a value that is not finite (another writer's "nan") makes every window's mean NaN, even
-        # at weight 0: those recordings take the whole sum as before
-        self.finite = all(math.isfinite(v) for _, _, f in periods for v in f.values())
 
     def frequencies(self, start_s: float, end_s: float, shaft_hz: float | None = None) -> dict:
         """``recorded_frequencies`` over [start_s, end_s) (s) of the periods moved to
         ``shaft_hz`` (Hz, ``at_shaft_speed``; None: as recorded)."""
         moving = shaft_hz is not None and math.isfinite(shaft_hz) and shaft_hz > 0
-        if not self.finite:
-            return recorded_frequencies(at_shaft_speed(self.periods, shaft_hz) if moving else self.periods,
-                                        start_s, end_s)
         if not self.periods:
             return {}
         # recorded_frequencies' weights, element for element (the sum over the same array)
@@ -848,13 +855,27 @@ def _title(meta: dict) -> str:
     return f"{meta.get('scene', '?')} - {meta.get('tier', '?')} tier, seed {meta.get('seed', '?')}"
 
 
+def band_text(fs: float) -> str:
+    """The envelope band at the sample rate ``fs`` (Hz) in words: ``2-5 kHz band``."""
+    lo, hi = envelope_band(fs)
+    return f"{lo / 1e3:.3g}-{hi / 1e3:.3g} kHz band"
+
+
+def held_part(d: _Data) -> str:
+    """The words that say a plot holds the first ``MAX_ANALYSIS_S`` of a longer recording
+    (``", the first 120.00 s of 150.00 s"``); "" where it holds all of it."""
+    held = d.accel.shape[0] / d.sample_rate
+    return f", the first {held:.2f} s of {d.signal_s:.2f} s" if d.truncated_analysis else ""
+
+
 def plot_waveform(d: _Data, freqs: dict, out: Path, meta: dict) -> str:
     plt, fig, (ax_all, ax_zoom) = _figure(2, 3.2)
     fs = d.sample_rate
     t = np.arange(d.accel.shape[0]) / fs + d.t0_ns / NS
     for k, name in enumerate(d.channels):
         ax_all.plot(t, d.accel[:, k], lw=0.4, label=name, alpha=0.85)
-    ax_all.set(xlabel="time (s)", ylabel="acceleration (m/s²)", title=f"Accelerometer - {_title(meta)}")
+    ax_all.set(xlabel="time (s)", ylabel="acceleration (m/s²)",
+               title=f"Accelerometer{held_part(d)} - {_title(meta)}")
     ax_all.legend(loc="upper right", fontsize=8)
     ax_all.grid(alpha=0.3)
     # zoom: about five periods of the slowest race-defect line, at least 20 ms
@@ -885,27 +906,29 @@ def plot_spectrum(d: _Data, out: Path, meta: dict) -> str:
     for k, name in enumerate(d.channels):
         f, p = welch(d.accel[:, k] - d.accel[:, k].mean(), fs=fs, nperseg=nper)
         ax.semilogy(f / 1e3, np.maximum(p, 1e-30), lw=0.8, label=name)
-    lo, hi = DEFAULT_BAND
-    ax.axvspan(lo / 1e3, min(hi, 0.45 * fs) / 1e3, color="0.85", alpha=0.5, label="envelope band")
+    # the band the envelope analysis uses, clipped as it clips it (below 11.1 kHz of sample rate;
+    # at 1 kHz 225-450 Hz, where 2 kHz to 0.45 x the rate shaded the wrong part)
+    lo, hi = envelope_band(fs)
+    ax.axvspan(lo / 1e3, hi / 1e3, color="0.85", alpha=0.5, label="envelope band")
     ax.set(xlabel="frequency (kHz)", ylabel="PSD ((m/s²)²/Hz)", xlim=(0, fs / 2e3),
-           title=f"Spectrum (Welch, {nper} points) - {_title(meta)}")
+           title=f"Spectrum (Welch, {nper} points{held_part(d)}) - {_title(meta)}")
     ax.legend(loc="upper right", fontsize=8)
     ax.grid(alpha=0.3, which="both")
     return _save(plt, fig, out / "spectrum.png")
 
 
 def plot_envelope(x: np.ndarray, fs: float, freqs: dict, verdict: dict, channel: str,
-                  out: Path, meta: dict, instead: str = "") -> str:
+                  out: Path, meta: dict, instead: str = "", held: str = "") -> str:
     """The envelope spectrum of ``x`` with the lines of ``freqs`` and ``verdict``'s prominences;
     ``instead``: the title's words in place of ``verdict``'s where the recording's verdict is
-    not this spectrum's (its lines move: ``one_verdict``)."""
+    not this spectrum's (its lines move: ``one_verdict``); ``held``: ``held_part``."""
     plt, fig, (ax,) = _figure(1, 4.2)
     targets = {"bpfo": freqs["bpfo"], "bpfi": freqs["bpfi"], "2bsf": 2 * freqs["bsf"], "ftf": freqs["ftf"]}
     fmax = min(0.45 * fs, 3.3 * max(targets.values()))
     f, s = envelope_spectrum(x, fs, max_freq=fmax)
     _draw_lines(ax, f, s, targets, verdict["lines"], fmax, "Hz", 2.0)
     ax.set(xlabel="frequency (Hz)",
-           title=(f"Envelope spectrum of {channel} ({DEFAULT_BAND[0] / 1e3:g}-{DEFAULT_BAND[1] / 1e3:g} kHz band) "
+           title=(f"Envelope spectrum of {channel} ({band_text(fs)}{held}) "
                   f"- {instead or 'verdict: ' + verdict['verdict'].upper()}   (×N: line height over local median)"))
     return _save(plt, fig, out / "envelope.png")
 
@@ -1096,9 +1119,21 @@ def build_report(path, out, window_s: float = DEFAULT_WINDOW_S) -> dict:
         rec.close()
 
 
+def _lines_placeable(rec) -> bool:
+    """Whether the report of ``rec`` may place the fault lines, and so score a timeline, as far
+    as can be told before its messages are read: a scene it reads, or ``/diagnostics``, which may
+    give the fault frequencies (``line_frequencies``).  Without either there is no verdict and
+    no timeline, and the samples past those held (``_Spool``) are not kept: an hour's recording
+    of another tool wrote 216 MB to --out that nothing read."""
+    if _scene_from_metadata(rec.metadata)[0] is not None:
+        return True
+    return any(c.msg_type == "diagnostic_msgs/msg/DiagnosticArray" and c.count for c in rec.topics().values())
+
+
 def _report(rec, out, window_s: float, spool: _Spool) -> dict:
-    """``build_report`` of the open recording ``rec``, the samples past those it holds kept in ``spool``."""
-    d = _Data(rec, spool)
+    """``build_report`` of the open recording ``rec``, the samples past those it holds kept in
+    ``spool`` where a timeline may be scored (``_lines_placeable``)."""
+    d = _Data(rec, spool if _lines_placeable(rec) else None)
     meta = dict(rec.metadata)
     log_span = (rec.end_ns - rec.start_ns) / NS
     message_count = rec.message_count
@@ -1144,7 +1179,7 @@ def _report(rec, out, window_s: float, spool: _Spool) -> dict:
                                        "" if moved <= STEADY_LINES else
                                        f"verdict {overall.upper()} "
                                        f"{'by order tracking' if tracked else 'of the windows'}: the lines move by "
-                                       f"{100 * moved:.0f} % and smear here"))
+                                       f"{100 * moved:.0f} % and smear here", held_part(d)))
         if tracked:
             plots.append(plot_orders(tracked, ch, out, meta))
         if "operating_point.png" not in not_drawn:
@@ -1189,6 +1224,8 @@ def _report(rec, out, window_s: float, spool: _Spool) -> dict:
         "sample_rate_hz": fs,
         "channels": list(d.channels),
         "analysed_s": d.accel.shape[0] / fs,
+        # the plots and the one verdict hold the first MAX_ANALYSIS_S s only (the timeline all of it)
+        "analysed_first_only": d.truncated_analysis,
         "waveform_gaps": d.gaps,
         "statistics": {name: statistics(d.accel[:, k]) for k, name in enumerate(d.channels)},
         "shaft_speed_rpm": speed * RPM,
@@ -1198,6 +1235,7 @@ def _report(rec, out, window_s: float, spool: _Spool) -> dict:
         "fault_frequencies_from": frequencies_source(rolling, d.signal_frequencies, scene_problem,
                                                      d.frequency_keys_missing),
         "envelope_channel": ch,
+        "envelope_band_hz": list(envelope_band(fs)),   # the band-pass before the envelope, clipped below Nyquist
         "fault_lines": ({k: {"expected_hz": v.expected_hz, "found_hz": v.found_hz, "height": v.height,
                              "prominence": v.prominence} for k, v in verdict["lines"].items()}
                         if verdict else {}),
@@ -1331,7 +1369,9 @@ def _markdown(s: dict) -> str:
                      "envelope spectrum in orders of the shaft |")
     lines.append("")
     if s["fault_lines"]:
+        lo, hi = s["envelope_band_hz"]
         lines += ["## Fault lines in the envelope spectrum", "",
+                  f"The envelope of {s['envelope_channel']}, band-passed to {lo:g}-{hi:g} Hz.", "",
                   f"Expected at the fault frequencies of {s['fault_frequencies_from']}."
                   + (" The lines move over the analysed stretch: this spectrum of all of it smears them, and "
                      "these prominences are not the verdict ("
@@ -1573,6 +1613,11 @@ def report_command(args) -> int:
     print(f"{args.out}: {', '.join(s['plots'])}, summary.md, summary.json; verdict {s['verdict']}"
           + (f" ({', '.join(s['verdict_faults'])})" if s["verdict"] == "mixed" else "")
           + f" (scene defects: {_defects_text(s)}{timing})")
+    if s["analysed_first_only"]:
+        # the plots' time axis ended at 120 s of an hour's recording, said nowhere but summary.md
+        print(f"{args.out}: waveform.png, spectrum.png, envelope.png and the one verdict are of the first "
+              f"{s['analysed_s']:.2f} s of {s['duration_s']:.2f} s (the most the report holds in memory); "
+              "the verdict over time (timeline.png) covers all of it")
     if _from_windows(s) or _from_orders(s):
         print(f"{args.out}: the verdict is that of {s['verdict_from']}")
     if s["verdict_note"]:

@@ -37,6 +37,7 @@ A test or pipeline that needs every message even after two missed periods passes
 """
 from __future__ import annotations
 
+import json
 import math
 import sys
 import threading
@@ -187,7 +188,7 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
                                                 durability=DurabilityPolicy.VOLATILE))
             pieces = f" in {len(rec.paths)} files" if len(rec.paths) > 1 else ""
             log(f"play {path}: {rec.message_count} messages{pieces} on {len(pubs)} topic{'' if len(pubs) == 1 else 's'}, "
-                f"{(rec.end_ns - rec.start_ns) / NS:.2f} s at {rate:g}x"
+                f"{_length_said(rec, classes, sample_rate)} at {rate:g}x"
                 + (", looping" if loop else "") + (", publishing /clock" if clock else ""))
             _wait_for_subscribers(pubs, wait_for_subscribers, running, lambda text: log(f"play {path}: {text}"))
 
@@ -246,6 +247,31 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
                     rclpy.shutdown()
     finally:
         rec.close()
+
+
+def _length_said(rec, classes: dict, sample_rate: float | None) -> str:
+    """The recording's length as its start line says it: the signal's, from the first waveform
+    table's stamp to the end of the last (its stamp + its width / ``sample_rate``), as ``report``'s
+    ``duration_s`` and ``render`` say it and ``--loop`` moves on by (``5.00 s of signal``); the
+    log times' span where it has no table or no sample rate (``0.50 s of log time``).  The log
+    times of a 5 s recording span a batch less (a table is logged as its batch ends): "4.99 s"
+    was said of it."""
+    roles = {}
+    try:
+        roles = json.loads(rec.metadata.get("topics") or "{}")
+    except ValueError:
+        pass
+    waveforms = sorted(t for t, c in rec.topics().items() if c.msg_type == WAVEFORM_TYPE and c.count)
+    named = roles.get("accel") if isinstance(roles, dict) else None
+    topic = named if named in waveforms else (waveforms[0] if waveforms else None)
+    ends = rec.first_and_last(topic) if topic and sample_rate else None
+    if ends:
+        (first_ns, first), (last_ns, last) = ends
+        first = deserialize(rec.path, topic, WAVEFORM_TYPE, first_ns, first, classes[topic])
+        last = deserialize(rec.path, topic, WAVEFORM_TYPE, last_ns, last, classes[topic])
+        stamp = lambda msg: int(msg.header.stamp.sec) * NS + int(msg.header.stamp.nanosec)  # noqa: E731
+        return f"{(stamp(last) - stamp(first)) / NS + int(last.width) / sample_rate:.2f} s of signal"
+    return f"{(rec.end_ns - rec.start_ns) / NS:.2f} s of log time"
 
 
 def _check_topic_name(path, topic: str) -> None:

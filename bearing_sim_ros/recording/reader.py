@@ -174,14 +174,29 @@ class Recording:
         for topic, msg_type, _, log_ns, data in self._records(topics, log_time_order=True):
             yield topic, msg_type, log_ns, data
 
-    def _records(self, topics=None, log_time_order=False):
-        """(topic, msg_type, channel id, log_time_ns, CDR bytes) of the messages; a damaged file
-        is a one-line UserError."""
+    def first_and_last(self, topic: str):
+        """The first and the last message on ``topic``, in log-time order, each as (log_time_ns,
+        CDR bytes), read from the chunks that hold them (not the whole file); None without any."""
+        first = next(self._records([topic], log_time_order=True), None)
+        if first is None:
+            return None
+        if self.summary.chunk_indexes:
+            last = next(self._records([topic], log_time_order=True, reverse=True))
+        else:
+            # messages outside chunks (another writer's, MCAP allows it): the mcap reader streams
+            # them in file order whatever ``reverse`` says, and gave the first as the last
+            *_, last = self._records([topic], log_time_order=True)
+        return (first[3], first[4]), (last[3], last[4])
+
+    def _records(self, topics=None, log_time_order=False, reverse=False):
+        """(topic, msg_type, channel id, log_time_ns, CDR bytes) of the messages (``reverse``:
+        the last first); a damaged file is a one-line UserError."""
         from mcap.exceptions import McapError
         from zstandard import ZstdError
 
         try:
-            for schema, channel, msg in self._reader.iter_messages(topics=topics, log_time_order=log_time_order):
+            for schema, channel, msg in self._reader.iter_messages(topics=topics, log_time_order=log_time_order,
+                                                                   reverse=reverse):
                 yield channel.topic, (schema.name if schema else ""), channel.id, int(msg.log_time), msg.data
         # ZstdError: a chunk whose compressed bytes are damaged fails to decompress before its CRC
         # is checked (it was a traceback and "internal error")
@@ -532,6 +547,13 @@ class SplitRecording:
         """(topic, msg_type, log_time_ns, CDR bytes), piece after piece, each in log-time order."""
         for r in self._pieces:
             yield from r.messages(topics)
+
+    def first_and_last(self, topic: str):
+        """``Recording.first_and_last`` over the pieces: the first piece's first message on
+        ``topic`` and the last piece's last (of those that have one)."""
+        first = next((ends for ends in (r.first_and_last(topic) for r in self._pieces) if ends), None)
+        last = next((ends for ends in (r.first_and_last(topic) for r in reversed(self._pieces)) if ends), None)
+        return (first[0], last[1]) if first else None
 
     def parameters(self) -> dict:
         return self._pieces[0].parameters()

@@ -305,7 +305,7 @@ class _Progress:
         fill = int(round(frac * width))
         wall = max(now - self.t_wall0, 1e-9)
         self._write(f"\rrender [{'#' * fill}{'.' * (width - fill)}] {100 * frac:5.1f}% "
-                    f"{done:7.2f}/{self.total:.2f} s  {done / wall:6.1f}x real time")
+                    f"{done:7.2f}/{self.total:.2f} s  {times_real_time(done / wall):>6}x real time")
 
     def done(self) -> None:
         if self.enabled and self.last:         # the line after a bar drawn, none without one
@@ -641,5 +641,12 @@ def render_command(args) -> int:
         tier += "; no skid ratios: the scene asks for them, the skidding tier computes them"
     print(f"{summary['path']}: {summary['signal_s']:g} s of {scene.name} ({tier}), "
           f"{summary['messages']} messages, {summary['bytes'] / 1e6:.1f} MB of messages, "
-          f"rendered in {summary['wall_s']:.2f} s = {summary['real_time_factor']:.1f}x real time")
+          f"rendered in {summary['wall_s']:.2f} s = {times_real_time(summary['real_time_factor'])}x real time")
     return 0
+
+
+def times_real_time(factor: float) -> str:
+    """A real-time factor in words: one decimal from 1 up (``27.2``), two significant digits
+    below (``0.014``), where one decimal said "0.0x real time" of a render 70 times slower than
+    real time."""
+    return f"{factor:.1f}" if factor >= 1.0 else f"{factor:.2g}"
