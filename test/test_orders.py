@@ -184,3 +184,26 @@ def test_at_a_steady_speed_the_scores_in_orders_are_those_in_hz():
     assert why == "" and result["verdict"] == in_hz["verdict"] == "outer"
     for fault, score in in_hz["scores"].items():
         assert result["scores"][fault] == pytest.approx(score, rel=0.03), (fault, result["scores"], in_hz["scores"])
+
+
+def test_at_300_rpm_a_ball_pit_whose_cage_sidebands_crowd_its_line_stands_in_orders_as_in_hz():
+    """A ball pit meets the load zone once per cage turn: impacts at 2xBSF per revolution whose
+    strength follows the cage angle (sin^8: strongest at the bottom, none in the top half).  At
+    300 rpm the cage turns 1.985 times a second and those sidebands, 1.985 Hz apart, fill 1 s
+    segments' bins (1 Hz, the Hann lobe +-2 Hz) and the floor beside the line: x2.2 in orders and
+    in Hz, no fault.  In segments of 8 cage turns (envelope.decision_segment: 20 revolutions, the
+    whole 4 s) the line stands above its sidebands, x9.3, "ball", in orders as in Hz (BPFI, 5.427
+    orders, x7.7, sits on the line's second cage sideband here: 4.64 + 2 x 0.397)."""
+    angle, speed = _ramp(5.0, 5.0, 4.0)
+    t = np.arange(int(4.0 * FS)) / FS
+    per_rev = 2 * PER_SHAFT_HZ["bsf"]
+    hits = np.flatnonzero(np.diff(np.floor(angle(t) / (2 * math.pi) * per_rev)) > 0) + 1
+    train = np.zeros(t.size)
+    train[hits] = np.maximum(0.0, -np.sin(CAGE_RATIO * angle(t[hits]))) ** 8      # half strength within +-24 deg of the bottom
+    k = np.arange(int(0.005 * FS)) / FS
+    x = np.convolve(train, np.exp(-k / 1e-3) * np.sin(2 * math.pi * 3800.0 * k))[:t.size]
+    x += np.random.default_rng(0).normal(0.0, 0.05, t.size)
+    result, why = orders.order_diagnose(x, FS, t, *_state(angle, speed, 4.0), PER_SHAFT_HZ, BALLS)
+    in_hz = diagnose(x[t >= 0.02], FS, {k: 5.0 * v for k, v in PER_SHAFT_HZ.items()})
+    assert why == "" and result["verdict"] == in_hz["verdict"] == "ball", (result["scores"], in_hz["scores"])
+    assert result["scores"]["ball"] == pytest.approx(in_hz["scores"]["ball"], rel=0.1)

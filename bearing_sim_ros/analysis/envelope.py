@@ -20,6 +20,11 @@ Choices, checked on the CWRU recordings (``bearing-sim validate``, README "Valid
   makes the floor's median a steady reference.  Largest score of white noise: 3.4 over 150
   one-second records, 1.8 over 150 four-second ones.  CWRU recordings, any 1 s window: healthy
   <= 2.8, inner race 44-62 (BPFI), outer race 68-129 (BPFO); threshold 4.
+* Below FTF = 8 Hz (about 1200 rpm on the ER-16K and the 6205) segments of 8 cage turns
+  instead (:func:`decision_segment`): there 1 Hz bins merge a fault line with its cage- and
+  shaft-rate sidebands and a ball or inner pit at 300 rpm scored x1.6-2.1
+  (docs/low_speed_detection.md).  A record shorter than that is one FFT (white noise: up to 3.6
+  over 4 s at 300 rpm, as over a 1 s record).
 * One line per fault (no harmonic sum): 3 x BPFO and 2 x BPFI of the 6205 lie 0.7 % apart, and
   summing harmonics made an outer-race fault score for "inner" too.
 """
@@ -34,6 +39,11 @@ from ..errors import UserError, short_repr
 
 DEFAULT_BAND = (2000.0, 5000.0)
 DEFAULT_SEGMENT = 1.0     # s: length of the averaged segments of the detector's envelope spectrum
+# segments span at least this many cage turns (decision_segment): a ball pit meets the load zone
+# once per cage turn and the others' lines carry the cage or shaft rate as sidebands, which bins of
+# 1 Hz merge with the line below about 1000 rpm (the ER-16K's FTF 6.6 Hz); 1/8 of FTF apart, the
+# first sidebands lie 8 bins off, clear of the Hann main lobe (+-2 bins) and the +-1 % search
+CAGE_TURNS = 8.0
 FAULT_KEYS = ("ftf", "bpfo", "bpfi", "bsf")   # what Bearing.fault_frequencies gives, Hz
 FAULT_LINES = {          # which envelope line marks which fault
     "outer": "bpfo",
@@ -114,6 +124,25 @@ def averaged_spectrum(env: np.ndarray, rate: float, max_freq: float, segment: fl
     freqs = np.fft.rfftfreq(nseg, 1.0 / rate)
     keep = freqs <= max_freq
     return freqs[keep], spec[keep]
+
+
+def decision_segment(frequencies: Mapping, segment: float = DEFAULT_SEGMENT) -> float:
+    """The detector's segment (s, or revolutions where ``frequencies`` are orders): ``segment``, or
+    ``CAGE_TURNS`` cage turns (``frequencies["ftf"]``, per the same unit) where that is longer.
+
+    At 300 rpm the ER-16K's cage turns at 2 Hz and a ball pit's 2xBSF line carries sidebands every
+    2 Hz (the pit passes the load zone once per cage turn), an inner pit's BPFI every 5 Hz (once per
+    shaft turn): 1 s segments (1 Hz bins, the Hann main lobe +-2 Hz) smear them into one hump that
+    the +-20 Hz floor rises with, and a 0.6 mm ball pit scored x2.1 (kinematic) and x1.6 (skidding)
+    over 4 s, an inner pit x1.8 and x2.0 (docs/low_speed_detection.md).  Segments of 8 cage turns
+    (4 s there) resolve the line: x9.6 / x18.3, x16.7 / x23.5.  From 1200 rpm up on the ER-16K (and
+    the CWRU 6205 at 1797 rpm: FTF 11.9 Hz) this is 1 s: nothing changes there."""
+    ftf = frequencies.get("ftf", 0.0) if isinstance(frequencies, Mapping) else 0.0
+    try:
+        ftf = abs(float(ftf))
+    except (TypeError, ValueError):
+        ftf = 0.0
+    return max(segment, CAGE_TURNS / ftf) if np.isfinite(ftf) and ftf > 0 else segment
 
 
 def _segment_samples(n: int, fs: float, segment: float | None) -> int:
@@ -206,9 +235,10 @@ def fault_targets(frequencies: dict) -> dict:
 
 def fault_lines(x: np.ndarray, fs: float, frequencies: dict, band=DEFAULT_BAND,
                 neighbourhood_hz: float = 20.0, search_rel: float = 0.01,
-                segment: float | None = DEFAULT_SEGMENT) -> dict:
+                segment: float | None | str = "auto") -> dict:
     """Envelope lines at the fault frequencies, on the averaged envelope spectrum
-    (``segment`` s, see :func:`envelope_spectrum`).
+    (``segment`` s, see :func:`envelope_spectrum`; "auto": :func:`decision_segment`, 1 s or
+    ``CAGE_TURNS`` cage turns where those are longer; a record shorter than that is one FFT).
 
     ``frequencies``: ``{"ftf", "bpfo", "bpfi", "bsf"}`` in Hz (``Bearing.fault_frequencies``).
     Returns ``{name: Line}`` for "bpfo", "bpfi", "2bsf", "ftf".  A record (or ``segment``)
@@ -216,10 +246,12 @@ def fault_lines(x: np.ndarray, fs: float, frequencies: dict, band=DEFAULT_BAND,
     one-line :class:`~bearing_sim_ros.errors.UserError`.
     """
     x = one_channel(x)
+    targets = fault_targets(frequencies)
+    if isinstance(segment, str) and segment == "auto":
+        segment = decision_segment(frequencies)
     reason = _too_short(x.size, fs, segment, neighbourhood_hz)
     if reason:
         raise UserError(reason)
-    targets = fault_targets(frequencies)
     fmax = 1.2 * max(targets.values()) + 2 * neighbourhood_hz
     freqs, spec = envelope_spectrum(x, fs, band, max_freq=fmax, segment=segment)
     return {name: line_at(freqs, spec, f0, search_rel, neighbourhood_hz) for name, f0 in targets.items()}
@@ -256,7 +288,7 @@ def with_cage(frequencies: dict, balls: int, shaft_hz: float, cage_hz: float) ->
 
 
 def diagnose(x: np.ndarray, fs: float, frequencies: dict, band=DEFAULT_BAND,
-             threshold: float = DETECTION_THRESHOLD, segment: float | None = DEFAULT_SEGMENT) -> dict:
+             threshold: float = DETECTION_THRESHOLD, segment: float | None | str = "auto") -> dict:
     """Envelope verdict: ``{"verdict": "healthy" | "outer" | "inner" | "ball", "lines": {...},
     "scores": {fault: prominence}}``.  The fault whose line stands highest above ``threshold``
     wins; none above it is "healthy".  ``segment``: see :func:`fault_lines`."""

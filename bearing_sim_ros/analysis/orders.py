@@ -14,7 +14,8 @@ stay put while the speed moves.  The recipe:
    resonance does not move with the speed), resampled at equal steps of shaft angle, at least
    as finely as the signal samples it everywhere (no aliasing where the shaft is slowest);
 3. its spectrum in orders, averaged over segments of as many revolutions as the shaft turns in
-   ``envelope.DEFAULT_SEGMENT`` at its mean speed, each line's neighbourhood as many orders as
+   ``envelope.DEFAULT_SEGMENT`` at its mean speed (or ``envelope.CAGE_TURNS`` cage turns where
+   those are more, ``envelope.decision_segment``), each line's neighbourhood as many orders as
    20 Hz is at that speed: the same bins per neighbourhood and segments as the detector in Hz
    gives a steady recording, so ``DETECTION_THRESHOLD`` means the same;
 4. the lines at the fault orders (BPFO, BPFI and FTF from the cage-to-shaft angle ratio of
@@ -30,7 +31,7 @@ import math
 import numpy as np
 
 from .envelope import (DEFAULT_BAND, DEFAULT_SEGMENT, DETECTION_THRESHOLD, STEADY_LINES, averaged_spectrum,
-                       envelope, fault_targets, line_at, shortest_record_s, spread, verdict_of, with_cage)
+                       decision_segment, envelope, fault_targets, line_at, shortest_record_s, spread, verdict_of, with_cage)
 
 NEIGHBOURHOOD_HZ = 20.0         # Hz: the detector's neighbourhood in Hz (envelope.line_at's default)
 MAX_STATE_GAP_S = 0.1           # s: states further apart than this leave a speed step between them unseen
@@ -141,10 +142,12 @@ def order_diagnose(x, fs: float, times_s, state_t_s, shaft_angle, shaft_w, cage_
     per_rev = int(min(MAX_SAMPLES_PER_REV, math.ceil(fs / max(float(speeds_hz.min()), SLOWEST_SHARE * speeds_hz.max()))))
     grid = angle[0] + 2.0 * math.pi * np.arange(int(revolutions * per_rev)) / per_rev
     resampled = np.interp(grid, angle, env[covered])
-    # the detector's resolution and neighbourhood in Hz, at the mean speed, in orders
-    segment_revs = DEFAULT_SEGMENT * mean_hz
+    # the detector's resolution and neighbourhood in Hz, at the mean speed, in orders; segments of
+    # at least CAGE_TURNS cage turns as in Hz (envelope.decision_segment: the lines' cage and shaft
+    # sidebands resolved below about 1000 rpm)
     neighbourhood = NEIGHBOURHOOD_HZ / mean_hz
     targets = fault_targets(with_cage(per_shaft_hz, balls, 1.0, ratio))
+    segment_revs = decision_segment(targets, DEFAULT_SEGMENT * mean_hz)
     # up to 3.3 x the highest line, as the report's plot of it shows
     max_order = 3.3 * max(targets.values()) + 2 * neighbourhood
     orders, spec = averaged_spectrum(resampled - resampled.mean(), per_rev, max_order, segment_revs)
