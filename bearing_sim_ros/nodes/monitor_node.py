@@ -228,7 +228,7 @@ def _highest_over_axes(channels, diagnose_axis) -> dict:
 
 
 def order_verdict(data: np.ndarray, channels, sample_rate: float, times_s, bearing, states,
-                  spin_share: float | None = None) -> tuple:
+                  spin_share: float | None = None, spin_shares=None) -> tuple:
     """The envelope verdict over the axes of ``data`` (n, channels; sample ``k`` at signal time
     ``times_s[k]``, s) in orders of the shaft (``orders.order_diagnose``), for a stretch whose
     speeds moved, where one spectrum in Hz smears every line: ``(result, "")`` with ``verdict``'s
@@ -237,9 +237,14 @@ def order_verdict(data: np.ndarray, channels, sample_rate: float, times_s, beari
     samples that span the stretch, (stamp s on ``times_s``' clock, shaft angle rad, shaft speed
     rad/s, cage angle rad, cage speed rad/s) arrays, NaN for an angle not given; a cage speed of
     NaN (a ``state`` without the cage) is pure rolling's, as ``verdict`` takes then;
-    ``spin_share`` moves BSF as there."""
+    ``spin_share`` moves BSF as there; ``spin_shares`` (the balls' spin share at each state
+    sample, ``spin_shares_at``), where given, instead: a skid that moves in the window
+    (a speed step on the skidding tier) has the 2xBSF line judged on the balls' spin angle
+    (``orders.order_diagnose``)."""
     state_t, shaft_angle, shaft_w, cage_angle, cage_w = (np.asarray(a, dtype=float) for a in states)
     per_shaft_hz = bearing.fault_frequencies(1.0)
+    if spin_shares is not None:
+        spin_share = None
     if spin_share:
         per_shaft_hz = {**per_shaft_hz, "bsf": per_shaft_hz["bsf"] * spin_share}
     if not np.all(np.isfinite(cage_w)):
@@ -248,13 +253,27 @@ def order_verdict(data: np.ndarray, channels, sample_rate: float, times_s, beari
     for k in range(len(channels)):
         # why not is the same on every axis: it depends on the states and times alone
         result, why = order_diagnose(data[:, k].astype(float), sample_rate, times_s, state_t, shaft_angle, shaft_w,
-                                     cage_angle, cage_w, per_shaft_hz, bearing.balls)
+                                     cage_angle, cage_w, per_shaft_hz, bearing.balls, spin_shares=spin_shares)
         if result is None:
             return None, why
         tracked.append(result)
     first = tracked[0]          # the stretch, speeds and orders are the same on every axis
     return {**_highest_over_axes(channels, tracked.__getitem__), "theory": first["orders"],
             "shaft_rpm": first["shaft_rpm"], "revolutions": first["revolutions"]}, ""
+
+
+def spin_shares_at(spins, stamps_ns) -> np.ndarray | None:
+    """The balls' spin share at each of ``stamps_ns`` (a window's state samples, ns) from
+    ``spins`` ((stamp ns, share) of the diagnostics, ``SourceRun.spins``): each share (the mean of
+    the second before its stamp) put half a second before its stamp, linear between them and held
+    beyond; None without any (pure rolling).  (Held over each period instead, a ball pit over a
+    step from 1000 to 2000 rpm scored x4.4, not x5.5.)"""
+    spins = list(spins)         # the executor thread appends to it
+    if not spins:
+        return None
+    at = np.array([stamp - NS // 2 for stamp, _share in spins], dtype=float)
+    shares = np.array([share for _stamp, share in spins], dtype=float)
+    return np.interp(np.asarray(stamps_ns, dtype=float), at, shares)
 
 
 def spin_share_of(values: dict, bearing) -> float | None:
@@ -887,8 +906,12 @@ class MonitorNode(Node):
             if moved > STEADY_LINES:
                 # a step or ramp in the window smeared its lines in Hz ("healthy" of an outer-race
                 # pit): in orders of the shaft they hold still
+                # the balls' spin at each state sample (``window_states``' stamps: s from ``start``):
+                # a skid that moves in the window moves 2xBSF
+                shares = (spin_shares_at(run.spins, (end if start is None else start) + np.asarray(states[0]) * NS)
+                          if states is not None else None)
                 tracked, why = (order_verdict(x, channels, fs, np.arange(x.shape[0]) / fs, self.scene.bearing, states,
-                                              spin)
+                                              spin, shares)
                                 if states is not None else (None, "no state samples in the window"))
                 result = ({**tracked, "shaft_hz": shaft_hz, "moved": moved} if tracked is not None else
                           {"verdict": "unknown", "shaft_hz": shaft_hz, "moved": moved, "untracked": why})
