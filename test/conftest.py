@@ -211,23 +211,24 @@ def skidding_outer_race(tmp_path_factory):
     """(scene path, recording path): er16k_outer_race moved to 10000 rpm / 10 N, where its cage
     skids about 7 % (the outer-race line sits 7 % below the catalog's pure-rolling BPFO, 552
     against 595 Hz), rendered once for 2 s on the skidding tier (test_render, test_report)."""
-    return _skidding_variant(tmp_path_factory, "er16k_outer_race", "{shaft_speed_rpm: 1600, radial_load: [0.0, -50.0]}",
-                             "{shaft_speed_rpm: 10000, radial_load: [0.0, -10.0]}")
+    return _skidding_variant(tmp_path_factory, "er16k_outer_race", [(
+        "{shaft_speed_rpm: 1600, radial_load: [0.0, -50.0]}", "{shaft_speed_rpm: 10000, radial_load: [0.0, -10.0]}")])
 
 
-def _skidding_variant(tmp_path_factory, shipped: str, old: str, new: str):
-    """(scene path, recording path): the shipped scene ``shipped`` with its text ``old``
-    replaced by ``new``, rendered for 2 s on the skidding tier."""
+def _skidding_variant(tmp_path_factory, shipped: str, changes: list, seconds: float = 2.0):
+    """(scene path, recording path): the shipped scene ``shipped`` with each (old, new) text of
+    ``changes`` replaced, rendered for ``seconds`` on the skidding tier."""
     from bearing_sim_ros.recording.render import render
 
     text = (REPO / "config" / "scenes" / f"{shipped}.yaml").read_text()
-    changed = text.replace(old, new)
-    assert changed != text, f"{shipped}.yaml no longer has {old!r}: update this fixture"
+    for old, new in changes:
+        assert old in text, f"{shipped}.yaml no longer has {old!r}: update this fixture"
+        text = text.replace(old, new)
     folder = tmp_path_factory.mktemp(shipped)
     path = folder / f"{shipped}_variant.yaml"
-    path.write_text(changed)
+    path.write_text(text)
     recording = folder / "variant.mcap"
-    render(str(path), 2.0, recording, fidelity="skidding", progress=False)
+    render(str(path), seconds, recording, fidelity="skidding", progress=False)
     return path, recording
 
 
@@ -236,8 +237,21 @@ def skidding_ball_pit(tmp_path_factory):
     """(scene path, recording path): er16k_skidding (2000 rpm / 200 N) with a 0.6 mm ball pit,
     rendered once for 2 s on the skidding tier, whose balls spin 2.2 % slower than pure rolling:
     the pit's 2xBSF line sits at 151.3 Hz, not pure rolling's 154.75 (test_monitor, test_run)."""
-    return _skidding_variant(tmp_path_factory, "er16k_skidding", "defects: []",
-                             "defects: [{kind: ball, width_mm: 0.6, depth_mm: 0.25, angle_deg: 0}]")
+    return _skidding_variant(tmp_path_factory, "er16k_skidding", [BALL_PIT])
+
+
+BALL_PIT = ("defects: []", "defects: [{kind: ball, width_mm: 0.6, depth_mm: 0.25, angle_deg: 0}]")
+
+
+@pytest.fixture(scope="session")
+def skidding_ball_pit_speed_step(tmp_path_factory):
+    """(scene path, recording path): as ``skidding_ball_pit``, at 1000 rpm stepping to 2000 rpm at
+    1.8-2.2 s, rendered for 4 s: the balls' skid moves from about 4.8 % to 3 %, and the pit's 2xBSF
+    line by 2 % in orders of the shaft (test_monitor, test_report)."""
+    return _skidding_variant(tmp_path_factory, "er16k_skidding", [BALL_PIT, (
+        "{shaft_speed_rpm: 2000, radial_load: [0.0, -200.0]}",
+        "{shaft_speed_rpm: 1000, radial_load: [0.0, -200.0]}\nprofile:\n"
+        "  - {t: 1.8, shaft_speed_rpm: 1000}\n  - {t: 2.2, shaft_speed_rpm: 2000}")], seconds=4.0)
 
 
 # A scene within every bound on which the skidding tier's default solver diverges, 10 - 60 ms

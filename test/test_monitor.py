@@ -1217,7 +1217,7 @@ def test_the_monitor_looks_for_a_ball_pit_where_the_balls_spin_puts_it(ros_env, 
     assert score == "monitor: score 2 of 2 verdicts agree with the truth, 0 truth=unknown", score
 
 
-def test_a_window_over_a_speed_step_looks_for_a_ball_pit_on_the_balls_spin(ros_env, tmp_path):
+def test_a_window_over_a_speed_step_looks_for_a_ball_pit_on_the_balls_spin(ros_env, skidding_ball_pit_speed_step):
     """On the skidding tier a speed step moves the balls' skid (er16k_skidding with a 0.6 mm ball
     pit, 1000 to 2000 rpm at 1.8-2.2 s: about 4.8 % to 3 %), so the pit's 2xBSF line moves by 2 %
     in orders of the shaft, out of the +-1 % search, and a 4 s window over the step, judged in
@@ -1225,14 +1225,7 @@ def test_a_window_over_a_speed_step_looks_for_a_ball_pit_on_the_balls_spin(ros_e
     the spin of each /diagnostics period (``spin_shares_at``) and judges the 2xBSF line on
     the balls' spin angle: ball, x5.5 (1 Hz periods follow the skid roughly: with the skid of
     every sample, x12 in a probe)."""
-    scene = tmp_path / "ball_step.yaml"
-    scene.write_text(load_scene("er16k_skidding").source_text
-                     .replace("defects: []", "defects: [{kind: ball, width_mm: 0.6, depth_mm: 0.25, angle_deg: 0}]")
-                     .replace("{shaft_speed_rpm: 2000, radial_load: [0.0, -200.0]}",
-                              "{shaft_speed_rpm: 1000, radial_load: [0.0, -200.0]}\nprofile:\n"
-                              "  - {t: 1.8, shaft_speed_rpm: 1000}\n  - {t: 2.2, shaft_speed_rpm: 2000}"))
-    recording = tmp_path / "ball_step.mcap"
-    render(str(scene), 4.0, recording, fidelity="skidding", progress=False)
+    scene, recording = skidding_ball_pit_speed_step
     lines, _score = _verdicts_of_a_recording(recording, load_scene(str(scene)), window=4.0)
     assert len(lines) == 1 and "in orders" in lines[0], lines
     assert [(v, truth) for _t, v, truth in VERDICT.findall(lines[0])] == [("ball", "ball")], lines

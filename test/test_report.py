@@ -14,7 +14,7 @@ import pytest
 from bearing_sim_ros import cli, load_scene
 from bearing_sim_ros.ground_truth import faults_at
 from bearing_sim_ros.analysis import report
-from bearing_sim_ros.analysis.envelope import envelope_spectrum
+from bearing_sim_ros.analysis.envelope import DETECTION_THRESHOLD, envelope_spectrum
 from bearing_sim_ros.analysis.report import build_report
 from bearing_sim_ros.recording.reader import open_recording
 from bearing_sim_ros.recording.render import render
@@ -467,6 +467,18 @@ def test_report_looks_for_the_lines_where_the_recorded_cage_puts_them(tmp_path, 
     assert abs(s["fault_lines"]["bpfo"]["found_hz"] - used["bpfo"]) < 0.5
     assert "Expected at the fault frequencies of the recording's /diagnostics" in (
         tmp_path / "out" / "summary.md").read_text()
+
+
+def test_order_tracking_looks_for_a_ball_pit_on_the_balls_spin(tmp_path, skidding_ball_pit_speed_step):
+    """On the skidding tier a speed step from 1000 to 2000 rpm takes the balls' skid from about
+    4.8 % to 3 %: a ball pit's 2xBSF line moves by 2 % in orders of the shaft, out of the +-1 %
+    search, and order tracking at the stretch's mean spin called this pit healthy (2xBSF x3.0).
+    Now it takes each /diagnostics period's spin (``spin_shares``) and judges the line on the
+    balls' spin angle, as the monitor does: ball."""
+    _scene, rec = skidding_ball_pit_speed_step
+    s = build_report(rec, tmp_path / "out")
+    assert s["order_tracking"]["verdict"] == "ball" and s["verdict"] == "ball", s["order_tracking"]
+    assert s["order_tracking"]["lines"]["2bsf"]["prominence"] > DETECTION_THRESHOLD, s["order_tracking"]
 
 
 def test_report_says_when_auto_switched_tiers(tmp_path):

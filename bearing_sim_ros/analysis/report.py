@@ -790,8 +790,28 @@ def order_tracked(d: "_Data", x, times_s, scene, periods: RecordedPeriods | None
     if not per_shaft_hz or per_shaft_hz["ftf"] <= 0:
         return None, "no fault frequencies to take the fault orders from"
     balls = scene.bearing.balls if scene is not None else round(per_shaft_hz["bpfo"] / per_shaft_hz["ftf"])
-    return order_diagnose(x, d.sample_rate, times_s, d.state_t - d.t0_ns / NS, d.shaft_angle, d.shaft_w,
-                          d.cage_angle, d.cage_w, per_shaft_hz, balls)
+    state_t = d.state_t - d.t0_ns / NS
+    return order_diagnose(x, d.sample_rate, times_s, state_t, d.shaft_angle, d.shaft_w, d.cage_angle, d.cage_w,
+                          per_shaft_hz, balls,
+                          spin_shares=spin_shares(d.signal_frequency_periods, state_t, per_shaft_hz["bsf"], balls))
+
+
+def spin_shares(periods: list, at_s, bsf_per_shaft_hz: float, balls: int):
+    """The balls' spin at each of the times ``at_s`` (s of signal) as a share of
+    ``bsf_per_shaft_hz`` (BSF per shaft hertz), from the recorded ``/diagnostics`` ``periods``
+    ((from s, to s, {"ftf", "bpfi", "bsf": Hz}): ``_Data.signal_frequency_periods``): each
+    period's BSF over its shaft speed (FTF + BPFI / Z) at its middle, linear between them and held
+    beyond, as the monitor takes them (``monitor_node.spin_shares_at``); ``order_diagnose`` judges
+    the 2xBSF line on the balls' spin angle where the share moves.  None where a period lacks
+    ``bsf`` (a recording made before ``bsf_hz``) or a shaft that turns: the mean BSF then."""
+    middles, shares = [], []
+    for p0, p1, f in periods:
+        shaft = f.get("ftf", 0.0) + f.get("bpfi", 0.0) / balls
+        if "bsf" not in f or not shaft > 0 or not bsf_per_shaft_hz > 0:
+            return None
+        middles.append(0.5 * (p0 + p1))
+        shares.append(f["bsf"] / shaft / bsf_per_shaft_hz)
+    return np.interp(np.asarray(at_s, dtype=float), middles, shares) if shares else None
 
 
 class _Spool:
