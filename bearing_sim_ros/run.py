@@ -40,9 +40,10 @@ def _record_tail(paths, max_s: float) -> dict:
     whole recording (percent; the skidding tier's ``/diagnostics``).  For order tracking where
     the speeds moved: ``times_s``, the signal time of each sample (s from the stretch's first,
     by its table's stamp), and ``states``, the ``state`` samples that span the stretch (with the
-    last before it) as ``monitor_node.order_verdict`` takes them.  ``diagnostics``: the values
-    ({key: text}) of each ``/diagnostics`` message stamped in the stretch (each the mean of the
-    second before its stamp), where the balls' spin is (``bsf_hz``)."""
+    last before it) as ``monitor_node.order_verdict`` takes them, on the clock of ``t0_ns`` (the
+    stretch's first stamp).  ``diagnostics``: (stamp ns, values {key: text}) of each
+    ``/diagnostics`` message stamped in the stretch (each the mean of the second before its
+    stamp), where the balls' spin is (``bsf_hz``)."""
     from rclpy.serialization import deserialize_message
 
     from .analysis.envelope import STEADY_LINES, spread
@@ -59,7 +60,7 @@ def _record_tail(paths, max_s: float) -> dict:
     before = []                     # the last state before the stretch (its angles where it begins)
     starts: deque = deque()         # the stamp of each table in parts
     skids: dict = {}
-    diagnostics: deque = deque()    # (stamp ns, {key: text}) of each /diagnostics message
+    diagnostics: deque = deque()    # (stamp ns, {key: text}) of each /diagnostics message in the stretch
     channels, rate = None, None
     prev = None
     with open_recording(paths) as rec:          # a split recording's pieces in order, as one
@@ -120,7 +121,7 @@ def _record_tail(paths, max_s: float) -> dict:
             "states": window_states(before + list(states), t0),
             "shaft_speed": float(np.mean(speeds)) if speeds else None,
             "cage_speed": float(np.mean([s[2] for s in states])) if states else None, "speed_spread": moved,
-            "metadata": meta, "diagnostics": [values for _stamp, values in diagnostics],
+            "metadata": meta, "diagnostics": list(diagnostics), "t0_ns": t0,
             "counts": counts, "skid_percent": {k: float(np.mean(v)) for k, v in sorted(skids.items())}}
 
 
@@ -176,8 +177,9 @@ def summarise(scene, tail: dict, node_figures: dict, path, out: str | None = Non
     recording (``recording_argument``); ``out``: the name it was made to (default ``path``),
     whose stem names the report's folder."""
     from .analysis.envelope import DETECTION_THRESHOLD, STEADY_LINES
-    from .nodes.monitor_node import order_verdict, spin_share_of, verdict
+    from .nodes.monitor_node import order_verdict, spin_share_of, spin_shares_at, verdict
     from .recording.render import tier_summary
+    from .waveform import NS
 
     lines = []
     f = node_figures
@@ -201,15 +203,19 @@ def summarise(scene, tail: dict, node_figures: dict, path, out: str | None = Non
         # the balls' spin from the simulator's /diagnostics in the stretch: on the skidding tier
         # they spin 1-3 % slower than pure rolling, and a ball pit's 2xBSF line with them,
         # outside the detector's +-1 % search at pure rolling's (a ball pit was called healthy)
-        shares = [share for share in (spin_share_of(values, scene.bearing) for values in tail.get("diagnostics", ()))
-                  if share is not None]
-        spin = float(np.mean(shares)) if shares else None
+        spins = [(stamp, share) for stamp, share in ((stamp, spin_share_of(values, scene.bearing))
+                                                      for stamp, values in tail.get("diagnostics", ()))
+                 if share is not None]
+        spin = float(np.mean([share for _stamp, share in spins])) if spins else None
         tracked, untracked = None, ""
         if moved > STEADY_LINES:
             # a speed step or ramp (commands to the node) smeared the lines in Hz: in orders of
             # the shaft they hold still
+            # where a step moves the balls' skid, their spin at each state sample: the 2xBSF line is
+            # judged on their spin angle (as monitor and report do)
+            shares = spin_shares_at(spins, tail["t0_ns"] + np.asarray(tail["states"][0]) * NS) if spins else None
             tracked, untracked = order_verdict(x, tail["channels"], fs, tail["times_s"], scene.bearing,
-                                               tail["states"], spin)
+                                               tail["states"], spin, shares)
         if moved > STEADY_LINES and tracked is None:
             lines.append(f"envelope analysis of the last {x.shape[0] / fs:.1f} s: no verdict: the shaft and cage "
                          f"speeds moved by {100 * moved:.0f} % in it (a speed step or ramp, a load step that "

@@ -354,6 +354,19 @@ def test_the_summary_looks_for_a_ball_pit_where_the_balls_spin_puts_it(skidding_
     assert abs(expected - found) < 1.0 and 0.97 * pure < expected < 0.99 * pure and height > 10, (pure, text)
 
 
+def test_the_summary_tracks_a_ball_pit_on_the_balls_spin_over_a_speed_step(skidding_ball_pit_speed_step):
+    """A speed step from 1000 to 2000 rpm on the skidding tier takes the balls' skid from about
+    4.8 % to 3 %, and a ball pit's 2xBSF line moves by 2 % in orders of the shaft: judged at the
+    stretch's mean spin, the summary called the pit healthy (2xBSF x3.0).  Now it takes each
+    /diagnostics period's spin, as monitor and report do: ball fault, 2xBSF detected."""
+    from bearing_sim_ros import load_scene
+
+    scene, recording = skidding_ball_pit_speed_step
+    text = _summary_of(recording, load_scene(str(scene)))
+    assert " by order tracking, " in text and "\nverdict: ball fault (" in text, text
+    assert re.search(r"2xBSF +[\d.]+ +[\d.]+ +[\d.]+  <- detected", text), text
+
+
 def test_the_summary_of_a_stretch_whose_speed_stepped_is_in_orders(tmp_path):
     """A speed command from 1600 to 3000 rpm in the analysed stretch smears every envelope line;
     the summary judged it at the lines of the mean speed, where neither half has them, and called
