@@ -210,9 +210,8 @@ def summarise(scene, tail: dict, node_figures: dict, path, out: str | None = Non
         tracked, untracked = None, ""
         if moved > STEADY_LINES:
             # a speed step or ramp (commands to the node) smeared the lines in Hz: in orders of
-            # the shaft they hold still
-            # where a step moves the balls' skid, their spin at each state sample: the 2xBSF line is
-            # judged on their spin angle (as monitor and report do)
+            # the shaft they hold still; where it moves the balls' skid, the 2xBSF line is judged
+            # on their spin angle, from their spin at each state sample (as monitor and report do)
             shares = spin_shares_at(spins, tail["t0_ns"] + np.asarray(tail["states"][0]) * NS) if spins else None
             tracked, untracked = order_verdict(x, tail["channels"], fs, tail["times_s"], scene.bearing,
                                                tail["states"], spin, shares)
