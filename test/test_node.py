@@ -758,12 +758,16 @@ def test_diagnostics_go_on_each_second_after_real_time_is_switched_off_and_on(st
     resumed = time.monotonic()
     listener.wait_for(lambda: float(listener.diagnostics[-1][3]["simulated_s"]) > 10.0, 5.0,
                       "the signal to run ahead")        # the test can fail: it did run ahead
-    # three within 6 s (a loaded machine may delay one; the old schedule gave none for the 10 s
-    # the signal had run ahead)
-    listener.wait_for(lambda: len([d for d in listener.diagnostics if d[0] > resumed + 0.2]) >= 3,
-                      resumed + 6.0 - time.monotonic(), "three /diagnostics after real_time:=true")
-    after = [d for d in listener.diagnostics if d[0] > resumed + 0.2]
-    assert all(d[3]["real_time"] == "true" for d in after[1:])
+    # three that say real_time true within 6 s (a loaded machine may delay one; the old schedule
+    # gave none for the 10 s the signal had run ahead).  Counted by what they say, not by when
+    # they arrived: the listener may still be taking in the tables and diagnostics published
+    # while the signal ran ahead (one clean CI run had two of those arrive after the switch)
+    listener.wait_for(lambda: len([d for d in listener.diagnostics
+                                   if d[0] > resumed and d[3]["real_time"] == "true"]) >= 3,
+                      resumed + 6.0 - time.monotonic(), "three /diagnostics of real_time true after real_time:=true")
+    # and once one says true, none after it says false (they come in the order published)
+    said = [d[3]["real_time"] for d in listener.diagnostics if d[0] > resumed]
+    assert "false" not in said[said.index("true"):], said
 
 
 def test_a_command_across_the_tier_boundary_switches_tiers_and_says_so(started, listener):
