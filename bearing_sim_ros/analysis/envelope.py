@@ -67,10 +67,6 @@ def one_channel(x) -> np.ndarray:
 def envelope_band(fs: float, band=DEFAULT_BAND) -> tuple:
     """(low, high) Hz: the band-pass of the envelope at the sample rate ``fs`` (Hz): ``band``
     with its top held to 0.9 x Nyquist and its bottom to half its top (1 kHz: 225-450 Hz)."""
-    return _band(fs, band)
-
-
-def _band(fs: float, band) -> tuple:
     lo, hi = band
     nyq = 0.5 * fs
     hi = min(hi, 0.9 * nyq)
@@ -83,7 +79,7 @@ def envelope(x: np.ndarray, fs: float, band=DEFAULT_BAND) -> np.ndarray:
     from scipy.signal import butter, hilbert, sosfiltfilt
 
     x = one_channel(x)
-    lo, hi = _band(fs, band)
+    lo, hi = envelope_band(fs, band)
     sos = butter(4, [lo, hi], btype="bandpass", fs=fs, output="sos")
     y = sosfiltfilt(sos, x - x.mean())
     env = np.abs(hilbert(y))
