@@ -1171,3 +1171,22 @@ def test_a_render_slower_than_real_time_says_how_much_slower(tmp_path, capsys):
     assert found, line
     wall, factor = float(found.group(1)), float(found.group(2))
     assert wall > 0.02 and factor == pytest.approx(0.02 / wall, rel=0.06), line      # 2 digits, and the wall's rounding
+
+
+def test_a_short_render_says_what_its_messages_weigh(tmp_path, capsys):
+    """The line gave the messages' size with one decimal in MB: 20 ms of signal said "0.0 MB of
+    messages".  Below 1 MB it has two significant digits, still in MB, and agrees with the bytes
+    of the messages an independent reader finds in the file."""
+    from mcap.reader import make_reader
+
+    out = tmp_path / "short.mcap"
+    assert cli.main(["render", "er16k_healthy", "--duration", "0.02", "--out", str(out)]) == 0
+    line = capsys.readouterr().out.strip().splitlines()[-1]
+    found = re.search(r"messages, ([0-9.]+) MB of messages, ", line)
+    assert found, line
+    with open(out, "rb") as f:
+        message_bytes = sum(len(m.data) for _s, _c, m in make_reader(f).iter_messages())
+    assert 1_000 < message_bytes < 1_000_000
+    shown = found.group(1)
+    assert float(shown) == pytest.approx(message_bytes / 1e6, rel=0.05), (line, message_bytes)
+    assert len(shown.lstrip("0.")) == 2, line                        # two significant digits

@@ -127,7 +127,18 @@ def sizes_text(status: dict) -> str:
     """'6.5 MB of messages, 2.3 MB on disk (zstd)' for a closed recording's ``status``: what
     the messages weigh serialised, and what the files take after chunk compression."""
     on_disk = sum(os.path.getsize(p) for p in status["files"] if os.path.exists(p))
-    return f"{status['bytes'] / 1e6:.1f} MB of messages, {on_disk / 1e6:.1f} MB on disk (zstd)"
+    return f"{megabytes(status['bytes'])} of messages, {megabytes(on_disk)} on disk (zstd)"
+
+
+def megabytes(n_bytes: int) -> str:
+    """A size in MB (10^6 bytes): one decimal from 1 MB up (``13.0 MB``), two significant digits
+    below (``0.045 MB``), where one decimal said "0.0 MB" of a short render's 45 kB; nothing
+    at all is ``0.0 MB``.  Always MB, so that a script reads one unit."""
+    size = n_bytes / 1e6
+    if size >= 1.0 or size <= 0.0:
+        return f"{size:.1f} MB"
+    decimals = 1 - math.floor(math.log10(size))           # the second significant digit's place
+    return f"{size:.{decimals}f} MB"
 
 
 def rotated_path(path: Path, index: int) -> Path:

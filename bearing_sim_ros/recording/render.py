@@ -636,11 +636,12 @@ def render_command(args) -> int:
     if summary["solver_unused"]:
         tier += "; --solver applies to the skidding tier only, not used"
     from ..fidelity import NO_SKID_RATIOS
+    from .recorder import megabytes
 
     if summary["tier_values"]["tier_reason"].startswith(NO_SKID_RATIOS):
         tier += "; no skid ratios: the scene asks for them, the skidding tier computes them"
     print(f"{summary['path']}: {summary['signal_s']:g} s of {scene.name} ({tier}), "
-          f"{summary['messages']} messages, {summary['bytes'] / 1e6:.1f} MB of messages, "
+          f"{summary['messages']} messages, {megabytes(summary['bytes'])} of messages, "
           f"rendered in {summary['wall_s']:.2f} s = {times_real_time(summary['real_time_factor'])}x real time")
     return 0
 
