@@ -325,6 +325,35 @@ def _params_file_scenes(ros_args: list) -> list:
     return found
 
 
+def _params_files_in_memory(ros_args: list) -> tuple:
+    """(``ros_args`` with each ``--params-file`` that is not a regular file replaced by a copy in
+    memory, {copy's path: path given}).  A pipe gives its text once: read here for its scene,
+    it left rcl an empty file, whose parameters were lost without a word (``<(...)``), or a FIFO
+    that rcl waited on for good.  The copy is a memfd, named ``/proc/self/fd/N``: rcl opens it
+    by that path in this process, and it goes with the process, whichever way that ends (the
+    node's teardown ends it with ``os._exit``, which no cleanup would outlive).  A path that
+    cannot be read is left to rcl, which names it."""
+    import os
+    import stat
+
+    args, given_as = list(ros_args), {}
+    for i, (flag, path) in enumerate(zip(ros_args, ros_args[1:])):
+        if flag != "--params-file":
+            continue
+        try:
+            if stat.S_ISREG(os.stat(path).st_mode):
+                continue
+            with open(path, "rb") as f:
+                text = f.read()
+        except OSError:
+            continue
+        fd = os.memfd_create("params_file")         # closed on exec: rcl reads it in this process
+        os.write(fd, text)
+        args[i + 1] = f"/proc/self/fd/{fd}"
+        given_as[args[i + 1]] = path
+    return args, given_as
+
+
 # the commands that load rcl (the ROS client library), which rclpy's serialisation needs too:
 # render and report write and read the messages with it
 RCL_COMMANDS = ("node", "run", "monitor", "play", "render", "report")
@@ -368,7 +397,7 @@ def _dispatch(args, rest) -> int:
     if cmd == "scenes":
         return _scenes(args)
     if cmd == "node":
-        from .nodes.bearing_sim_node import main as node_main, stray_arguments_error
+        from .nodes.bearing_sim_node import PARAMS_FILES_GIVEN_AS, main as node_main, stray_arguments_error
 
         # checked here too: the scene's parameter goes first, after a --ros-args of its own
         stray = rest[:rest.index("--ros-args")] if "--ros-args" in rest else rest
@@ -387,10 +416,14 @@ def _dispatch(args, rest) -> int:
                      and b.split(":=", 1)[0].rsplit(":", 1)[-1] == "scene" and ":=" in b]
             if given:
                 raise UserError(f"bearing-sim node: --scene {args.scene} and -p {given[0]} name two scenes; give one")
-            # ... and so does a parameters file's (it came after our -p and ran its scene)
+            # ... and so does a parameters file's (it came after our -p and ran its scene).  A pipe
+            # (`<(...)`, a FIFO) is read once, here, into a copy that rcl reads after us
+            rest, given_as = _params_files_in_memory(rest)
+            PARAMS_FILES_GIVEN_AS.update(given_as)
             in_files = _params_file_scenes(rest)
             if in_files:
                 path, scene = in_files[0]
+                path = given_as.get(path, path)
                 raise UserError(f"bearing-sim node: --scene {args.scene} and --params-file {path} (scene: {scene}) "
                                 "name two scenes; give one")
             argv += ["--ros-args", "-p", f"scene:={args.scene}"]

@@ -154,6 +154,59 @@ def test_node_refuses_a_scene_and_a_params_files_scene(capsys, tmp_path, text):
                    "name two scenes; give one"]
 
 
+@pytest.mark.parametrize("text, status, said", [
+    ("bearing_sim:\n  ros__parameters:\n    duration: 0.05\n", 0, "duration 0.05 s"),
+    ("bearing_sim:\n  ros__parameters:\n    scene: er16k_outer_race\n", 2, "(scene: er16k_outer_race) name two scenes"),
+])
+def test_node_with_a_scene_takes_a_params_file_from_a_pipe(ros_env, bearing_sim_exe, tmp_path, text, status, said):
+    """``bearing-sim node --scene A --ros-args --params-file FIFO`` (or ``<(...)``): the check for a
+    second scene read the pipe, and rcl then waited on the FIFO for good (or found ``<(...)`` empty
+    and ran without the file's parameters).  The pipe is read once, its parameters reach the node,
+    and a second scene in it is named with the path given."""
+    import os
+    import threading
+
+    fifo = tmp_path / "params.yaml"
+    os.mkfifo(fifo)
+
+    def write_once():
+        with open(fifo, "w") as f:      # blocks until the command opens the FIFO
+            f.write(text)
+
+    writer = threading.Thread(target=write_once, daemon=True)
+    writer.start()
+    try:
+        r = subprocess.run([bearing_sim_exe, "node", "--scene", "er16k_healthy", "--ros-args", "--params-file",
+                            str(fifo), "-p", "real_time:=false"], env=ros_env, capture_output=True, text=True,
+                           timeout=60)
+    finally:
+        if writer.is_alive():           # the command never opened it: let the thread go
+            os.close(os.open(fifo, os.O_RDONLY | os.O_NONBLOCK))
+    assert r.returncode == status, r.stdout + r.stderr
+    assert said in r.stdout + r.stderr, r.stdout + r.stderr
+    if status:
+        assert r.stderr.strip().splitlines() == [
+            f"error: bearing-sim node: --scene er16k_healthy and --params-file {fifo} (scene: er16k_outer_race) "
+            "name two scenes; give one"]
+
+
+def test_a_bad_params_file_from_a_pipe_is_named_as_given(ros_env, bearing_sim_exe, tmp_path):
+    """rcl's line for a pipe that is no parameters file names the path the user gave, not the
+    in-memory copy rcl read (``/proc/self/fd/N``)."""
+    import os
+    import threading
+
+    fifo = tmp_path / "params.yaml"
+    os.mkfifo(fifo)
+    threading.Thread(target=lambda: fifo.write_text("bearing_sim: [\n"), daemon=True).start()
+    r = subprocess.run([bearing_sim_exe, "node", "--scene", "er16k_healthy", "--ros-args", "--params-file",
+                        str(fifo)], env=ros_env, capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2, r.stdout + r.stderr
+    line = r.stderr.strip().splitlines()[-1]
+    assert line.startswith(f"error: ROS arguments: Couldn't parse params file: '--params-file {fifo}'"), line
+    assert "/proc/self" not in r.stderr, r.stderr
+
+
 def test_a_params_file_without_the_nodes_scene_goes_with_scene(tmp_path):
     """Another node's scene, or a file rcl will refuse, is no second scene."""
     from bearing_sim_ros.cli import _params_file_scenes

@@ -1378,6 +1378,11 @@ def build_node(factory):
         raise ExternalShutdownException() from None
 
 
+# {copy's path: path given} of the --params-file pipes that `bearing-sim node` read into memory
+# (cli._params_files_in_memory): rcl names the copy, /proc/self/fd/N; the user's line names theirs
+PARAMS_FILES_GIVEN_AS: dict = {}
+
+
 def ros_arguments_error(exc) -> UserError:
     """The one-line UserError for ROS arguments that rcl cannot parse (RCLError from
     ``rclpy.init``) or does not know (UnknownROSArgsError from the node): rcl's reason without
@@ -1390,6 +1395,8 @@ def ros_arguments_error(exc) -> UserError:
     text = re.sub(r",? at /\S+:\d+", "", text).removeprefix("failed to initialize rcl: ")
     if isinstance(exc, UnknownROSArgsError):
         text = "unknown " + text.strip("[]").replace("'", "")      # "['--bogus']" -> "unknown --bogus"
+    for copy, given in PARAMS_FILES_GIVEN_AS.items():
+        text = re.sub(re.escape(copy) + r"(?!\d)", lambda _m, given=given: given, text)
     return UserError(f"ROS arguments: {text}; after --ros-args come -p name:=value (an empty string: "
                      f"name:=\"''\"), -r from:=to, --params-file FILE, --log-level LEVEL")
 
