@@ -15,9 +15,18 @@ batch's end, ``render`` and ``run`` holding Ctrl-C while a recording is finalise
 """
 from __future__ import annotations
 
+# every module the signal handlers below may use is imported here, none where they run: a handler
+# runs between two bytecodes of whatever the main thread does, an import too, and an import it
+# started there (``select``, on the first Ctrl-C while numpy was imported) broke Python 3.11's
+# record of the import it interrupted (``importlib._bootstrap._blocking_on``, one entry per
+# thread): a KeyError out of that import, exit 1 with a traceback
+import ctypes
+import errno
 import faulthandler
 import os
+import select
 import signal
+import stat
 import sys
 import threading
 from contextlib import contextmanager
@@ -48,8 +57,6 @@ def drop_a_closed_terminal() -> None:
     OSError there, after the recording was finalised, and ended the command as an internal error
     (exit 1; a traceback where stderr went to a file), or ended a render before it kept its file.
     Nobody can read them any more.  A terminal still there (a ``kill -HUP`` by hand) is kept."""
-    import select
-
     for fd in (1, 2):                   # standard output and error
         try:
             poll = select.poll()
@@ -70,8 +77,6 @@ def say(line: str, file=None) -> None:
     and the command goes on to the end its SIGHUP gives it.  ``monitor``'s, ``run``'s and ``play``'s
     lines raised the OSError there and ended them as an internal error, exit 1.  An EIO of a file
     (``monitor > verdicts.txt`` on a failing disk or network mount) is raised: its lines are lost."""
-    import errno
-
     file = file or sys.stdout
     try:
         print(line, file=file, flush=True)
@@ -86,8 +91,6 @@ def say(line: str, file=None) -> None:
 def _a_terminal(file) -> bool:
     """Is ``file`` a character device: a terminal (one that hung up is no longer ``isatty``: its
     ioctls fail), or /dev/null where the SIGHUP's handler pointed it there since?"""
-    import stat
-
     try:
         return stat.S_ISCHR(os.fstat(file.fileno()).st_mode)
     except (AttributeError, OSError, ValueError):      # no descriptor (io.StringIO) or closed
@@ -194,8 +197,6 @@ class CommandSignals:
         self._exit_now()
 
     def _exit_now(self):
-        import ctypes
-
         for stream in (sys.stdout, sys.stderr):
             try:
                 stream.flush()

@@ -1216,6 +1216,46 @@ def test_a_signal_after_a_fraction_of_a_second_ends_the_command_quietly_with_sta
         proc.close()
 
 
+# a module that another thread imports, and that the main thread waits for: as the main thread
+# waits on the module's lock, the importing thread sends the signal
+_IMPORTED_SLOWLY = """
+import importlib._bootstrap as bootstrap, os, signal, sys, threading, time
+sys.modules["__main__"].begun.set()
+main, deadline = threading.main_thread().ident, time.monotonic() + 30
+while main not in bootstrap._blocking_on:
+    if time.monotonic() > deadline:
+        raise SystemExit("the main thread never waited for this module")
+    time.sleep(0.001)
+os.kill(os.getpid(), signal.SIG)
+time.sleep(0.3)
+"""
+
+
+@pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM"])
+def test_a_signal_that_comes_while_an_import_waits_leaves_the_import_whole(tmp_path, sig):
+    """``play`` 0.3 s after its start, Ctrl-C: once in a while exit 1 with ``KeyError`` out of
+    ``importlib._bootstrap`` as numpy was imported (a wall_clock test saw it).  The command's handler
+    (teardown.CommandSignals) imported ``select`` as it ran, inside the import it interrupted, and
+    Python 3.11 keeps one entry per thread of the import a thread waits for: the handler's import
+    removed the interrupted one's, whose own removal then failed.  Here the handler runs exactly
+    there, in a fresh process: while the main thread waits for a module that another thread
+    imports.  The import completes and the signal is noted."""
+    (tmp_path / "imported_slowly.py").write_text(_IMPORTED_SLOWLY.replace("signal.SIG)", f"signal.{sig})"))
+    script = (
+        "import sys, threading\n"
+        f"sys.path.insert(0, {str(tmp_path)!r})\n"
+        "from bearing_sim_ros.teardown import command_signals\n"
+        "signals = command_signals()\n"
+        "begun = threading.Event()\n"
+        "threading.Thread(target=__import__, args=('imported_slowly',)).start()\n"
+        "begun.wait(30)\n"
+        "import imported_slowly\n"
+        "print('noted', signals.first, flush=True)\n"
+    )
+    r = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60)
+    assert (r.returncode, r.stdout, r.stderr) == (0, f"noted {getattr(signal, sig).value}\n", ""), r.stderr
+
+
 def test_a_second_ctrl_c_while_the_process_still_exits_is_not_lost(started, tmp_path):
     """A second Ctrl-C 0.15-0.3 s after the node's last line (`recording ...: N messages`) came
     while the process still exited (0.4 s of the middleware's and numba's teardown, after the
