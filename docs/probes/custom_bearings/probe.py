@@ -1,7 +1,7 @@
 """Bearings other than the shipped ones: the numbers of README "Limitations" ("Bearings of other
 sizes and speeds").  Four custom bearings typed into scenes as a user would (README "A bearing of
 your own"); run from the repository: ``python docs/probes/custom_bearings/probe.py [part ...]``,
-parts ``alias``, ``band``, ``rms``, ``fidelity`` (all by default; a few minutes on 2 cores).
+parts ``alias``, ``band``, ``rms``, ``fidelity``, ``step`` (all by default; a few minutes on 2 cores).
 """
 import copy
 import math
@@ -106,7 +106,26 @@ def fidelity():
               f"skidding tier's cage skid {skid:.2%} (x{sel.estimated_error / skid:.2f}); auto: {sel.tier}")
 
 
+def step():
+    """The kinematic tier's default step (x1 below a bearing mode of 1.5 kHz, else x2) against 32
+    steps per sample: RMS of the difference over the reference's (1 s after 0.2 s)."""
+    outer = [{"kind": "outer", "width_mm": 0.5, "depth_mm": 0.1, "clock": 6}]
+    for which, rpm, load, defects in [("6000-size", 3000, 300, []), ("6000-size", 3000, 3000, []),
+                                      ("6-ball", 3000, 500, outer), ("6220-size", 1500, 150000, []),
+                                      ("61820-size", 1500, 30000, [])]:
+        s = scene(which, rpm, load, defects)
+        runs = {}
+        for oversample in (None, 1, 2, 4, 32):
+            sim = Simulator(s, fidelity="kinematic", seed=0, oversample=oversample)
+            runs[oversample] = (signal(s, "kinematic", 1.2, 0.2, oversample), sim.oversample,
+                                sim._model.bearing_mode)
+        ref = runs.pop(32)[0]
+        error = {k: np.sqrt(np.mean((y - ref) ** 2) / np.mean(ref ** 2)) for k, (y, _o, _m) in runs.items()}
+        print(f"{which} {rpm} rpm {load} N{' outer pit' if defects else ''}: bearing mode {runs[None][2]:.0f} Hz, "
+              f"default x{runs[None][1]}; error x1 {error[1]:.2%}, x2 {error[2]:.2%}, x4 {error[4]:.2%}")
+
+
 if __name__ == "__main__":
-    parts = {"alias": alias, "band": band, "rms": rms, "fidelity": fidelity}
+    parts = {"alias": alias, "band": band, "rms": rms, "fidelity": fidelity, "step": step}
     for name in sys.argv[1:] or parts:
         parts[name]()
