@@ -168,14 +168,16 @@ RADIAL_CLEARANCE_RANGE_UM = (-50.0, 500.0)   # a catalog's or a scene's radial_c
 DENSITY_RANGE = (1000.0, 20000.0)
 
 
-def bearing_from_mapping(name: str, data: dict, where: str = "bearing") -> Bearing:
-    """Build a :class:`Bearing` from a catalog-style mapping (mm, um, deg, GPa), validating it."""
+def bearing_from_mapping(name: str, data: dict, where: str = "bearing", also_allowed: tuple = ()) -> Bearing:
+    """Build a :class:`Bearing` from a catalog-style mapping (mm, um, deg, GPa), validating it.
+    ``also_allowed``: keys the caller took out of ``data`` before (a scene's ``name``), named
+    among the allowed ones where a key is unknown."""
     if not isinstance(data, dict):
         raise SceneError(f"{where}: expected a catalog name or a mapping of geometry, got {short_repr(data)}")
     unknown = sorted(set(map(str, data)) - _CATALOG_KEYS)     # str: a YAML key may be a number
     if unknown:
         raise SceneError(
-            f"{where}.{unknown[0]}: unknown key; allowed: {', '.join(sorted(_CATALOG_KEYS))}")
+            f"{where}.{unknown[0]}: unknown key; allowed: {', '.join(sorted(_CATALOG_KEYS | set(also_allowed)))}")
     for key in _REQUIRED:
         if key not in data:
             raise SceneError(f"{where}.{key}: missing; a bearing needs {', '.join(_REQUIRED)}")
@@ -207,9 +209,15 @@ def bearing_from_mapping(name: str, data: dict, where: str = "bearing") -> Beari
     di = num("inner_race_diameter_mm", (dm - d) / _MM, 0.1, 2000.0) * _MM
     do = num("outer_race_diameter_mm", (dm + d) / _MM, 0.1, 2000.0) * _MM
     if abs((do - di) - 2 * d) > 0.05 * d:
+        # the key the mapping gave: an inner diameter alone was refused under the outer one's
+        # key, with a value (the pitch plus the ball diameter) that the user never typed
+        key, value, other = (("outer_race_diameter_mm", do, f"inner {di / _MM:g} mm")
+                             if "outer_race_diameter_mm" in data or "inner_race_diameter_mm" not in data
+                             else ("inner_race_diameter_mm", di, f"outer {do / _MM:g} mm, by default the pitch "
+                                   "plus the ball diameter"))
         raise SceneError(
-            f"{where}.outer_race_diameter_mm = {do / _MM:g}: outer minus inner race diameter must "
-            f"be close to twice the ball diameter ({2 * d / _MM:g} mm)")
+            f"{where}.{key} = {value / _MM:g}: outer minus inner race diameter must be close to twice "
+            f"the ball diameter ({2 * d / _MM:g} mm, within 5 % of a ball; the {other})")
     density = num("density", 7850.0, *DENSITY_RANGE)
     mass_default = density * math.pi * d ** 3 / 6.0
     # the ball's mass as its volume holds it at DENSITY_RANGE: a fixed [1e-6, 100] kg let a 7.94 mm

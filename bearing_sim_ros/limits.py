@@ -27,6 +27,14 @@ STATIC_F0 = 14.7
 LOAD_MULTIPLE_C0 = 2.0
 
 
+def bound_text(value: float) -> str:
+    """A bound (rpm, rad/s, N) as a message shows it: a whole number rounded down, so that the
+    number a user reads and types back is within it (rounded to the nearest, a custom 61820's
+    8888.9 rpm showed as 8889, which the same message refused; the shipped 6307's 39748.8 N and
+    6205-2RS-SKF's 25614.8 rpm did so too)."""
+    return f"{math.floor(value):.0f}"
+
+
 def load_on_balls(load_x: float, load_y: float, shaft_weight: float, load_z: float = 0.0) -> float:
     """|F| (N) that the balls carry: the radial load (``load_x``, ``load_y`` N, y up; ``load_z``
     axial, which the node's inputs count too) and the shaft's weight (``shaft_weight`` N, acting
@@ -54,8 +62,9 @@ class InputLimits:
     def __str__(self):
         """As the node's start line says it."""
         weight = f", the shaft's weight ({self.shaft_weight:.3g} N) included" if self.shaft_weight else ""
-        return (f"shaft speed up to {self.max_speed:.0f} rad/s ({self.max_speed / RPM:.0f} rpm), radial load "
-                f"up to {self.max_load:.0f} N{weight} (static capacity C0 {self.static_capacity:.0f} N)")
+        return (f"shaft speed up to {bound_text(self.max_speed)} rad/s ({bound_text(self.max_speed / RPM)} rpm), "
+                f"radial load up to {bound_text(self.max_load)} N{weight} (static capacity C0 "
+                f"{self.static_capacity:.0f} N)")
 
     def __repr__(self):
         return (f"InputLimits(max_speed={self.max_speed:.1f} rad/s, "

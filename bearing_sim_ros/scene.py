@@ -17,7 +17,8 @@ from typing import Any
 
 from .catalog import RADIAL_CLEARANCE_RANGE_UM, G, Bearing, bearing_from_mapping, get_bearing
 from .errors import SceneError, short_repr
-from .limits import LOAD_MULTIPLE_C0, MAX_LOAD, MAX_SPEED_RPM, NDM_LIMIT, RPM, InputLimits, load_on_balls
+from .limits import (LOAD_MULTIPLE_C0, MAX_LOAD, MAX_SPEED_RPM, NDM_LIMIT, RPM, InputLimits, bound_text,
+                     load_on_balls)
 from .paths import MCAP_MAGIC, input_file, scenes_dir
 
 DEFECT_KINDS = ("inner", "outer", "ball")
@@ -450,7 +451,7 @@ def _operating_point_error(bearing: Bearing, speed: float, load, speed_key: str,
     limits = InputLimits(bearing)
     if abs(speed) > limits.max_speed:
         return (f"{speed_key} = {speed_text}: beyond what bearing {bearing.name} takes "
-                f"(|speed| <= {limits.max_speed / RPM:.0f} rpm, n*dm <= {NDM_LIMIT:.0e} rpm mm)")
+                f"(|speed| <= {bound_text(limits.max_speed / RPM)} rpm, n*dm <= {NDM_LIMIT:.0e} rpm mm)")
     force = math.hypot(*load)
     if force > limits.max_load:
         return f"{load_key} = [{load[0]:g}, {load[1]:g}] N: |F| = {force:.6g} N beyond {_load_bound(bearing)}"
@@ -460,7 +461,7 @@ def _operating_point_error(bearing: Bearing, speed: float, load, speed_key: str,
 def _load_bound(bearing: Bearing) -> str:
     """The most load ``bearing`` takes (InputLimits.max_load), said with where it comes from."""
     limit = InputLimits(bearing).max_load
-    return (f"{LOAD_MULTIPLE_C0:g} x C0 = {limit:.0f} N of bearing {bearing.name}" if limit < MAX_LOAD
+    return (f"{LOAD_MULTIPLE_C0:g} x C0 = {bound_text(limit)} N of bearing {bearing.name}" if limit < MAX_LOAD
             else f"{MAX_LOAD:g} N, the most a scene may ask for")
 
 
@@ -740,7 +741,7 @@ def _bearing(top: _Section) -> Bearing:
     elif isinstance(value, dict):
         bearing = bearing_from_mapping(str(value.get("name", "custom")),
                                        {k: v for k, v in value.items() if k != "name"},
-                                       where="bearing")
+                                       where="bearing", also_allowed=("name",))
     else:
         raise SceneError(f"bearing = {short_repr(value)}: expected a catalog name or a mapping of geometry")
     if top.has("radial_clearance_um"):

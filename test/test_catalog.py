@@ -253,3 +253,19 @@ def test_a_custom_bearings_defaults_and_limits_of_fit():
     assert bearing_from_mapping("custom", near).outer_race_diameter == pytest.approx((dm + d + 0.3) * 1e-3)
     with pytest.raises(SceneError, match="outer minus inner race diameter must be close to twice the ball diameter"):
         bearing_from_mapping("custom", dict(near, outer_race_diameter_mm=dm + d + 0.5))
+
+
+def test_a_race_diameter_that_does_not_fit_is_named_by_the_key_given():
+    """An inner race diameter typed alone, which leaves no room for the balls, is named: the
+    error named outer_race_diameter_mm with its default (pitch plus ball diameter, 46.44 mm),
+    a key and a value the user never wrote.  An unknown key in a scene's bearing lists ``name``
+    among the allowed ones, which a scene's bearing takes."""
+    with pytest.raises(SceneError, match=r"^bearing\.inner_race_diameter_mm = 20: outer minus inner race "
+                                         r"diameter must be close to twice the ball diameter \(15\.88 mm"):
+        bearing_from_mapping("custom", dict(CUSTOM, inner_race_diameter_mm=20.0))
+    from bearing_sim_ros.scene import scene_from_dict
+
+    with pytest.raises(SceneError, match=r"bearing\.bore_mm: unknown key; allowed: .*, name, "):
+        scene_from_dict({"bearing": dict(CUSTOM, bore_mm=25.0), "operating_point": {"shaft_speed_rpm": 1000},
+                         "structure": {"shaft": {"mass": 1.0, "stiffness": 1e7, "damping": 100},
+                                       "pedestal": {"mass": 1.0, "stiffness": 1e8, "damping": 100}}})

@@ -60,9 +60,12 @@ def test_input_limits_from_the_bearing_geometry():
     assert 0.9 * 7800 < lim.static_capacity < 1.15 * 7800       # SKF 6205: C0 = 7.8 kN
     assert lim.max_load == pytest.approx(2 * lim.static_capacity)
     assert 18000 * 2 * math.pi / 60 < lim.max_speed < 2 * 18000 * 2 * math.pi / 60   # SKF limiting 18000 rpm
-    # the node's start line says them in words and units, not as a Python repr
-    assert str(lim) == (f"shaft speed up to {lim.max_speed:.0f} rad/s ({lim.max_speed * 60 / (2 * math.pi):.0f} rpm), "
-                        f"radial load up to {lim.max_load:.0f} N (static capacity C0 {lim.static_capacity:.0f} N)")
+    # the node's start line says them in words and units, not as a Python repr, each bound
+    # rounded down (25614.8 rpm: 25614, a speed the bearing takes; 25615 is not)
+    assert str(lim) == (f"shaft speed up to {math.floor(lim.max_speed)} rad/s "
+                        f"({math.floor(lim.max_speed * 60 / (2 * math.pi))} rpm), "
+                        f"radial load up to {math.floor(lim.max_load)} N (static capacity C0 {lim.static_capacity:.0f} N)")
+    assert "(25614 rpm)" in str(lim)
     big = InputLimits(get_bearing("6307"))
     assert big.static_capacity > lim.static_capacity and big.max_speed < lim.max_speed
     assert check_speed(167.55, lim) is None and check_speed(-167.55, lim) is None

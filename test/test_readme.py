@@ -85,6 +85,27 @@ def test_the_python_api_block_runs_as_written():
     assert set(sim.bearing.fault_frequencies(scope["scene"].shaft_hz)) == {"ftf", "bpfo", "bpfi", "bsf"}
 
 
+def test_the_own_bearing_block_loads_as_written():
+    """"A bearing of your own": the block is a scene's bearing as written, with the defaults the
+    text gives, and its fault frequencies are the textbook ones of its geometry."""
+    import math
+
+    from bearing_sim_ros.scene import load_yaml, scene_from_dict
+
+    doc = load_yaml(_block_containing("yaml", "name: my_6000"))
+    doc.update(operating_point={"shaft_speed_rpm": 6000},
+               structure={"shaft": {"mass": 0.3, "stiffness": 2e6, "damping": 300},
+                          "pedestal": {"mass": 0.8, "stiffness": 5e7, "damping": 1500}})
+    b = scene_from_dict(doc).bearing
+    assert (b.name, b.balls, b.radial_clearance, b.width) == ("my_6000", 7, 4e-6, 8e-3)
+    assert (b.inner_race_diameter, b.outer_race_diameter) == pytest.approx((18e-3 - 4.762e-3, 18e-3 + 4.762e-3))
+    assert (b.contact_angle, b.inner_groove_conformity, b.elastic_modulus, b.density) == (0.0, 0.52, 208e9, 7850.0)
+    assert b.ball_mass == pytest.approx(7850.0 * math.pi * 4.762e-3 ** 3 / 6.0)
+    g = 4.762 / 18.0
+    assert b.fault_frequencies(100.0) == pytest.approx(
+        {"ftf": 50 * (1 - g), "bpfo": 350 * (1 - g), "bpfi": 350 * (1 + g), "bsf": 50 / g * (1 - g * g)})
+
+
 def test_the_envelope_analysis_block_runs_as_written():
     """"Envelope analysis in Python": the lines run, and the values are what the comments say."""
     scope = {}

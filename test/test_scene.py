@@ -832,3 +832,42 @@ def test_an_operating_point_without_a_load_is_the_shafts_weight_alone():
     assert scene.radial_load == (0.0, 0.0)
     with pytest.raises(SceneError, match="operating_point.shaft_speed_rpm"):
         scene_from_dict(load_yaml(GOOD.replace("shaft_speed_rpm: 1600, ", "")))
+
+
+# a user's own bearings, typed into a scene: a thin-section 61820-like one (pitch 112.5 mm:
+# n*dm = 1e6 rpm mm at 8888.9 rpm) and the shipped catalog's CWRU 6205 and 6307, whose limits,
+# 25614.8 rpm and 39748.8 N, are not whole numbers either
+_THIN = {"balls": 20, "ball_diameter_mm": 7.938, "pitch_diameter_mm": 112.5, "width_mm": 13.0}
+
+
+def _scene_doc(bearing, rpm, load):
+    return {"bearing": bearing, "operating_point": {"shaft_speed_rpm": rpm, "radial_load": [0.0, -load]},
+            "structure": {"shaft": {"mass": 10.0, "stiffness": 1e7, "damping": 4000},
+                          "pedestal": {"mass": 20.0, "stiffness": 5e8, "damping": 2e4}},
+            "gravity": False}
+
+
+@pytest.mark.parametrize("bearing", [_THIN, "6205-2RS-SKF", "6307"], ids=["61820-like", "6205-2RS-SKF", "6307"])
+def test_the_limit_a_refusal_names_is_a_value_the_bearing_takes(bearing):
+    """The speed and load bound that a refusal names, typed back into the scene, is taken: they
+    were rounded to the nearest whole number, so that '|speed| <= 8889 rpm' refused 8889 rpm on
+    a 61820-like bearing (and 25615 rpm on the CWRU 6205, 39749 N on the 6307)."""
+    import re
+
+    with pytest.raises(SceneError) as speed_error:
+        scene_from_dict(_scene_doc(bearing, 60000, 100.0))
+    rpm = float(re.search(r"\|speed\| <= (\d+) rpm", str(speed_error.value)).group(1))
+    with pytest.raises(SceneError) as load_error:
+        scene_from_dict(_scene_doc(bearing, 1000, 1e6))
+    load = float(re.search(r"2 x C0 = (\d+) N", str(load_error.value)).group(1))
+    scene = scene_from_dict(_scene_doc(bearing, rpm, load))
+    assert scene.shaft_speed == pytest.approx(rpm * RPM)
+    assert scene.radial_load == (0.0, -load)
+    # and the live node's input checks, in rad/s and N
+    from bearing_sim_ros.limits import InputLimits
+    from bearing_sim_ros.nodes.bearing_sim_node import check_load, check_speed
+
+    limits = InputLimits(scene.bearing)
+    speed = float(re.search(r"\|speed\| <= (\d+) rad/s", check_speed(1e9, limits)[1]).group(1))
+    load = float(re.search(r"C0 = (\d+) N", check_load(0.0, -1e7, 0.0, limits)[1]).group(1))
+    assert check_speed(speed, limits) is None and check_load(0.0, -load, 0.0, limits) is None

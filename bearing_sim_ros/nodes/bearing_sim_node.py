@@ -41,7 +41,7 @@ from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
 
 from ..errors import NODE_SETTINGS, SettingNames, UserError
-from ..limits import LOAD_MULTIPLE_C0, NDM_LIMIT, STATIC_F0, InputLimits, load_on_balls  # noqa: F401 (names kept here)
+from ..limits import LOAD_MULTIPLE_C0, NDM_LIMIT, STATIC_F0, InputLimits, bound_text, load_on_balls  # noqa: F401 (names kept here)
 from ..teardown import EXIT_INTERRUPTED, SIGNAL_NAMES, command_signals, say_on_stderr, teardown_watchdog
 from ..stale_dds_ports import clear_before_start
 
@@ -81,7 +81,7 @@ def check_speed(value: float, limits: InputLimits):
         return "not_finite", f"shaft_speed = {value!r} rad/s: not a finite number"
     if abs(value) > limits.max_speed:
         return "out_of_range", (f"shaft_speed = {value:.6g} rad/s: beyond what the bearing takes "
-                                f"(|speed| <= {limits.max_speed:.0f} rad/s, n*dm <= {NDM_LIMIT:.0e} rpm mm)")
+                                f"(|speed| <= {bound_text(limits.max_speed)} rad/s, n*dm <= {NDM_LIMIT:.0e} rpm mm)")
     return None
 
 
@@ -93,13 +93,13 @@ def check_load(fx: float, fy: float, fz: float, limits: InputLimits):
     mag = math.sqrt(fx * fx + fy * fy + fz * fz)
     if mag > limits.max_load:
         return "out_of_range", (f"load = ({fx:.6g}, {fy:.6g}, {fz:.6g}) N: |F| = {mag:.6g} N beyond "
-                                f"{LOAD_MULTIPLE_C0:g} x C0 = {limits.max_load:.0f} N")
+                                f"{LOAD_MULTIPLE_C0:g} x C0 = {bound_text(limits.max_load)} N")
     # the balls carry the shaft's weight too: a load within the bound alone may not be with it
     total = load_on_balls(fx, fy, limits.shaft_weight, fz)
     if total > limits.max_load:
         return "out_of_range", (f"load = ({fx:.6g}, {fy:.6g}, {fz:.6g}) N with the shaft's weight "
                                 f"{limits.shaft_weight:.6g} N downwards: |F| on the balls = {total:.6g} N beyond "
-                                f"{LOAD_MULTIPLE_C0:g} x C0 = {limits.max_load:.0f} N")
+                                f"{LOAD_MULTIPLE_C0:g} x C0 = {bound_text(limits.max_load)} N")
     return None
 
 
