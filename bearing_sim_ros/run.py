@@ -176,7 +176,7 @@ def summarise(scene, tail: dict, node_figures: dict, path, out: str | None = Non
     """The one-screen summary (text); ``path``: how ``report`` and ``play`` are given the
     recording (``recording_argument``); ``out``: the name it was made to (default ``path``),
     whose stem names the report's folder."""
-    from .analysis.envelope import DETECTION_THRESHOLD, STEADY_LINES
+    from .analysis.envelope import DETECTION_THRESHOLD, STEADY_LINES, borrowed_text
     from .nodes.monitor_node import order_verdict, spin_share_of, spin_shares_at, verdict
     from .recording.render import tier_summary
     from .waveform import NS
@@ -245,6 +245,8 @@ def summarise(scene, tail: dict, node_figures: dict, path, out: str | None = Non
                 mark = "  <- detected" if key != "ftf" and ln.prominence >= DETECTION_THRESHOLD else ""
                 lines.append(f"  {label:<6} {ln.expected_hz:>{wide[0]}.{digits}f} {ln.found_hz:>{wide[1]}.{digits}f} "
                              f"{ln.prominence:>8.1f}{mark}")
+            # a line on another detected fault's sideband counts for that fault (envelope.borrowed_lines)
+            lines += [f"  {borrowed_text(fault, res['borrowed'])}" for fault in res.get("borrowed", {})]
             lines += _verdict_lines(scene, res, f["signal_s"], x.shape[0] / fs)
     if tail["skid_percent"]:
         lines.append(f"skid ratios, mean of the recording's /diagnostics ({f['tier_values']['tier']} tier): "

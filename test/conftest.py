@@ -215,9 +215,9 @@ def skidding_outer_race(tmp_path_factory):
         "{shaft_speed_rpm: 1600, radial_load: [0.0, -50.0]}", "{shaft_speed_rpm: 10000, radial_load: [0.0, -10.0]}")])
 
 
-def _skidding_variant(tmp_path_factory, shipped: str, changes: list, seconds: float = 2.0):
+def _skidding_variant(tmp_path_factory, shipped: str, changes: list, seconds: float = 2.0, fidelity: str = "skidding"):
     """(scene path, recording path): the shipped scene ``shipped`` with each (old, new) text of
-    ``changes`` replaced, rendered for ``seconds`` on the skidding tier."""
+    ``changes`` replaced, rendered for ``seconds`` on the skidding tier (or ``fidelity``'s)."""
     from bearing_sim_ros.recording.render import render
 
     text = (REPO / "config" / "scenes" / f"{shipped}.yaml").read_text()
@@ -228,7 +228,7 @@ def _skidding_variant(tmp_path_factory, shipped: str, changes: list, seconds: fl
     path = folder / f"{shipped}_variant.yaml"
     path.write_text(text)
     recording = folder / "variant.mcap"
-    render(str(path), seconds, recording, fidelity="skidding", progress=False)
+    render(str(path), seconds, recording, fidelity=fidelity, progress=False)
     return path, recording
 
 
@@ -241,6 +241,35 @@ def skidding_ball_pit(tmp_path_factory):
 
 
 BALL_PIT = ("defects: []", "defects: [{kind: ball, width_mm: 0.6, depth_mm: 0.25, angle_deg: 0}]")
+
+
+@pytest.fixture(scope="session")
+def skidding_inner_pit_1000rpm(tmp_path_factory):
+    """(scene path, recording path): er16k_inner_race at 1000 rpm / 200 N, rendered once for 2 s on
+    the skidding tier, whose balls spin about 5 % slow: 2xBSF (74.1 Hz) falls on the inner pit's
+    BPFI - 1 x shaft line (74.0 Hz), which stands higher than BPFI (test_report, test_monitor)."""
+    return _skidding_variant(tmp_path_factory, "er16k_inner_race", [(
+        "{shaft_speed_rpm: 1600, radial_load: [0.0, -50.0]}", "{shaft_speed_rpm: 1000, radial_load: [0.0, -200.0]}")])
+
+
+@pytest.fixture(scope="session")
+def skidding_ball_pit_300rpm(tmp_path_factory):
+    """(scene path, recording path): er16k_healthy with a 0.6 mm ball pit at 300 rpm / 50 N,
+    rendered once for 4 s (8 cage turns) on the skidding tier: the pit's 2xBSF - 1 x FTF line falls
+    on BPFO and its 2xBSF + 4 x FTF on BPFI, which stands highest of the three (test_monitor)."""
+    return _skidding_variant(tmp_path_factory, "er16k_healthy", [BALL_PIT, (
+        "{shaft_speed_rpm: 1600, radial_load: [0.0, -50.0]}", "{shaft_speed_rpm: 300, radial_load: [0.0, -50.0]}")],
+        seconds=4.0)
+
+
+@pytest.fixture(scope="session")
+def ball_pit_3000rpm(tmp_path_factory):
+    """(scene path, recording path): er16k_healthy with a 0.6 mm ball pit at 3000 rpm / 50 N,
+    rendered once for 2 s on the kinematic tier: the pit's 2xBSF + 2 x FTF line (271.8 Hz) falls
+    on BPFI (271.4 Hz) and stands higher than 2xBSF (test_report, test_monitor)."""
+    return _skidding_variant(tmp_path_factory, "er16k_healthy", [BALL_PIT, (
+        "{shaft_speed_rpm: 1600, radial_load: [0.0, -50.0]}", "{shaft_speed_rpm: 3000, radial_load: [0.0, -50.0]}")],
+        fidelity="kinematic")
 
 
 @pytest.fixture(scope="session")

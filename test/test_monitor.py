@@ -1217,6 +1217,34 @@ def test_the_monitor_looks_for_a_ball_pit_where_the_balls_spin_puts_it(ros_env, 
     assert score == "monitor: score 2 of 2 verdicts agree with the truth, 0 truth=unknown", score
 
 
+@pytest.mark.parametrize("fixture, fault, said", [
+    ("skidding_inner_pit_1000rpm", "inner", "2xBSF sits on BPFI - 1 x shaft rate"),
+    ("ball_pit_3000rpm", "ball", "BPFI sits on 2xBSF + 2 x FTF"),
+])
+def test_a_line_on_another_faults_sideband_counts_for_that_fault(ros_env, request, fixture, fault, said):
+    """An inner pit's BPFI - 1 x shaft line falls on 2xBSF where the balls skid about 5 %
+    (skidding tier, 1000 rpm / 200 N), a ball pit's 2xBSF + 2 x FTF on BPFI (the ER-16K at 3000 rpm,
+    kinematic), each higher than the fault's own line: the monitor, the highest line over both
+    axes winning, called the inner pit ball and the ball pit inner.  Now the line on another
+    detected fault's sideband counts for that fault, and the verdict line says so."""
+    scene, recording = request.getfixturevalue(fixture)
+    lines, score = _verdicts_of_a_recording(recording, load_scene(str(scene)))
+    assert [(v, truth) for _t, v, truth in VERDICT.findall("\n".join(lines))] == [(fault, fault)] * 2, lines
+    assert all(said in line for line in lines), lines
+    assert score == "monitor: score 2 of 2 verdicts agree with the truth, 0 truth=unknown", score
+
+
+def test_where_two_lines_are_each_others_sideband_the_higher_is_the_carrier(ros_env, skidding_ball_pit_300rpm):
+    """A ball pit at 300 rpm on the skidding tier: BPFO lies on 2xBSF - 1 x FTF, and 2xBSF so on BPFO
+    + 1 x FTF (the ball's and the outer race's families share the cage-rate spacing), and BPFI on
+    2xBSF + 4 x FTF and stands highest: the monitor called it inner.  2xBSF, higher than BPFO, is
+    the carrier of the two and keeps its line; BPFI and BPFO count for the ball."""
+    scene, recording = skidding_ball_pit_300rpm
+    lines, _score = _verdicts_of_a_recording(recording, load_scene(str(scene)), window=4.0)
+    assert [(v, truth) for _t, v, truth in VERDICT.findall("\n".join(lines))] == [("ball", "ball")], lines
+    assert "BPFI sits on 2xBSF + 4 x FTF" in lines[0] and "BPFO sits on 2xBSF - 1 x FTF" in lines[0], lines
+
+
 def test_a_window_over_a_speed_step_looks_for_a_ball_pit_on_the_balls_spin(ros_env, skidding_ball_pit_speed_step):
     """On the skidding tier a speed step moves the balls' skid (er16k_skidding with a 0.6 mm ball
     pit, 1000 to 2000 rpm at 1.8-2.2 s: about 4.8 % to 3 %), so the pit's 2xBSF line moves by 2 %

@@ -481,6 +481,37 @@ def test_order_tracking_looks_for_a_ball_pit_on_the_balls_spin(tmp_path, skiddin
     assert s["order_tracking"]["lines"]["2bsf"]["prominence"] > DETECTION_THRESHOLD, s["order_tracking"]
 
 
+def test_an_inner_pits_shaft_sideband_on_2xbsf_is_counted_for_the_inner_race(tmp_path, skidding_inner_pit_1000rpm):
+    """On the skidding tier at 1000 rpm / 200 N the ER-16K's balls spin about 5 % slow, and 2xBSF
+    falls within 0.2 % of BPFI - 1 x shaft rate, a sideband of an inner pit's own line that stands
+    higher than BPFI: the report called this inner pit a ball fault (the highest line wins).  Now
+    a line on another detected fault's sideband counts for that fault
+    (``envelope.borrowed_lines``): inner, and the report says why 2xBSF does not count."""
+    _scene, rec = skidding_inner_pit_1000rpm
+    s = build_report(rec, tmp_path / "out")
+    lines = s["fault_lines"]
+    assert s["verdict"] == "inner", (s["verdict"], lines)
+    # the coincidence is still there: the sideband found at 2xBSF is the higher of the two
+    assert lines["2bsf"]["prominence"] > lines["bpfi"]["prominence"] > DETECTION_THRESHOLD, lines
+    shaft_hz = s["shaft_speed_rpm"] / 60.0
+    assert abs(lines["2bsf"]["found_hz"] - (lines["bpfi"]["found_hz"] - shaft_hz)) < 0.1, lines
+    said = s["borrowed_lines"]["ball"]
+    assert said.startswith("2xBSF sits on BPFI - 1 x shaft rate") and "counted for inner" in said, said
+    assert said in (tmp_path / "out" / "summary.md").read_text()
+
+
+def test_a_ball_pits_cage_sideband_on_bpfi_is_counted_for_the_ball(tmp_path, ball_pit_3000rpm):
+    """On the ER-16K a ball pit's 2xBSF + 2 x FTF line lies 0.15 % from BPFI, and at 3000 rpm /
+    50 N (kinematic) it stands higher than 2xBSF: the report called this ball pit an inner-race
+    fault.  Now it is the ball's line (``envelope.borrowed_lines``): ball."""
+    _scene, rec = ball_pit_3000rpm
+    s = build_report(rec, tmp_path / "out")
+    lines = s["fault_lines"]
+    assert s["verdict"] == "ball", (s["verdict"], lines)
+    assert lines["bpfi"]["prominence"] > lines["2bsf"]["prominence"] > DETECTION_THRESHOLD, lines
+    assert s["borrowed_lines"]["inner"].startswith("BPFI sits on 2xBSF + 2 x FTF"), s["borrowed_lines"]
+
+
 def test_report_says_when_auto_switched_tiers(tmp_path):
     """A profile from 1600 to 10000 rpm with the load taken off moves ``fidelity: auto`` from the
     kinematic to the skidding tier part way: the metadata keeps the tier at the start, and the

@@ -354,6 +354,20 @@ def test_the_summary_looks_for_a_ball_pit_where_the_balls_spin_puts_it(skidding_
     assert abs(expected - found) < 1.0 and 0.97 * pure < expected < 0.99 * pure and height > 10, (pure, text)
 
 
+def test_the_summary_counts_a_line_on_another_faults_sideband_for_that_fault(skidding_inner_pit_1000rpm):
+    """On the skidding tier at 1000 rpm / 200 N the ER-16K's balls spin about 5 % slow and 2xBSF
+    falls on an inner pit's BPFI - 1 x shaft line, which stands higher than BPFI: the summary said
+    "ball fault" of this inner pit.  Now that line counts for the inner race, and the summary says
+    so under the lines."""
+    from bearing_sim_ros import load_scene
+
+    scene, recording = skidding_inner_pit_1000rpm
+    text = _summary_of(recording, load_scene(str(scene)))
+    assert "\nverdict: inner-race fault (" in text, text
+    assert "\n  2xBSF sits on BPFI - 1 x shaft rate, a sideband of the inner fault's line: counted for inner, not ball\n" \
+        in text, text
+
+
 def test_the_summary_tracks_a_ball_pit_on_the_balls_spin_over_a_speed_step(skidding_ball_pit_speed_step):
     """A speed step from 1000 to 2000 rpm on the skidding tier takes the balls' skid from about
     4.8 % to 3 %, and a ball pit's 2xBSF line moves by 2 % in orders of the shaft: judged at the

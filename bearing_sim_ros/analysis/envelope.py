@@ -27,6 +27,9 @@ Choices, checked on the CWRU recordings (``bearing-sim validate``, README "Valid
   over 4 s at 300 rpm, as over a 1 s record).
 * One line per fault (no harmonic sum): 3 x BPFO and 2 x BPFI of the 6205 lie 0.7 % apart, and
   summing harmonics made an outer-race fault score for "inner" too.
+* A fault's line that sits on another detected fault's sideband is that fault's
+  (:func:`borrowed_lines`): the inner pit's shaft-rate sidebands and the ball pit's cage-rate
+  ones fall on each other's lines at some speeds and skids (docs/detector_confusion.md).
 """
 from __future__ import annotations
 
@@ -286,18 +289,100 @@ def with_cage(frequencies: dict, balls: int, shaft_hz: float, cage_hz: float) ->
 def diagnose(x: np.ndarray, fs: float, frequencies: dict, band=DEFAULT_BAND,
              threshold: float = DETECTION_THRESHOLD, segment: float | None | str = "auto") -> dict:
     """Envelope verdict: ``{"verdict": "healthy" | "outer" | "inner" | "ball", "lines": {...},
-    "scores": {fault: prominence}}``.  The fault whose line stands highest above ``threshold``
-    wins; none above it is "healthy".  ``segment``: see :func:`fault_lines`."""
+    "scores": {fault: prominence}, "borrowed": {fault: (other fault, k)}}``.  The fault whose line
+    stands highest above ``threshold`` wins, unless that line is another detected fault's sideband
+    (``borrowed``, :func:`borrowed_lines`); none above it is "healthy".  ``segment``: see
+    :func:`fault_lines`."""
     return verdict_of(fault_lines(x, fs, frequencies, band, segment=segment), threshold)
 
 
 def verdict_of(lines: dict, threshold: float = DETECTION_THRESHOLD) -> dict:
     """:func:`diagnose`'s result from the fault ``lines`` ({"bpfo", "bpfi", "2bsf", "ftf": Line},
-    in Hz or in orders alike)."""
+    in Hz or in orders alike), with ``"borrowed"`` (:func:`borrowed_lines`): the highest line
+    over ``threshold`` that is not another detected fault's sideband wins."""
     scores = {fault: lines[key].prominence for fault, key in FAULT_LINES.items() if fault != "cage"}
-    best = max(scores, key=scores.get)
-    verdict = best if scores[best] >= threshold else "healthy"
-    return {"verdict": verdict, "lines": lines, "scores": scores}
+    borrowed = borrowed_lines(lines, threshold)
+    return {"verdict": pick_verdict(scores, borrowed, threshold), "lines": lines, "scores": scores,
+            "borrowed": borrowed}
+
+
+def pick_verdict(scores: dict, borrowed, threshold: float = DETECTION_THRESHOLD) -> str:
+    """The fault of the highest of ``scores`` ({fault: prominence}) at or over ``threshold`` that is
+    not in ``borrowed`` (faults whose line is another's sideband); where every one over it is, the
+    highest of them; "healthy" where none is over it."""
+    over = [fault for fault in scores if scores[fault] >= threshold]
+    own = [fault for fault in over if fault not in borrowed] or over
+    return max(own, key=scores.get) if own else "healthy"
+
+
+# Sidebands by which a detected fault's line explains another fault's (borrowed_lines): an inner
+# pit passes the load zone once per shaft turn (BPFI +- k x shaft), a ball pit once per cage turn
+# (2xBSF +- k x FTF), and an outer race's ball-pass line carries the cage rate where the balls are
+# unevenly spaced or loaded (BPFO +- k x FTF).  Measured (docs/detector_confusion.md): an ER-16K
+# inner pit on the skidding tier at 1000 rpm put its BPFI - 1 x shaft line on 2xBSF (the balls 5 %
+# slow), and a ball pit its 2xBSF + 2 x FTF on BPFI (0.15 % apart on the ER-16K at pure rolling).
+SIDEBANDS = {"inner": ("shaft", (1, 2)), "ball": ("ftf", (1, 2, 3, 4)), "outer": ("ftf", (1, 2, 3, 4))}
+# a found line this close (share of its frequency) to another fault's sideband is that sideband:
+# over the confusion table's 192 records the coincidences lay within 0.18 % (the found lines'
+# frequencies are interpolated to a small part of a bin), the nearest pair that was none 0.52 %
+COINCIDENCE_REL = 0.0025
+
+
+def borrowed_lines(lines: dict, threshold: float = DETECTION_THRESHOLD) -> dict:
+    """The detected faults whose line is another detected fault's sideband: ``{fault: (other fault,
+    k)}``, the line found (``found_hz``) within ``COINCIDENCE_REL`` of the other's found line + k x
+    its ``SIDEBANDS`` rate (the shaft rate, FTF x (1 + BPFI / BPFO) by the lines' expected
+    frequencies, Hz or orders; or FTF), and nearer to it than to its own expected frequency.  A
+    line of one fault's family, not the other's: an inner pit's BPFI - 1 x shaft line is no ball
+    fault, a ball pit's 2xBSF + 2 x FTF no inner race.
+
+    Where two lines are each other's sideband (the ball's and the outer race's families share the
+    cage-rate spacing), the higher one (prominence) is the carrier and keeps its line."""
+    keys = {fault: key for fault, key in FAULT_LINES.items() if fault != "cage"}
+    try:
+        ftf = float(lines["ftf"].expected_hz)
+        shaft = ftf * (1.0 + float(lines["bpfi"].expected_hz) / float(lines["bpfo"].expected_hz))
+    except (KeyError, ZeroDivisionError):
+        return {}
+    rates = {"shaft": shaft, "ftf": ftf}
+    detected = {fault for fault, key in keys.items()
+                if lines[key].prominence >= threshold and np.isfinite(lines[key].found_hz)}
+    by = {}                 # fault -> {other fault: k}
+    for fault in detected:
+        found, expected = lines[keys[fault]].found_hz, lines[keys[fault]].expected_hz
+        for other in detected - {fault}:
+            rate_name, ks = SIDEBANDS[other]
+            rate, anchor = rates[rate_name], lines[keys[other]].found_hz
+            if not (np.isfinite(rate) and rate > 0):
+                continue
+            for k in (s * k for k in ks for s in (-1, 1)):
+                off = abs(found - (anchor + k * rate))
+                # nearer the sideband than its own frequency: a ball pit and an inner pit together
+                # on seed 004's 6205 (b6205_ball_inner), whose BPFI lies 0.15 % below 2xBSF + 2 x FTF,
+                # found BPFI 0.06 % from its own place and 0.21 % from the sideband: the inner pit's
+                if off <= COINCIDENCE_REL * abs(found) and off < abs(found - expected):
+                    by.setdefault(fault, {})[other] = k
+                    break
+    for fault, others in list(by.items()):
+        for other in list(others):
+            if fault in by.get(other, {}):      # each the other's sideband: the higher is the carrier
+                lower, higher = sorted((fault, other), key=lambda f: lines[keys[f]].prominence)
+                by[higher].pop(lower, None)
+    return {fault: min(others.items(), key=lambda item: abs(item[1]))
+            for fault, others in by.items() if others}
+
+
+def borrowed_text(fault: str, borrowed: dict) -> str:
+    """In words, the line of ``fault`` as another fault's sideband (``borrowed_lines``' entry
+    ``borrowed[fault]``), e.g. "2xBSF sits on BPFI - 1 x shaft rate, a sideband of the inner
+    fault's line: counted for inner, not ball"; "" where it is its own."""
+    if fault not in borrowed:
+        return ""
+    other, k = borrowed[fault]
+    names = {"outer": "BPFO", "inner": "BPFI", "ball": "2xBSF"}
+    rate = "shaft rate" if SIDEBANDS[other][0] == "shaft" else "FTF"
+    return (f"{names[fault]} sits on {names[other]} {'+' if k > 0 else '-'} {abs(k)} x {rate}, "
+            f"a sideband of the {other} fault's line: counted for {other}, not {fault}")
 
 
 def no_defect_note(fault: str, bpfo_prominence: float = float("nan")) -> tuple | None:

@@ -56,7 +56,7 @@ from ..errors import UserError
 from ..paths import output_folder, replace_file, save_figure, writing_into
 from ..recording.reader import open_recording
 from ..waveform import NS, from_pointcloud2
-from .envelope import (DETECTION_THRESHOLD, FAULT_LINES, STEADY_LINES, diagnose, envelope_band,
+from .envelope import (DETECTION_THRESHOLD, FAULT_LINES, STEADY_LINES, borrowed_text, diagnose, envelope_band,
                        envelope_spectrum, no_defect_note, spread, statistics, with_cage)
 from .orders import order_diagnose
 
@@ -1259,6 +1259,10 @@ def _report(rec, out, window_s: float, spool: _Spool) -> dict:
         "fault_lines": ({k: {"expected_hz": v.expected_hz, "found_hz": v.found_hz, "height": v.height,
                              "prominence": v.prominence} for k, v in verdict["lines"].items()}
                         if verdict else {}),
+        # the analysed stretch's lines that sit on another detected fault's sideband and count for
+        # that fault (envelope.borrowed_lines), in words
+        "borrowed_lines": ({fault: borrowed_text(fault, verdict["borrowed"]) for fault in verdict["borrowed"]}
+                           if verdict else {}),
         "verdict": overall,
         "verdict_faults": named,         # the fault kinds the verdict names (several where "mixed")
         "verdict_from": verdict_from,    # the analysed stretch, or its windows where the lines move
@@ -1403,7 +1407,9 @@ def _markdown(s: dict) -> str:
             lines.append(f"| {LINE_LABELS[key]} | {line['expected_hz']:.2f} | {_num(line['found_hz'])} | "
                          f"{_num(line['prominence'])} |")
         lines += ["", f"A line counts as a fault above a prominence of 4 (`analysis.envelope.DETECTION_THRESHOLD`); "
-                  f"which line marks which fault: {', '.join(f'{k} -> {LINE_LABELS[v]}' for k, v in FAULT_LINES.items())}.", ""]
+                  f"which line marks which fault: {', '.join(f'{k} -> {LINE_LABELS[v]}' for k, v in FAULT_LINES.items())}"
+                  # a line on another detected fault's sideband (envelope.borrowed_lines)
+                  + "".join(f"; {said}" for said in s.get("borrowed_lines", {}).values()) + ".", ""]
     lines += _orders_markdown(s)
     lines += _timeline_markdown(s)
     if s["skid_ratios_percent"]:

@@ -18,6 +18,9 @@ the simulator's ``/diagnostics``, ``bsf_hz``, where skidding balls put it), and 
 
 ``found/theory Hz`` and ``x`` the height of the line over the median of its neighbourhood
 (threshold x4, ``envelope.DETECTION_THRESHOLD``).  The axis where a line stands highest counts.
+A line that sits on another detected fault's sideband counts for that fault, and the line says
+so (``envelope.borrowed_lines``: ``2xBSF sits on BPFI - 1 x shaft rate, ...: counted for inner,
+not ball``).
 Where those speeds moved by more than 1 % in the window (a speed step or ramp), its lines smear
 in Hz: it is judged in orders of the shaft instead (``order_verdict``: ``orders.order_diagnose``
 with the shaft and cage angles of the window's ``state`` samples, which go with it into the
@@ -93,7 +96,8 @@ import rclpy
 from rclpy.node import Node
 
 from .. import ground_truth
-from ..analysis.envelope import DETECTION_THRESHOLD, FAULT_LINES, STEADY_LINES, diagnose, spread, with_cage
+from ..analysis.envelope import (DETECTION_THRESHOLD, FAULT_LINES, STEADY_LINES, borrowed_text, diagnose, pick_verdict,
+                                 spread, with_cage)
 from ..analysis.orders import order_diagnose
 from ..messages import RUN_ENDED, RUN_KEY, TOPIC_ACCEL, TOPIC_DIAGNOSTICS, TOPIC_STATE, waveform_qos
 from ..stale_dds_ports import clear_before_start
@@ -212,19 +216,23 @@ def verdict(data: np.ndarray, channels, sample_rate: float, bearing, shaft_hz: f
 
 
 def _highest_over_axes(channels, diagnose_axis) -> dict:
-    """{"verdict", "scores", "axis", "lines"} over ``channels`` from ``diagnose_axis(k)`` (an
-    ``envelope.diagnose``-like result of axis ``k``): for each fault the highest prominence over
-    the axes, the axis and lines of the fault that stands highest."""
-    per_fault = {}          # fault -> (score, axis, lines of that axis)
+    """{"verdict", "scores", "axis", "lines", "borrowed"} over ``channels`` from
+    ``diagnose_axis(k)`` (an ``envelope.diagnose``-like result of axis ``k``): for each fault the
+    highest prominence over the axes, and whether that axis found its line on another detected
+    fault's sideband (``borrowed``: ``envelope.borrowed_lines``); the verdict as
+    ``envelope.pick_verdict`` gives it, with the axis and lines of that fault (or of the highest)."""
+    per_fault = {}          # fault -> (score, axis, lines of that axis, that axis's borrowed)
     for k, name in enumerate(channels):
         d = diagnose_axis(k)
         for fault, score in d["scores"].items():
             if fault not in per_fault or score > per_fault[fault][0]:
-                per_fault[fault] = (score, name, d["lines"])
-    scores = {fault: s for fault, (s, _axis, _lines) in per_fault.items()}
-    top = max(scores, key=scores.get)
-    return {"verdict": top if scores[top] >= DETECTION_THRESHOLD else "healthy",
-            "scores": scores, "axis": per_fault[top][1], "lines": per_fault[top][2]}
+                per_fault[fault] = (score, name, d["lines"], d.get("borrowed", {}))
+    scores = {fault: s for fault, (s, _axis, _lines, _borrowed) in per_fault.items()}
+    borrowed = {fault: per_fault[fault][3][fault] for fault in per_fault if fault in per_fault[fault][3]}
+    verdict = pick_verdict(scores, borrowed)
+    top = verdict if verdict in per_fault else max(scores, key=scores.get)
+    return {"verdict": verdict, "scores": scores, "axis": per_fault[top][1], "lines": per_fault[top][2],
+            "borrowed": borrowed}
 
 
 def order_verdict(data: np.ndarray, channels, sample_rate: float, times_s, bearing, states,
@@ -324,6 +332,7 @@ def format_verdict(t: float, result: dict) -> str:
         where = f"{line.found_hz:.3f}/{line.expected_hz:.3f} orders" if in_orders else \
             f"{line.found_hz:.1f}/{line.expected_hz:.1f}Hz"
         parts.append(f"{key} {where} x{line.prominence:.1f}")
+    parts += [borrowed_text(fault, result.get("borrowed", {})) for fault in result.get("borrowed", {})]
     parts.append(f"({FAULT_NAMES[result['verdict']]}, threshold x{DETECTION_THRESHOLD:g}, axis {result['axis']})")
     return " | ".join(parts)
 
