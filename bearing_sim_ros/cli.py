@@ -397,13 +397,13 @@ def _dispatch(args, rest) -> int:
     if cmd == "scenes":
         return _scenes(args)
     if cmd == "node":
-        from .nodes.bearing_sim_node import PARAMS_FILES_GIVEN_AS, main as node_main, stray_arguments_error
+        from .nodes.bearing_sim_node import main as node_main, stray_arguments_error
 
         # checked here too: the scene's parameter goes first, after a --ros-args of its own
         stray = rest[:rest.index("--ros-args")] if "--ros-args" in rest else rest
         if stray:
             raise stray_arguments_error("bearing-sim node", stray)
-        argv = []
+        argv, given_as = [], {}
         if args.scene is not None and not args.scene.strip():
             # --scene "$SCENE" with SCENE unset ran the default scene without a word: the scene
             # loader's own line for an empty path
@@ -419,7 +419,6 @@ def _dispatch(args, rest) -> int:
             # ... and so does a parameters file's (it came after our -p and ran its scene).  A pipe
             # (`<(...)`, a FIFO) is read once, here, into a copy that rcl reads after us
             rest, given_as = _params_files_in_memory(rest)
-            PARAMS_FILES_GIVEN_AS.update(given_as)
             in_files = _params_file_scenes(rest)
             if in_files:
                 path, scene = in_files[0]
@@ -427,7 +426,7 @@ def _dispatch(args, rest) -> int:
                 raise UserError(f"bearing-sim node: --scene {args.scene} and --params-file {path} (scene: {scene}) "
                                 "name two scenes; give one")
             argv += ["--ros-args", "-p", f"scene:={args.scene}"]
-        return node_main(argv + rest) or EXIT_OK
+        return node_main(argv + rest, given_as) or EXIT_OK
     if cmd == "monitor":
         from .nodes.monitor_node import main as monitor_main
 

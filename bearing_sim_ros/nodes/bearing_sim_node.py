@@ -1378,15 +1378,13 @@ def build_node(factory):
         raise ExternalShutdownException() from None
 
 
-# {copy's path: path given} of the --params-file pipes that `bearing-sim node` read into memory
-# (cli._params_files_in_memory): rcl names the copy, /proc/self/fd/N; the user's line names theirs
-PARAMS_FILES_GIVEN_AS: dict = {}
-
-
-def ros_arguments_error(exc) -> UserError:
+def ros_arguments_error(exc, given_as=None) -> UserError:
     """The one-line UserError for ROS arguments that rcl cannot parse (RCLError from
     ``rclpy.init``) or does not know (UnknownROSArgsError from the node): rcl's reason without
-    its source locations, and what is allowed."""
+    its source locations, and what is allowed.  ``given_as``: {copy's path: path given} of the
+    ``--params-file`` pipes that ``bearing-sim node`` read into memory
+    (``cli._params_files_in_memory``): rcl names the copy, ``/proc/self/fd/N``, the line the
+    path the user gave."""
     import re
 
     from rclpy._rclpy_pybind11 import UnknownROSArgsError
@@ -1395,7 +1393,7 @@ def ros_arguments_error(exc) -> UserError:
     text = re.sub(r",? at /\S+:\d+", "", text).removeprefix("failed to initialize rcl: ")
     if isinstance(exc, UnknownROSArgsError):
         text = "unknown " + text.strip("[]").replace("'", "")      # "['--bogus']" -> "unknown --bogus"
-    for copy, given in PARAMS_FILES_GIVEN_AS.items():
+    for copy, given in (given_as or {}).items():
         text = re.sub(re.escape(copy) + r"(?!\d)", lambda _m, given=given: given, text)
     return UserError(f"ROS arguments: {text}; after --ros-args come -p name:=value (an empty string: "
                      f"name:=\"''\"), -r from:=to, --params-file FILE, --log-level LEVEL")
@@ -1407,12 +1405,12 @@ def stray_arguments_error(program: str, stray: list) -> UserError:
     return UserError(f"{program}: unrecognized arguments: {' '.join(stray)} (ROS arguments follow --ros-args)")
 
 
-def main(argv=None) -> int:
+def main(argv=None, params_files_given_as=None) -> int:
     """``bearing_sim_node`` / ``bearing-sim node``: run the node until ``duration``, Ctrl-C or
     SIGTERM, and end the process (``teardown.CommandSignals.exit``): exit status 0, or 2 with one
     line for a bad parameter, scene or ROS argument or a recording that failed on the way (disk
     full: the node published on), or 130 / 143 for a signal while it shut down.  An internal
-    error is raised."""
+    error is raised.  ``params_files_given_as``: see ``ros_arguments_error``."""
     from rclpy._rclpy_pybind11 import RCLError, UnknownROSArgsError
     from rclpy.executors import ExternalShutdownException
     from rclpy.signals import SignalHandlerOptions
@@ -1439,7 +1437,7 @@ def main(argv=None) -> int:
         except (RCLError, UnknownROSArgsError) as exc:
             if isinstance(exc, RCLError) and rclpy.ok():
                 raise                   # not the arguments: rclpy.init went through
-            raise ros_arguments_error(exc) from None
+            raise ros_arguments_error(exc, params_files_given_as) from None
         signals.check()                 # ... or while the node was built (its kernels loading)
         spin_node(node, signals)
     except (KeyboardInterrupt, ExternalShutdownException):
