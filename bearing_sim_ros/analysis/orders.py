@@ -100,6 +100,13 @@ def untrackable(state_t_s, shaft_w, cage_w, start_s: float, end_s: float) -> str
     return ""
 
 
+def at_equal_angles(angle, values, per_rev: int) -> np.ndarray:
+    """``values`` (taken at the increasing ``angle``, rad) interpolated at equal steps of angle,
+    ``per_rev`` per revolution from ``angle[0]``, as many as fit in the span of ``angle``."""
+    steps = int((angle[-1] - angle[0]) / (2.0 * math.pi) * per_rev)
+    return np.interp(angle[0] + 2.0 * math.pi * np.arange(steps) / per_rev, angle, values)
+
+
 def order_diagnose(x, fs: float, times_s, state_t_s, shaft_angle, shaft_w, cage_angle, cage_w,
                    per_shaft_hz: dict, balls: int, band=DEFAULT_BAND, threshold: float = DETECTION_THRESHOLD,
                    spin_shares=None):
@@ -153,8 +160,7 @@ def order_diagnose(x, fs: float, times_s, state_t_s, shaft_angle, shaft_w, cage_
     mean_hz = revolutions / (times_s[covered][-1] - times_s[covered][0])
     # samples per revolution: at least the signal's rate where the shaft is slowest
     per_rev = int(min(MAX_SAMPLES_PER_REV, math.ceil(fs / max(float(speeds_hz.min()), SLOWEST_SHARE * speeds_hz.max()))))
-    grid = angle[0] + 2.0 * math.pi * np.arange(int(revolutions * per_rev)) / per_rev
-    resampled = np.interp(grid, angle, env[covered])
+    resampled = at_equal_angles(angle, env[covered], per_rev)
     # the detector's resolution and neighbourhood in Hz, at the mean speed, in orders; segments of
     # at least CAGE_TURNS cage turns as in Hz (envelope.decision_segment: the lines' cage and shaft
     # sidebands resolved below about 1000 rpm)
@@ -172,9 +178,7 @@ def order_diagnose(x, fs: float, times_s, state_t_s, shaft_angle, shaft_w, cage_
         ball = unwrapped_angles(t, np.full(t.size, np.nan), ball_w)
         ball_angle = sign * angle_at(times_s[covered], t, ball, ball_w)
         if np.all(np.diff(ball_angle) > 0):
-            ball_grid = ball_angle[0] + 2.0 * math.pi * np.arange(
-                int((ball_angle[-1] - ball_angle[0]) / (2.0 * math.pi) * per_rev)) / per_rev
-            ball_env = np.interp(ball_grid, ball_angle, env[covered])
+            ball_env = at_equal_angles(ball_angle, env[covered], per_rev)
             ball_orders, ball_spec = averaged_spectrum(ball_env - ball_env.mean(), per_rev, max_order, segment_revs)
             lines["2bsf"] = line_at(ball_orders, ball_spec, targets["2bsf"], neighbourhood_hz=neighbourhood)
         else:
