@@ -176,7 +176,7 @@ def summarise(scene, tail: dict, node_figures: dict, path, out: str | None = Non
     """The one-screen summary (text); ``path``: how ``report`` and ``play`` are given the
     recording (``recording_argument``); ``out``: the name it was made to (default ``path``),
     whose stem names the report's folder."""
-    from .analysis.envelope import DETECTION_THRESHOLD, STEADY_LINES, borrowed_text
+    from .analysis.envelope import DETECTION_THRESHOLD, LINE_LABELS, STEADY_LINES, borrowed_text
     from .nodes.monitor_node import order_verdict, spin_share_of, spin_shares_at, verdict
     from .recording.render import tier_summary
     from .waveform import NS
@@ -240,7 +240,7 @@ def summarise(scene, tail: dict, node_figures: dict, path, out: str | None = Non
             theory, found = f"theory {unit}", f"found {unit}"
             wide = (max(10, len(theory)), max(9, len(found)))
             lines.append(f"  {'line':<6} {theory:>{wide[0]}} {found:>{wide[1]}} {'x floor':>8}")
-            for key, label in (("bpfo", "BPFO"), ("bpfi", "BPFI"), ("2bsf", "2xBSF"), ("ftf", "FTF")):
+            for key, label in LINE_LABELS.items():
                 ln = res["lines"][key]
                 mark = "  <- detected" if key != "ftf" and ln.prominence >= DETECTION_THRESHOLD else ""
                 lines.append(f"  {label:<6} {ln.expected_hz:>{wide[0]}.{digits}f} {ln.found_hz:>{wide[1]}.{digits}f} "

@@ -54,6 +54,7 @@ FAULT_LINES = {          # which envelope line marks which fault
     "ball": "2bsf",
     "cage": "ftf",
 }
+LINE_LABELS = {"bpfo": "BPFO", "bpfi": "BPFI", "2bsf": "2xBSF", "ftf": "FTF"}   # each line's name in words
 
 
 def one_channel(x) -> np.ndarray:
@@ -379,9 +380,9 @@ def borrowed_text(fault: str, borrowed: dict) -> str:
     if fault not in borrowed:
         return ""
     other, k = borrowed[fault]
-    names = {"outer": "BPFO", "inner": "BPFI", "ball": "2xBSF"}
     rate = "shaft rate" if SIDEBANDS[other][0] == "shaft" else "FTF"
-    return (f"{names[fault]} sits on {names[other]} {'+' if k > 0 else '-'} {abs(k)} x {rate}, "
+    return (f"{LINE_LABELS[FAULT_LINES[fault]]} sits on {LINE_LABELS[FAULT_LINES[other]]} "
+            f"{'+' if k > 0 else '-'} {abs(k)} x {rate}, "
             f"a sideband of the {other} fault's line: counted for {other}, not {fault}")
 
 

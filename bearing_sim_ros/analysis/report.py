@@ -56,14 +56,13 @@ from ..errors import UserError
 from ..paths import output_folder, replace_file, save_figure, writing_into
 from ..recording.reader import open_recording
 from ..waveform import NS, from_pointcloud2
-from .envelope import (DETECTION_THRESHOLD, FAULT_LINES, STEADY_LINES, borrowed_text, diagnose, envelope_band,
-                       envelope_spectrum, no_defect_note, spread, statistics, with_cage)
+from .envelope import (DETECTION_THRESHOLD, FAULT_LINES, LINE_LABELS, STEADY_LINES, borrowed_text, diagnose,
+                       envelope_band, envelope_spectrum, no_defect_note, spread, statistics, with_cage)
 from .orders import order_diagnose
 
 MAX_ANALYSIS_S = 120.0
 DEFAULT_WINDOW_S = 1.0        # s: the verdict timeline's windows (the detector's own segment length)
 WINDOW_RANGE_S = (0.5, MAX_ANALYSIS_S)   # s: below 0.5 s the lines' +-20 Hz neighbourhood holds too few bins
-LINE_LABELS = {"bpfo": "BPFO", "bpfi": "BPFI", "2bsf": "2xBSF", "ftf": "FTF"}
 LINE_COLOURS = {"bpfo": "tab:red", "bpfi": "tab:green", "2bsf": "tab:purple", "ftf": "tab:orange"}
 RPM = 60.0 / (2.0 * math.pi)
 
