@@ -13,7 +13,7 @@ import subprocess
 
 import numpy as np
 import pytest
-from test_play import WAIT, _play_to, _subscriber
+from test_play import WAIT, _subscriber
 
 from bearing_sim_ros.analysis.report import build_report
 from bearing_sim_ros.errors import UserError
@@ -84,6 +84,10 @@ def test_a_split_recording_reads_as_the_recording_it_was_split_from(whole):
             assert list(rec.messages()) == messages
             accel = [m for m in messages if m[0] == "/accel"]
             assert list(rec.messages(["/accel"])) == accel and len(accel) == 200
+            for topic in {m[0] for m in messages}:        # play's first and last table, per topic
+                on = [(m[2], m[3]) for m in messages if m[0] == topic]
+                assert rec.first_and_last(topic) == (on[0], on[-1]), topic
+            assert rec.first_and_last("/nothing") is None
     with open_recording(pieces[1:3]) as rec:               # consecutive pieces are a recording too
         assert rec.path == f"{pieces[1]} .. {pieces[2]}"
         n = 0

@@ -177,16 +177,27 @@ class Recording:
     def first_and_last(self, topic: str):
         """The first and the last message on ``topic``, in log-time order, each as (log_time_ns,
         CDR bytes), read from the chunks that hold them (not the whole file); None without any."""
-        first = next(self._records([topic], log_time_order=True), None)
-        if first is None:
-            return None
+        first = self.first(topic)
+        return None if first is None else (first, self.last(topic))
+
+    def first(self, topic: str):
+        """The first message on ``topic`` in log-time order as (log_time_ns, CDR bytes), read from
+        the chunk that holds it; None without any."""
+        record = next(self._records([topic], log_time_order=True), None)
+        return None if record is None else (record[3], record[4])
+
+    def last(self, topic: str):
+        """The last message on ``topic`` in log-time order as (log_time_ns, CDR bytes), read from
+        the chunk that holds it; None without any."""
         if self.summary.chunk_indexes:
-            last = next(self._records([topic], log_time_order=True, reverse=True))
+            record = next(self._records([topic], log_time_order=True, reverse=True), None)
         else:
             # messages outside chunks (another writer's, MCAP allows it): the mcap reader streams
             # them in file order whatever ``reverse`` says, and gave the first as the last
-            *_, last = self._records([topic], log_time_order=True)
-        return (first[3], first[4]), (last[3], last[4])
+            record = None
+            for record in self._records([topic], log_time_order=True):
+                pass
+        return None if record is None else (record[3], record[4])
 
     def _records(self, topics=None, log_time_order=False, reverse=False):
         """(topic, msg_type, channel id, log_time_ns, CDR bytes) of the messages (``reverse``:
@@ -551,9 +562,12 @@ class SplitRecording:
     def first_and_last(self, topic: str):
         """``Recording.first_and_last`` over the pieces: the first piece's first message on
         ``topic`` and the last piece's last (of those that have one)."""
-        first = next((ends for ends in (r.first_and_last(topic) for r in self._pieces) if ends), None)
-        last = next((ends for ends in (r.first_and_last(topic) for r in reversed(self._pieces)) if ends), None)
-        return (first[0], last[1]) if first else None
+        # each end from the one piece that holds it: first_and_last per piece read the first
+        # piece's last message and the last piece's first as well, two chunks for nothing
+        first = next((m for m in (r.first(topic) for r in self._pieces) if m), None)
+        if first is None:
+            return None
+        return first, next(m for m in (r.last(topic) for r in reversed(self._pieces)) if m)
 
     def parameters(self) -> dict:
         return self._pieces[0].parameters()
