@@ -639,7 +639,6 @@ def test_defect_search_matches_every_ball_evaluated(name):
     w, load = scene.shaft_speed, np.array(scene.radial_load)
     model.advance(3000, w, w, load, load)          # 50 ms: the balls settle in their pockets
     p, dtab, nb = model.p, model.dtab, int(model.p[sk.P_NB])
-    spacing = 2 * np.pi / nb
     rng = np.random.default_rng(5)
     scr = np.zeros((nb, 5))
     met = 0
@@ -1025,17 +1024,10 @@ def test_a_ball_pit_at_300_rpm_is_found_on_the_skidding_tier():
     balls ran (the cage speed, ball_skid): in 1 s segments the pit's cage-rate sidebands (2 Hz
     apart) merge with its 2xBSF line and the +-20 Hz floor rises with them (x1.6, "healthy"); in
     segments of 8 cage turns (envelope.decision_segment: the whole 4 s) the line stands, x18."""
-    from bearing_sim_ros.analysis.envelope import diagnose, with_cage
-    from bearing_sim_ros.scene import Defect
+    from test_kinematic import _slow
 
-    rpm = 300.0
-    pit = Defect(kind="ball", width=0.6e-3, depth=0.25e-3, length=0.6e-3, angle=0.0)
-    sim = Simulator(replace(load_scene("er16k_skidding"), shaft_speed=rpm * RPM, defects=(pit,)), fidelity="skidding")
-    sim.advance(int(0.5 * FS))
-    batch = sim.advance(int(4.0 * FS))
-    assert batch.tier == "skidding"
-    ff = with_cage(sim.bearing.fault_frequencies(rpm / 60), sim.bearing.balls, rpm / 60,
-                   float(np.mean(batch.cage_speed)) / (2 * np.pi))
-    ff = {**ff, "bsf": ff["bsf"] * (1 - float(np.mean(batch.extras["ball_skid"])) / 100)}
-    d = diagnose(batch.accel[:, 1], FS, ff)
+    from bearing_sim_ros.analysis.envelope import diagnose
+
+    y, fs, ff = _slow("ball", 300.0, fidelity="skidding")
+    d = diagnose(y, fs, ff)
     assert d["verdict"] == "ball" and d["scores"]["ball"] > 8.0, d["scores"]

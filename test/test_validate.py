@@ -339,7 +339,7 @@ def test_the_report_says_how_the_one_calibration_splits_outer_and_inner_race(com
     outer_miss = outer["sim"]["lines"]["bpfo"]["height"] / outer["real"]["lines"]["bpfo"]["height"]
     inner_miss = inner["sim"]["stats"]["rms"] / inner["real"]["stats"]["rms"]
     assert f"outer race fault-line height (BPFO, BPFI) x{g(outer_miss)}, " in md, md
-    assert f"inner race fault-line height (BPFO, BPFI) x" in md and f", RMS x{g(inner_miss)}, " in md, md
+    assert "inner race fault-line height (BPFO, BPFI) x" in md and f", RMS x{g(inner_miss)}, " in md, md
     data = json.loads((out / "validation.json").read_text())
     assert data["race_split"]["line_height"] == pytest.approx(height)
 
