@@ -53,6 +53,36 @@ def _selection_and_errors(rpm, load):
     return sel, errors(kin, ref, scene, 15000.0)
 
 
+def _6000_size_at_its_limits():
+    """A 6000-size bearing (7 balls of 4.762 mm on 18 mm, 4 um play; README "Limitations",
+    docs/probes/custom_bearings) at its speed limit, 55 555 rpm, under 2 x C0 less its shaft's
+    weight, sensor noise off."""
+    from bearing_sim_ros.scene import scene_from_dict
+
+    part = lambda m, k, c: {"mass": m, "stiffness": k, "damping": c}  # noqa: E731
+    return scene_from_dict({
+        "name": "6000-size", "bearing": {"name": "6000-size", "balls": 7, "ball_diameter_mm": 4.762,
+                                         "pitch_diameter_mm": 18.0, "radial_clearance_um": 4.0, "width_mm": 8.0},
+        "structure": {"shaft": part(0.3, 2e6, 300), "pedestal": part(0.8, 5e7, 1500),
+                      "resonator": {"mass": 0.02, "frequency_hz": 4000, "damping_ratio": 0.04}},
+        "operating_point": {"shaft_speed_rpm": 55555, "radial_load": [0.0, -4662.0]},
+        "lubrication": {"viscosity": 0.04, "pressure_viscosity": 2.0e-8}, "sensor": {"noise_density": 0.0}})
+
+
+def test_at_a_small_bearings_speed_limit_the_kinematic_tier_auto_keeps_matches_the_reference():
+    """Where the tiers' RMS looked 72 % apart (kinematic 33.9 m/s^2 against the skidding tier's
+    default solver's 19.7), the default solver was off: the skidding reference (RK4 at 1e-6 and
+    4e-7 s agree with it to four digits) gives 34.3, within 5 % of the kinematic tier that ``auto``
+    picks there (docs/fidelity_rms_gap.md)."""
+    scene = _6000_size_at_its_limits()
+    sel = select_tier(scene, "auto", scene.shaft_speed, scene.radial_load, scene.fidelity_tolerance)
+    assert sel.tier == "kinematic", sel
+    n, skip = int(0.3 * 15000), int(0.1 * 15000)
+    rms = {tier: float(np.sqrt(np.mean(Simulator(scene, fidelity=tier, seed=0, **kw).advance(n).accel[skip:, -1] ** 2)))
+           for tier, kw in (("kinematic", {}), ("skidding", {"solver": "reference"}))}
+    assert abs(rms["kinematic"] / rms["skidding"] - 1.0) < 0.05, rms
+
+
 def test_light_load_high_speed_gets_skidding():
     scene = load_scene("er16k_healthy")
     sel = select_tier(scene, "auto", 10000 * RPM, (0.0, -10.0), 0.05)
