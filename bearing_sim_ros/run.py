@@ -162,6 +162,23 @@ def _verdict_lines(scene, res: dict, end_s: float = math.inf, analysed_s: float 
     return [f"verdict: {said}{what},", f"  {advice}"]
 
 
+def _line_table(res: dict, unit: str, digits: int) -> list:
+    """The fault lines of ``res`` (a verdict, lines in Hz or orders: ``unit``) as the summary's
+    table, each found line's height over its floor, then each line counted for another fault."""
+    from .analysis.envelope import DETECTION_THRESHOLD, LINE_LABELS, borrowed_text
+
+    theory, found = f"theory {unit}", f"found {unit}"
+    wide = (max(10, len(theory)), max(9, len(found)))
+    lines = [f"  {'line':<6} {theory:>{wide[0]}} {found:>{wide[1]}} {'x floor':>8}"]
+    for key, label in LINE_LABELS.items():
+        ln = res["lines"][key]
+        mark = "  <- detected" if key != "ftf" and ln.prominence >= DETECTION_THRESHOLD else ""
+        lines.append(f"  {label:<6} {ln.expected_hz:>{wide[0]}.{digits}f} {ln.found_hz:>{wide[1]}.{digits}f} "
+                     f"{ln.prominence:>8.1f}{mark}")
+    # a line on another detected fault's sideband counts for that fault (envelope.borrowed_lines)
+    return lines + [f"  {borrowed_text(fault, res['borrowed'])}" for fault in res.get("borrowed", {})]
+
+
 def recording_argument(out: str, split: bool) -> str:
     """How ``report`` and ``play`` are given the recording made to ``out``: the file itself, or
     for a split recording (``split``: ``out``'s stem + ``_000.mcap``, ...) the name it was made
@@ -176,7 +193,7 @@ def summarise(scene, tail: dict, node_figures: dict, path, out: str | None = Non
     """The one-screen summary (text); ``path``: how ``report`` and ``play`` are given the
     recording (``recording_argument``); ``out``: the name it was made to (default ``path``),
     whose stem names the report's folder."""
-    from .analysis.envelope import DETECTION_THRESHOLD, LINE_LABELS, STEADY_LINES, borrowed_text
+    from .analysis.envelope import STEADY_LINES, band_words, resonator_hz
     from .nodes.monitor_node import order_verdict, spin_share_of, spin_shares_at, verdict
     from .recording.render import tier_summary
     from .waveform import NS
@@ -214,7 +231,7 @@ def summarise(scene, tail: dict, node_figures: dict, path, out: str | None = Non
             # on their spin angle, from their spin at each state sample (as monitor and report do)
             shares = spin_shares_at(spins, tail["t0_ns"] + np.asarray(tail["states"][0]) * NS) if spins else None
             tracked, untracked = order_verdict(x, tail["channels"], fs, tail["times_s"], scene.bearing,
-                                               tail["states"], spin, shares)
+                                               tail["states"], spin, shares, resonator_hz(scene.structure))
         if moved > STEADY_LINES and tracked is None:
             lines.append(f"envelope analysis of the last {x.shape[0] / fs:.1f} s: no verdict: the shaft and cage "
                          f"speeds moved by {100 * moved:.0f} % in it (a speed step or ramp, a load step that "
@@ -224,30 +241,28 @@ def summarise(scene, tail: dict, node_figures: dict, path, out: str | None = Non
             if tracked is not None:
                 res, unit, digits = tracked, "order", 3
                 slowest, fastest = tracked["shaft_rpm"]
+                # the band the envelope was taken in, as the detector chose it (envelope.detector_band):
+                # 2-5 kHz held under 0.9 x Nyquist, or moved up above fast lines
                 lines.append(f"envelope analysis of the last {x.shape[0] / fs:.1f} s ({', '.join(tail['channels'])}, "
-                             f"band 2-5 kHz) by order tracking, axis {res['axis']}: the shaft and cage speeds moved "
-                             f"by {100 * moved:.0f} % in it ({slowest:.0f}-{fastest:.0f} rpm), which smears the "
-                             f"lines in Hz; in orders of the shaft ({tracked['revolutions']:.0f} revolutions) "
+                             f"band {band_words(res['band'])}) by order tracking, axis {res['axis']}: the shaft and "
+                             f"cage speeds moved by {100 * moved:.0f} % in it ({slowest:.0f}-{fastest:.0f} rpm), which "
+                             f"smears the lines in Hz; in orders of the shaft ({tracked['revolutions']:.0f} revolutions) "
                              "they hold still:")
             else:
                 # the cage's speed from state: where it skids (7 % at 10000 rpm / 10 N on the
                 # ER-16K) the lines are there, and at pure rolling's this said "ball fault" of an
                 # outer-race pit
                 res, unit, digits = verdict(x, tail["channels"], fs, scene.bearing, shaft_hz,
-                                            None if cage is None else abs(cage) / (2 * math.pi), spin), "Hz", 2
-                lines.append(f"envelope analysis of the last {x.shape[0] / fs:.1f} s ({', '.join(tail['channels'])}, "
-                             f"band 2-5 kHz) at shaft {shaft_hz:.2f} Hz ({shaft_hz * 60:.0f} rpm), axis {res['axis']}:")
-            theory, found = f"theory {unit}", f"found {unit}"
-            wide = (max(10, len(theory)), max(9, len(found)))
-            lines.append(f"  {'line':<6} {theory:>{wide[0]}} {found:>{wide[1]}} {'x floor':>8}")
-            for key, label in LINE_LABELS.items():
-                ln = res["lines"][key]
-                mark = "  <- detected" if key != "ftf" and ln.prominence >= DETECTION_THRESHOLD else ""
-                lines.append(f"  {label:<6} {ln.expected_hz:>{wide[0]}.{digits}f} {ln.found_hz:>{wide[1]}.{digits}f} "
-                             f"{ln.prominence:>8.1f}{mark}")
-            # a line on another detected fault's sideband counts for that fault (envelope.borrowed_lines)
-            lines += [f"  {borrowed_text(fault, res['borrowed'])}" for fault in res.get("borrowed", {})]
-            lines += _verdict_lines(scene, res, f["signal_s"], x.shape[0] / fs)
+                                            None if cage is None else abs(cage) / (2 * math.pi), spin,
+                                            resonator_hz(scene.structure)), "Hz", 2
+                head = f"envelope analysis of the last {x.shape[0] / fs:.1f} s"
+                at = f"at shaft {shaft_hz:.2f} Hz ({shaft_hz * 60:.0f} rpm)"
+                lines.append(f"{head} {at}: {res['no_band']}" if res.get("no_band") else
+                             f"{head} ({', '.join(tail['channels'])}, band {band_words(res['band'])}) {at}, "
+                             f"axis {res['axis']}:")
+            if not res.get("no_band"):
+                lines += _line_table(res, unit, digits)
+                lines += _verdict_lines(scene, res, f["signal_s"], x.shape[0] / fs)
     if tail["skid_percent"]:
         lines.append(f"skid ratios, mean of the recording's /diagnostics ({f['tier_values']['tier']} tier): "
                      + ", ".join(f"{k.replace('_ratio', '')} {v:.3g} %" for k, v in tail["skid_percent"].items()))

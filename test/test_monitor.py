@@ -1480,3 +1480,32 @@ def test_a_verdict_line_the_disk_cannot_take_ends_the_monitor_as_an_error(ros_en
     assert monitor.returncode == 1, (monitor.returncode, monitor.stdout, monitor.stderr)
     assert "OSError: [Errno 28] No space left on device" in monitor.stderr, monitor.stderr
     assert " verdict=" not in monitor.stdout, monitor.stdout
+
+
+def test_the_verdict_line_states_the_band_and_says_when_there_is_none():
+    """Each verdict line ends with the envelope's band as the detector chose it for the window's
+    lines (``envelope.detector_band``): ``band 2-5 kHz`` for the ER-16K at 1600 rpm at 15 kHz.
+    A 6000-size bearing (7 balls of 4.762 mm on 18 mm pitch) at 40 000 rpm at 15 kHz has its
+    BPFI at 2.95 kHz, too close to Nyquist for a band above its lines: ``verdict=unknown`` and
+    one line that says why, where the monitor judged it in 2-5 kHz."""
+    from bearing_sim_ros.nodes.monitor_node import format_verdict, verdict
+    from bearing_sim_ros.scene import scene_from_dict
+
+    fs = 15000.0
+    rng = np.random.default_rng(3)
+    data = rng.standard_normal((int(fs), 2))
+    er16k = load_scene("er16k_outer_race")
+    line = format_verdict(1.0, verdict(data, ["accel_x", "accel_y"], fs, er16k.bearing, 1600 / 60))
+    assert line.endswith(", band 2-5 kHz)"), line
+    small = scene_from_dict({
+        "name": "6000-size", "bearing": {"name": "6000-size", "balls": 7, "ball_diameter_mm": 4.762,
+                                         "pitch_diameter_mm": 18.0, "radial_clearance_um": 4.0, "width_mm": 8.0},
+        "structure": {"shaft": {"mass": 0.3, "stiffness": 2e6, "damping": 300},
+                      "pedestal": {"mass": 0.8, "stiffness": 5e7, "damping": 1500}},
+        "operating_point": {"shaft_speed_rpm": 40000, "radial_load": [0.0, -300.0]}})
+    result = verdict(data, ["accel_x", "accel_y"], fs, small.bearing, 40000 / 60)
+    assert result["verdict"] == "unknown" and result["band"] is None, result["verdict"]
+    line = format_verdict(1.0, {**result, "truth": ("inner",)})
+    assert line.startswith("t=1.00s shaft=40000rpm verdict=unknown truth=inner | no envelope band: the fault "
+                           "lines judged reach 2951 Hz"), line
+    assert "\n" not in line and "smear" not in line, line

@@ -424,3 +424,16 @@ def test_the_summary_gives_no_verdict_where_the_speed_moved_and_state_is_too_spa
     text = _summary_of(render_run_up(tmp_path, "er16k_outer_race", 2.0, state_rate=5.0), load_scene("er16k_outer_race"))
     assert ("envelope analysis of the last 2.0 s: no verdict: the shaft and cage speeds moved by" in text
             and "; no order tracking: state samples up to 0.2 s apart" in text and "\nverdict:" not in text), text
+
+
+def test_the_summary_states_the_band_the_envelope_used_at_a_low_sample_rate(tmp_path):
+    """At 4 kHz the detector's 2-5 kHz band is clipped to 0.9-1.8 kHz (``envelope.envelope_band``);
+    the summary said "band 2-5 kHz" whatever band was used.  It states the band used."""
+    from bearing_sim_ros import load_scene
+    from bearing_sim_ros.recording.render import render
+
+    recording = tmp_path / "slow.mcap"
+    render("er16k_outer_race", 2.0, recording, fidelity="kinematic", seed=1, sample_rate=4000.0, progress=False)
+    text = _summary_of(recording, load_scene("er16k_outer_race"))
+    assert "(accel_x, accel_y, band 0.9-1.8 kHz) at shaft 26.67 Hz (1600 rpm)" in text, text
+    assert "2-5 kHz" not in text, text

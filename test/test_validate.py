@@ -858,3 +858,52 @@ def test_the_recordings_in_a_folder_are_found_whatever_the_case_of_their_suffix(
     for name in ("b.MAT", "a.mat", "notes.txt"):
         (tmp_path / name).write_text("x")
     assert [p.name for p in find_recordings(tmp_path)] == ["a.mat", "b.MAT"]
+
+
+def test_every_shipped_scene_keeps_the_detector_band_of_2_to_5_khz():
+    """The detector's band follows the fault lines judged (``envelope.detector_band``), but where
+    2-5 kHz serves them it stays: every shipped scene at its operating point, at the node's
+    15 kHz and CWRU's 12 and 48 kHz, with its resonator, and the ER-16K up to 18 000 rpm (BPFI
+    1.63 kHz); at 1 kHz the clipped 225-450 Hz of the ER-16K at 1600 rpm stays too."""
+    names = sorted(p.stem for p in (Path(__file__).resolve().parents[1] / "config" / "scenes").glob("*.yaml"))
+    assert len(names) >= 13
+    for name in names:
+        scene = load_scene(name)
+        for fs in (12000.0, 15000.0, 48000.0):
+            band, why = env.detector_band(scene.fault_frequencies(), fs, env.resonator_hz(scene.structure))
+            assert band == (2000.0, 5000.0) and why == "", (name, fs, band, why)
+    er16k = load_scene("er16k_outer_race")
+    assert env.detector_band(er16k.bearing.fault_frequencies(18000 / 60), 15000.0)[0] == (2000.0, 5000.0)
+    assert env.detector_band(er16k.fault_frequencies(), 1000.0)[0] == (225.0, 450.0)
+    # beyond that the band moves up above the lines: its low edge and width at least the span read
+    band, _why = env.detector_band(er16k.bearing.fault_frequencies(25000 / 60), 15000.0)
+    span = env.spectrum_span(er16k.bearing.fault_frequencies(25000 / 60))
+    assert band[0] == pytest.approx(span) and band[1] - band[0] >= span and band[1] <= 6750.0
+
+
+def test_fault_lines_too_close_to_nyquist_get_no_verdict_in_one_line():
+    """A 6000-size bearing (7 balls of 4.762 mm on 18 mm pitch) at 40 000 rpm under 300 N with a
+    1 mm inner-race pit, at 15 kHz: BPFI 2.95 kHz, and the envelope spectrum read up to 3.58 kHz
+    needs a band from 3.58 kHz an octave wide, above 0.9 x Nyquist (6.75 kHz).  In the fixed
+    2-5 kHz band the detector judged the 0.8 s after 0.2 s of the kinematic tier "outer" (BPFO
+    x3500, BPFI x890: README "Limitations"; BPFO = Z x shaft - BPFI, the inner pit's own line
+    family); now it says why there is no verdict, and gives none."""
+    import sys
+
+    from bearing_sim_ros import Simulator
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "docs" / "probes" / "custom_bearings"))
+    try:
+        from probe import scene as custom_scene
+    finally:
+        sys.path.pop(0)
+    scene = custom_scene("6000-size", 40000, 300, [{"kind": "inner", "width_mm": 1.0, "depth_mm": 0.1}])
+    fs = 15000.0
+    y = Simulator(scene, fidelity="kinematic", seed=0, sample_rate=fs).advance(int(1.0 * fs)).accel[int(0.2 * fs):, -1]
+    d = env.diagnose(y, fs, scene.fault_frequencies())
+    assert d["verdict"] == "unknown" and d["band"] is None, d["verdict"]
+    # the scene's resonator (4 kHz) widens no band that far: the same
+    assert env.diagnose(y, fs, scene.fault_frequencies(), resonance_hz=env.resonator_hz(scene.structure)) == d
+    assert d["no_band"].startswith("no envelope band: the fault lines judged reach 2951 Hz") and "\n" not in d["no_band"]
+    assert "(6750 Hz at 15000 Hz): no verdict (a sample rate of at least 15914 Hz gives one)" in d["no_band"]
+    with pytest.raises(UserError, match="no envelope band"):
+        env.fault_lines(y, fs, scene.fault_frequencies())

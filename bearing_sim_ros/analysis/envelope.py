@@ -7,7 +7,10 @@ the median level of its neighbourhood.
 
 Choices, checked on the CWRU recordings (``bearing-sim validate``, README "Validation against real recordings"):
 
-* Band 2-5 kHz (clipped below 0.9 x Nyquist).  The CWRU housing resonances that the defect
+* Band 2-5 kHz (clipped below 0.9 x Nyquist) wherever it serves the lines judged
+  (:func:`detector_band`: its low edge and its width at least the envelope spectrum's span,
+  1.2 x the highest fault line + 40 Hz), else moved up above them, or no verdict where no band
+  fits below Nyquist.  The CWRU housing resonances that the defect
   impacts ring sit at 2.3-3.6 kHz (plus 5.2 kHz for the outer-race fault); the healthy machine's
   lines in the band (near 4.1 kHz) beat at 120 and 240 Hz, away from every fault line.  A band
   picked by spectral kurtosis was tried and rejected:
@@ -76,6 +79,71 @@ def envelope_band(fs: float, band=DEFAULT_BAND) -> tuple:
     hi = min(hi, 0.9 * nyq)
     lo = min(lo, 0.5 * hi)
     return lo, hi
+
+
+def spectrum_span(frequencies: Mapping, neighbourhood_hz: float = 20.0) -> float:
+    """The top (Hz) of the envelope spectrum the detector reads for ``frequencies``
+    (``Bearing.fault_frequencies``, Hz): 1.2 x its highest line (:func:`fault_targets`: BPFO,
+    BPFI, 2xBSF, FTF) plus two neighbourhoods of ``neighbourhood_hz``: each line's +-1 % search
+    with room for a cage skid or a ball slip, and the +-``neighbourhood_hz`` it is compared with."""
+    return 1.2 * max(fault_targets(frequencies).values()) + 2 * neighbourhood_hz
+
+
+def detector_band(frequencies: Mapping, fs: float, resonance_hz: float | None = None,
+                  neighbourhood_hz: float = 20.0) -> tuple:
+    """The band-pass (Hz) of the envelope for the fault lines of ``frequencies`` (Hz) at the
+    sample rate ``fs`` (Hz): ``((low, high), "")``, or ``(None, why)`` where none fits.
+
+    The rule, with ``span`` = :func:`spectrum_span` (the top of the envelope spectrum read):
+
+    * the low edge at least ``span``: no line the detector reads is in the band as a carrier.
+      Bands near the lines misread inner pits: the ER-16K's at 4000 rpm at 15 kHz is "outer" in
+      0.9-1.8 kHz (BPFO x78, BPFI x25: BPFO = Z x shaft - BPFI, the pit's own line family),
+      "inner" in 2-5 kHz (x10, x91; docs/envelope_band.md);
+    * the width at least ``span`` (from ``span`` up, an octave): the envelope of a band-limited
+      signal holds the differences of the frequencies in the band, up to its width;
+    * the top at most 0.9 x Nyquist (:func:`envelope_band`).
+
+    The default band as :func:`envelope_band` clips it (2-5 kHz from 11.1 kHz of sample rate,
+    225-450 Hz at 1 kHz) wherever it keeps the rule: up to a highest line of 1633 Hz from
+    11.1 kHz up (the ER-16K to 18 000 rpm, the 6205 to 11 000 rpm), of 154 Hz at 1 kHz.  Else
+    the band moves up: from ``span``, its top the largest of the default's (5 kHz), 2 x ``span``
+    and 1.25 x ``resonance_hz`` (the structure's resonator, Hz, where known and above ``span``:
+    the ring the impacts excite; the ER-16K's inner pit read "outer" in bands without its
+    3.8 kHz resonator), held under 0.9 x Nyquist.  Where that leaves it narrower than ``span``
+    there is none: the lines lie too close to Nyquist (a 6000-size bearing at 40 000 rpm, BPFI
+    2.95 kHz, at 15 kHz: a band from 3.58 kHz 3.58 kHz wide needs a sample rate of 15.9 kHz)."""
+    span = spectrum_span(frequencies, neighbourhood_hz)
+    lo, hi = envelope_band(fs)
+    if lo >= span and hi - lo >= span:
+        return (lo, hi), ""
+    top = 0.9 * 0.5 * fs
+    lo = max(lo, span)
+    want = max(DEFAULT_BAND[1], lo + span)     # lo = span here or above: at least an octave
+    if resonance_hz is not None and np.isfinite(resonance_hz) and resonance_hz > lo:
+        want = max(want, 1.25 * float(resonance_hz))
+    hi = min(want, top)
+    if hi - lo >= span:
+        return (lo, hi), ""
+    f_top = max(fault_targets(frequencies).values())
+    return None, (f"no envelope band: the fault lines judged reach {f_top:.0f} Hz, and the envelope spectrum read "
+                  f"up to {span:.0f} Hz needs a band from {span:.0f} Hz at least {span:.0f} Hz wide, above 0.9 x "
+                  f"Nyquist ({top:.0f} Hz at {fs:g} Hz): no verdict (a sample rate of at least "
+                  f"{4 * span / 0.9:.0f} Hz gives one)")
+
+
+def resonator_hz(structure) -> float | None:
+    """The natural frequency (Hz) of the unit resonator of ``structure`` (``Scene.structure``),
+    sqrt(k / m) / 2 pi, or None where it has none."""
+    mass = getattr(structure, "resonator_mass", 0.0) or 0.0
+    stiffness = getattr(structure, "resonator_stiffness", 0.0) or 0.0
+    return float(np.sqrt(stiffness / mass) / (2 * np.pi)) if mass > 0 and stiffness > 0 else None
+
+
+def band_words(band) -> str:
+    """The envelope band ``band`` ((low, high) Hz) in words: ``2-5 kHz``, ``0.225-0.45 kHz``."""
+    lo, hi = band
+    return f"{lo / 1e3:.3g}-{hi / 1e3:.3g} kHz"
 
 
 def envelope(x: np.ndarray, fs: float, band=DEFAULT_BAND) -> np.ndarray:
@@ -233,17 +301,20 @@ def fault_targets(frequencies: dict) -> dict:
             "2bsf": 2.0 * frequencies["bsf"], "ftf": frequencies["ftf"]}
 
 
-def fault_lines(x: np.ndarray, fs: float, frequencies: dict, band=DEFAULT_BAND,
+def fault_lines(x: np.ndarray, fs: float, frequencies: dict, band="auto",
                 neighbourhood_hz: float = 20.0, search_rel: float = 0.01,
-                segment: float | None | str = "auto") -> dict:
+                segment: float | None | str = "auto", resonance_hz: float | None = None) -> dict:
     """Envelope lines at the fault frequencies, on the averaged envelope spectrum
     (``segment`` s, see :func:`envelope_spectrum`; "auto": :func:`decision_segment`, 1 s or
     ``CAGE_TURNS`` cage turns where those are longer; a record shorter than that is one FFT).
 
     ``frequencies``: ``{"ftf", "bpfo", "bpfi", "bsf"}`` in Hz (``Bearing.fault_frequencies``).
-    Returns ``{name: Line}`` for "bpfo", "bpfi", "2bsf", "ftf".  A record (or ``segment``)
-    shorter than :func:`shortest_record_s`, whose bins leave a line no neighbourhood, is a
-    one-line :class:`~bearing_sim_ros.errors.UserError`.
+    ``band``: the band-pass (low, high) Hz, or "auto": :func:`detector_band` of these lines
+    (2-5 kHz wherever that serves them; ``resonance_hz``: the structure's resonator, Hz, where
+    known).  Returns ``{name: Line}`` for "bpfo", "bpfi", "2bsf", "ftf".  A record (or
+    ``segment``) shorter than :func:`shortest_record_s`, whose bins leave a line no
+    neighbourhood, or lines with no band ("auto"), is a one-line
+    :class:`~bearing_sim_ros.errors.UserError`.
     """
     x = one_channel(x)
     targets = fault_targets(frequencies)
@@ -252,7 +323,11 @@ def fault_lines(x: np.ndarray, fs: float, frequencies: dict, band=DEFAULT_BAND,
     reason = _too_short(x.size, fs, segment, neighbourhood_hz)
     if reason:
         raise UserError(reason)
-    fmax = 1.2 * max(targets.values()) + 2 * neighbourhood_hz
+    if isinstance(band, str) and band == "auto":
+        band, reason = detector_band(frequencies, fs, resonance_hz, neighbourhood_hz)
+        if band is None:
+            raise UserError(reason)
+    fmax = spectrum_span(frequencies, neighbourhood_hz)
     freqs, spec = envelope_spectrum(x, fs, band, max_freq=fmax, segment=segment)
     return {name: line_at(freqs, spec, f0, search_rel, neighbourhood_hz) for name, f0 in targets.items()}
 
@@ -287,14 +362,22 @@ def with_cage(frequencies: dict, balls: int, shaft_hz: float, cage_hz: float) ->
     return {**frequencies, "ftf": ftf, "bpfo": balls * ftf, "bpfi": balls * abs(abs(shaft_hz) - ftf)}
 
 
-def diagnose(x: np.ndarray, fs: float, frequencies: dict, band=DEFAULT_BAND,
-             threshold: float = DETECTION_THRESHOLD, segment: float | None | str = "auto") -> dict:
+def diagnose(x: np.ndarray, fs: float, frequencies: dict, band="auto",
+             threshold: float = DETECTION_THRESHOLD, segment: float | None | str = "auto",
+             resonance_hz: float | None = None) -> dict:
     """Envelope verdict: ``{"verdict": "healthy" | "outer" | "inner" | "ball", "lines": {...},
-    "scores": {fault: prominence}, "borrowed": {fault: (other fault, k)}}``.  The fault whose line
-    stands highest above ``threshold`` wins, unless that line is another detected fault's sideband
-    (``borrowed``, :func:`borrowed_lines`); none above it is "healthy".  ``segment``: see
-    :func:`fault_lines`."""
-    return verdict_of(fault_lines(x, fs, frequencies, band, segment=segment), threshold)
+    "scores": {fault: prominence}, "borrowed": {fault: (other fault, k)}, "band": (low, high)
+    Hz}``.  The fault whose line stands highest above ``threshold`` wins, unless that line is
+    another detected fault's sideband (``borrowed``, :func:`borrowed_lines`); none above it is
+    "healthy".  ``band`` ("auto": :func:`detector_band`), ``segment``, ``resonance_hz``: see
+    :func:`fault_lines`.  Where no band serves the lines: ``{"verdict": "unknown", "band": None,
+    "no_band": why (one line), "lines": {}, "scores": {}, "borrowed": {}}``."""
+    if isinstance(band, str) and band == "auto":
+        band, why = detector_band(frequencies, fs, resonance_hz)
+        if band is None:
+            return {"verdict": "unknown", "band": None, "no_band": why, "lines": {}, "scores": {}, "borrowed": {}}
+    result = verdict_of(fault_lines(x, fs, frequencies, band, segment=segment), threshold)
+    return {**result, "band": envelope_band(fs, band)}
 
 
 def verdict_of(lines: dict, threshold: float = DETECTION_THRESHOLD) -> dict:

@@ -30,8 +30,9 @@ import math
 
 import numpy as np
 
-from .envelope import (DEFAULT_BAND, DEFAULT_SEGMENT, DETECTION_THRESHOLD, STEADY_LINES, averaged_spectrum,
-                       decision_segment, envelope, fault_targets, line_at, shortest_record_s, spread, verdict_of, with_cage)
+from .envelope import (DEFAULT_SEGMENT, DETECTION_THRESHOLD, STEADY_LINES, averaged_spectrum, decision_segment,
+                       detector_band, envelope, envelope_band, fault_targets, line_at, shortest_record_s, spread,
+                       verdict_of, with_cage)
 
 NEIGHBOURHOOD_HZ = 20.0         # Hz: the detector's neighbourhood in Hz (envelope.line_at's default)
 MAX_STATE_GAP_S = 0.1           # s: states further apart than this leave a speed step between them unseen
@@ -108,8 +109,8 @@ def at_equal_angles(angle, values, per_rev: int) -> np.ndarray:
 
 
 def order_diagnose(x, fs: float, times_s, state_t_s, shaft_angle, shaft_w, cage_angle, cage_w,
-                   per_shaft_hz: dict, balls: int, band=DEFAULT_BAND, threshold: float = DETECTION_THRESHOLD,
-                   spin_shares=None):
+                   per_shaft_hz: dict, balls: int, band="auto", threshold: float = DETECTION_THRESHOLD,
+                   spin_shares=None, resonance_hz: float | None = None):
     """The envelope verdict on ``x`` (one channel sampled at ``fs`` Hz, sample ``k`` at signal
     time ``times_s[k]``, s) in orders of the shaft: ``(result, "")``, or ``(None, why not)``
     (``untrackable``).  ``state_t_s`` (s of signal), ``shaft_angle``/``cage_angle`` (rad, NaN
@@ -121,7 +122,10 @@ def order_diagnose(x, fs: float, times_s, state_t_s, shaft_angle, shaft_w, cage_
     The result is ``envelope.verdict_of``'s (``verdict``, ``lines`` with ``expected_hz`` and
     ``found_hz`` in orders, ``scores``) with ``orders`` ({"bpfo", "bpfi", "2bsf", "ftf": order}),
     ``start_s``/``end_s`` (the stretch the states cover), ``shaft_rpm`` (slowest, fastest),
-    ``revolutions`` and ``spectrum`` (orders, amplitude in the units of ``x``).
+    ``revolutions``, ``spectrum`` (orders, amplitude in the units of ``x``) and ``band`` (the
+    envelope's band-pass, Hz).  ``band`` "auto": ``envelope.detector_band`` of the lines in Hz at
+    the fastest shaft speed of the stretch (``resonance_hz``: the structure's resonator, Hz, where
+    known); where none serves them, ``(None, why)``.
 
     ``spin_shares``: the balls' spin at each state sample as a share of ``per_shaft_hz``'s BSF
     (None: that BSF throughout).  Steady (a spread up to ``STEADY_LINES``), their mean moves BSF;
@@ -146,6 +150,14 @@ def order_diagnose(x, fs: float, times_s, state_t_s, shaft_angle, shaft_w, cage_
     shaft = unwrapped_angles(t, np.asarray(shaft_angle, float)[around], shaft_w)
     cage = unwrapped_angles(t, np.asarray(cage_angle, float)[around], cage_w)
     ratio = abs((cage[-1] - cage[0]) / (shaft[-1] - shaft[0]))
+    if isinstance(band, str) and band == "auto":
+        # the band-pass is in Hz: it must serve the lines where they are highest, at the fastest
+        fastest = float(np.abs(shaft_w).max()) / (2.0 * math.pi)
+        at_fastest = {key: value * fastest for key, value in per_shaft_hz.items()}
+        band, why = detector_band(with_cage(at_fastest, balls, fastest, ratio * fastest), fs, resonance_hz)
+        if band is None:
+            return None, why
+    band = envelope_band(fs, band)
     # the envelope in time over the whole stretch (the band-pass is in Hz), then the samples the
     # states span (no extrapolation of the angle before the first or after the last)
     env = envelope(x, fs, band)
@@ -187,4 +199,4 @@ def order_diagnose(x, fs: float, times_s, state_t_s, shaft_angle, shaft_w, cage_
     rpm = 60.0 * speeds_hz
     return {**result, "orders": targets, "start_s": float(times_s[covered][0]), "end_s": float(times_s[covered][-1]),
             "shaft_rpm": (float(rpm.min()), float(rpm.max())), "revolutions": float(revolutions),
-            "spectrum": (orders, spec), "ball_tracked": bool(ball_tracked)}, ""
+            "spectrum": (orders, spec), "ball_tracked": bool(ball_tracked), "band": band}, ""

@@ -56,8 +56,9 @@ from ..errors import UserError
 from ..paths import output_folder, replace_file, save_figure, writing_into
 from ..recording.reader import open_recording
 from ..waveform import NS, from_pointcloud2
-from .envelope import (DETECTION_THRESHOLD, FAULT_LINES, LINE_LABELS, STEADY_LINES, borrowed_text, diagnose,
-                       envelope_band, envelope_spectrum, no_defect_note, spread, statistics, with_cage)
+from .envelope import (DETECTION_THRESHOLD, FAULT_LINES, LINE_LABELS, STEADY_LINES, band_words, borrowed_text,
+                       diagnose, envelope_band, envelope_spectrum, no_defect_note, resonator_hz, spread, statistics,
+                       with_cage)
 from .orders import order_diagnose
 
 MAX_ANALYSIS_S = 120.0
@@ -792,7 +793,8 @@ def order_tracked(d: "_Data", x, times_s, scene, periods: RecordedPeriods | None
     state_t = d.state_t - d.t0_ns / NS
     return order_diagnose(x, d.sample_rate, times_s, state_t, d.shaft_angle, d.shaft_w, d.cage_angle, d.cage_w,
                           per_shaft_hz, balls,
-                          spin_shares=spin_shares(d.signal_frequency_periods, state_t, per_shaft_hz["bsf"], balls))
+                          spin_shares=spin_shares(d.signal_frequency_periods, state_t, per_shaft_hz["bsf"], balls),
+                          resonance_hz=resonator_hz(scene.structure) if scene is not None else None)
 
 
 def spin_shares(periods: list, at_s, bsf_per_shaft_hz: float, balls: int):
@@ -874,10 +876,9 @@ def _title(meta: dict) -> str:
     return f"{meta.get('scene', '?')} - {meta.get('tier', '?')} tier, seed {meta.get('seed', '?')}"
 
 
-def band_text(fs: float) -> str:
-    """The envelope band at the sample rate ``fs`` (Hz) in words: ``2-5 kHz band``."""
-    lo, hi = envelope_band(fs)
-    return f"{lo / 1e3:.3g}-{hi / 1e3:.3g} kHz band"
+def band_text(band) -> str:
+    """The envelope band ``band`` ((low, high) Hz) in words: ``2-5 kHz band``."""
+    return f"{band_words(band)} band"
 
 
 def held_part(d: _Data) -> str:
@@ -916,7 +917,9 @@ def plot_waveform(d: _Data, freqs: dict, out: Path, meta: dict) -> str:
     return _save(plt, fig, out / "waveform.png")
 
 
-def plot_spectrum(d: _Data, out: Path, meta: dict) -> str:
+def plot_spectrum(d: _Data, out: Path, meta: dict, band=None) -> str:
+    """Welch PSD of each channel, ``band`` (the envelope's, (low, high) Hz; None: the default as
+    ``envelope.envelope_band`` clips it) shaded."""
     from scipy.signal import welch
 
     plt, fig, (ax,) = _figure(1, 4.0)
@@ -925,9 +928,10 @@ def plot_spectrum(d: _Data, out: Path, meta: dict) -> str:
     for k, name in enumerate(d.channels):
         f, p = welch(d.accel[:, k] - d.accel[:, k].mean(), fs=fs, nperseg=nper)
         ax.semilogy(f / 1e3, np.maximum(p, 1e-30), lw=0.8, label=name)
-    # the band the envelope analysis uses, clipped as it clips it (below 11.1 kHz of sample rate;
-    # at 1 kHz 225-450 Hz, where 2 kHz to 0.45 x the rate shaded the wrong part)
-    lo, hi = envelope_band(fs)
+    # the band the envelope analysis used (envelope.detector_band: clipped below 11.1 kHz of
+    # sample rate, at 1 kHz 225-450 Hz, where 2 kHz to 0.45 x the rate shaded the wrong part;
+    # moved up above fast lines)
+    lo, hi = band if band is not None else envelope_band(fs)
     ax.axvspan(lo / 1e3, hi / 1e3, color="0.85", alpha=0.5, label="envelope band")
     ax.set(xlabel="frequency (kHz)", ylabel="PSD ((m/s²)²/Hz)", xlim=(0, fs / 2e3),
            title=f"Spectrum (Welch, {nper} points{held_part(d)}) - {_title(meta)}")
@@ -944,10 +948,10 @@ def plot_envelope(x: np.ndarray, fs: float, freqs: dict, verdict: dict, channel:
     plt, fig, (ax,) = _figure(1, 4.2)
     targets = {"bpfo": freqs["bpfo"], "bpfi": freqs["bpfi"], "2bsf": 2 * freqs["bsf"], "ftf": freqs["ftf"]}
     fmax = min(0.45 * fs, 3.3 * max(targets.values()))
-    f, s = envelope_spectrum(x, fs, max_freq=fmax)
+    f, s = envelope_spectrum(x, fs, verdict["band"], max_freq=fmax)
     _draw_lines(ax, f, s, targets, verdict["lines"], fmax, "Hz", 2.0)
     ax.set(xlabel="frequency (Hz)",
-           title=(f"Envelope spectrum of {channel} ({band_text(fs)}{held}) "
+           title=(f"Envelope spectrum of {channel} ({band_text(verdict['band'])}{held}) "
                   f"- {instead or 'verdict: ' + verdict['verdict'].upper()}   (×N: line height over local median)"))
     return _save(plt, fig, out / "envelope.png")
 
@@ -1173,11 +1177,17 @@ def _report(rec, out, window_s: float, spool: _Spool) -> dict:
     # without a scene (a recording rewritten by another tool lost the bearing_sim metadata) the
     # recorded /diagnostics alone place them, when they give all four
     freqs = line_frequencies(rolling, d.signal_frequencies)
-    verdict = diagnose(x, fs, freqs) if freqs and x.size > fs * 0.2 else None
+    # the envelope's band from these lines (envelope.detector_band) and the scene's resonator
+    resonance = resonator_hz(scene.structure) if scene is not None else None
+    verdict = diagnose(x, fs, freqs, resonance_hz=resonance) if freqs and x.size > fs * 0.2 else None
+    no_band = verdict["no_band"] if verdict is not None and verdict["band"] is None else ""
+    if no_band:                         # fault lines too close to Nyquist: no verdict, said why
+        verdict = None
 
     not_drawn = {}                      # plot -> why it is not drawn
     if verdict is None:
-        why = "less than 0.2 s of signal" if freqs else no_frequencies_reason(scene_problem, d.frequency_keys_missing)
+        why = no_band or ("less than 0.2 s of signal" if freqs else
+                          no_frequencies_reason(scene_problem, d.frequency_keys_missing))
         not_drawn["envelope.png"] = not_drawn["timeline.png"] = f"no verdict: {why}"
     missing = operating_point_missing(d, scene)
     if missing:
@@ -1192,7 +1202,8 @@ def _report(rec, out, window_s: float, spool: _Spool) -> dict:
             tracked, untracked = order_tracked(
                 d, x, sample_times_s(np.arange(x.size), d.stamps, d.widths, fs, d.t0_ns), scene)
         overall, named, verdict_from = one_verdict(verdict, timeline, moved, d.analysed_end_s, tracked, untracked)
-        plots = [plot_waveform(d, freqs, out, meta), plot_spectrum(d, out, meta)]
+        band = tracked["band"] if tracked else verdict["band"] if verdict is not None else None
+        plots = [plot_waveform(d, freqs, out, meta), plot_spectrum(d, out, meta, band)]
         if verdict is not None:
             plots.append(plot_envelope(x, fs, freqs, verdict, ch, out, meta,
                                        "" if moved <= STEADY_LINES else
@@ -1254,7 +1265,10 @@ def _report(rec, out, window_s: float, spool: _Spool) -> dict:
         "fault_frequencies_from": frequencies_source(rolling, d.signal_frequencies, scene_problem,
                                                      d.frequency_keys_missing),
         "envelope_channel": ch,
-        "envelope_band_hz": list(envelope_band(fs)),   # the band-pass before the envelope, clipped below Nyquist
+        # the band-pass before the envelope (envelope.detector_band; order tracking: at the fastest
+        # shaft speed); null where no band serves the fault lines (no_band says why)
+        "envelope_band_hz": None if no_band else list(band if band is not None else envelope_band(fs)),
+        "no_band": no_band or None,
         "fault_lines": ({k: {"expected_hz": v.expected_hz, "found_hz": v.found_hz, "height": v.height,
                              "prominence": v.prominence} for k, v in verdict["lines"].items()}
                         if verdict else {}),

@@ -18,6 +18,9 @@ the simulator's ``/diagnostics``, ``bsf_hz``, where skidding balls put it), and 
 
 ``found/theory Hz`` and ``x`` the height of the line over the median of its neighbourhood
 (threshold x4, ``envelope.DETECTION_THRESHOLD``).  The axis where a line stands highest counts.
+The line ends with the envelope's band (``band 2-5 kHz``: ``envelope.detector_band`` of the
+window's lines and the scene's resonator); where none serves them (lines too close to Nyquist),
+``verdict=unknown`` and the one line that says why.
 A line that sits on another detected fault's sideband counts for that fault, and the line says
 so (``envelope.borrowed_lines``: ``2xBSF sits on BPFI - 1 x shaft rate, ...: counted for inner,
 not ball``).
@@ -96,8 +99,8 @@ import rclpy
 from rclpy.node import Node
 
 from .. import ground_truth
-from ..analysis.envelope import (DETECTION_THRESHOLD, FAULT_LINES, STEADY_LINES, borrowed_text, diagnose, pick_verdict,
-                                 spread, with_cage)
+from ..analysis.envelope import (DETECTION_THRESHOLD, FAULT_LINES, STEADY_LINES, band_words, borrowed_text, detector_band,
+                                 diagnose, pick_verdict, resonator_hz, spread, with_cage)
 from ..analysis.orders import order_diagnose
 from ..messages import RUN_ENDED, RUN_KEY, TOPIC_ACCEL, TOPIC_DIAGNOSTICS, TOPIC_STATE, waveform_qos
 from ..stale_dds_ports import clear_before_start
@@ -195,7 +198,8 @@ class Window:
 
 
 def verdict(data: np.ndarray, channels, sample_rate: float, bearing, shaft_hz: float,
-            cage_hz: float | None = None, spin_share: float | None = None) -> dict:
+            cage_hz: float | None = None, spin_share: float | None = None,
+            resonance_hz: float | None = None) -> dict:
     """Envelope verdict over the axes of ``data`` (n, channels): for each fault the highest
     prominence over the axes wins.  Returns {"verdict", "axis", "scores", "lines", "theory"}.
     The lines at pure rolling at ``shaft_hz`` (Hz), or with ``cage_hz`` (the cage's speed in
@@ -205,14 +209,19 @@ def verdict(data: np.ndarray, channels, sample_rate: float, bearing, shaft_hz: f
     share of pure rolling's (``spin_share_of``; None: pure rolling), which moves BSF and so the
     ball pit's 2xBSF line: on the skidding tier at 2000 rpm / 200 N the balls spin 2.2 % slow, the
     line falls outside the +-1 % search at pure rolling's, and the monitor called a ball pit
-    healthy (x0.9)."""
+    healthy (x0.9).  The envelope's band (``band``, Hz) is ``envelope.detector_band``'s for
+    these lines (``resonance_hz``: the watched scene's resonator, Hz); where none serves them,
+    ``verdict`` is "unknown" and ``no_band`` says why."""
     freqs = bearing.fault_frequencies(shaft_hz)
     if cage_hz:
         freqs = with_cage(freqs, bearing.balls, shaft_hz, cage_hz)
     if spin_share:
         freqs = {**freqs, "bsf": freqs["bsf"] * spin_share}
-    result = _highest_over_axes(channels, lambda k: diagnose(data[:, k].astype(float), sample_rate, freqs))
-    return {**result, "theory": freqs, "shaft_hz": shaft_hz}
+    band, why = detector_band(freqs, sample_rate, resonance_hz)
+    if band is None:
+        return {"verdict": "unknown", "no_band": why, "band": None, "theory": freqs, "shaft_hz": shaft_hz}
+    result = _highest_over_axes(channels, lambda k: diagnose(data[:, k].astype(float), sample_rate, freqs, band))
+    return {**result, "theory": freqs, "shaft_hz": shaft_hz, "band": band}
 
 
 def _highest_over_axes(channels, diagnose_axis) -> dict:
@@ -236,7 +245,7 @@ def _highest_over_axes(channels, diagnose_axis) -> dict:
 
 
 def order_verdict(data: np.ndarray, channels, sample_rate: float, times_s, bearing, states,
-                  spin_share: float | None = None, spin_shares=None) -> tuple:
+                  spin_share: float | None = None, spin_shares=None, resonance_hz: float | None = None) -> tuple:
     """The envelope verdict over the axes of ``data`` (n, channels; sample ``k`` at signal time
     ``times_s[k]``, s) in orders of the shaft (``orders.order_diagnose``), for a stretch whose
     speeds moved, where one spectrum in Hz smears every line: ``(result, "")`` with ``verdict``'s
@@ -248,7 +257,8 @@ def order_verdict(data: np.ndarray, channels, sample_rate: float, times_s, beari
     ``spin_share`` moves BSF as there; ``spin_shares`` (the balls' spin share at each state
     sample, ``spin_shares_at``), where given, instead: a skid that moves in the window
     (a speed step on the skidding tier) has the 2xBSF line judged on the balls' spin angle
-    (``orders.order_diagnose``)."""
+    (``orders.order_diagnose``); ``resonance_hz``: the scene's resonator (Hz), for the envelope's
+    band (``band``, Hz, at the fastest shaft speed: ``orders.order_diagnose``)."""
     state_t, shaft_angle, shaft_w, cage_angle, cage_w = (np.asarray(a, dtype=float) for a in states)
     per_shaft_hz = bearing.fault_frequencies(1.0)
     if spin_shares is not None:
@@ -261,13 +271,14 @@ def order_verdict(data: np.ndarray, channels, sample_rate: float, times_s, beari
     for k in range(len(channels)):
         # why not is the same on every axis: it depends on the states and times alone
         result, why = order_diagnose(data[:, k].astype(float), sample_rate, times_s, state_t, shaft_angle, shaft_w,
-                                     cage_angle, cage_w, per_shaft_hz, bearing.balls, spin_shares=spin_shares)
+                                     cage_angle, cage_w, per_shaft_hz, bearing.balls, spin_shares=spin_shares,
+                                     resonance_hz=resonance_hz)
         if result is None:
             return None, why
         tracked.append(result)
     first = tracked[0]          # the stretch, speeds and orders are the same on every axis
     return {**_highest_over_axes(channels, tracked.__getitem__), "theory": first["orders"],
-            "shaft_rpm": first["shaft_rpm"], "revolutions": first["revolutions"]}, ""
+            "shaft_rpm": first["shaft_rpm"], "revolutions": first["revolutions"], "band": first["band"]}, ""
 
 
 def spin_shares_at(spins, stamps_ns) -> np.ndarray | None:
@@ -313,6 +324,8 @@ def format_verdict(t: float, result: dict) -> str:
     """One line per verdict (see the module docstring)."""
     parts = [f"t={t:.2f}s shaft={result['shaft_hz'] * 60:.0f}rpm verdict={result['verdict']} "
              f"truth={truth_text(result.get('truth'))}"]
+    if result["verdict"] == "unknown" and result.get("no_band"):
+        return " | ".join(parts + [result["no_band"]])
     if result["verdict"] == "unknown":
         untracked = result.get("untracked")
         return " | ".join(parts + [f"the shaft and cage speeds in state moved by {100 * result['moved']:.0f} % in "
@@ -333,7 +346,8 @@ def format_verdict(t: float, result: dict) -> str:
             f"{line.found_hz:.1f}/{line.expected_hz:.1f}Hz"
         parts.append(f"{key} {where} x{line.prominence:.1f}")
     parts += [borrowed_text(fault, result.get("borrowed", {})) for fault in result.get("borrowed", {})]
-    parts.append(f"({FAULT_NAMES[result['verdict']]}, threshold x{DETECTION_THRESHOLD:g}, axis {result['axis']})")
+    band = f", band {band_words(result['band'])}" if result.get("band") else ""
+    parts.append(f"({FAULT_NAMES[result['verdict']]}, threshold x{DETECTION_THRESHOLD:g}, axis {result['axis']}{band})")
     return " | ".join(parts)
 
 
@@ -920,13 +934,14 @@ class MonitorNode(Node):
                 shares = (spin_shares_at(run.spins, (end if start is None else start) + np.asarray(states[0]) * NS)
                           if states is not None else None)
                 tracked, why = (order_verdict(x, channels, fs, np.arange(x.shape[0]) / fs, self.scene.bearing, states,
-                                              spin, shares)
+                                              spin, shares, resonator_hz(self.scene.structure))
                                 if states is not None else (None, "no state samples in the window"))
                 result = ({**tracked, "shaft_hz": shaft_hz, "moved": moved} if tracked is not None else
                           {"verdict": "unknown", "shaft_hz": shaft_hz, "moved": moved, "untracked": why})
             else:
                 result = verdict(x, channels, fs, self.scene.bearing, shaft_hz,
-                                 None if cage is None else abs(cage) / (2 * np.pi), spin)
+                                 None if cage is None else abs(cage) / (2 * np.pi), spin,
+                                 resonator_hz(self.scene.structure))
         except Exception as exc:  # noqa: BLE001 - a failed analysis must not end the monitor silently
             self.get_logger().error(f"envelope analysis at t={t:.2f}s failed: {exc}")
             return
