@@ -1090,3 +1090,21 @@ def test_shipped_and_bench_scenes_keep_the_default_step_without_a_warning():
         warnings.simplefilter("error", DefaultStepWarning)
         for sc in scenes:
             assert Simulator(sc, fidelity="skidding").oversample == 2, sc.name
+
+
+def test_a_render_says_the_default_step_warning_in_one_line(tmp_path, bearing_sim_exe):
+    """``bearing-sim render`` of the small bearing on the skidding tier: the warning is one line of
+    its own on standard error (not Python's file, line and source line), and the render goes on."""
+    import subprocess
+
+    import yaml
+
+    scene_file = tmp_path / "small.yaml"
+    scene_file.write_text(yaml.safe_dump(SMALL_BEARING))
+    out = subprocess.run([bearing_sim_exe, "render", str(scene_file), "--duration", "0.01", "--fidelity",
+                          "skidding", "--out", str(tmp_path / "small.mcap")],
+                         capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    lines = [line for line in out.stderr.splitlines() if "step" in line or "Warning" in line]
+    assert len(lines) == 1 and lines[0].startswith("bearing-sim: warning: skidding tier: the default solver's own step"), \
+        out.stderr
