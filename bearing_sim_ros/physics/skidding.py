@@ -152,8 +152,8 @@ DEFAULT_OVERSAMPLE = 2   # steps of the default solver per output sample (one pe
 # own step (s) above which the default was measured 0.3-50 % off its reference in RMS on small
 # bearings (docs/solvers.md, "Small bearings: the default's step against its reference"); the
 # shipped and bench scenes are at 1.16 at most (34.8 kHz at 15 kHz output), the custom bearings
-# found off from 1.35 up.  Below it the default can be off too (up to 9 % at 1.11-1.15): no
-# threshold of any candidate measured separated those from the shipped scenes
+# 0.3-1.2 % off at 1.20-1.21 and 1-50 % from 1.35 up.  Below it the default can be off too (up to
+# 9 % at 1.11-1.15): no threshold of any candidate measured separated those from the shipped scenes
 STEP_CONTACT_LIMIT = 1.2
 
 
