@@ -387,10 +387,30 @@ def rmw_error(environ=None) -> str:
             f"has {', '.join(sorted(installed))}); unset it or give one of those")
 
 
+def say_model_warnings(program: str) -> None:
+    """The simulator's warnings to the user (``DefaultStepWarning``) as one line on standard error,
+    ``<program>: warning: ...``, instead of Python's two (the library's file and line, and its
+    source line); any other warning as Python shows it."""
+    import warnings
+
+    from .simulator import DefaultStepWarning
+
+    shown = warnings.showwarning
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if issubclass(category, DefaultStepWarning):
+            say_on_stderr(f"{program}: warning: {message}")
+        else:
+            shown(message, category, filename, lineno, file, line)
+
+    warnings.showwarning = show
+
+
 def _dispatch(args, rest) -> int:
     cmd = args.command
     # numba is loaded already (the parser's physics import): a cold cache's compiling is said
     compile_notice.enable()
+    say_model_warnings("bearing-sim")
     missing_rmw = rmw_error() if cmd in RCL_COMMANDS else ""
     if missing_rmw:
         raise UserError(missing_rmw)
@@ -478,6 +498,7 @@ def node_main() -> int:
         from .nodes.bearing_sim_node import main as run_node
 
         compile_notice.enable("bearing_sim_node")     # its lines named as the user started it
+        say_model_warnings("bearing_sim_node")
         return run_node()
 
     return _signal_command(run)

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 import numbers
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -81,6 +82,12 @@ OVERSAMPLE_ALLOWED = "1, 2 or a multiple of 4 up to 64"
 # at most this many where fidelity auto may switch tiers at run time: above it the kinematic
 # tier's sensor chain runs faster than the skidding tier's, and a switch needs the same chain
 AUTO_OVERSAMPLE_MAX = 4
+
+
+class DefaultStepWarning(UserWarning):
+    """The skidding tier's default solver runs at its own step on a bearing where that step was
+    measured off its reference (``physics.skidding.STEP_CONTACT_LIMIT``): the message says by how
+    much and what to set instead."""
 
 
 def oversample_allowed(value) -> bool:
@@ -348,6 +355,9 @@ class Simulator:
                               ellipse_ball_load=ellipse_ball_load, takes_over_from=takes_over_from)
         # a divergence is told at the signal's time (the physics runs ahead of the output)
         model.start_time = self._physics_index / self.sample_rate
+        if model.step_warning:
+            # the step is left as it is (docs/solvers.md): the user is told, not the step changed
+            warnings.warn(model.step_warning, DefaultStepWarning, stacklevel=2)
         return model
 
     def _build_chain(self):
