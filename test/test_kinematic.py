@@ -804,3 +804,94 @@ def test_single_threaded_blas_limits_every_blas_for_the_block_only():
         inside = blas_threads()
     assert len(inside) >= 2 and set(inside) == {1}
     assert blas_threads() == before       # a caller's own numpy work keeps its threads
+
+
+# A thin-section 61820-size bearing with an outer-race pit 0.2 mm deep at 6 o'clock, typed into a
+# scene as a user would (docs/probes/custom_bearings/probe.py, docs/probes/kinematic_fast_pits):
+# its balls cross the pit fast, and its envelope floor lies ~1e4 below the fault line, so a
+# share of the line that follows the pit's phase on the event sub-steps' grid shows
+def _fast_pit(width_mm, rpm):
+    from bearing_sim_ros.scene import scene_from_dict
+
+    part = lambda m, k, c: {"mass": m, "stiffness": k, "damping": c}  # noqa: E731
+    return scene_from_dict({
+        "name": "61820-size",
+        "bearing": {"name": "61820-size", "balls": 20, "ball_diameter_mm": 7.938, "pitch_diameter_mm": 112.5,
+                    "radial_clearance_um": 10.0, "width_mm": 13.0},
+        "structure": {"shaft": part(10.0, 1e7, 4000), "pedestal": part(20.0, 5e8, 2e4),
+                      "resonator": {"mass": 0.05, "frequency_hz": 3800, "damping_ratio": 0.04}},
+        "operating_point": {"shaft_speed_rpm": rpm, "radial_load": [0.0, -1853.0]},
+        "lubrication": {"viscosity": 0.04, "pressure_viscosity": 2.0e-8},
+        "sensor": {"noise_density": 3.4e-5, "range": 49033},
+        "defects": [{"kind": "outer", "width_mm": width_mm, "depth_mm": 0.2, "clock": 6}]})
+
+
+def _beat_and_fault_lines(width_mm, rpm, seconds, skip=0.1):
+    """(the envelope line at the beat of the 60 kHz chain grid with BPFO, the BPFO line, the
+    verdict) of the kinematic tier at its default step."""
+    from bearing_sim_ros.analysis.envelope import envelope_spectrum, line_at
+
+    s = _fast_pit(width_mm, rpm)
+    sim = Simulator(s, fidelity="kinematic", seed=0)
+    fs = sim.sample_rate
+    y = sim.advance(int((seconds + skip) * fs)).accel[int(skip * fs):, -1]
+    ff = s.fault_frequencies()
+    grid = 4 * fs                            # the chain's rate: one event sub-step per sample
+    beat = abs(grid - round(grid / ff["bpfo"]) * ff["bpfo"])
+    f, spec = envelope_spectrum(y, fs, max_freq=3000, segment=None)
+    return line_at(f, spec, beat), line_at(f, spec, ff["bpfo"]), diagnose(y, fs, ff)["verdict"]
+
+
+def test_a_fast_pits_edges_leave_no_line_at_the_event_grids_beat():
+    """2 mm pit at 2000 rpm: the balls unload over 3.7 chain samples of the pit's edge.  On one
+    event sub-step per chain sample the impacts' heights beat with the pit's phase on that grid:
+    a line at 60 kHz - 578 BPFO (103.8 Hz) x315 the floor (docs/kinematic_fast_pits.md).  With
+    the finer sub-steps on short edges it is x4 (as at oversample 16, whose every step is that
+    fine; the skidding tier x1.7): x10 leaves room for the floor's scatter over a short record,
+    and is 30x below the grid's line."""
+    beat, fault, verdict = _beat_and_fault_lines(2.0, 2000, 0.9)
+    assert verdict == "outer"
+    assert fault.prominence > 1000
+    assert beat.prominence < 10, beat
+
+
+def test_a_narrow_fast_pit_reads_outer_not_the_event_grids_beat():
+    """0.5 mm pit at 7111 rpm, crossed in 1.4 chain samples (it takes 57 % of the most loaded
+    ball's deflection): on one event sub-step per chain sample the impacts' energy followed the
+    grid phase, the beat line (516.8 Hz) stood at 3x the BPFO line and the verdict was "ball".
+    16 sub-steps per chain sample there: the line is 0.3 % of BPFO's (x12 the floor; the skidding
+    tier's own x15)."""
+    beat, fault, verdict = _beat_and_fault_lines(0.5, 7111, 0.8, skip=0.2)
+    assert verdict == "outer"
+    assert beat.height < 0.02 * fault.height, (beat, fault)
+
+
+@pytest.mark.parametrize("name", sorted(p.stem for p in (Path(__file__).resolve().parents[1]
+                                                       / "config" / "scenes").glob("*.yaml")))
+def test_shipped_scenes_keep_one_event_substep_per_chain_sample(name):
+    """The finer event sub-steps start above a speed set by each defect's edge: every shipped
+    scene stays below it with room (its samples are those of the one-per-chain-sample grid, bit
+    for bit; docs/kinematic_fast_pits.md), on the default step and on x1, x2 (the bench's)."""
+    for oversample in (None, 1, 2):
+        sim = Simulator(name, fidelity="kinematic", seed=0, oversample=oversample)
+        model = sim._model
+        assert model.fine_speed > 1.25 * sim.scene.shaft_speed, (oversample, model.fine_speed)
+
+
+def test_finer_event_substeps_are_chunk_invariant_and_survive_a_pickle():
+    """Where they run (the 2 mm pit at 2000 rpm), a chunked run gives the same bits as one call,
+    and a simulator pickled mid-run (its finer propagators made) continues as the original."""
+    import pickle
+
+    s = _fast_pit(2.0, 2000)
+    total = 3000
+    one = Simulator(s, seed=3, fidelity="kinematic").advance(total)
+    sim = Simulator(s, seed=3, fidelity="kinematic")
+    sizes = [150, 37, 1, 613, 1000]
+    sizes.append(total - sum(sizes))
+    parts = [sim.advance(n) for n in sizes[:-1]]
+    twin = pickle.loads(pickle.dumps(sim))
+    parts.append(sim.advance(sizes[-1]))
+    assert sim._model.fine_speed < sim.scene.shaft_speed
+    np.testing.assert_array_equal(np.concatenate([p.accel for p in parts]), one.accel)
+    np.testing.assert_array_equal(twin.advance(sizes[-1]).accel, parts[-1].accel)

@@ -42,7 +42,11 @@ follows it.  A step at whose end a ball is inside a defect, and the AFTER_STEPS 
 the same ETD3 and their own propagators.  At one step per output sample that makes the defect
 scenes as accurate as plain ETD3 at two, and at two (the default) 4-8x more accurate on the
 defect lines, for 3-9 % of the steps sub-stepped on a race defect (30 % on seed 004's ball
-defect, which meets a race 16 % of the time).
+defect, which meets a race 16 % of the time).  Where a ball's load leaves and returns over a few
+chain samples only (a fast pit's edge), the impacts' heights would beat with the pit's phase on
+that grid (false envelope lines at 60 kHz - N BPFO): there the sub-steps are 4-16 per chain
+sample, every one of them in the chain at its rate (``KinematicModel.fine_event_speed``,
+docs/kinematic_fast_pits.md); the shipped scenes' edges are long enough for one.
 
 Steps and output: ``oversample`` steps per output sample; the accelerometer chain gets
 ``chain_oversample`` (default >= 4) samples per output sample, the ones inside a step from the
@@ -88,6 +92,15 @@ SOFT_MODE_FRACTION = 0.1  # oversample=None takes one step per output sample whi
                           # stays below this fraction of the output rate (1.5 kHz at 15 kHz: the
                           # ER-16K at 200 N and less, 0.07 % RMS; the 6307, 0.35 %, x2's worst); above
                           # it, DEFAULT_OVERSAMPLE (test/test_kinematic_speed.py bearing-mode)
+FINE_EVENTS = (4, 16)  # event sub-steps per chain sample where a defect's edge is short on the
+                       # chain grid: the fewest powers of two in this range that put FINE_RESOLVE
+                       # sub-steps on the edge (``KinematicModel.fine_events``;
+                       # docs/kinematic_fast_pits.md: 4 takes the 61820's 2 mm pit's beat from x315
+                       # to x4.2, its 0.5 mm pit's from x3 870 to x164, 16 to x12)
+FINE_RESOLVE = 10.0    # sub-steps on the shortest edge
+FINE_EDGE = 4.4       # chain samples: a ball that unloads fully over a shorter edge gets them
+FINE_PARTIAL = 0.25   # a defect that takes this share of the ball's deflection but not all of it,
+FINE_CROSSING = 3.0   # crossed in fewer chain samples than this, gets them too
 CHAIN_OVERSAMPLE = 4   # accelerometer chain rate / output rate at least (the skidding tier's rate,
                        # so that a switch of tiers keeps the chain and the signal has no seam)
 
@@ -430,7 +443,8 @@ def _corrected(wx, wy, r, ca0, ca1, ca2, ca3, cb0, cb1, cb2, cb3, cb4, cb5, rxs,
 @njit(cache=True, fastmath={"contract"}, _nrt=False)
 def advance_kernel(x, ang, trig, step, hist, geom, n, m, d, s0, s1, l0x, l0y, l1x, l1y, h, geo, cj, sj,
                    dtab, wtab, seed, slip_cache, kbx, kby, px, py, wx, wy, ex, ey, cx, cy, feed,
-                   dense_x, dense_y, psx, psy, wsx, wsy, esx, esy, sub_mode, out_acc, out_q, out_cage):
+                   dense_x, dense_y, psx, psy, wsx, wsy, esx, esy, sub_mode, r_fine, fine_speed, pfx,
+                   pfy, wfx, wfy, efx, efy, out_acc, out_q, out_cage):
     """ETD3 over ``n`` steps of ``h`` s (see the module docstring).
 
     x: state (10,); ang: (shaft, cage, ball spin) angles; trig: (cos, sin) of the cage angle;
@@ -457,6 +471,13 @@ def advance_kernel(x, ang, trig, step, hist, geom, n, m, d, s0, s1, l0x, l0y, l1
     esx, esy: the sub-step's propagators as px, py, ex, ey; wsx (10, 4), wsy (10, 6): its
     weights as wx, wy, then those of the first sub-step, whose previous node is the previous
     step's start (d sub-steps back).
+
+    Finer event sub-steps (``r_fine`` > 1): where the step's faster end turns the shaft faster
+    than ``fine_speed`` (rad/s; ``KinematicModel.fine_event_speed``: a defect's edge is short on
+    the chain grid there), the step is done again as d r_fine sub-steps of h / (d r_fine) instead,
+    with the propagators pfx, pfy, wfx, wfy, efx, efy as psx .. esy (the first sub-step's
+    previous node d r_fine sub-steps back); every r_fine-th node goes to out_acc, so the chain
+    keeps its rate.  Elsewhere the sub-steps are the ones above, bit for bit.
 
     Writes d acceleration samples per step to out_acc (n * d, 2) and, every m-th step, the ball
     loads at the step start to out_q (n // m, 2 Nb: the inner contacts, then the outer ones, the
@@ -506,6 +527,8 @@ def advance_kernel(x, ang, trig, step, hist, geom, n, m, d, s0, s1, l0x, l0y, l1
     margin_b = abs(r_spin) * wmax if sub_steps else 0.0
     hs = h / d
     inv_d = 1.0 / d
+    hf = h / (d * r_fine)           # the finer sub-steps (where fine_speed is passed)
+    inv_df = 1.0 / (d * r_fine)
     # the state as scalars: x block (xs, xp, vxs, vxp), y block (ys, yp, yr, vys, vyp, vyr)
     a0, a1, a2, a3 = x[0], x[2], x[5], x[7]
     b0, b1, b2, b3, b4, b5 = x[1], x[3], x[4], x[6], x[8], x[9]
@@ -610,17 +633,32 @@ def advance_kernel(x, ang, trig, step, hist, geom, n, m, d, s0, s1, l0x, l0y, l1
         # steps after (the ball leaves the defect, the structure rings after the impact)
         since_near = 0 if near else min(since_near + 1, 1000)
         if sub_steps and since_near <= AFTER_STEPS:
-            # the step again as d sub-steps, one per chain sample
+            # the step again as d sub-steps, one per chain sample, or d r_fine where a defect's
+            # edge is short on the chain grid (its impacts would beat with the pit's phase there)
             n_sub += 1
+            if r_fine > 1 and max(abs(w0), abs(w1)) > fine_speed:
+                ns = d * r_fine
+                stride = r_fine
+                inv_s = inv_df
+                hsub = hf
+                qsx, qsy, qwx, qwy, qex, qey = pfx, pfy, wfx, wfy, efx, efy
+            else:
+                ns = d
+                stride = 1
+                inv_s = inv_d
+                hsub = hs
+                qsx, qsy, qwx, qwy, qex, qey = psx, psy, wsx, wsy, esx, esy
+            kw = k              # the chain sample last written, and sub-steps until the next
+            until_write = stride
             shaft_angle, cage_angle, spin_angle, cage_cos, cage_sin = start_angles
             rsx = rx
             rsy = ry
             rqx = rxp           # residual at the previous node: the previous step's start
             rqy = ryp
             first = 5           # first sub-step: weight rows for that node, d sub-steps back
-            for sd in range(d):
-                g0 = (i + sd * inv_d) * inv_n
-                g1 = (i + (sd + 1) * inv_d) * inv_n
+            for sd in range(ns):
+                g0 = (i + sd * inv_s) * inv_n
+                g1 = (i + (sd + 1) * inv_s) * inv_n
                 v0 = s0 + (s1 - s0) * g0
                 v1 = s0 + (s1 - s0) * g1
                 if sd > 0:
@@ -631,22 +669,26 @@ def advance_kernel(x, ang, trig, step, hist, geom, n, m, d, s0, s1, l0x, l0y, l1
                     rsx, rsy = _residual(kc, kbx, kby, gc, gs, goff, a0 - a1, b0 - b1, a2 - a3,
                                          b3 - b4, r_cage * v0, cdw, ai, ao, sqi, sqo, sqio, law0,
                                          rough)
-                    out_acc[k + sd, 0] = cx[0] * a0 + cx[1] * a1 + cx[2] * a2 + cx[3] * a3 + fdx * rsx
-                    out_acc[k + sd, 1] = (cy[0] * b0 + cy[1] * b1 + cy[2] * b2 + cy[3] * b3
+                    until_write -= 1
+                    if until_write == 0:         # a chain sample: every stride-th node
+                        until_write = stride
+                        kw += 1
+                        out_acc[kw, 0] = cx[0] * a0 + cx[1] * a1 + cx[2] * a2 + cx[3] * a3 + fdx * rsx
+                        out_acc[kw, 1] = (cy[0] * b0 + cy[1] * b1 + cy[2] * b2 + cy[3] * b3
                                           + cy[4] * b4 + cy[5] * b5 + fdy * rsy)
                 exs = l0x + (l1x - l0x) * g0
                 eys = l0y + (l1y - l0y) * g0 - grav
-                dexs = dex * inv_d
-                deys = dey * inv_d
+                dexs = dex * inv_s
+                deys = dey * inv_s
                 ca0, ca1, ca2, ca3, cb0, cb1, cb2, cb3, cb4, cb5 = _free_response(
-                    psx, psy, esx, esy, a0, a1, a2, a3, b0, b1, b2, b3, b4, b5, exs, eys, dexs, deys)
-                dx, dy, dvx, dvy = _predicted_offset(wsx, wsy, first, ca0, ca1, ca2, ca3, cb0, cb1,
+                    qsx, qsy, qex, qey, a0, a1, a2, a3, b0, b1, b2, b3, b4, b5, exs, eys, dexs, deys)
+                dx, dy, dvx, dvy = _predicted_offset(qwx, qwy, first, ca0, ca1, ca2, ca3, cb0, cb1,
                                                      cb3, cb4, rsx, rqx, rsy, rqy)
-                dth = 0.5 * (v0 + v1) * hs
+                dth = 0.5 * (v0 + v1) * hsub
                 shaft_angle += dth
                 cage_angle += r_cage * dth
                 spin_angle += r_spin * dth
-                if anchor and sd == d - 1:
+                if anchor and sd == ns - 1:
                     cage_cos = math.cos(cage_angle)
                     cage_sin = math.sin(cage_angle)
                 else:
@@ -659,7 +701,7 @@ def advance_kernel(x, ang, trig, step, hist, geom, n, m, d, s0, s1, l0x, l0y, l1
                 rxs, rys = _residual(kc, kbx, kby, gc, gs, goff, dx, dy, dvx, dvy, r_cage * v1, cdw,
                                      ai, ao, sqi, sqo, sqio, law1, rough)
                 a0, a1, a2, a3, b0, b1, b2, b3, b4, b5 = _corrected(
-                    wsx, wsy, first, ca0, ca1, ca2, ca3, cb0, cb1, cb2, cb3, cb4, cb5, rxs, rsx, rqx,
+                    qwx, qwy, first, ca0, ca1, ca2, ca3, cb0, cb1, cb2, cb3, cb4, cb5, rxs, rsx, rqx,
                     rys, rsy, rqy)
                 rqx = rsx
                 rqy = rsy
@@ -759,6 +801,48 @@ def _ball_films(geo, geom, dx, dy, shaft_speed):
     return out
 
 
+def _blocks(A, B, tau, h):
+    """exp(A h tau) and E_j(tau), j = 0 .. 2, for a step of h s (tau in units of h): Van Loan's
+    block exponential (``KinematicModel._propagators``)."""
+    from scipy.linalg import expm
+
+    order = len(CORRECTOR_NODES)
+    nz = NSTATE + order * NINPUT
+    Z = np.zeros((nz, nz))
+    Z[:NSTATE, :NSTATE] = A * h
+    Z[:NSTATE, NSTATE:NSTATE + NINPUT] = B * h
+    for j in range(order - 1):
+        r0 = NSTATE + j * NINPUT
+        Z[r0:r0 + NINPUT, r0 + NINPUT:r0 + 2 * NINPUT] = np.eye(NINPUT)
+    E = expm(tau * Z)
+    return E[:NSTATE, :NSTATE], [E[:NSTATE, NSTATE + j * NINPUT:NSTATE + (j + 1) * NINPUT]
+                                  * math.factorial(j) for j in range(order)]
+
+
+def _weights(Es, corrector, predictor):
+    """What the residual at each corrector node, then each predictor node, adds (``_blocks``'s
+    E_j combined by the Lagrange basis of the nodes, in steps)."""
+    order = len(CORRECTOR_NODES)
+    vc, vp = _lagrange(corrector), _lagrange(predictor)
+    wc = [sum(Es[j] * vc[j, i] for j in range(order)) for i in range(order)]
+    wp = [sum(Es[j] * vp[j, i] for j in range(len(predictor))) for i in range(len(predictor))]
+    return wc + wp
+
+
+def _sub_step_propagators(A, B, h, sub):
+    """The kernel's event sub-step propagators (psx, psy, wsx, wsy, esx, esy) for sub-steps of
+    h / sub s; the first sub-step's previous node is the previous step's start, ``sub`` sub-steps
+    back."""
+    xb, yb = list(X_BLOCK), list(Y_BLOCK)
+    phs, Ess = _blocks(A, B, 1.0, h / sub)
+    ws = (_weights(Ess, CORRECTOR_NODES, PREDICTOR_NODES)
+          + _weights(Ess, CORRECTOR_NODES[:2] + (-float(sub),), PREDICTOR_NODES[:1] + (-float(sub),)))
+    return (np.ascontiguousarray(phs[np.ix_(xb, xb)]), np.ascontiguousarray(phs[np.ix_(yb, yb)]),
+            np.ascontiguousarray([wi[xb, 0] for wi in ws]), np.ascontiguousarray([wi[yb, 1] for wi in ws]),
+            np.ascontiguousarray([Ess[0][xb, 2], Ess[1][xb, 2]]),
+            np.ascontiguousarray([Ess[0][yb, 3], Ess[1][yb, 3]]))
+
+
 def bearing_mode_hz(A: np.ndarray, structure) -> float:
     """The highest mode (Hz) of a linearised structure's system matrix ``A`` below its unit
     resonator: the bearing's.  The stiffer the bearing (the load), the higher it is and the less
@@ -838,6 +922,7 @@ class KinematicModel:
                                   else float(ellipse_ball_load))
         self.dtab = active_defect_table(scene.defects, self.defect_sizes, b, seed=self.seed,
                                         ball_load=self.ellipse_ball_load)
+        self.fine_speed, self.fine_events = self.fine_event_speed()
         self._balance_at_start(np.asarray(radial_load, dtype=float), float(shaft_speed))
 
     def _balance_at_start(self, load: np.ndarray, speed: float) -> None:
@@ -877,6 +962,7 @@ class KinematicModel:
                                         seed=self.seed, ball_load=self.ellipse_ball_load)
         self.hist[2] = 0.0       # the residual jumps with the defects: restart its history
         self.hist[3] = 0.0       # and the balls' geometry (their defect losses) is recomputed
+        self.fine_speed, self.fine_events = self.fine_event_speed()
 
     # ---- linearisation and propagators ---------------------------------------------------------
     def _set_step(self, oversample: int):
@@ -982,6 +1068,7 @@ class KinematicModel:
             self._set_step(self.step_for_mode(self.bearing_mode))
         rows = [7, 9 if self.scene.structure.has_resonator else 8]
         self._propagators(A, B, A[rows], B[rows])
+        self.fine_speed, self.fine_events = self.fine_event_speed()
         self.hist[2] = 0.0       # the residual's definition changed: restart its history
         self._lin_load = (float(load[0]), float(load[1]))
         if initial:
@@ -994,49 +1081,21 @@ class KinematicModel:
         E_j(tau) = int_0^tau exp(A h (tau - s)) B h s^j ds (s in steps), j = 0, 1, 2, and the
         weights of the residual at the corrector / predictor nodes follow from the Lagrange
         basis.  The kernel gets the x and y blocks separately; C, D: acceleration rows."""
-        from scipy.linalg import expm
-
         self.A, self.B, self.C, self.D = A, B, C, D      # kept for tests and studies
         order = len(CORRECTOR_NODES)
-        nz = NSTATE + order * NINPUT
-
-        def blocks(tau, h=self.h):
-            """exp(A h tau) and E_j(tau) for a step of h (s in units of h)"""
-            Z = np.zeros((nz, nz))
-            Z[:NSTATE, :NSTATE] = A * h
-            Z[:NSTATE, NSTATE:NSTATE + NINPUT] = B * h
-            for j in range(order - 1):
-                r0 = NSTATE + j * NINPUT
-                Z[r0:r0 + NINPUT, r0 + NINPUT:r0 + 2 * NINPUT] = np.eye(NINPUT)
-            E = expm(tau * Z)
-            return E[:NSTATE, :NSTATE], [E[:NSTATE, NSTATE + j * NINPUT:NSTATE + (j + 1) * NINPUT]
-                                          * math.factorial(j) for j in range(order)]
-
-        def weights(Es, corrector, predictor):
-            """what the residual at each corrector node, then each predictor node, adds"""
-            vc, vp = _lagrange(corrector), _lagrange(predictor)
-            wc = [sum(Es[j] * vc[j, i] for j in range(order)) for i in range(order)]
-            wp = [sum(Es[j] * vp[j, i] for j in range(len(predictor))) for i in range(len(predictor))]
-            return wc + wp
-
+        blocks = functools.partial(_blocks, A, B, h=self.h)
+        weights = _weights
         vc = _lagrange(CORRECTOR_NODES)
         phi, Es = blocks(1.0)
         xb, yb = list(X_BLOCK), list(Y_BLOCK)
         # the blocks must decouple (diagonal kb, resonator on y only)
         assert not np.any(phi[np.ix_(xb, yb)]) and not np.any(phi[np.ix_(yb, xb)])
         w = weights(Es, CORRECTOR_NODES, PREDICTOR_NODES)   # rows of wx / wy, in the kernel's order
-        # event sub-steps: one per chain sample; the first one's previous node is the previous
-        # step's start, d sub-steps back
+        # event sub-steps: one per chain sample; the finer ones (r per chain sample) when a
+        # defect's edge first needs them (``_fine_propagators``)
         d = self.dense
-        phs, Ess = blocks(1.0, self.h / d)
-        ws = (weights(Ess, CORRECTOR_NODES, PREDICTOR_NODES)
-              + weights(Ess, CORRECTOR_NODES[:2] + (-float(d),), PREDICTOR_NODES[:1] + (-float(d),)))
-        self.psx = np.ascontiguousarray(phs[np.ix_(xb, xb)])
-        self.psy = np.ascontiguousarray(phs[np.ix_(yb, yb)])
-        self.wsx = np.ascontiguousarray([wi[xb, 0] for wi in ws])
-        self.wsy = np.ascontiguousarray([wi[yb, 1] for wi in ws])
-        self.esx = np.ascontiguousarray([Ess[0][xb, 2], Ess[1][xb, 2]])
-        self.esy = np.ascontiguousarray([Ess[0][yb, 3], Ess[1][yb, 3]])
+        self.psx, self.psy, self.wsx, self.wsy, self.esx, self.esy = _sub_step_propagators(A, B, self.h, d)
+        self.fine = {}
         self.px = np.ascontiguousarray(phi[np.ix_(xb, xb)])
         self.py = np.ascontiguousarray(phi[np.ix_(yb, yb)])
         self.wx = np.ascontiguousarray([wi[xb, 0] for wi in w])
@@ -1063,6 +1122,78 @@ class KinematicModel:
             self.dense_y[sd] = np.concatenate([cphi[1, yb], [nd[1, 1] for nd in node],
                                                [(C @ Et[0])[1, 3], (C @ Et[1])[1, 3]]])
 
+    def _fine_propagators(self, r: int):
+        """The propagators (pfx, pfy, wfx, wfy, efx, efy) of r event sub-steps per chain sample
+        (h / (d r) each), computed at the current linearisation the first time a batch may need
+        them (a step faster than ``fine_speed``), so that a scene whose edges are long computes
+        none."""
+        if r not in self.fine:
+            self.fine[r] = _sub_step_propagators(self.A, self.B, self.h, self.dense * r)
+        return self.fine[r]
+
+    def fine_event_speed(self) -> tuple:
+        """(shaft speed (rad/s) above which the event sub-steps are finer than one per chain
+        sample, inf where none needs them; how many per chain sample there: ``fine_events``)
+        (README, "Limitations", and docs/kinematic_fast_pits.md).
+
+        The balls' load leaves and returns at a pit's edges; where that takes a few chain samples
+        only, the impacts' heights depend on where the edge falls on the chain grid and beat with
+        it.  For each defect (a ball defect: at both of its contacts), with delta the Hertz
+        deflection (m) of the most loaded ball at the linearisation (film left out) and the drop
+        at the defect's centre: where the drop reaches delta (the ball unloads fully), the edge is
+        the travel from the defect's border to where the drop is delta, and the finer sub-steps
+        start where it is shorter than FINE_EDGE chain samples; where the drop reaches
+        FINE_PARTIAL of delta but not delta, where the whole defect is crossed in fewer than
+        FINE_CROSSING chain samples.  Travel over the speed of the defect against the balls
+        (race: the cage's, relative; ball defect: the spin) gives the shaft speed.  The limits
+        leave every shipped scene on the chain grid (the ER-16K's edges of 5.7-7.0 chain samples,
+        CWRU's pits that never unload the ball, crossed in 6.1, seed 001's crack, 8.4).
+
+        How many: the fewest of FINE_EVENTS's powers of two that put FINE_RESOLVE sub-steps on the
+        shortest such edge (where the ball does not unload fully: half the crossing) at the speed
+        of the linearisation (or at ``fine_speed``, if that is higher): one number per
+        linearisation, so that a step's sub-steps do not depend on how the run is chunked."""
+        if not self.event_substeps or self.dtab.shape[0] == 0:
+            return math.inf, 1
+        geo = self.geo
+        delta = (self.static_ball_load / geo[P_K]) ** (2.0 / 3.0)
+        chain_step = 1.0 / self.internal_rate          # s
+        speed = math.inf
+        shortest = math.inf          # rad per (rad/s of the shaft): the shortest edge's travel time
+        for row in self.dtab:
+            kind, half, prof, depth = int(row[D_KIND]), row[D_HALF], int(row[D_PROFILE]), row[D_DEPTH]
+            if kind == KIND_BALL:
+                contacts = ((geo[P_RB], abs(geo[P_SPIN]), row[D_RHO_O], row[D_HMAX_O], row[D_RAMP_O]),
+                            (geo[P_RB], abs(geo[P_SPIN]), row[D_RHO_I], row[D_HMAX_I], row[D_RAMP_I]))
+            elif kind == KIND_INNER:
+                contacts = ((geo[P_RI], abs(1.0 - geo[P_CAGE]), row[D_RHO_I], row[D_HMAX_I], row[D_RAMP_I]),)
+            else:
+                contacts = ((geo[P_RO], abs(geo[P_CAGE]), row[D_RHO_O], row[D_HMAX_O], row[D_RAMP_O]),)
+            for radius, rate, rho, hmax, ramp in contacts:
+                def drop(inward):
+                    # the drop (m) at ``inward`` rad from the defect's border
+                    return _profile_drop(prof, half - inward, half, radius, rho, hmax, ramp, depth)
+                top = drop(half)
+                if top >= delta:
+                    lo, hi = 0.0, half        # the drop grows inward (every profile): bisect
+                    for _ in range(60):
+                        mid = 0.5 * (lo + hi)
+                        lo, hi = (lo, mid) if drop(mid) >= delta else (mid, hi)
+                    travel, limit, edge = hi, FINE_EDGE, hi
+                elif top >= FINE_PARTIAL * delta:
+                    travel, limit, edge = 2.0 * half, FINE_CROSSING, half
+                else:
+                    continue
+                speed = min(speed, travel / (rate * chain_step * limit))
+                shortest = min(shortest, edge / rate)
+        if speed == math.inf:
+            return speed, 1
+        edge_samples = shortest / (max(abs(self._lin_speed), speed) * chain_step)   # chain samples
+        r = FINE_EVENTS[0]
+        while r < FINE_EVENTS[1] and edge_samples * r < FINE_RESOLVE:
+            r *= 2
+        return speed, r
+
     def _needs_relinearising(self, lx: float, ly: float) -> bool:
         """Has the load (N) moved by more than 20 % of the one linearised at (10 N at least)?"""
         rx, ry = self._lin_load
@@ -1087,13 +1218,19 @@ class KinematicModel:
         if self._needs_relinearising(l1x, l1y):
             self._linearise(np.array([l1x, l1y]), float(speed1))
         d = self.dense
+        fine_speed, r_fine = self.fine_speed, self.fine_events
+        if self.event_substeps and d > 1 and max(abs(speed0), abs(speed1)) > fine_speed:
+            pf = self._fine_propagators(r_fine)
+        else:
+            pf = (self.psx, self.psy, self.wsx, self.wsy, self.esx, self.esy)     # not read
         advance_kernel(self.x, self.angles, self.trig, self.step, self.hist, self.geom, n_steps // d,
                        self.decimation, d, float(speed0), float(speed1), float(load0[0]),
                        float(load0[1]), l1x, l1y, self.h, self.geo, self.cj, self.sj,
                        self.dtab, self.wtab, self.seed, self.slip_cache, self.kbx, self.kby,
                        self.px, self.py, self.wx, self.wy, self.ex, self.ey, self.cx, self.cy,
                        self.feed, self.dense_x, self.dense_y, self.psx, self.psy, self.wsx, self.wsy,
-                       self.esx, self.esy, int(self.event_substeps), acc, forces, cage)
+                       self.esx, self.esy, int(self.event_substeps), r_fine, fine_speed, *pf,
+                       acc, forces, cage)
         self._last_speed = float(speed1)
 
     def adopt_state(self, other) -> None:
