@@ -331,12 +331,13 @@ class Simulator:
         return f"the {self.tier} tier's kernels"
 
     def _build_model(self, tier: str, defect_sizes: tuple, ellipse_ball_load: float | None = None,
-                     takes_over_from=None):
+                     takes_over_from=None, runs: bool = True):
         """The ``tier``'s model at the present operating point with the defects at
         ``defect_sizes``; ``ellipse_ball_load`` (N) from the tier it takes over from, so that a
         wandering ball defect meets the races as often after a switch as before (None: the new
         model's own most loaded ball); ``takes_over_from``: that tier's model, whose state the
-        new one continues from (``adopt_state``)."""
+        new one continues from (``adopt_state``).  ``runs`` False: a throwaway whose signal
+        nobody gets (``prepare_switches``), which warns of nothing."""
         if tier == "kinematic":
             from .physics.kinematic import KinematicModel
 
@@ -355,7 +356,7 @@ class Simulator:
                               ellipse_ball_load=ellipse_ball_load, takes_over_from=takes_over_from)
         # a divergence is told at the signal's time (the physics runs ahead of the output)
         model.start_time = self._physics_index / self.sample_rate
-        if model.step_warning:
+        if model.step_warning and runs:
             # the step is left as it is (docs/solvers.md): the user is told, not the step changed
             warnings.warn(model.step_warning, DefaultStepWarning, stacklevel=2)
         return model
@@ -666,8 +667,10 @@ class Simulator:
         notice = Notice()           # its own: the node runs this beside its start
         with notice.within(f"the {other} tier's kernels", " in the background, for a switch of tier"):
             # the hand-over too (it reads the old tier's films); from a copy, which it may update
+            # (its step's warning, if any, is said when a switch builds the tier that runs: the
+            # node under auto on the kinematic tier said it of a tier it never ran)
             model = self._build_model(other, self._model.defect_sizes, self._model.ellipse_ball_load,
-                                      takes_over_from=copy.deepcopy(self._model))
+                                      takes_over_from=copy.deepcopy(self._model), runs=False)
             w, load = self._shaft_speed, self._radial_load.copy()
             from .physics.skidding import SolverDiverged
 

@@ -1076,6 +1076,25 @@ def test_the_default_step_on_a_small_bearing_under_load_warns_in_one_line_with_w
     assert abs(tail_rms(sixteen) / ref - 1) < 0.01
 
 
+def test_the_default_step_warning_is_said_of_the_tier_that_runs_not_of_a_throwaway():
+    """Under ``fidelity: auto`` the small bearing runs the kinematic tier; the node's
+    ``prepare_switches`` builds a throwaway skidding model (to load its kernels) whose signal
+    nobody gets: no warning of its step (the node said it of a tier it never ran).  A switch
+    builds the skidding model that runs, which warns as a Simulator on that tier does."""
+    import warnings
+
+    from bearing_sim_ros.scene import scene_from_dict
+    from bearing_sim_ros.simulator import DefaultStepWarning
+
+    sim = Simulator(scene_from_dict(SMALL_BEARING))
+    assert sim.tier == "kinematic" and sim.can_switch_tiers
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DefaultStepWarning)
+        sim.prepare_switches()
+        sim.advance(150)
+    assert sim.tier == "kinematic"
+
+
 def test_shipped_and_bench_scenes_keep_the_default_step_without_a_warning():
     """The shipped and bench scenes' most loaded balls are at 34.8 kHz at most, under the
     warning's 36 kHz: the default keeps its step and says nothing."""
