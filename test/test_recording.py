@@ -3,6 +3,7 @@ with complete schemas, QoS, metadata and attachments; off-thread writing that su
 disk; rotation; CDR padding zeroed without changing any value."""
 from __future__ import annotations
 
+import os
 import time
 from pathlib import Path
 
@@ -1222,3 +1223,28 @@ def test_a_write_that_waits_for_a_stalled_pipe_ends_once_a_stop_is_asked_for(tmp
     (tmp_path / "copy.mcap").write_bytes(data)
     with open(tmp_path / "copy.mcap", "rb") as f:
         assert make_reader(f).get_summary().statistics.message_count == 40
+
+
+def test_a_file_whose_folder_moved_as_it_was_opened_is_no_other_writers(tmp_path):
+    """The recorder refuses a file that another writer put at its name between its open and its
+    check (a render finishing meanwhile), but a name that is simply gone (the folder moved, the
+    file deleted, just as a split recording's piece was opened: CI caught a node test there) is no
+    other writer: the recording goes on into the open file.  It said "another recording is being
+    written to this file (two renders, nodes or runs given the same path?)"."""
+    from bearing_sim_ros.recording.recorder import _replaced
+
+    folder = tmp_path / "runs"
+    folder.mkdir()
+    path = folder / "run_001.mcap"
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT)
+    try:
+        assert not _replaced(path, fd)
+        folder.rename(tmp_path / "moved")              # gone from its name: nobody else's
+        assert not _replaced(path, fd)
+        folder.mkdir()
+        other = folder / "other.mcap"
+        other.write_bytes(b"")
+        os.replace(other, path)                         # another file moved onto the name
+        assert _replaced(path, fd)
+    finally:
+        os.close(fd)

@@ -351,7 +351,7 @@ def _open_held(path: Path, where: str, final: Path, stopped):
                 raise _busy(where) from None
         if stat.S_ISREG(mode):
             # a node's file moved aside by a render finishing meanwhile is not at its name any more
-            refusal = _writer_of(final, path, where) or (None if _at(path, fd) else _busy(where))
+            refusal = _writer_of(final, path, where) or (_busy(where) if _replaced(path, fd) else None)
             if refusal is not None:
                 if path != final:       # our partial file (its name is our pid's); a node's new
                     with contextlib.suppress(OSError):     # empty file stays: a render may be
@@ -364,14 +364,20 @@ def _open_held(path: Path, where: str, final: Path, stopped):
         raise
 
 
-def _at(path: Path, fd: int) -> bool:
-    """Whether the open file ``fd`` is the one at ``path``."""
+def _replaced(path: Path, fd: int) -> bool:
+    """Whether another file is at ``path`` now than the open file ``fd`` (a render finishing
+    meanwhile moved its own onto the name).  Nothing there is no other writer: the folder was moved
+    or the file deleted as it was opened, and the recording goes on into the open file (a split
+    recording's next piece then fails, and says so).  That was taken for "another recording is
+    being written to this file" when a folder moved away just as a piece was opened."""
     try:
         there = os.stat(path)
-    except OSError:
+    except FileNotFoundError:
         return False
+    except OSError:
+        return True
     mine = os.fstat(fd)
-    return (there.st_dev, there.st_ino) == (mine.st_dev, mine.st_ino)
+    return (there.st_dev, there.st_ino) != (mine.st_dev, mine.st_ino)
 
 
 class Recorder:
