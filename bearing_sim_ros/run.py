@@ -193,7 +193,7 @@ def summarise(scene, tail: dict, node_figures: dict, path, out: str | None = Non
     """The one-screen summary (text); ``path``: how ``report`` and ``play`` are given the
     recording (``recording_argument``); ``out``: the name it was made to (default ``path``),
     whose stem names the report's folder."""
-    from .analysis.envelope import STEADY_LINES, band_words, resonator_hz
+    from .analysis.envelope import STEADY_LINES, band_words
     from .nodes.monitor_node import order_verdict, spin_share_of, spin_shares_at, verdict
     from .recording.render import tier_summary
     from .waveform import NS
@@ -231,7 +231,7 @@ def summarise(scene, tail: dict, node_figures: dict, path, out: str | None = Non
             # on their spin angle, from their spin at each state sample (as monitor and report do)
             shares = spin_shares_at(spins, tail["t0_ns"] + np.asarray(tail["states"][0]) * NS) if spins else None
             tracked, untracked = order_verdict(x, tail["channels"], fs, tail["times_s"], scene.bearing,
-                                               tail["states"], spin, shares, resonator_hz(scene.structure))
+                                               tail["states"], spin, shares, scene.structure.resonator_hz)
         if moved > STEADY_LINES and tracked is None:
             lines.append(f"envelope analysis of the last {x.shape[0] / fs:.1f} s: no verdict: the shaft and cage "
                          f"speeds moved by {100 * moved:.0f} % in it (a speed step or ramp, a load step that "
@@ -254,7 +254,7 @@ def summarise(scene, tail: dict, node_figures: dict, path, out: str | None = Non
                 # outer-race pit
                 res, unit, digits = verdict(x, tail["channels"], fs, scene.bearing, shaft_hz,
                                             None if cage is None else abs(cage) / (2 * math.pi), spin,
-                                            resonator_hz(scene.structure)), "Hz", 2
+                                            scene.structure.resonator_hz), "Hz", 2
                 head = f"envelope analysis of the last {x.shape[0] / fs:.1f} s"
                 at = f"at shaft {shaft_hz:.2f} Hz ({shaft_hz * 60:.0f} rpm)"
                 lines.append(f"{head} {at}: {res['no_band']}" if res.get("no_band") else

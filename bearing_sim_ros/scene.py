@@ -50,6 +50,11 @@ class Structure:
     def has_resonator(self) -> bool:
         return self.resonator_mass > 0.0
 
+    @property
+    def resonator_hz(self) -> float | None:
+        """The unit resonator's natural frequency sqrt(k / m) / 2 pi (Hz); None without one."""
+        return math.sqrt(self.resonator_stiffness / self.resonator_mass) / (2 * math.pi) if self.has_resonator else None
+
 
 @dataclass(frozen=True)
 class Defect:

@@ -870,7 +870,7 @@ def test_every_shipped_scene_keeps_the_detector_band_of_2_to_5_khz():
     for name in names:
         scene = load_scene(name)
         for fs in (12000.0, 15000.0, 48000.0):
-            band, why = env.detector_band(scene.fault_frequencies(), fs, env.resonator_hz(scene.structure))
+            band, why = env.detector_band(scene.fault_frequencies(), fs, scene.structure.resonator_hz)
             assert band == (2000.0, 5000.0) and why == "", (name, fs, band, why)
     er16k = load_scene("er16k_outer_race")
     assert env.detector_band(er16k.bearing.fault_frequencies(18000 / 60), 15000.0)[0] == (2000.0, 5000.0)
@@ -902,7 +902,7 @@ def test_fault_lines_too_close_to_nyquist_get_no_verdict_in_one_line():
     d = env.diagnose(y, fs, scene.fault_frequencies())
     assert d["verdict"] == "unknown" and d["band"] is None, d["verdict"]
     # the scene's resonator (4 kHz) widens no band that far: the same
-    assert env.diagnose(y, fs, scene.fault_frequencies(), resonance_hz=env.resonator_hz(scene.structure)) == d
+    assert env.diagnose(y, fs, scene.fault_frequencies(), resonance_hz=scene.structure.resonator_hz) == d
     assert d["no_band"].startswith("no envelope band: the fault lines judged reach 2951 Hz") and "\n" not in d["no_band"]
     assert "(6750 Hz at 15000 Hz): no verdict (a sample rate of at least 15914 Hz gives one)" in d["no_band"]
     with pytest.raises(UserError, match="no envelope band"):

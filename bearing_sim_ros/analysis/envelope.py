@@ -132,14 +132,6 @@ def detector_band(frequencies: Mapping, fs: float, resonance_hz: float | None = 
                   f"{4 * span / 0.9:.0f} Hz gives one)")
 
 
-def resonator_hz(structure) -> float | None:
-    """The natural frequency (Hz) of the unit resonator of ``structure`` (``Scene.structure``),
-    sqrt(k / m) / 2 pi, or None where it has none."""
-    mass = getattr(structure, "resonator_mass", 0.0) or 0.0
-    stiffness = getattr(structure, "resonator_stiffness", 0.0) or 0.0
-    return float(np.sqrt(stiffness / mass) / (2 * np.pi)) if mass > 0 and stiffness > 0 else None
-
-
 def band_words(band) -> str:
     """The envelope band ``band`` ((low, high) Hz) in words: ``2-5 kHz``, ``0.225-0.45 kHz``."""
     lo, hi = band

@@ -57,7 +57,7 @@ from ..paths import output_folder, replace_file, save_figure, writing_into
 from ..recording.reader import open_recording
 from ..waveform import NS, from_pointcloud2
 from .envelope import (DETECTION_THRESHOLD, FAULT_LINES, LINE_LABELS, STEADY_LINES, band_words, borrowed_text,
-                       diagnose, envelope_band, envelope_spectrum, no_defect_note, resonator_hz, spread, statistics,
+                       diagnose, envelope_band, envelope_spectrum, no_defect_note, spread, statistics,
                        with_cage)
 from .orders import order_diagnose
 
@@ -794,7 +794,7 @@ def order_tracked(d: "_Data", x, times_s, scene, periods: RecordedPeriods | None
     return order_diagnose(x, d.sample_rate, times_s, state_t, d.shaft_angle, d.shaft_w, d.cage_angle, d.cage_w,
                           per_shaft_hz, balls,
                           spin_shares=spin_shares(d.signal_frequency_periods, state_t, per_shaft_hz["bsf"], balls),
-                          resonance_hz=resonator_hz(scene.structure) if scene is not None else None)
+                          resonance_hz=scene.structure.resonator_hz if scene is not None else None)
 
 
 def spin_shares(periods: list, at_s, bsf_per_shaft_hz: float, balls: int):
@@ -1178,7 +1178,7 @@ def _report(rec, out, window_s: float, spool: _Spool) -> dict:
     # recorded /diagnostics alone place them, when they give all four
     freqs = line_frequencies(rolling, d.signal_frequencies)
     # the envelope's band from these lines (envelope.detector_band) and the scene's resonator
-    resonance = resonator_hz(scene.structure) if scene is not None else None
+    resonance = scene.structure.resonator_hz if scene is not None else None
     verdict = diagnose(x, fs, freqs, resonance_hz=resonance) if freqs and x.size > fs * 0.2 else None
     no_band = verdict["no_band"] if verdict is not None and verdict["band"] is None else ""
     if no_band:                         # fault lines too close to Nyquist: no verdict, said why

@@ -100,7 +100,7 @@ from rclpy.node import Node
 
 from .. import ground_truth
 from ..analysis.envelope import (DETECTION_THRESHOLD, FAULT_LINES, STEADY_LINES, band_words, borrowed_text, detector_band,
-                                 diagnose, pick_verdict, resonator_hz, spread, with_cage)
+                                 diagnose, pick_verdict, spread, with_cage)
 from ..analysis.orders import order_diagnose
 from ..messages import RUN_ENDED, RUN_KEY, TOPIC_ACCEL, TOPIC_DIAGNOSTICS, TOPIC_STATE, waveform_qos
 from ..stale_dds_ports import clear_before_start
@@ -934,14 +934,14 @@ class MonitorNode(Node):
                 shares = (spin_shares_at(run.spins, (end if start is None else start) + np.asarray(states[0]) * NS)
                           if states is not None else None)
                 tracked, why = (order_verdict(x, channels, fs, np.arange(x.shape[0]) / fs, self.scene.bearing, states,
-                                              spin, shares, resonator_hz(self.scene.structure))
+                                              spin, shares, self.scene.structure.resonator_hz)
                                 if states is not None else (None, "no state samples in the window"))
                 result = ({**tracked, "shaft_hz": shaft_hz, "moved": moved} if tracked is not None else
                           {"verdict": "unknown", "shaft_hz": shaft_hz, "moved": moved, "untracked": why})
             else:
                 result = verdict(x, channels, fs, self.scene.bearing, shaft_hz,
                                  None if cage is None else abs(cage) / (2 * np.pi), spin,
-                                 resonator_hz(self.scene.structure))
+                                 self.scene.structure.resonator_hz)
         except Exception as exc:  # noqa: BLE001 - a failed analysis must not end the monitor silently
             self.get_logger().error(f"envelope analysis at t={t:.2f}s failed: {exc}")
             return

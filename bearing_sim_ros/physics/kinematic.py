@@ -849,8 +849,7 @@ def bearing_mode_hz(A: np.ndarray, structure) -> float:
     one step per output sample follows it."""
     freqs = np.abs(np.linalg.eigvals(A).imag) / (2 * math.pi)
     if structure.has_resonator:
-        resonator = math.sqrt(structure.resonator_stiffness / structure.resonator_mass) / (2 * math.pi)
-        freqs = freqs[freqs < 0.9 * resonator]
+        freqs = freqs[freqs < 0.9 * structure.resonator_hz]
     return float(freqs.max()) if freqs.size else 0.0
 
 

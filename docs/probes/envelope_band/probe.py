@@ -33,7 +33,7 @@ def fast():
     for rpm, tiers, fs in [(30000, ("kinematic",), 15000.0), (40000, ("kinematic", "skidding"), 15000.0),
                            (50000, ("kinematic",), 15000.0), (40000, ("kinematic", "skidding"), 20000.0)]:
         s = custom_scene("6000-size", rpm, 300, PIT)
-        ff, res = s.fault_frequencies(), env.resonator_hz(s.structure)
+        ff, res = s.fault_frequencies(), s.structure.resonator_hz
         band, why = env.detector_band(ff, fs, res)
         for tier in tiers:
             y = record(s, tier, fs)
@@ -63,7 +63,7 @@ def low_rate():
         base = load_scene(name)
         for rpm in (1600, 4000, 8000):
             s = dataclasses.replace(base, shaft_speed=rpm * 2 * math.pi / 60)
-            ff, res = s.fault_frequencies(), env.resonator_hz(s.structure)
+            ff, res = s.fault_frequencies(), s.structure.resonator_hz
             for fs in (1000.0, 2000.0, 4000.0, 8000.0):
                 y = Simulator(s, fidelity="kinematic", seed=1, sample_rate=fs).advance(int(2.2 * fs)).accel[int(0.2 * fs):, 1]
                 band, _why = env.detector_band(ff, fs, res)
