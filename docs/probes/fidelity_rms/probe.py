@@ -21,13 +21,9 @@ from bearing_sim_ros.physics.film import FILM_EXP_Q, FILM_EXP_U, FILM_LOAD_FLOOR
 _spec = importlib.util.spec_from_file_location("custom_bearings", "docs/probes/custom_bearings/probe.py")
 custom = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(custom)
-BEARINGS, FS, scene = custom.BEARINGS, custom.FS, custom.scene
+BEARINGS, FS, scene, quiet = custom.BEARINGS, custom.FS, custom.scene, custom.quiet
 
 SETTLE, SECONDS = 0.1, 0.2
-
-
-def quiet(s):
-    return replace(s, sensor=replace(s.sensor, noise_density=0.0))
 
 
 def rms(s, tier, **kwargs):

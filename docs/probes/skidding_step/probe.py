@@ -12,7 +12,6 @@ so the figures are the fixed steps' whatever the default chooses.
 import importlib.util
 import math
 import sys
-from dataclasses import replace
 
 import numpy as np
 
@@ -26,13 +25,9 @@ from bearing_sim_ros.scene import shipped_scenes
 _spec = importlib.util.spec_from_file_location("custom_bearings", "docs/probes/custom_bearings/probe.py")
 custom = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(custom)
-BEARINGS, FS, scene = custom.BEARINGS, custom.FS, custom.scene
+BEARINGS, FS, scene, quiet = custom.BEARINGS, custom.FS, custom.scene, custom.quiet
 
 SETTLE, SECONDS = 0.1, 0.2
-
-
-def quiet(s):
-    return replace(s, sensor=replace(s.sensor, noise_density=0.0))
 
 
 def rms_of(sim):
