@@ -291,6 +291,24 @@ def skidding_ball_pit_speed_step(tmp_path_factory):
 DIVERGING_PIT = "{kind: outer, width_mm: 6.7, depth_mm: 3.9, clock: 6, profile: rectangular, onset_s: %r}"
 
 
+def small_bearing(rpm: float, load_n: float, defects=(), **sensor) -> dict:
+    """The 6000-size bearing of README "Limitations" (docs/probes/custom_bearings/probe.py: 7 balls
+    of 4.762 mm on 18 mm pitch, 4 um play, with that probe's structure, resonator and lubricant) as
+    a user types a scene, at ``rpm`` under ``load_n`` N downwards with ``defects`` (the YAML's
+    mappings); ``sensor``: keys over sensor noise off.  A mapping, for ``scene_from_dict`` or a
+    YAML file (test_skidding, test_fidelity, test_monitor, test_validate: ``from conftest import
+    small_bearing``)."""
+    part = lambda m, k, c: {"mass": m, "stiffness": k, "damping": c}  # noqa: E731
+    return {"name": "6000-size",
+            "bearing": {"name": "6000-size", "balls": 7, "ball_diameter_mm": 4.762, "pitch_diameter_mm": 18.0,
+                        "radial_clearance_um": 4.0, "width_mm": 8.0},
+            "structure": {"shaft": part(0.3, 2e6, 300), "pedestal": part(0.8, 5e7, 1500),
+                          "resonator": {"mass": 0.02, "frequency_hz": 4000, "damping_ratio": 0.04}},
+            "operating_point": {"shaft_speed_rpm": rpm, "radial_load": [0.0, -float(load_n)]},
+            "lubrication": {"viscosity": 0.04, "pressure_viscosity": 2.0e-8},
+            "sensor": {"noise_density": 0.0, **sensor}, "defects": [dict(d) for d in defects]}
+
+
 @pytest.fixture
 def diverging_scene(tmp_path):
     """``diverging_scene(onset_s)``: the path of that scene with its pit appearing at ``onset_s``

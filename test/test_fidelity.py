@@ -57,16 +57,11 @@ def _6000_size_at_its_limits():
     """A 6000-size bearing (7 balls of 4.762 mm on 18 mm, 4 um play; README "Limitations",
     docs/probes/custom_bearings) at its speed limit, 55 555 rpm, under 2 x C0 less its shaft's
     weight, sensor noise off."""
+    from conftest import small_bearing
+
     from bearing_sim_ros.scene import scene_from_dict
 
-    part = lambda m, k, c: {"mass": m, "stiffness": k, "damping": c}  # noqa: E731
-    return scene_from_dict({
-        "name": "6000-size", "bearing": {"name": "6000-size", "balls": 7, "ball_diameter_mm": 4.762,
-                                         "pitch_diameter_mm": 18.0, "radial_clearance_um": 4.0, "width_mm": 8.0},
-        "structure": {"shaft": part(0.3, 2e6, 300), "pedestal": part(0.8, 5e7, 1500),
-                      "resonator": {"mass": 0.02, "frequency_hz": 4000, "damping_ratio": 0.04}},
-        "operating_point": {"shaft_speed_rpm": 55555, "radial_load": [0.0, -4662.0]},
-        "lubrication": {"viscosity": 0.04, "pressure_viscosity": 2.0e-8}, "sensor": {"noise_density": 0.0}})
+    return scene_from_dict(small_bearing(55555, 4662.0))
 
 
 def test_at_a_small_bearings_speed_limit_the_kinematic_tier_auto_keeps_matches_the_reference():

@@ -1488,6 +1488,8 @@ def test_the_verdict_line_states_the_band_and_says_when_there_is_none():
     A 6000-size bearing (7 balls of 4.762 mm on 18 mm pitch) at 40 000 rpm at 15 kHz has its
     BPFI at 2.95 kHz, too close to Nyquist for a band above its lines: ``verdict=unknown`` and
     one line that says why, where the monitor judged it in 2-5 kHz."""
+    from conftest import small_bearing
+
     from bearing_sim_ros.nodes.monitor_node import format_verdict, verdict
     from bearing_sim_ros.scene import scene_from_dict
 
@@ -1497,12 +1499,7 @@ def test_the_verdict_line_states_the_band_and_says_when_there_is_none():
     er16k = load_scene("er16k_outer_race")
     line = format_verdict(1.0, verdict(data, ["accel_x", "accel_y"], fs, er16k.bearing, 1600 / 60))
     assert line.endswith(", band 2-5 kHz)"), line
-    small = scene_from_dict({
-        "name": "6000-size", "bearing": {"name": "6000-size", "balls": 7, "ball_diameter_mm": 4.762,
-                                         "pitch_diameter_mm": 18.0, "radial_clearance_um": 4.0, "width_mm": 8.0},
-        "structure": {"shaft": {"mass": 0.3, "stiffness": 2e6, "damping": 300},
-                      "pedestal": {"mass": 0.8, "stiffness": 5e7, "damping": 1500}},
-        "operating_point": {"shaft_speed_rpm": 40000, "radial_load": [0.0, -300.0]}})
+    small = scene_from_dict(small_bearing(40000, 300.0))
     result = verdict(data, ["accel_x", "accel_y"], fs, small.bearing, 40000 / 60)
     assert result["verdict"] == "unknown" and result["band"] is None, result["verdict"]
     line = format_verdict(1.0, {**result, "truth": ("inner",)})

@@ -11,6 +11,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from conftest import small_bearing
 
 from bearing_sim_ros import Simulator, load_scene
 from bearing_sim_ros.analysis.envelope import fault_lines
@@ -1035,15 +1036,7 @@ def test_a_ball_pit_at_300_rpm_is_found_on_the_skidding_tier():
 
 # a 6000-size bearing (README "Limitations", docs/probes/custom_bearings: 7 balls of 4.762 mm on
 # 18 mm) at 13 888 rpm under 4662 N (a quarter of its speed limit, 2 C0)
-SMALL_BEARING = {
-    "name": "6000-size", "bearing": {"name": "6000-size", "balls": 7, "ball_diameter_mm": 4.762,
-                                     "pitch_diameter_mm": 18.0, "radial_clearance_um": 4.0, "width_mm": 8.0},
-    "structure": {"shaft": {"mass": 0.3, "stiffness": 2e6, "damping": 300},
-                  "pedestal": {"mass": 0.8, "stiffness": 5e7, "damping": 1500},
-                  "resonator": {"mass": 0.02, "frequency_hz": 4000, "damping_ratio": 0.04}},
-    "operating_point": {"shaft_speed_rpm": 13888, "radial_load": [0.0, -4662.0]},
-    "lubrication": {"viscosity": 0.04, "pressure_viscosity": 2.0e-8},
-    "sensor": {"noise_density": 0.0, "range": 49033}}
+SMALL_BEARING = small_bearing(13888, 4662.0, range=49033)
 
 
 def test_the_default_step_on_a_small_bearing_under_load_warns_in_one_line_with_what_helps():

@@ -888,15 +888,13 @@ def test_fault_lines_too_close_to_nyquist_get_no_verdict_in_one_line():
     2-5 kHz band the detector judged the 0.8 s after 0.2 s of the kinematic tier "outer" (BPFO
     x3500, BPFI x890: README "Limitations"; BPFO = Z x shaft - BPFI, the inner pit's own line
     family); now it says why there is no verdict, and gives none."""
-    import sys
+    from conftest import small_bearing
 
     from bearing_sim_ros import Simulator
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "docs" / "probes" / "custom_bearings"))
-    try:
-        from probe import scene as custom_scene
-    finally:
-        sys.path.pop(0)
-    scene = custom_scene("6000-size", 40000, 300, [{"kind": "inner", "width_mm": 1.0, "depth_mm": 0.1}])
+    from bearing_sim_ros.scene import scene_from_dict
+
+    scene = scene_from_dict(small_bearing(40000, 300.0, [{"kind": "inner", "width_mm": 1.0, "depth_mm": 0.1}],
+                                          noise_density=3.4e-5, range=49033))
     fs = 15000.0
     y = Simulator(scene, fidelity="kinematic", seed=0, sample_rate=fs).advance(int(1.0 * fs)).accel[int(0.2 * fs):, -1]
     d = env.diagnose(y, fs, scene.fault_frequencies())
