@@ -85,9 +85,11 @@ AUTO_OVERSAMPLE_MAX = 4
 
 
 class DefaultStepWarning(UserWarning):
-    """The skidding tier's default solver runs at its own step on a bearing where that step was
-    measured off its reference (``physics.skidding.STEP_CONTACT_LIMIT``): the message says by how
-    much and what to set instead."""
+    """The skidding tier's default solver runs at a step its step check could not bring within
+    its target (``physics.skidding.STEP_CHECK_TARGET``: capped at ``STEP_CHECK_MAX`` steps per
+    sample, or at ``AUTO_OVERSAMPLE_MAX`` under fidelity auto), or at its own step where the check
+    did not run (a tier switch) on a bearing where that step was measured off its reference
+    (``STEP_CONTACT_LIMIT``): the message says by how much and what to set instead."""
 
 
 def oversample_allowed(value) -> bool:
@@ -347,17 +349,24 @@ class Simulator:
             if takes_over_from is not None:
                 model.adopt_state(takes_over_from)
             return model
-        from .physics.skidding import SkiddingModel
+        from .physics.skidding import STEP_CHECK_MAX, SkiddingModel
 
+        # the default's step check (at its own step only: ``oversample`` None) where the model
+        # starts the signal; a tier switch has no time for it, a throwaway no use.  Where fidelity
+        # auto may switch tiers it takes at most AUTO_OVERSAMPLE_MAX, as the user may
+        check = None
+        if runs and takes_over_from is None:
+            check = AUTO_OVERSAMPLE_MAX if self.can_switch_tiers else STEP_CHECK_MAX
         # the skidding tier takes the state over as it is built: it then needs no equilibrium
         model = SkiddingModel(self.scene, self.physics_rate, self.seed, self._shaft_speed,
                               self._radial_load, solver=self.solver, rk4_step=self.rk4_step,
                               oversample=self._oversample, defect_sizes=defect_sizes,
-                              ellipse_ball_load=ellipse_ball_load, takes_over_from=takes_over_from)
+                              ellipse_ball_load=ellipse_ball_load, takes_over_from=takes_over_from,
+                              step_check=check)
         # a divergence is told at the signal's time (the physics runs ahead of the output)
         model.start_time = self._physics_index / self.sample_rate
         if model.step_warning and runs:
-            # the step is left as it is (docs/solvers.md): the user is told, not the step changed
+            # what the step check could not fix (capped, or not run at a tier switch)
             warnings.warn(model.step_warning, DefaultStepWarning, stacklevel=2)
         return model
 
