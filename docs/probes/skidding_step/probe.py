@@ -5,7 +5,9 @@ the ball pass" (2026-11-30).  Run from the repository:
 bearings of docs/probes/custom_bearings at 0.1-1 x their speed limit and 0.02-1 x their load
 limit, about 15 minutes on 2 cores) and ``shipped`` (config/scenes and the bench's scenes at their
 operating points, about 5 minutes) and ``sixteen`` (oversample 16 and 32 where 8 was
-furthest off, against the references ``grid`` printed).  Every run is healthy unless the scene has defects, sensor
+furthest off, against the references ``grid`` printed) and ``check`` (the default at the step its
+step check chooses, every point of ``grid`` and ``shipped``, against the references of
+measured.txt: docs/solvers.md, "The default's step chosen by measuring", about 3 minutes).  Every run is healthy unless the scene has defects, sensor
 noise off, accel_y RMS over 0.2 s after 0.1 s of settling; ``oversample`` is given explicitly,
 so the figures are the fixed steps' whatever the default chooses.
 """
@@ -60,21 +62,34 @@ def row(label, s):
           f"mode {f['mode_hz']:6.0f} Hz  contact {f['contact_hz'] / 1e3:5.1f} kHz", flush=True)
 
 
-def grid():
+def grid_points():
+    """(label, scene) of the four custom bearings at 0.1-1 x their speed limit and 0.02-1 x their
+    load limit."""
     for which in BEARINGS:
         lim = InputLimits(scene(which, 1000, 0).bearing, scene(which, 1000, 0).shaft_weight)
         for fs in (0.1, 0.25, 0.5, 1.0):
             for fl in (0.02, 0.1, 0.5, 1.0):
                 rpm = math.floor(fs * lim.max_speed / RPM)
                 load = math.floor(fl * (lim.max_load - lim.shaft_weight - 1))
-                row(f"{which} {rpm} rpm {load} N", scene(which, rpm, load))
+                yield f"{which} {rpm} rpm {load} N", scene(which, rpm, load)
+
+
+def shipped_points():
+    """(label, scene) of config/scenes and the bench's scenes at their operating points."""
+    for name in shipped_scenes():
+        yield name, load_scene(name)
+    for sc in {sc.label: sc for sc in SCENARIOS + CALIBRATION_POINTS}.values():
+        yield "bench " + sc.label, sc.build()
+
+
+def grid():
+    for label, s in grid_points():
+        row(label, s)
 
 
 def shipped():
-    for name in shipped_scenes():
-        row(name, load_scene(name))
-    for sc in {sc.label: sc for sc in SCENARIOS + CALIBRATION_POINTS}.values():
-        row("bench " + sc.label, sc.build())
+    for label, s in shipped_points():
+        row(label, s)
 
 
 def sixteen():
@@ -87,7 +102,35 @@ def sixteen():
             for m in (16, 32)), flush=True)
 
 
+def check():
+    """The default with no ``oversample``: the steps per sample its check chose, the check's
+    estimates, the construction time and the error against measured.txt's reference (the same
+    noise-off accel_y RMS), and whether it warned."""
+    import re
+    import time
+    import warnings
+    from pathlib import Path
+
+    refs = {}
+    for line in (Path(__file__).parent / "measured.txt").read_text().splitlines():
+        m = re.match(r"(.+?)\s+ref\s+(\S+)\s+x2", line)
+        if m:
+            refs[m[1].strip()] = float(m[2])
+    points = list(grid_points()) + list(shipped_points())
+    for label, s in points:
+        s = quiet(s)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            t0 = time.perf_counter()
+            sim = Simulator(s, fidelity="skidding", seed=0)
+            built = time.perf_counter() - t0
+        est = " ".join(f"x{m} {e:.2%}" for m, e in sim._model.step_estimates.items()) or "not checked"
+        print(f"{label:44s} x{sim.oversample:<2d} {rms_of(sim) / refs[label] - 1:+7.2%}  built {built:5.2f} s  "
+              f"screen {sim._model.step_screen:.3f}  estimates {est}"
+              f"{'  WARNS' if caught else ''}", flush=True)
+
+
 if __name__ == "__main__":
-    parts = {"grid": grid, "shipped": shipped, "sixteen": sixteen}
+    parts = {"grid": grid, "shipped": shipped, "sixteen": sixteen, "check": check}
     for part in sys.argv[1:] or parts:
         parts[part]()
