@@ -278,7 +278,10 @@ def test_a_verdict_waits_for_the_diagnostics_stamped_at_its_window_end(ros_env):
     table, so they may arrive after it.  A verdict waits for them, up to ``TRUTH_GRACE_S``: here
     they come 0.15 s later and say the pit appeared half a second before the window's end, so
     ``truth=outer``, where the message before said none.  Without a message at the end, the
-    verdict goes out after the grace with the latest truth there is."""
+    verdict goes out after the grace with the latest truth there is.  The first wait is given a
+    5 s grace, so that ending it at the message (0.15 s and the analysis) and waiting out the
+    grace are seconds apart: with the real 0.25 s the bound was 0.4 s, which a timer and an
+    analysis slowed by a loaded machine can pass."""
     import threading
 
     with _monitor_in_process(load_scene("er16k_outer_race")) as node:
@@ -291,9 +294,9 @@ def test_a_verdict_waits_for_the_diagnostics_stamped_at_its_window_end(ros_env):
         late = _reports(((2, "outer"),), onsets={"outer": 1.5})
         t = time.monotonic()            # before the timer starts: it waited 0.1492 s, timed after it
         threading.Timer(0.15, node.run.reports.extend, (late,)).start()
-        node._analyse(2 * NS, x, ["accel_x", "accel_y"], 15000.0, shaft, time.monotonic() + TRUTH_GRACE_S)
+        node._analyse(2 * NS, x, ["accel_x", "accel_y"], 15000.0, shaft, time.monotonic() + 5.0)
         waited = time.monotonic() - t
-        assert 0.15 <= waited < 0.15 + TRUTH_GRACE_S and " truth=outer " in out.getvalue(), (waited, out.getvalue())
+        assert 0.15 <= waited < 2.5 and " truth=outer " in out.getvalue(), (waited, out.getvalue())
         t = time.monotonic()
         node._analyse(3 * NS, x, ["accel_x", "accel_y"], 15000.0, shaft, time.monotonic() + TRUTH_GRACE_S)
         assert time.monotonic() - t >= TRUTH_GRACE_S
