@@ -40,15 +40,16 @@ SUBSCRIBER = textwrap.dedent('''
     qos = QoSProfile(depth=1000)
 
     def keep(topic):
-        def cb(msg):
+        def cb(msg, info):
             stamp = None
             if hasattr(msg, "header"):
                 stamp = msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec
             elif hasattr(msg, "clock"):
                 stamp = msg.clock.sec * 10**9 + msg.clock.nanosec
             crc = zlib.crc32(bytes(msg.data)) if topic.endswith("accel") else 0
-            # the receive time: play is paced by the log times / --rate
-            got.setdefault(topic, []).append([stamp, int(getattr(msg, "width", 0)), crc, time.monotonic()])
+            # the publish time (ns, play's clock: DDS writes it into the sample as play publishes
+            # it), not the receive time, which this process's own delays under load move
+            got.setdefault(topic, []).append([stamp, int(getattr(msg, "width", 0)), crc, info["source_timestamp"]])
         return cb
 
     for topic, cls in [("/accel", PointCloud2), ("/contact_forces", PointCloud2), ("/state", JointState),
@@ -216,21 +217,28 @@ def test_play_gives_a_stalled_subscriber_one_grace_at_its_end(recording, ros_env
 
 
 def _assert_paced(received, rate):
-    """The tables of ``received`` ([stamp, width, crc, monotonic time]; stamps a recording's
-    sample times, as its log times, 10 ms apart) arrived at ``rate`` x their stamps' pace, within
-    10 %: the median over the tables k of (arrival of k + n/2 - arrival of k) / (their stamps'
-    difference), each pair half the stretch apart.  Arrivals come in bursts (discovery holds back
-    the first few, the last may wait for a reliable resend, and a loaded machine delivers what
-    queued up at once): measured first to last, the late ones compressed the span to 0.442 s of
-    0.495 on a quiet machine; the median gap between neighbours, which a burst fills with gaps
-    of zero, came to 0.217 of 0.25 at --rate 4 beside two other suites (load 5), twice; a pair
-    half the stretch apart moves by a burst's length over 0.1-0.25 s.  Tables that all came at
-    once (no pacing) or at their stamps' pace (the rate ignored) still fail."""
-    arrivals = np.array([r[3] for r in received], dtype=float)
-    stamps = np.array([r[0] for r in received], dtype=float) / NS
-    half = len(received) // 2
-    pace = float(np.median((arrivals[half:] - arrivals[:-half]) / (stamps[half:] - stamps[:-half])))
-    assert pace == pytest.approx(1 / rate, rel=0.10), (pace, 1 / rate, np.round(np.diff(arrivals) * 1e3, 2).tolist())
+    """The tables of ``received`` ([stamp, width, crc, publish time (ns)]; stamps a recording's
+    sample times, as its log times, 10 ms apart) were published at ``rate`` x their stamps' pace:
+    never ahead of it, and not behind it for good.  A table's lateness: its publish time after
+    the first tables' minus its stamp's after theirs / ``rate`` (s).  Play sleeps until a message's
+    time and sends at once what is due (``_sleep_until``), so no table is early (measured from the
+    best of the first five: the first was 7-35 ms later than the rest, loaded or not); a machine
+    that starves play makes tables late, and play catches up when it can: at --rate 2 beside two
+    CPU hogs the last quarter's median lateness was 0 to 10 ms.  (Receive times were checked
+    before, over 0.25 s: bursts on a loaded machine, discovery's and the subscriber's own, moved
+    them by 0.1-0.25 s.  And at --rate 4 a looping play, which decodes each message to move its
+    stamp, fell behind beside two hogs by 1.2-2.2 x, so the pace cannot be checked there.)
+    Tables all sent at once (no pacing), or at twice the rate, are early by half their span or
+    more; at half the rate, or the rate ignored, late by their span or more in the last quarter."""
+    sent = np.array([r[3] for r in received], dtype=np.int64)
+    stamps = np.array([r[0] for r in received], dtype=np.int64)
+    late = ((sent - sent[0]) - (stamps - stamps[0]) / rate) / NS
+    late -= late[:5].min()              # the first table may have come after a wait: the first five's best
+    span = (stamps[-1] - stamps[0]) / rate / NS
+    quarter = late[-(len(late) // 4):]
+    said = (rate, span, np.round(late[::max(1, len(late) // 40)] * 1e3, 1).tolist())
+    assert late.min() >= -0.05, said
+    assert np.median(quarter) <= 0.2 * span, said
 
 
 @pytest.mark.wall_clock
@@ -238,7 +246,7 @@ def test_loop_keeps_tables_contiguous_and_sigint_ends_cleanly(recording, bearing
     path, counts, accel = recording
     want = int(2.5 * len(accel))
     sub, result = _subscriber(tmp_path, ros_env, want, 40)
-    play = subprocess.Popen([bearing_sim_exe, "play", str(path), "--rate", "4", "--loop", *WAIT], env=ros_env,
+    play = subprocess.Popen([bearing_sim_exe, "play", str(path), "--rate", "2", "--loop", *WAIT], env=ros_env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         sub.wait(timeout=60)
@@ -262,9 +270,8 @@ def test_loop_keeps_tables_contiguous_and_sigint_ends_cleanly(recording, bearing
     assert stamps[len(accel)] == 1 * NS       # the second pass starts where the first ended
     # the second pass is the recording again, sample for sample
     assert [t[2] for t in tables[len(accel):2 * len(accel)]] == [t[2] for t in tables[:len(accel)]]
-    # one pass (first table of pass 2 to first of pass 3: 1 s of log time) takes 0.25 s at --rate 4;
-    # not pass 1, whose first tables may come in a burst behind discovery (0.20 s once, loaded)
-    _assert_paced(tables[len(accel):2 * len(accel) + 1], rate=4)
+    # paced across the passes and their seams: a pass (1 s of log time) takes 0.5 s at --rate 2
+    _assert_paced(tables, rate=2)
     # every header stamp moves on by the recording's length (1 s), not only the waveform tables':
     # /state (every 20 ms), /diagnostics (once, at the end), /contact_forces, /load
     for topic, n in counts.items():

@@ -1450,3 +1450,31 @@ def test_a_recording_without_a_recorded_sample_rate_is_held_to_the_same_first_pa
     assert [w["verdict"] for w in s["timeline"]] == [w["verdict"] for w in original["timeline"]]
     for mine, theirs in zip(s["timeline"], original["timeline"]):
         assert mine["prominences"] == pytest.approx(theirs["prominences"], rel=1e-6)
+
+
+def test_the_windows_take_the_scenes_resonator_into_their_band_as_the_whole_does(tmp_path):
+    """The 6000-size bearing (``small_bearing``) at 30 000 rpm with an inner-race pit and its
+    resonator at 5 kHz: BPFI at 2.21 kHz moves the detector's band up, from 2.70 kHz, and its top
+    is 1.25 x the resonator (6.25 kHz), not twice the span (5.39 kHz), which leaves the resonator
+    at its edge (``envelope.detector_band``).  The whole recording's analysis gave the band the
+    resonator; the verdict timeline's windows did not.  A recording of one window (1 s): that
+    window is the whole, so its band and prominences are the whole's."""
+    import yaml
+    from conftest import small_bearing
+
+    from bearing_sim_ros.scene import scene_from_dict
+
+    scene = small_bearing(30000, 300.0, [{"kind": "inner", "width_mm": 1.0, "depth_mm": 0.1}])
+    scene["structure"]["resonator"]["frequency_hz"] = 5000
+    assert scene_from_dict(scene).structure.resonator_hz == 5000.0
+    path = tmp_path / "fast.yaml"
+    path.write_text(yaml.safe_dump(scene))
+    rec = tmp_path / "fast.mcap"
+    render(str(path), 1.0, rec, fidelity="kinematic", progress=False)
+    s = build_report(rec, tmp_path / "out")
+    assert s["envelope_band_hz"] == [pytest.approx(2695.6, abs=0.1), 6250.0], s["envelope_band_hz"]
+    (window,) = s["timeline"]
+    assert window["envelope_band_hz"] == pytest.approx(s["envelope_band_hz"], abs=0.01), window     # (summary rounds)
+    whole = {fault: s["fault_lines"][line]["prominence"] for line, fault in (("bpfo", "outer"), ("bpfi", "inner"),
+                                                                            ("2bsf", "ball"))}
+    assert window["prominences"] == pytest.approx(whole, rel=1e-3), (window["prominences"], whole)

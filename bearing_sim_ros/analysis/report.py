@@ -636,7 +636,8 @@ def truth_changes(truth: list) -> list:
 
 
 def score_windows(windows, sample_rate_hz: float, times_s: list, frequencies: list,
-                  truth: list, speeds_rad_s: list, spreads: list | None = None, track=None) -> list:
+                  truth: list, speeds_rad_s: list, spreads: list | None = None, track=None,
+                  resonance_hz: float | None = None) -> list:
     """The envelope detector (``envelope.diagnose``, as for the whole recording) in each window:
     the samples of each of ``windows`` (an iterable of arrays), spanning ``times_s`` (start s,
     end s) of signal, looking at ``frequencies`` ({"ftf", "bpfo", "bpfi", "bsf": Hz} per window, {}
@@ -646,8 +647,11 @@ def score_windows(windows, sample_rate_hz: float, times_s: list, frequencies: li
     step or ramp in it smeared them, and its verdict was "healthy", or "ball" where 2xBSF of one
     speed fell on BPFO of the other.  Those are scored in orders of the shaft instead where
     ``track`` (``track(samples, times_s)``: ``order_tracked``'s (result, why)) gives a result; their
-    rows have ``order_tracked``: True.  One dict per window: start_s, end_s, shaft_speed_rpm,
-    line_spread, verdict, prominences ({fault: line height over local median}; {} unscored), and
+    rows have ``order_tracked``: True.  ``resonance_hz``: the scene's resonator (Hz, None: not
+    known), for the detector's band (``envelope.detector_band``), as for the whole recording.
+    One dict per window: start_s, end_s, shaft_speed_rpm, line_spread, verdict, prominences
+    ({fault: line height over local median}; {} unscored), envelope_band_hz (the band the
+    detector used, [low, high] Hz, in orders at the fastest speed; None unscored), and
     the ground truth at its end: faults_present, those in its last sample
     (``ground_truth.faults_at``: to the sample where the recording has ``fault_onsets_s``), and
     defect_sizes with truth_t_s, the sizes of the latest ``/diagnostics`` at or before the end
@@ -657,7 +661,8 @@ def score_windows(windows, sample_rate_hz: float, times_s: list, frequencies: li
     spreads = [0.0] * len(times_s) if spreads is None else spreads
     for xw, (t0, t1), freqs, speed, moved in zip(windows, times_s, frequencies, speeds_rad_s, spreads):
         usable = freqs and freqs["bpfo"] > 0 and xw.size > 0.2 * sample_rate_hz     # as for the whole
-        verdict = diagnose(xw, sample_rate_hz, freqs) if usable and moved <= STEADY_LINES else None
+        verdict = (diagnose(xw, sample_rate_hz, freqs, resonance_hz=resonance_hz)
+                   if usable and moved <= STEADY_LINES else None)
         tracked = (track(xw, t0 + np.arange(xw.size) / sample_rate_hz)[0]
                    if usable and moved > STEADY_LINES and track is not None else None)
         verdict = verdict or tracked
@@ -669,6 +674,7 @@ def score_windows(windows, sample_rate_hz: float, times_s: list, frequencies: li
         rows.append({"start_s": t0, "end_s": t1, "shaft_speed_rpm": speed * RPM, "line_spread": moved,
                      "verdict": verdict["verdict"] if verdict else "unknown",
                      "prominences": verdict["scores"] if verdict else {},
+                     "envelope_band_hz": list(verdict["band"]) if verdict and verdict["band"] is not None else None,
                      "faults_present": list(faults) if faults is not None else None,
                      "defect_sizes": list(sizes.sizes) if sizes else None,
                      "truth_t_s": sizes.t if sizes else None,
@@ -754,7 +760,8 @@ def verdict_timeline(d: "_Data", x, scene, window_s: float, mean_speed_rad_s: fl
     rest = bounds[len(held):]
     windows = itertools.chain((x[i0:i1] for i0, i1 in held), windows_beyond(rest) if rest else ())
     return score_windows(windows, fs, times, freqs, d.truth, speeds, spreads,
-                         lambda xw, times_s: order_tracked(d, xw, times_s, scene, periods))
+                         lambda xw, times_s: order_tracked(d, xw, times_s, scene, periods),
+                         scene.structure.resonator_hz if scene is not None else None)
 
 
 def with_state_cage(recorded: dict, d: "_Data", scene, start_s: float, end_s: float) -> dict:

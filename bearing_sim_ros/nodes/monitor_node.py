@@ -99,7 +99,7 @@ import rclpy
 from rclpy.node import Node
 
 from .. import ground_truth
-from ..analysis.envelope import (DETECTION_THRESHOLD, FAULT_LINES, STEADY_LINES, band_words, borrowed_text, detector_band,
+from ..analysis.envelope import (DETECTION_THRESHOLD, FAULT_LINES, NO_BAND, STEADY_LINES, band_words, borrowed_text, detector_band,
                                  diagnose, pick_verdict, spread, with_cage)
 from ..analysis.orders import order_diagnose
 from ..messages import RUN_ENDED, RUN_KEY, TOPIC_ACCEL, TOPIC_DIAGNOSTICS, TOPIC_STATE, waveform_qos
@@ -388,21 +388,26 @@ def agrees(verdict: str, truth):
 
 
 def score_lines(scored, appeared, t0_ns: int) -> list:
-    """The exit lines on ``scored`` ((window end ns, verdict, truth) per verdict, in order) and
+    """The exit lines on ``scored`` ((window end ns, verdict, truth, whether the verdict is
+    "unknown" for want of a detector band) per verdict, in order) and
     ``appeared``, the faults that appeared during the run (after ``t0_ns``, the first table's
     stamp) by all the diagnostics (``ground_truth.appearances``): agreement of each verdict with
     the truth its line printed (the diagnostics that came later may tell a window's truth
     better, after a grace that ran out, but the score must count what the lines say), and one
     latency line per appearance.  Times as in the verdict lines: s from ``t0_ns``."""
-    marks = [agrees(verdict, truth) for _end, verdict, truth in scored]
+    marks = [agrees(verdict, truth) for _end, verdict, truth, _no_band in scored]
     known = [m for m in marks if m is not None]
-    none = sum(verdict == "unknown" for _end, verdict, _truth in scored)
+    none = sum(verdict == "unknown" for _end, verdict, _truth, _no_band in scored)
+    # no band for the lines is the sample rate's doing, not a speed that moved: said apart
+    no_band = sum(bool(no_band) for _end, _verdict, _truth, no_band in scored)
     lines = [f"monitor: score {sum(known)} of {len(known)} verdicts agree with the truth, "
              f"{len(marks) - len(known) - none} truth=unknown"
-             + (f", {none} verdict=unknown (the lines moved in the window)" if none else "")]
+             + (f", {none - no_band} verdict=unknown (the lines moved in the window)" if none > no_band else "")
+             + (f", {no_band} verdict=unknown (no detector band for the fault lines at this sample rate)"
+                if no_band else "")]
     if not scored:
         return lines
-    calls = [(end, verdict) for end, verdict, _truth in scored]
+    calls = [(end, verdict) for end, verdict, _truth, _no_band in scored]
     for fault in appeared:
         before, after = ((t - t0_ns) / NS for t in (fault.earliest, fault.latest))
         found, since = ground_truth.first_detection(calls, fault, SLACK_NS)
@@ -481,7 +486,7 @@ class SourceRun:
         # need of them all: a monitor kept every 1 Hz message for those, about 1 kB an hour
         self.reports = []
         self.appeared = ground_truth.AppearanceLog(SLACK_NS)
-        self.verdicts = []          # (window end ns, verdict, truth) of its own verdicts
+        self.verdicts = []          # (window end ns, verdict, truth, no band) of its own verdicts
         self.windows = 0            # its windows queued for analysis
         self.last_table = None      # stamp (ns) of its latest table
         self.last_report = None     # stamp (ns) of its simulator's latest /diagnostics
@@ -946,7 +951,9 @@ class MonitorNode(Node):
             self.get_logger().error(f"envelope analysis at t={t:.2f}s failed: {exc}")
             return
         result.update(end_ns=end, truth=truth_at(reports, end))
-        scored = (end, result["verdict"], result["truth"])
+        # no detector band for the lines, in Hz or (the speeds moved) in orders
+        no_band = "no_band" in result or result.get("untracked", "").startswith(NO_BAND)
+        scored = (end, result["verdict"], result["truth"], no_band)
         self.verdicts.append(scored)
         run.verdicts.append(scored)
         say(format_verdict(t, result), self.out)
