@@ -415,6 +415,14 @@ class Simulator:
         return self._model.decimation
 
     @property
+    def step_warning(self) -> str:
+        """The running tier's ``DefaultStepWarning`` text (the skidding tier's default at a step
+        its step check could not bring within its target, or did not check at a tier switch),
+        "" where there is none: the one line warned when that model was built, kept for
+        ``/diagnostics`` (``recording.render.tier_values``), which outlives a terminal."""
+        return getattr(self._model, "step_warning", "")
+
+    @property
     def max_advance(self) -> int:
         """The most output samples one ``advance`` takes: ``MAX_ADVANCE_INTERNAL`` internal samples
         of the sensor chain (a memory bound; longer signals go in chunks, the same samples)."""

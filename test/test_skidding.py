@@ -1133,10 +1133,19 @@ def test_shipped_and_bench_scenes_keep_the_default_step_without_a_warning():
 def test_a_render_says_the_default_step_warning_in_one_line(tmp_path, bearing_sim_exe):
     """``bearing-sim render`` of the small bearing at 55 555 rpm on the skidding tier (its step
     check capped): the warning is one line of its own on standard error (not Python's file, line
-    and source line), and the render goes on."""
+    and source line), and the render goes on; the recording's ``/diagnostics`` (read with
+    rosbags) carry the same line as ``step_warning`` (a terminal's line is gone when the recording
+    is analysed), which a scene whose step is not in doubt does not have."""
     import subprocess
 
     import yaml
+    from rosbags.highlevel import AnyReader
+
+    def recorded_step_warnings(path):
+        with AnyReader([path]) as reader:
+            conns = [c for c in reader.connections if c.topic == "/diagnostics"]
+            return [{kv.key: kv.value for kv in reader.deserialize(raw, conn.msgtype).status[0].values}
+                    .get("step_warning") for conn, _t, raw in reader.messages(connections=conns)]
 
     scene_file = tmp_path / "small.yaml"
     scene_file.write_text(yaml.safe_dump(small_bearing(55555, 4662.0, range=49033)))
@@ -1147,3 +1156,10 @@ def test_a_render_says_the_default_step_warning_in_one_line(tmp_path, bearing_si
     lines = [line for line in out.stderr.splitlines() if "step" in line or "Warning" in line]
     assert len(lines) == 1 and lines[0].startswith("bearing-sim: warning: skidding tier: the default solver's step check"), \
         out.stderr
+    said = lines[0].removeprefix("bearing-sim: warning: ")
+    assert recorded_step_warnings(tmp_path / "small.mcap") == [said]
+    quiet = tmp_path / "quiet.mcap"
+    out = subprocess.run([bearing_sim_exe, "render", "er16k_healthy", "--duration", "0.01", "--fidelity", "skidding",
+                          "--out", str(quiet)], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    assert recorded_step_warnings(quiet) == [None]

@@ -236,14 +236,19 @@ def tier_values(sim) -> dict:
     latest switch (``kinematic -> skidding at 1.230 s``: the simulated time of the first batch
     the new tier computed; ``none``), and its integration steps per output sample
     (``Simulator.oversample``, which the kinematic tier's default changes with the load; ``none``
-    for the fixed steps of "rk4" and "reference")."""
+    for the fixed steps of "rk4" and "reference"); and ``step_warning``, only while the running
+    tier has one (``Simulator.step_warning``: the default's step is known to be long for the
+    bearing), the line the command or node printed on standard error when it was built."""
     last = sim.last_tier_switch
     steps = sim.oversample
-    return {"tier": sim.tier, "tier_reason": sim.selection.reason,
-            "tier_estimated_error": f"{sim.selection.estimated_error:.3g}",
-            "tier_switches": sim.tier_switches,
-            "last_tier_switch": "none" if last is None else f"{last[1]} -> {last[2]} at {last[0]:.3f} s",
-            "oversample": "none" if steps is None else steps}
+    values = {"tier": sim.tier, "tier_reason": sim.selection.reason,
+              "tier_estimated_error": f"{sim.selection.estimated_error:.3g}",
+              "tier_switches": sim.tier_switches,
+              "last_tier_switch": "none" if last is None else f"{last[1]} -> {last[2]} at {last[0]:.3f} s",
+              "oversample": "none" if steps is None else steps}
+    if sim.step_warning:
+        values["step_warning"] = sim.step_warning
+    return values
 
 
 def defect_values(sim, sample: int | None = None) -> dict:
