@@ -423,6 +423,16 @@ class Simulator:
         return getattr(self._model, "step_warning", "")
 
     @property
+    def centrifugal(self) -> bool | None:
+        """Whether the kinematic tier's balls carry their centrifugal force (True) or are massless
+        (False), as decided at its last linearisation by F_c / Q_max against
+        ``physics.kinematic.CENTRIFUGAL_GATE`` (0.01; F_c = m_b (D_m / 2) w_c^2 in N, Q_max = 5 W /
+        Z); None for the skidding tier, whose balls always have their mass."""
+        if self.tier == "skidding":
+            return None
+        return self._model.centrifugal
+
+    @property
     def max_advance(self) -> int:
         """The most output samples one ``advance`` takes: ``MAX_ADVANCE_INTERNAL`` internal samples
         of the sensor chain (a memory bound; longer signals go in chunks, the same samples)."""

@@ -78,6 +78,38 @@ def test_at_a_small_bearings_speed_limit_the_kinematic_tier_auto_keeps_matches_t
     assert abs(rms["kinematic"] / rms["skidding"] - 1.0) < 0.05, rms
 
 
+def _rms_against_reference(scene, n, skip):
+    """accel_y RMS (m/s^2) of the kinematic tier and of the skidding tier's reference, seed 0."""
+    return {tier: float(np.sqrt(np.mean(Simulator(scene, fidelity=tier, seed=0, **kw).advance(n).accel[skip:, -1] ** 2)))
+            for tier, kw in (("kinematic", {}), ("skidding", {"solver": "reference"}))}
+
+
+def test_b6307_seed001_healthy_kinematic_rms_is_near_the_reference():
+    """The kinematic tier's balls carry their centrifugal force (physics/kinematic.py,
+    ``_ball_state``): on b6307_seed001 healthy at its operating point, noise off, 0.2 s after 0.1
+    s, it is 13 % below the reference (0.0050 against 0.0057 m/s^2), where the massless balls were
+    34 % below (0.0038; docs/fidelity_rms_gap.md, "With the centrifugal force").  15 %: the rest is
+    not the quasi-static law (met within 0.1 % of the heaviest ball's load) but the reference's
+    balls' own dynamics, which this tier has not."""
+    scene = replace(load_scene("b6307_seed001"), defects=())
+    scene = replace(scene, sensor=replace(scene.sensor, noise_density=0.0))
+    rms = _rms_against_reference(scene, int(0.3 * 15000), int(0.1 * 15000))
+    assert abs(rms["kinematic"] / rms["skidding"] - 1.0) < 0.15, rms
+
+
+def test_a_small_bearing_at_light_load_and_high_speed_kinematic_rms_is_near_the_reference():
+    """The 6000-size at 55 555 rpm under 93 N, where the balls' centrifugal force is a third of
+    the heaviest ball's load: the massless balls were 84 % below the reference; with the force
+    4 % (0.2 s after 0.1 s).  This shorter window (0.1 s after 0.05 s) gives the same within a
+    few %; 10 %."""
+    from conftest import small_bearing
+
+    from bearing_sim_ros.scene import scene_from_dict
+
+    rms = _rms_against_reference(scene_from_dict(small_bearing(55555, 93.0)), int(0.15 * 15000), int(0.05 * 15000))
+    assert abs(rms["kinematic"] / rms["skidding"] - 1.0) < 0.10, rms
+
+
 def test_light_load_high_speed_gets_skidding():
     scene = load_scene("er16k_healthy")
     sel = select_tier(scene, "auto", 10000 * RPM, (0.0, -10.0), 0.05)
