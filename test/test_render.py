@@ -510,6 +510,28 @@ def test_tier_keys_name_what_tier_values_writes():
     assert tuple(tier_values(Simulator("er16k_healthy", fidelity="kinematic"))) == TIER_KEYS
 
 
+def test_recorded_diagnostics_say_whether_the_kinematic_balls_carry_their_centrifugal_force(tmp_path):
+    """``centrifugal`` in a recording's /diagnostics (read with rosbags): ``true`` on
+    b6307_seed001, whose kinematic balls carry F_c (F_c / Q_max 0.025, above
+    ``CENTRIFUGAL_GATE``), ``false`` on er16k_healthy (0.0053: massless balls), ``none`` on the
+    skidding tier; as ``Simulator.centrifugal`` says."""
+    from rosbags.highlevel import AnyReader
+
+    from bearing_sim_ros.recording.render import render
+
+    def recorded(name, fidelity):
+        out = tmp_path / f"{name}_{fidelity}.mcap"
+        render(name, 0.02, out, fidelity=fidelity, progress=False)
+        with AnyReader([out]) as reader:
+            conns = [c for c in reader.connections if c.topic == "/diagnostics"]
+            return {({kv.key: kv.value for kv in reader.deserialize(raw, conn.msgtype).status[0].values}
+                     .get("centrifugal")) for conn, _t, raw in reader.messages(connections=conns)}
+
+    assert recorded("b6307_seed001", "kinematic") == {"true"}
+    assert recorded("er16k_healthy", "kinematic") == {"false"}
+    assert recorded("er16k_healthy", "skidding") == {"none"}
+
+
 def _accel_y_and_diagnostics(out):
     """The recording ``out``'s accel_y tables ([array]) and /diagnostics ([{key: value}])."""
     from rclpy.serialization import deserialize_message

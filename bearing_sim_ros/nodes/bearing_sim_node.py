@@ -702,11 +702,12 @@ class BearingSimNode(Node):
     def _tier_keys(self) -> dict:
         """The tier keys of ``/diagnostics`` (``render.tier_values``) as the batch just computed
         ran, for the diagnostics published with it; one dict shared by every batch until the tier,
-        its selection or its steps change, so a batch allocates nothing for it."""
+        its selection, its steps or its balls' law (``Simulator.centrifugal``, re-decided as the
+        speed moves) change, so a batch allocates nothing for it."""
         from ..recording.render import tier_values
 
         sim = self.sim
-        key = (sim.selection, sim.tier_switches, sim.oversample)
+        key = (sim.selection, sim.tier_switches, sim.oversample, sim.centrifugal)
         cached = self._tier_cache
         if cached is None or cached[0][0] is not key[0] or cached[0][1:] != key[1:]:
             self._tier_cache = cached = (key, tier_values(sim))

@@ -227,7 +227,8 @@ class PeriodMeans:
 
 
 # the keys ``tier_values`` writes, for readers of recorded diagnostics (``analysis.report``)
-TIER_KEYS = ("tier", "tier_reason", "tier_estimated_error", "tier_switches", "last_tier_switch", "oversample")
+TIER_KEYS = ("tier", "tier_reason", "tier_estimated_error", "tier_switches", "last_tier_switch", "oversample",
+             "centrifugal")
 
 
 def tier_values(sim) -> dict:
@@ -236,7 +237,10 @@ def tier_values(sim) -> dict:
     latest switch (``kinematic -> skidding at 1.230 s``: the simulated time of the first batch
     the new tier computed; ``none``), and its integration steps per output sample
     (``Simulator.oversample``, which the kinematic tier's default changes with the load; ``none``
-    for the fixed steps of "rk4" and "reference"); and ``step_warning``, only while the running
+    for the fixed steps of "rk4" and "reference"); ``centrifugal`` (``Simulator.centrifugal``:
+    ``true`` where the kinematic tier's balls carry their centrifugal force, ``false`` where they
+    are massless, ``none`` on the skidding tier, whose balls always have their mass); and
+    ``step_warning``, only while the running
     tier has one (``Simulator.step_warning``: the default's step is known to be long for the
     bearing), the line the command or node printed on standard error when it was built."""
     last = sim.last_tier_switch
@@ -245,7 +249,8 @@ def tier_values(sim) -> dict:
               "tier_estimated_error": f"{sim.selection.estimated_error:.3g}",
               "tier_switches": sim.tier_switches,
               "last_tier_switch": "none" if last is None else f"{last[1]} -> {last[2]} at {last[0]:.3f} s",
-              "oversample": "none" if steps is None else steps}
+              "oversample": "none" if steps is None else steps,
+              "centrifugal": "none" if sim.centrifugal is None else str(sim.centrifugal).lower()}
     if sim.step_warning:
         values["step_warning"] = sim.step_warning
     return values
