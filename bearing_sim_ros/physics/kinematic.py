@@ -1034,6 +1034,23 @@ def centrifugal_law_table(stiffness_ratio: float) -> np.ndarray:
                             np.append(p, 0.0)]).ravel()
 
 
+def centrifugal_force(bearing, speed: float) -> float:
+    """A ball's centrifugal force F_c = m_b (D_m / 2) w_c^2 (N) at shaft speed ``speed`` (rad/s),
+    w_c the pure-rolling cage speed (seed 000 eq. 31)."""
+    return bearing.ball_mass * 0.5 * bearing.pitch_diameter * bearing.cage_speed(abs(speed)) ** 2
+
+
+def centrifugal_ratio(scene, load, speed: float) -> float:
+    """F_c / Q_max at the radial ``load`` (N, x and y) and shaft ``speed`` (rad/s): a ball's
+    centrifugal force (``centrifugal_force``) over 5 W / Z, W the load the balls carry
+    (``fidelity.bearing_load``, the shaft's weight in) and Z the balls: what ``CENTRIFUGAL_GATE``
+    is compared with, and what docs/fidelity_rms_gap.md sorts its points by."""
+    from ..fidelity import bearing_load
+
+    b = scene.bearing
+    return centrifugal_force(b, speed) / (5.0 * max(bearing_load(scene, load), 1e-3) / b.balls)
+
+
 def centrifugal_law(scene) -> np.ndarray:
     """The geometry vector's entries from P_FCW up to P_CFON, then from P_CTAB on: F_c per shaft speed^2 (N s^2), F_c =
     m_b (D_m / 2) w_c^2 with w_c the pure-rolling cage speed (seed 000 eq. 31, the skidding
@@ -1045,7 +1062,7 @@ def centrifugal_law(scene) -> np.ndarray:
     ``film_law``'s); 1 / a_i = (K_i / K)^(2/3); then ``centrifugal_law_table`` of the bearing's K_o / K_i.  The balls' own weight (m_b g, which
     the skidding tier has too) is left out: it is 0.2 % of F_c on b6307_seed001 at 1500 rpm."""
     bearing, lub = scene.bearing, scene.lubrication
-    fcw = bearing.ball_mass * 0.5 * bearing.pitch_diameter * bearing.cage_speed(1.0) ** 2
+    fcw = centrifugal_force(bearing, 1.0)
     ko, ki = bearing.outer_contact.stiffness, bearing.inner_contact.stiffness
     k = bearing.combined_stiffness
     per_speed = (0.5 * bearing.outer_race_diameter * bearing.cage_speed(1.0)) ** FILM_EXP_U
@@ -1067,7 +1084,7 @@ def _ball_films(geo, geom, dx, dy, shaft_speed):
     out = np.empty((nb, 2))
     if geo[P_CFON] == 0.0:
         # massless balls: one film at one load, as before the force
-        lam, inv_lam, phi_f, u_f, lam_i, lam_o = law[0], law[1], law[2], law[3], law[4], law[5]
+        inv_lam, phi_f, u_f, lam_i, lam_o = law[1], law[2], law[3], law[4], law[5]
         for j in range(nb):
             phi = _film_factor((dx * geom[0, j] + dy * geom[1, j] - geom[2, j]) * inv_lam, phi_f, u_f)
             out[j, 0] = lam_i * phi
@@ -1331,14 +1348,9 @@ class KinematicModel:
             self._linearise_on_one_thread(load, speed, initial)
 
     def centrifugal_ratio(self, load, speed: float) -> float:
-        """F_c / Q_max at the radial ``load`` (N, x and y) and shaft ``speed`` (rad/s): the balls'
-        centrifugal force m_b (D_m / 2) w_c^2 over 5 W / Z, W the load the balls carry
-        (``fidelity.bearing_load``, the shaft's weight in) and Z the balls; compared with
-        ``CENTRIFUGAL_GATE``.  A few flops and an interpolation."""
-        from ..fidelity import bearing_load
-
-        fc = self.geo[P_FCW] * speed * speed
-        return fc / (5.0 * max(bearing_load(self.scene, load), 1e-3) / self.geo[P_NB])
+        """F_c / Q_max of this scene at ``load`` (N) and ``speed`` (rad/s): ``centrifugal_ratio``,
+        compared with ``CENTRIFUGAL_GATE``."""
+        return centrifugal_ratio(self.scene, load, speed)
 
     def _decide_centrifugal(self, load, speed: float) -> bool:
         """Whether the balls carry their centrifugal force at ``load`` (N) and ``speed`` (rad/s):

@@ -17,6 +17,8 @@ from bearing_sim_ros import Simulator, load_scene
 from bearing_sim_ros.fidelity import bearing_load
 from bearing_sim_ros.limits import RPM, InputLimits
 from bearing_sim_ros.physics.film import FILM_EXP_Q, FILM_EXP_U, FILM_LOAD_FLOOR, film_coefficient
+from bearing_sim_ros.physics.kinematic import centrifugal_force
+from bearing_sim_ros.physics.kinematic import centrifugal_ratio as kinematic_centrifugal_ratio
 
 _spec = importlib.util.spec_from_file_location("custom_bearings", "docs/probes/custom_bearings/probe.py")
 custom = importlib.util.module_from_spec(_spec)
@@ -86,10 +88,9 @@ def grid():
 
 
 def centrifugal_ratio(s):
-    """m_b (D_m / 2) w_c^2 over 5 W / Z (W the balls' share of the load, ``bearing_load``)."""
-    b = s.bearing
-    fc = b.ball_mass * 0.5 * b.pitch_diameter * b.cage_speed(abs(s.shaft_speed)) ** 2
-    return fc / (5.0 * max(bearing_load(s, s.radial_load), 1e-3) / b.balls)
+    """F_c / Q_max at the scene's operating point (``physics.kinematic.centrifugal_ratio``, what
+    the kinematic tier's gate compares)."""
+    return kinematic_centrifugal_ratio(s, s.radial_load, s.shaft_speed)
 
 
 def light():
@@ -130,7 +131,7 @@ def _inner_loads(s, interference, massive):
     speed = (0.5 * b.outer_race_diameter * b.cage_speed(1.0) * w) ** FILM_EXP_U
     ci, co = ((film_coefficient(c, lub, b.effective_modulus) * speed if lub.ehl_film else 0.0)
               for c in (b.inner_contact, b.outer_contact))
-    fc = b.ball_mass * 0.5 * b.pitch_diameter * b.cage_speed(w) ** 2 if massive else 0.0
+    fc = centrifugal_force(b, w) if massive else 0.0
     ki, ko = b.inner_contact.stiffness, b.outer_contact.stiffness
 
     def excess(log_q):      # Hertz approaches less films less the interference: increasing in Q
