@@ -69,6 +69,10 @@ def drop_a_closed_terminal() -> None:
             point_at_devnull(fd)
 
 
+# re-entrant: a signal handler that says its line runs in the thread it interrupted, maybe inside say
+_SAY_LOCK = threading.RLock()
+
+
 def say(line: str, file=None) -> None:
     """``line`` on ``file`` (default standard output, as it is now), flushed.  Where that fails with
     EIO, a terminal that hung up as the line was written, before the SIGHUP that comes with it was
@@ -79,7 +83,12 @@ def say(line: str, file=None) -> None:
     (``monitor > verdicts.txt`` on a failing disk or network mount) is raised: its lines are lost."""
     file = file or sys.stdout
     try:
-        print(line, file=file, flush=True)
+        with _SAY_LOCK:
+            # one write of the line with its newline: print() writes the two apart, and where the
+            # stream writes through (PYTHONUNBUFFERED) another thread's line came between them
+            # (monitor's envelope worker and its executor: 'waiting for more)t=2.00s ...')
+            file.write(line + "\n")
+            file.flush()
     except OSError as exc:
         if exc.errno != errno.EIO or not _a_terminal(file):
             raise

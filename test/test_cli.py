@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import errno
 import math
+import re
 import signal
 import subprocess
 
@@ -705,6 +706,38 @@ def test_a_line_lost_to_an_eio_of_a_file_is_an_error_and_one_of_a_terminal_is_no
     finally:
         os.close(leader)
         os.close(terminal)
+
+
+def test_lines_said_by_two_threads_on_a_write_through_stream_stay_whole(tmp_path):
+    """teardown.say writes a line and its newline as one: ``monitor``'s envelope worker says the
+    verdicts and its executor the run's news, and print() wrote each line's newline apart, so under
+    PYTHONUNBUFFERED (the tests' NodeProcess) a line came between them: ``... monitor ends)t=2.00s
+    shaft=1797rpm verdict=unknown`` (CI on 61c1515 read one verdict of two there)."""
+    import io
+    import sys
+    import threading
+
+    from bearing_sim_ros.teardown import say
+
+    lines = 3000
+    with open(tmp_path / "out.txt", "wb", buffering=0) as raw:
+        stream = io.TextIOWrapper(raw, encoding="utf-8", write_through=True)    # as under -u
+        interval = sys.getswitchinterval()
+        sys.setswitchinterval(1e-6)     # threads swap between any two writes
+        try:
+            threads = [threading.Thread(target=lambda name=name: [say(f"{name} {i}", stream) for i in range(lines)])
+                       for name in ("verdict", "news")]
+            for thread in threads:
+                thread.start()
+            for thread in threads:
+                thread.join()
+        finally:
+            sys.setswitchinterval(interval)
+        stream.detach()
+    said = (tmp_path / "out.txt").read_text().splitlines()
+    assert len(said) == 2 * lines
+    broken = [line for line in said if not re.fullmatch(r"(verdict|news) \d+", line)]
+    assert not broken, broken[:5]
 
 
 RMW_CASES = [("bearing-sim", "render", "er16k_healthy", "--duration", "0.05", "--out", "x.mcap"),
