@@ -809,6 +809,34 @@ def test_a_command_across_the_tier_boundary_switches_tiers_and_says_so(started, 
     assert node.proc.poll() is None
 
 
+def test_diagnostics_follow_the_centrifugal_gate_as_the_speed_moves(started, listener):
+    """b6307_seed001 at 1500 rpm / 50 N: its kinematic balls carry their centrifugal force (F_c /
+    Q_max 0.025, above ``CENTRIFUGAL_GATE``), and /diagnostics say ``centrifugal: true``.  At 750
+    rpm F_c is a quarter (0.006): the tier re-decides its gate as the speed moves, and the node's
+    /diagnostics say ``false`` (the node caches the tier's keys, so the cache must follow the gate,
+    not only the tier); back at 1500 rpm, ``true`` again.  The stream stays contiguous through."""
+    node = started({"scene": "b6307_seed001", "fidelity": "kinematic"})
+    listener.wait_matched()
+
+    def said(value, after_ns):
+        return listener.wait_for(lambda: next((d for d in listener.diagnostics if d[4] > after_ns
+                                               and d[3].get("centrifugal") == value), None),
+                                 FIRST_TABLE_S, f"centrifugal: {value}")
+
+    first = said("true", 0)
+    assert first[3]["tier"] == "kinematic"
+    for rpm, value in ((750.0, "false"), (1500.0, "true")):
+        t_command = listener.node.get_clock().now().nanoseconds
+        listener.publish_speed(rpm * 2 * math.pi / 60)
+        d = said(value, t_command)
+        assert d[3]["tier"] == "kinematic" and d[3]["tier_switches"] == "0", d[3]
+    tables = listener.accel_since(first[4])
+    stamps, widths = stamps_and_widths(tables)
+    assert np.all(np.diff(stamps) == widths[:-1] * NS // 15000)
+    assert np.all(np.isfinite(np.concatenate([d for _s, d in tables])))
+    assert node.proc.poll() is None
+
+
 # ---- shutdown and recording ---------------------------------------------------------------------
 # SIGHUP: the terminal closed or the SSH session dropped; it killed the node (129) and its
 # recording had no footer
