@@ -108,6 +108,15 @@ def pytest_sessionstart(session):
             _uncaptured_stderr = os.fdopen(os.dup(2), "w")
 
 
+def pytest_sessionfinish(session, exitstatus):
+    """Close the hung-test guard's copy of stderr: left open, every run ended with "sys:1:
+    ResourceWarning: unclosed file" (each test's guard is cancelled before this)."""
+    global _uncaptured_stderr
+    if _uncaptured_stderr is not None:
+        _uncaptured_stderr.close()
+        _uncaptured_stderr = None
+
+
 @pytest.hookimpl(hookwrapper=True)
 def pytest_runtest_protocol(item, nextitem):
     out = _uncaptured_stderr or sys.stderr
