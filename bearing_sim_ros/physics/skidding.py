@@ -1769,7 +1769,7 @@ class SkiddingModel:
         acceleration, m/s^2, on each axis the sensor reads).  At the cap without that, the cap is
         taken and ``step_warning`` says so.  The model itself has not moved: it then runs as if
         built with ``oversample`` M (the same samples).  A trial that diverges counts as off
-        (a finer step may not)."""
+        (a finer step may not), and ``step_warning`` names the steps whose trials diverged."""
         import copy
 
         n = int(round((STEP_CHECK_SETTLE + STEP_CHECK_WINDOW) * self.internal_rate))
@@ -1782,7 +1782,8 @@ class SkiddingModel:
             try:
                 acc = trial.advance(n, speed, speed, load, load).accel[skip:]
             except SolverDiverged:
-                return np.full(2, np.inf)
+                diverged.append(m)
+                return None
             return np.sqrt(np.mean(acc ** 2, axis=0))
 
         # the axes the sensor reads, each on its own: over both at once the horizontal axis (5-20
@@ -1791,10 +1792,13 @@ class SkiddingModel:
         # relative change of a signal at rounding level says nothing of the step)
         axes = [("x", "y").index(a) for a in self.scene.sensor.axes]
 
-        def estimate(r: np.ndarray, r2: np.ndarray) -> float:
+        def estimate(r: np.ndarray | None, r2: np.ndarray | None) -> float:
+            if r is None or r2 is None:     # a trial diverged: no estimate, off
+                return math.inf
             on = [a for a in axes if r2[a] >= 0.01 * r2.max()] or axes
             return float(np.max(np.abs(r - r2)[on] / np.maximum(r2[on], 1e-30))) * 4.0 / 3.0
 
+        diverged = []
         found, m, r = None, DEFAULT_OVERSAMPLE, rms(DEFAULT_OVERSAMPLE)
         while m <= cap:
             r2 = rms(2 * m)
@@ -1809,10 +1813,17 @@ class SkiddingModel:
         if found is None:
             at = max(self.step_estimates)
             est = self.step_estimates[at]
+            # a diverged trial gives no estimate (it printed nan %): which steps diverged, and
+            # whether the one the run takes was among them
+            said = [f"estimated {est:.2%} off at oversample {at}"] if math.isfinite(est) else []
+            if diverged:
+                said.append(f"its trials at oversample {', '.join(map(str, diverged))} diverged within "
+                            f"{(STEP_CHECK_SETTLE + STEP_CHECK_WINDOW) * 1e3:g} ms"
+                            + (", so the run may" if chosen in diverged else ""))
+            said = "; ".join(said)
             self.step_warning = (
                 f"skidding tier: the default solver's step check found no step within {STEP_CHECK_TARGET:.1%} "
-                f"up to {cap} steps per sample (estimated {est:.2%} off at oversample {at}; it runs at "
-                f"{chosen})" + (
+                f"up to {cap} steps per sample ({said}; it runs at {chosen})" + (
                     f": fidelity auto takes at most {cap} (a tier switch shares the sensor chain's rate); "
                     f"fidelity skidding lets the check go up to {STEP_CHECK_MAX}" if cap < STEP_CHECK_MAX else
                     f": oversample {2 * STEP_CHECK_MAX} halves the step again, at {STEP_CHECK_MAX} times the "
