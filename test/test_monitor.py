@@ -1535,3 +1535,32 @@ def test_the_exit_line_counts_the_windows_without_a_detector_band_apart(ros_env,
     assert ("monitor: score 0 of 0 verdicts agree with the truth, 0 truth=unknown, 2 verdict=unknown (no detector "
             "band for the fault lines at this sample rate)\n") in out, out
     assert "lines moved" not in out, out
+
+
+def test_the_exit_line_counts_order_tracked_windows_without_a_band_apart_too(ros_env, bearing_sim_exe, tmp_path):
+    """The ER-16K run up from 2000 to 3000 rpm over 2 s, recorded at 1 kHz and played to a monitor
+    in 1 s windows: the speed moves ~20 % in each window, so each is order tracked, and at its
+    fastest speed (2500, 3000 rpm) the fault lines leave the envelope detector no band under 0.9 x
+    Nyquist (450 Hz).  Each line says why there is no verdict, and the exit line counts those
+    windows as ones without a detector band (the sample rate's doing), not as ones whose lines
+    moved (which order tracking answers)."""
+    text = load_scene("er16k_outer_race").source_text
+    text, found = re.subn(r"operating_point: \{shaft_speed_rpm: \d+", "operating_point: {shaft_speed_rpm: 2000", text)
+    assert found == 1, "er16k_outer_race.yaml's operating point moved: update this test"
+    scene = tmp_path / "run_up_2000.yaml"
+    scene.write_text(text + "profile:\n  - {t: 2, shaft_speed_rpm: 3000}\n")
+    recording = tmp_path / "run_up_1khz.mcap"
+    render(str(scene), 2.0, recording, fidelity="kinematic", seed=1, sample_rate=1000.0, progress=False)
+    monitor = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / "monitor.log",
+                          command=("monitor", "--window", "1", "--count", "2", "--scene", str(scene)))
+    try:
+        out = _play_into(monitor, bearing_sim_exe, recording, ros_env)
+    finally:
+        monitor.close()
+    assert [v for _t, v, _truth in VERDICT.findall(out)] == ["unknown", "unknown"], out
+    # the order-tracked path's words (the speeds moved, then no band), not the fixed-speed one's
+    assert out.count(" in the window (a speed step or ramp, a load step that changed the cage's skid): its envelope "
+                     "lines smear, no verdict; no order tracking: no envelope band: the fault lines judged reach ") == 2, out
+    assert ("monitor: score 0 of 0 verdicts agree with the truth, 0 truth=unknown, 2 verdict=unknown (no detector "
+            "band for the fault lines at this sample rate)\n") in out, out
+    assert "lines moved" not in out, out
