@@ -65,6 +65,29 @@ def _rig_node(name):
         rclpy.try_shutdown(context=ctx)
 
 
+@contextlib.contextmanager
+def _monitor_subscribed(ros_env, bearing_sim_exe, tmp_path, *options):
+    """``bearing-sim monitor *options`` (its output in ``monitor.log``) once it has subscribed (its
+    first line said), so that what the test starts next is watched from its first table:
+    ``(monitor, start)``, where ``start(params, log name, command=("node",))`` starts a
+    ``NodeProcess`` beside it on ``ros_env`` and returns it.  Leaving closes the monitor, then
+    every process ``start`` started."""
+    monitor = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / "monitor.log", command=("monitor", *options))
+    started = []
+
+    def start(params, log_name, command=("node",)):
+        started.append(NodeProcess(bearing_sim_exe, ros_env, params, tmp_path / log_name, command=command))
+        return started[-1]
+
+    try:
+        monitor.wait_for_output("envelope analysis every")
+        yield monitor, start
+    finally:
+        monitor.close()
+        for proc in started:
+            proc.close()
+
+
 def test_window_gathers_contiguous_tables_and_restarts_on_a_gap():
     w = Window()
     step = 10_000_000
@@ -402,19 +425,12 @@ def test_monitor_scores_itself_against_the_ground_truth_of_a_fault_that_appears(
     scene = tmp_path / "or_onset.yaml"
     scene.write_text(load_scene("cwru_6205_or007_6").source_text.replace(
         "clock: 6, profile: geometric}", f"clock: 6, profile: geometric, onset_s: {onset}}}"))
-    monitor = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / "monitor.log",
-                          command=("monitor", "--window", "1", "--count", "8", "--scene", str(scene)))
-    node = None
-    try:
-        monitor.wait_for_output("envelope analysis every")       # subscribed before the node starts
-        params = {"scene": str(scene), "duration": 30.0, "compute_ahead": 0.5, "record": str(tmp_path / "node.mcap")}
-        node = NodeProcess(bearing_sim_exe, ros_env, params, tmp_path / "node.log")
+    with _monitor_subscribed(ros_env, bearing_sim_exe, tmp_path,
+                             "--window", "1", "--count", "8", "--scene", str(scene)) as (monitor, start):
+        start({"scene": str(scene), "duration": 30.0, "compute_ahead": 0.5, "record": str(tmp_path / "node.mcap")},
+              "node.log")
         assert monitor.wait(60) == 0, monitor.output()
         out = monitor.output()
-    finally:
-        monitor.close()
-        if node is not None:
-            node.close()
     lines = [(float(t), v, truth) for t, v, truth in VERDICT.findall(out)]
     assert len(lines) == 8, out
     truths = "".join({"unknown": "u", "none": "n", "outer": "o"}[truth] for _t, _v, truth in lines)
@@ -472,23 +488,14 @@ def test_monitor_takes_the_ground_truth_of_the_rig_it_watches_only(ros_env, bear
     Both publish their ground truth on the one ``/diagnostics``; a monitor in ``rig1`` scores
     against rig1's only (``rig1/bearing_sim: simulator``, from the namespace of ``/rig1/accel``):
     ``truth=none``, never rig2's ``outer``, and it says once that it ignores rig2's."""
-    monitor = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / "monitor.log",
-                          command=("monitor", "--window", "1", "--count", "2", "--scene", "cwru_6205_normal",
-                                   "--ros-args", "-r", "__ns:=/rig1"))
-    rigs = []
-    try:
-        monitor.wait_for_output("envelope analysis every")       # subscribed before the rigs start
+    with _monitor_subscribed(ros_env, bearing_sim_exe, tmp_path, "--window", "1", "--count", "2", "--scene",
+                             "cwru_6205_normal", "--ros-args", "-r", "__ns:=/rig1") as (monitor, start):
         for rig, scene, params in (("rig2", "er16k_outer_race", {"real_time": False, "duration": 300.0}),
                                    ("rig1", "cwru_6205_normal", {"duration": 30.0})):
-            rigs.append(NodeProcess(bearing_sim_exe, ros_env, params, tmp_path / f"{rig}.log",
-                                    command=("node", "--scene", scene, "--ros-args", "-r", f"__ns:=/{rig}")))
-            rigs[-1].wait_for_output("scene ", timeout=60)       # rig2 is under way before rig1
+            node = start(params, f"{rig}.log", ("node", "--scene", scene, "--ros-args", "-r", f"__ns:=/{rig}"))
+            node.wait_for_output("scene ", timeout=60)       # rig2 is under way before rig1
         assert monitor.wait(60) == 0, monitor.output()
         out = monitor.output()
-    finally:
-        monitor.close()
-        for rig in rigs:
-            rig.close()
     assert "of /rig1/accel, ground truth from /diagnostics 'rig1/bearing_sim: simulator'" in out, out
     truths = [truth for _t, _v, truth in VERDICT.findall(out)]
     assert len(truths) == 2 and set(truths) <= {"none", "unknown"} and "none" in truths, out
@@ -513,24 +520,15 @@ def _wait_for_the_end_status(monitor, ended: str, timeout: float = 5.0) -> None:
                         r"play --loop; [^()\n]+\)\n", line[0]), line[0]
 
 
+@contextlib.contextmanager
 def _short_run_watched(ros_env, bearing_sim_exe, tmp_path, *monitor_options):
     """A monitor in 1 s windows (and ``monitor_options``), up before a node that runs 1.5 s of
-    signal, until it printed the node's end status: (monitor, node), for the caller to close."""
-    monitor = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / "monitor.log",
-                          command=("monitor", "--window", "1", *monitor_options))
-    node = None
-    try:
-        monitor.wait_for_output("envelope analysis every")
-        node = NodeProcess(bearing_sim_exe, ros_env, {"fidelity": "kinematic", "duration": 1.5,
-                                                      "wait_for_subscribers": 1}, tmp_path / "node.log")
+    signal, yielded once it printed the node's end status; leaving closes both."""
+    with _monitor_subscribed(ros_env, bearing_sim_exe, tmp_path, "--window", "1", *monitor_options) as (monitor, start):
+        node = start({"fidelity": "kinematic", "duration": 1.5, "wait_for_subscribers": 1}, "node.log")
         assert node.wait(90) == 0, node.output()
         _wait_for_the_end_status(monitor, "duration 1.5 s reached, 1.500000 s of signal (22500 samples) published")
-    except BaseException:
-        monitor.close()
-        if node is not None:
-            node.close()
-        raise
-    return monitor, node
+        yield monitor
 
 
 def test_the_monitor_says_that_the_run_it_watches_ended_and_waits_for_more(ros_env, bearing_sim_exe, tmp_path):
@@ -539,16 +537,12 @@ def test_the_monitor_says_that_the_run_it_watches_ended_and_waits_for_more(ros_e
     on (a node started again, the next pass of ``play --loop``) until Ctrl-C."""
     import signal
 
-    monitor, node = _short_run_watched(ros_env, bearing_sim_exe, tmp_path)
-    try:
+    with _short_run_watched(ros_env, bearing_sim_exe, tmp_path) as monitor:
         time.sleep(1.0)
         assert monitor.proc.poll() is None, monitor.output()
         monitor.send(signal.SIGINT)
         assert monitor.wait(20) == 0, monitor.output()
         out = monitor.output()
-    finally:
-        monitor.close()
-        node.close()
     assert out.count("run ended") == 1 and "monitor: 1 verdicts from 150 tables, 0 gaps" in out, out
 
 
@@ -557,15 +551,11 @@ def test_a_monitor_with_a_count_ends_when_the_run_ends_before_it(ros_env, bearin
     after the node's end status: a script running both hung.  With ``--count`` the monitor now
     waits ``--end-wait`` (default 5 s) without a table after the end status, says how many
     verdicts it got of how many, and exits with status 3 (not 0: it did not get its count)."""
-    monitor, node = _short_run_watched(ros_env, bearing_sim_exe, tmp_path, "--count", "5")
-    ended = time.monotonic()
-    try:
+    with _short_run_watched(ros_env, bearing_sim_exe, tmp_path, "--count", "5") as monitor:
+        ended = time.monotonic()
         assert monitor.wait(30) == 3, monitor.output()
         waited = time.monotonic() - ended
         out = monitor.output()
-    finally:
-        monitor.close()
-        node.close()
     assert "waiting for more (a node started again, the next pass of play --loop; without a table for 5 s " \
            "the monitor ends)" in out, out
     assert ("monitor: 1 of --count 5 verdicts: the run of bearing_sim ended and no table came in the 5 s since "
@@ -579,19 +569,11 @@ def test_a_monitor_with_a_count_goes_on_across_the_seams_of_play_loop(ros_env, b
     the next pass, stamped from the end status on, cancel it."""
     recording = tmp_path / "short.mcap"
     render("er16k_outer_race", 1.0, recording, fidelity="kinematic", seed=3, progress=False)
-    monitor = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / "monitor.log",
-                          command=("monitor", "--window", "1", "--count", "3", "--end-wait", "0.5"))
-    play = None
-    try:
-        monitor.wait_for_output("envelope analysis every")
-        play = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / "play.log",
-                           command=("play", str(recording), "--loop", "--rate", "2", "--wait", "15"))
+    with _monitor_subscribed(ros_env, bearing_sim_exe, tmp_path,
+                             "--window", "1", "--count", "3", "--end-wait", "0.5") as (monitor, start):
+        start(None, "play.log", ("play", str(recording), "--loop", "--rate", "2", "--wait", "15"))
         assert monitor.wait(60) == 0, monitor.output()
         out = monitor.output()
-    finally:
-        monitor.close()
-        if play is not None:
-            play.close()
     assert out.count("run ended: duration 1 s reached") >= 2, out
     assert "monitor: 3 verdicts from 300 tables, 0 gaps" in out and "of --count" not in out, out
     assert "monitor: run " not in out, out      # the passes of one recording are one run
@@ -606,21 +588,13 @@ def test_a_monitor_with_a_count_ends_when_its_node_is_killed(ros_env, bearing_si
     left on ``accel`` (DDS drops a dead one when its lease runs out, about 20 s with Fast DDS),
     says so, waits ``--end-wait`` for one to come back, and exits with status 4 and one line that
     says how many verdicts it got of N."""
-    monitor = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / "monitor.log",
-                          command=("monitor", "--window", "1", "--count", "50", "--end-wait", "1"))
-    node = None
-    try:
-        monitor.wait_for_output("envelope analysis every")
-        node = NodeProcess(bearing_sim_exe, ros_env, {"fidelity": "kinematic", "wait_for_subscribers": 1},
-                           tmp_path / "node.log")
+    with _monitor_subscribed(ros_env, bearing_sim_exe, tmp_path,
+                             "--window", "1", "--count", "50", "--end-wait", "1") as (monitor, start):
+        node = start({"fidelity": "kinematic", "wait_for_subscribers": 1}, "node.log")
         monitor.wait_for_output("t=1.00s", timeout=90)
         node.kill()
         assert monitor.wait(60) == 4, monitor.output()
         out = monitor.output()
-    finally:
-        monitor.close()
-        if node is not None:
-            node.close()
     assert "run ended" not in out, out
     assert ("monitor: no publisher on /accel any more and no end status from bearing_sim (killed, crashed, a play "
             "stopped, or lost to discovery); waiting for one (a node started again; without one for 1 s the monitor ends)") in out, out
@@ -639,27 +613,20 @@ def _monitor_beside_nodes_in_turn(ros_env, bearing_sim_exe, tmp_path, turns) -> 
     is closed."""
     import signal
 
-    monitor = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / "monitor.log",
-                          command=("monitor", "--window", "0.5", "--scene", "cwru_6205_normal"))
     nodes = []
+    with _monitor_subscribed(ros_env, bearing_sim_exe, tmp_path,
+                             "--window", "0.5", "--scene", "cwru_6205_normal") as (monitor, start_process):
 
-    def start(scene, **params):
-        nodes.append(NodeProcess(bearing_sim_exe, ros_env, {"fidelity": "kinematic", "wait_for_subscribers": 1,
-                                                            **params},
-                                 tmp_path / f"node{len(nodes)}.log", command=("node", "--scene", scene)))
-        return nodes[-1]
+        def start(scene, **params):
+            nodes.append(start_process({"fidelity": "kinematic", "wait_for_subscribers": 1, **params},
+                                       f"node{len(nodes)}.log", ("node", "--scene", scene)))
+            return nodes[-1]
 
-    try:
-        monitor.wait_for_output("envelope analysis every")
         turns(monitor, start)
         time.sleep(1.0)
         monitor.send(signal.SIGINT)
         assert monitor.wait(20) == 0, monitor.output()
         return monitor.output()
-    finally:
-        monitor.close()
-        for node in nodes:
-            node.close()
 
 
 def test_a_node_started_again_after_an_end_or_a_kill_starts_a_new_run(ros_env, bearing_sim_exe, tmp_path):
@@ -1516,22 +1483,43 @@ def test_the_exit_line_counts_the_windows_without_a_detector_band_apart(ros_env,
     envelope detector no band under 0.9 x Nyquist (``docs/envelope_band.md``), so each window's
     line says ``verdict=unknown`` and why.  The exit line counted those windows as ones whose
     lines moved in the window (the speed held still); it now counts them apart and says why."""
-    monitor = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / "monitor.log",
-                          command=("monitor", "--window", "1", "--count", "2", "--scene", "cwru_6205_normal"))
-    node = None
-    try:
-        monitor.wait_for_output("envelope analysis every")
-        node = NodeProcess(bearing_sim_exe, ros_env, {"fidelity": "kinematic", "sample_rate": 1000.0, "duration": 2.0,
-                                                      "wait_for_subscribers": 1},
-                           tmp_path / "node.log", command=("node", "--scene", "cwru_6205_normal"))
+    with _monitor_subscribed(ros_env, bearing_sim_exe, tmp_path,
+                             "--window", "1", "--count", "2", "--scene", "cwru_6205_normal") as (monitor, start):
+        start({"fidelity": "kinematic", "sample_rate": 1000.0, "duration": 2.0, "wait_for_subscribers": 1},
+              "node.log", ("node", "--scene", "cwru_6205_normal"))
         assert monitor.wait(90) == 0, monitor.output()
         out = monitor.output()
-    finally:
-        monitor.close()
-        if node is not None:
-            node.close()
     assert [v for _t, v, _truth in VERDICT.findall(out)] == ["unknown", "unknown"], out
     assert out.count("| no envelope band: the fault lines judged reach ") == 2, out
+    assert ("monitor: score 0 of 0 verdicts agree with the truth, 0 truth=unknown, 2 verdict=unknown (no detector "
+            "band for the fault lines at this sample rate)\n") in out, out
+    assert "lines moved" not in out, out
+
+
+def test_the_exit_line_counts_order_tracked_windows_without_a_band_apart_too(ros_env, bearing_sim_exe, tmp_path):
+    """The ER-16K run up from 2000 to 3000 rpm over 2 s, recorded at 1 kHz and played to a monitor
+    in 1 s windows: the speed moves ~20 % in each window, so each is order tracked, and at its
+    fastest speed (2500, 3000 rpm) the fault lines leave the envelope detector no band under 0.9 x
+    Nyquist (450 Hz).  Each line says why there is no verdict, and the exit line counts those
+    windows as ones without a detector band (the sample rate's doing), not as ones whose lines
+    moved (which order tracking answers)."""
+    text = load_scene("er16k_outer_race").source_text
+    text, found = re.subn(r"operating_point: \{shaft_speed_rpm: \d+", "operating_point: {shaft_speed_rpm: 2000", text)
+    assert found == 1, "er16k_outer_race.yaml's operating point moved: update this test"
+    scene = tmp_path / "run_up_2000.yaml"
+    scene.write_text(text + "profile:\n  - {t: 2, shaft_speed_rpm: 3000}\n")
+    recording = tmp_path / "run_up_1khz.mcap"
+    render(str(scene), 2.0, recording, fidelity="kinematic", seed=1, sample_rate=1000.0, progress=False)
+    monitor = NodeProcess(bearing_sim_exe, ros_env, None, tmp_path / "monitor.log",
+                          command=("monitor", "--window", "1", "--count", "2", "--scene", str(scene)))
+    try:
+        out = _play_into(monitor, bearing_sim_exe, recording, ros_env)
+    finally:
+        monitor.close()
+    assert [v for _t, v, _truth in VERDICT.findall(out)] == ["unknown", "unknown"], out
+    # the order-tracked path's words (the speeds moved, then no band), not the fixed-speed one's
+    assert out.count(" in the window (a speed step or ramp, a load step that changed the cage's skid): its envelope "
+                     "lines smear, no verdict; no order tracking: no envelope band: the fault lines judged reach ") == 2, out
     assert ("monitor: score 0 of 0 verdicts agree with the truth, 0 truth=unknown, 2 verdict=unknown (no detector "
             "band for the fault lines at this sample rate)\n") in out, out
     assert "lines moved" not in out, out
