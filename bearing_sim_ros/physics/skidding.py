@@ -1788,7 +1788,7 @@ class SkiddingModel:
                                  solver=self.solver, rk4_step=self.rk4_step)
         memo = {id(base.scene): base.scene}
 
-        def rms(m: int) -> np.ndarray:
+        def rms(m: int) -> np.ndarray | None:
             trial = copy.deepcopy(base, dict(memo))
             trial._set_step(m)
             try:
