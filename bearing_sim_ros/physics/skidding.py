@@ -1734,7 +1734,7 @@ class SkiddingModel:
             self.step_screen = fc * self.hstep
             if step_check and self.step_screen > STEP_CHECK_SCREEN:
                 self._check_step(int(step_check), load, float(shaft_speed))
-            elif fc * self.hstep > STEP_CONTACT_LIMIT:
+            elif self.step_screen > STEP_CONTACT_LIMIT:
                 self.step_warning = (
                     f"skidding tier: the default solver's own step ({self.hstep * 1e6:.3g} us) is long for this "
                     f"bearing (its most loaded ball's contact frequency {fc / 1e3:.3g} kHz, above "
@@ -1762,7 +1762,8 @@ class SkiddingModel:
 
     def _check_step(self, cap: int, load: np.ndarray, speed: float):
         """Choose the default's steps per output sample by measuring, as ODE codes choose their
-        first step: throwaway copies of this model (its start state, inputs held) run
+        first step: throwaway copies of this model (its start state, inputs held; of the bearing
+        without its defects where it has any, below) run
         ``STEP_CHECK_SETTLE`` + ``STEP_CHECK_WINDOW`` s at 2, 4, ... steps per sample up to
         ``cap``; the coarsest M whose estimate |RMS_M - RMS_2M| x 4/3 (the error is second order
         in the step) is within ``STEP_CHECK_TARGET`` of RMS_2M is taken (RMS of the pedestal's
