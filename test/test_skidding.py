@@ -1116,6 +1116,44 @@ def test_the_step_check_of_a_pitted_bearing_is_the_bearings_own():
         assert sim._model.step_estimates == healthy._model.step_estimates, width
 
 
+
+def test_a_diverged_step_check_trial_counts_as_off_and_is_named_in_the_warning():
+    """The step check's rule where a trial diverges (``skidding.choose_step``,
+    ``step_check_warning``), on trial results given as they would come (no measured healthy
+    bearing in the input limits diverges in the check's 30 ms since its trials left the scene's
+    defects out; with them, a 4 x 2.3 mm pit's did at 2, 4, 8 and 32 steps per sample and the
+    warning said "estimated nan% off").  A diverged trial gives no estimate: it and the step
+    below it count as off and the next finer step is tried; where none is found the warning
+    names the diverged steps, says the run's own step may diverge too where it is among them,
+    gives the finest finite estimate if there is one, and never "nan" or "inf"."""
+    settled = {m: np.array([3.0, 1.0]) * (1.0 + 0.01 / m ** 2) for m in (2, 4, 8, 16, 32)}
+
+    def trials(diverged):
+        return lambda m: None if m in diverged else settled[m]
+
+    found, estimates, diverged = sk.choose_step(trials({2}), 2, 16, [0, 1])
+    assert (found, diverged) == (4, [2]) and estimates[2] == np.inf and estimates[4] < sk.STEP_CHECK_TARGET
+
+    found, estimates, diverged = sk.choose_step(trials({2, 4, 8, 16, 32}), 2, 16, [0, 1])
+    assert found is None and diverged == [2, 4, 8, 16, 32] and set(estimates) == {2, 4, 8, 16}
+    text = sk.step_check_warning(estimates, diverged, 16, 16)
+    assert ("(its trials at oversample 2, 4, 8, 16, 32 diverged within 30 ms, so the run may; it runs at 16)"
+            in text), text
+    assert "estimated" not in text and "nan" not in text and "inf" not in text and "\n" not in text
+
+    # the finest step's estimate finite, a coarse trial diverged: both said, the run's step not among them
+    off = {m: np.array([3.0, 1.0]) * (1.0 + 0.2 / m) for m in (2, 4, 8, 16, 32)}
+    found, estimates, diverged = sk.choose_step(lambda m: None if m == 2 else off[m], 2, 16, [0, 1])
+    assert found is None and diverged == [2]
+    text = sk.step_check_warning(estimates, diverged, 16, 16)
+    assert re.search(r"\(estimated 0\.8\d% off at oversample 16; its trials at oversample 2 diverged within 30 ms; "
+                     r"it runs at 16\)", text), text
+    # under fidelity auto the cap is lower, and the line says what lifts it
+    text = sk.step_check_warning({2: np.inf, 4: np.inf}, [2, 4, 8], 4, 4)
+    assert "up to 4 steps per sample (its trials at oversample 2, 4, 8 diverged within 30 ms, so the run may; " \
+           "it runs at 4): fidelity auto takes at most 4" in text, text
+
+
 def test_the_default_step_warning_is_said_of_the_tier_that_runs_not_of_a_throwaway():
     """Under ``fidelity: auto`` the small bearing runs the kinematic tier; the node's
     ``prepare_switches`` builds a throwaway skidding model (to load its kernels) whose signal

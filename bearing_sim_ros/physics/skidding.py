@@ -1632,6 +1632,61 @@ class RK4Diverged(SolverDiverged):
                 f"{settings.assign('solver', 'default')}")
 
 
+def choose_step(rms_at, start: int, cap: int, axes) -> tuple:
+    """The step check's rule (``SkiddingModel._check_step``) on its trials' results: ``rms_at(m)``
+    the RMS (m/s^2, per axis x, y) of a trial at ``m`` steps per output sample, None where that
+    trial diverged; ``axes`` the indices of the axes the sensor reads.  From ``start`` doubling up
+    to ``cap``, the first M whose estimate |RMS_M - RMS_2M| x 4/3 (the error is second order in
+    the step) is within ``STEP_CHECK_TARGET`` of RMS_2M on every axis read.  An axis below 1 % of
+    the other's RMS is left out (a relative change of a signal at rounding level says nothing of
+    the step).  A diverged trial gives no estimate: M and M/2 count as off (infinite), since a
+    finer step may not diverge.  Returns (M or None where none up to ``cap`` is, {M: estimate},
+    the steps per sample whose trials diverged)."""
+    diverged = []
+
+    def trial(m: int):
+        r = rms_at(m)
+        if r is None:
+            diverged.append(m)
+        return r
+
+    def estimate(r, r2) -> float:
+        if r is None or r2 is None:
+            return math.inf
+        on = [a for a in axes if r2[a] >= 0.01 * r2.max()] or axes
+        return float(np.max(np.abs(r - r2)[on] / np.maximum(r2[on], 1e-30))) * 4.0 / 3.0
+
+    estimates = {}
+    m, r = start, trial(start)
+    while m <= cap:
+        r2 = trial(2 * m)
+        estimates[m] = estimate(r, r2)
+        if estimates[m] <= STEP_CHECK_TARGET:
+            return m, estimates, diverged
+        m, r = 2 * m, r2
+    return None, estimates, diverged
+
+
+def step_check_warning(estimates: dict, diverged: list, chosen: int, cap: int) -> str:
+    """The line the step check leaves where no step up to ``cap`` met its target and the run takes
+    ``chosen`` (``choose_step``'s ``estimates`` and ``diverged``): the estimate at the finest step
+    tried where it is finite, the steps whose trials diverged (a diverged trial has no estimate:
+    it was printed "nan %"), and what a user can do."""
+    at = max(estimates)
+    est = estimates[at]
+    said = [f"estimated {est:.2%} off at oversample {at}"] if math.isfinite(est) else []
+    if diverged:
+        said.append(f"its trials at oversample {', '.join(map(str, diverged))} diverged within "
+                    f"{(STEP_CHECK_SETTLE + STEP_CHECK_WINDOW) * 1e3:g} ms"
+                    + (", so the run may" if chosen in diverged else ""))
+    return (f"skidding tier: the default solver's step check found no step within {STEP_CHECK_TARGET:.1%} "
+            f"up to {cap} steps per sample ({'; '.join(said)}; it runs at {chosen})" + (
+                f": fidelity auto takes at most {cap} (a tier switch shares the sensor chain's rate); "
+                f"fidelity skidding lets the check go up to {STEP_CHECK_MAX}" if cap < STEP_CHECK_MAX else
+                f": oversample {2 * STEP_CHECK_MAX} halves the step again, at {STEP_CHECK_MAX} times the "
+                f"default's own cost") + " (docs/solvers.md)")
+
+
 class SkiddingModel:
     """The skidding tier (see module docstring).  ``internal_rate`` = 4 x the output rate (Hz)."""
 
@@ -1767,13 +1822,13 @@ class SkiddingModel:
         ``STEP_CHECK_SETTLE`` + ``STEP_CHECK_WINDOW`` s at 2, 4, ... steps per sample up to
         ``cap``; the coarsest M whose estimate |RMS_M - RMS_2M| x 4/3 (the error is second order
         in the step) is within ``STEP_CHECK_TARGET`` of RMS_2M is taken (RMS of the pedestal's
-        acceleration, m/s^2, on each axis the sensor reads).  At the cap without that, the cap is
-        taken and ``step_warning`` says so.  The model itself has not moved: it then runs as if
-        built with ``oversample`` M (the same samples).  The trials run on the bearing without
-        its defects, from its own equilibrium: the step is the contacts' need, and a defect's
-        impacts are sub-stepped alike at every M (event sub-steps per internal sample).  A trial
-        that diverges counts as off (a finer step may not), and ``step_warning`` names the steps
-        whose trials diverged."""
+        acceleration, m/s^2, on each axis the sensor reads; ``choose_step``).  At the cap without
+        that, the cap is taken and ``step_warning`` says so (``step_check_warning``).  The model
+        itself has not moved: it then runs as if built with ``oversample`` M (the same samples).
+        The trials run on the bearing without its defects, from its own equilibrium: the step is
+        the contacts' need, and a defect's impacts are sub-stepped alike at every M (event
+        sub-steps per internal sample).  A trial that diverges counts as off (a finer step may
+        not), and ``step_warning`` names the steps whose trials diverged."""
         import copy
         from dataclasses import replace
 
@@ -1795,52 +1850,19 @@ class SkiddingModel:
             try:
                 acc = trial.advance(n, speed, speed, load, load).accel[skip:]
             except SolverDiverged:
-                diverged.append(m)
                 return None
             return np.sqrt(np.mean(acc ** 2, axis=0))
 
         # the axes the sensor reads, each on its own: over both at once the horizontal axis (5-20
         # times the vertical's RMS on the measured points) hid the vertical's error (0.09 %
-        # estimated at x2 where it is 12 %); an axis below 1 % of the other's RMS is left out (a
-        # relative change of a signal at rounding level says nothing of the step)
+        # estimated at x2 where it is 12 %)
         axes = [("x", "y").index(a) for a in self.scene.sensor.axes]
-
-        def estimate(r: np.ndarray | None, r2: np.ndarray | None) -> float:
-            if r is None or r2 is None:     # a trial diverged: no estimate, off
-                return math.inf
-            on = [a for a in axes if r2[a] >= 0.01 * r2.max()] or axes
-            return float(np.max(np.abs(r - r2)[on] / np.maximum(r2[on], 1e-30))) * 4.0 / 3.0
-
-        diverged = []
-        found, m, r = None, DEFAULT_OVERSAMPLE, rms(DEFAULT_OVERSAMPLE)
-        while m <= cap:
-            r2 = rms(2 * m)
-            self.step_estimates[m] = estimate(r, r2)
-            if self.step_estimates[m] <= STEP_CHECK_TARGET:
-                found = m
-                break
-            m, r = 2 * m, r2
+        found, self.step_estimates, diverged = choose_step(rms, DEFAULT_OVERSAMPLE, cap, axes)
         chosen = found if found is not None else cap
         if chosen != self.oversample:
             self._set_step(chosen)
         if found is None:
-            at = max(self.step_estimates)
-            est = self.step_estimates[at]
-            # a diverged trial gives no estimate (it printed nan %): which steps diverged, and
-            # whether the one the run takes was among them
-            said = [f"estimated {est:.2%} off at oversample {at}"] if math.isfinite(est) else []
-            if diverged:
-                said.append(f"its trials at oversample {', '.join(map(str, diverged))} diverged within "
-                            f"{(STEP_CHECK_SETTLE + STEP_CHECK_WINDOW) * 1e3:g} ms"
-                            + (", so the run may" if chosen in diverged else ""))
-            said = "; ".join(said)
-            self.step_warning = (
-                f"skidding tier: the default solver's step check found no step within {STEP_CHECK_TARGET:.1%} "
-                f"up to {cap} steps per sample ({said}; it runs at {chosen})" + (
-                    f": fidelity auto takes at most {cap} (a tier switch shares the sensor chain's rate); "
-                    f"fidelity skidding lets the check go up to {STEP_CHECK_MAX}" if cap < STEP_CHECK_MAX else
-                    f": oversample {2 * STEP_CHECK_MAX} halves the step again, at {STEP_CHECK_MAX} times the "
-                    f"default's own cost") + " (docs/solvers.md)")
+            self.step_warning = step_check_warning(self.step_estimates, diverged, chosen, cap)
 
     def contact_frequency(self) -> float:
         """The most loaded ball's radial contact frequency (Hz) in the present state: its inner and
