@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from bearing_sim_ros.analysis import orders
-from bearing_sim_ros.analysis.envelope import diagnose
+from bearing_sim_ros.analysis.envelope import NO_BAND, NoBand, diagnose
 
 FS = 15000.0
 CAGE_RATIO = 0.397          # cage speed over shaft speed (ER-16K at pure rolling)
@@ -103,6 +103,21 @@ def test_what_cannot_be_order_tracked_says_why():
     x, times = _impacts(angle, 4.0, PER_SHAFT_HZ["bpfo"])
     assert orders.order_diagnose(x, FS, times, t[sparse], np.full(t[sparse].size, np.nan), shaft_w[sparse],
                                  np.full(t[sparse].size, np.nan), cage_w[sparse], PER_SHAFT_HZ, BALLS)[0] is None
+
+
+def test_where_no_band_serves_the_lines_the_reason_says_so_by_its_type():
+    """A run-up from 2000 to 3000 rpm sampled at 1 kHz: at its fastest the fault lines leave the
+    envelope detector no band under 0.9 x Nyquist, and ``order_diagnose``'s reason is a
+    ``envelope.NoBand`` (the monitor counts such windows apart by that type, not by its words);
+    a reason of the states (too sparse to track) is not."""
+    angle, speed = _ramp(2000 / 60, 3000 / 60, 2.0)
+    x, times = _impacts(angle, 2.0, PER_SHAFT_HZ["bpfo"])
+    state = _state(angle, speed, 2.0)
+    result, why = orders.order_diagnose(x[::15], 1000.0, times[::15], *state, PER_SHAFT_HZ, BALLS)
+    assert result is None and isinstance(why, NoBand) and why.startswith(NO_BAND + ": "), why
+    sparse = tuple(column[::10] for column in state)
+    result, why = orders.order_diagnose(x, FS, times, *sparse, PER_SHAFT_HZ, BALLS)
+    assert result is None and "state samples up to 0.2 s apart" in why and not isinstance(why, NoBand), why
 
 
 def _ratio_state(angle, speed, duration_s: float, cage_ratio: float, rate_hz: float = 50.0):

@@ -45,9 +45,15 @@ from ..errors import UserError, short_repr
 
 DEFAULT_BAND = (2000.0, 5000.0)
 DEFAULT_SEGMENT = 1.0     # s: length of the averaged segments of the detector's envelope spectrum
-# how ``detector_band``'s one line begins where no band serves the lines (the monitor counts those
-# windows apart from the ones whose lines moved)
+# how ``detector_band``'s one line begins where no band serves the lines
 NO_BAND = "no envelope band"
+
+
+class NoBand(str):
+    """``detector_band``'s reason where no band serves the fault lines: one line, beginning with
+    ``NO_BAND``, whose type says so where a caller passes reasons on as text (``orders.
+    order_diagnose``'s ``(None, why not)``): the monitor counts those windows apart from the ones
+    whose lines moved, without reading the words."""
 # segments span at least this many cage turns (decision_segment): a ball pit meets the load zone
 # once per cage turn and the others' lines carry the cage or shaft rate as sidebands, which bins of
 # 1 Hz merge with the line below about 1000 rpm (the ER-16K's FTF 6.6 Hz); 1/8 of FTF apart, the
@@ -129,10 +135,10 @@ def detector_band(frequencies: Mapping, fs: float, resonance_hz: float | None = 
     if hi - lo >= span:
         return (lo, hi), ""
     f_top = max(fault_targets(frequencies).values())
-    return None, (f"{NO_BAND}: the fault lines judged reach {f_top:.0f} Hz, and the envelope spectrum read "
-                  f"up to {span:.0f} Hz needs a band from {span:.0f} Hz at least {span:.0f} Hz wide, above 0.9 x "
-                  f"Nyquist ({top:.0f} Hz at {fs:g} Hz): no verdict (a sample rate of at least "
-                  f"{4 * span / 0.9:.0f} Hz gives one)")
+    return None, NoBand(f"{NO_BAND}: the fault lines judged reach {f_top:.0f} Hz, and the envelope spectrum read "
+                        f"up to {span:.0f} Hz needs a band from {span:.0f} Hz at least {span:.0f} Hz wide, above 0.9 x "
+                        f"Nyquist ({top:.0f} Hz at {fs:g} Hz): no verdict (a sample rate of at least "
+                        f"{4 * span / 0.9:.0f} Hz gives one)")
 
 
 def band_words(band) -> str:

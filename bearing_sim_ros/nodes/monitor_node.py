@@ -99,7 +99,7 @@ import rclpy
 from rclpy.node import Node
 
 from .. import ground_truth
-from ..analysis.envelope import (DETECTION_THRESHOLD, FAULT_LINES, NO_BAND, STEADY_LINES, band_words, borrowed_text, detector_band,
+from ..analysis.envelope import (DETECTION_THRESHOLD, FAULT_LINES, STEADY_LINES, NoBand, band_words, borrowed_text, detector_band,
                                  diagnose, pick_verdict, spread, with_cage)
 from ..analysis.orders import order_diagnose
 from ..messages import RUN_ENDED, RUN_KEY, TOPIC_ACCEL, TOPIC_DIAGNOSTICS, TOPIC_STATE, waveform_qos
@@ -952,7 +952,7 @@ class MonitorNode(Node):
             return
         result.update(end_ns=end, truth=truth_at(reports, end))
         # no detector band for the lines, in Hz or (the speeds moved) in orders
-        no_band = "no_band" in result or result.get("untracked", "").startswith(NO_BAND)
+        no_band = "no_band" in result or isinstance(result.get("untracked"), NoBand)
         scored = (end, result["verdict"], result["truth"], no_band)
         self.verdicts.append(scored)
         run.verdicts.append(scored)
