@@ -74,7 +74,7 @@ class _Data:
     leave them out) takes the envelope channel's samples past those held (``MAX_ANALYSIS_S``)."""
 
     def __init__(self, rec, spool=None):
-        from ..recording.reader import deserialize, get_message
+        from ..recording.reader import deserialize, get_message, recorded_sample_rate
 
         topics = rec.topics()
         self.topics = {t: {"type": c.msg_type, "messages": c.count} for t, c in topics.items()}
@@ -104,11 +104,7 @@ class _Data:
         frequency_messages, frequency_key_counts = 0, dict.fromkeys(RECORDED_KEYS, 0)
         self.named_scenes = []          # (scene, bearing) the /diagnostics name, in order of appearance
         samples = 0
-        fs_meta = None
-        try:
-            fs_meta = float(rec.parameters().get("sample_rate") or 0) or None
-        except (TypeError, ValueError):
-            fs_meta = None
+        fs_meta = recorded_sample_rate(rec)
         held_rate = fs_meta             # Hz: the rate that tells when MAX_ANALYSIS_S are held
         for topic, _type, log_ns, data in rec.messages(topics=wanted):
             # another writer's bytes or tables were a traceback and "internal error"
@@ -248,7 +244,7 @@ class _Data:
                    f"{self.stamps.size} tables whose stamps do not increase ({self.stamps[0]} ns .. "
                    f"{self.stamps[-1]} ns)")
             raise UserError(f"{path}: cannot tell the sample rate from the waveform tables on {self.accel_topic} "
-                            f"({why}) and the metadata has no sample_rate parameter")
+                            f"({why}) and the metadata has no usable sample_rate parameter")
         return rate
 
     def _gaps(self) -> int:
