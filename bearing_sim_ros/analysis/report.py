@@ -115,6 +115,13 @@ class _Data:
                 except ValueError as exc:     # another tool's point cloud (a lidar's) on .../accel
                     raise UserError(f"{rec.path}: the table on {topic} logged at {log_ns / NS:.9f} s: {exc}; "
                                     "expected the node's waveform tables (README, \"Consuming a waveform table\")") from None
+                bad = int(arr.size - np.count_nonzero(np.isfinite(arr)))
+                if bad:
+                    # NaN samples went through the envelope analysis to a verdict of "healthy"
+                    # (infinite ones too, with numpy's "invalid value" warning), exit status 0
+                    raise UserError(f"{rec.path}: the table on {topic} logged at {log_ns / NS:.9f} s holds {bad} "
+                                    f"non-finite sample{'s' if bad > 1 else ''} (NaN or infinity) of {arr.size}; "
+                                    "a waveform is finite numbers, m/s^2: a damaged recording or another writer's")
                 if self.channels and tuple(names) != self.channels:
                     # the columns are concatenated: numpy's error was a traceback
                     raise UserError(f"{rec.path}: {topic}: a table's channels ({', '.join(names)}) are not "
