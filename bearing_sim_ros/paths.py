@@ -171,6 +171,10 @@ def input_file(text, where: str, expected: str, error=None) -> Path:
         problem = "no such file"
     except OSError as exc:
         problem = f"cannot read it ({exc.strerror or exc.__class__.__name__})"
+    except ValueError:
+        # a NUL in a path given in Python (the command line's cannot hold one): os.stat's
+        # "embedded null byte" was a traceback
+        problem = "not a path: it holds a NUL character"
     else:
         if stat.S_ISREG(mode):
             return path

@@ -303,6 +303,29 @@ def test_seed_range_is_the_nodes():
         assert str(exc.value) == f"seed = {bad!r}: expected a whole number in [0, 2147483647]"
 
 
+@pytest.mark.parametrize("step", [-1.0, 0.0, math.nan, 1.0, "1e-6", True])
+def test_a_bad_rk4_step_is_refused_when_the_simulator_is_made(step):
+    """Where fidelity auto starts on the kinematic tier (er16k_healthy), ``rk4_step`` of -1, NaN
+    or "1e-6" was taken without a word, and refused at the first switch to the skidding tier, in
+    the middle of a run; now at once, in the line the skidding tier gives it."""
+    from bearing_sim_ros.physics.integrators import RK4_STEP_RANGE
+
+    with pytest.raises(UserError) as exc:
+        Simulator("er16k_healthy", solver="rk4", rk4_step=step)
+    assert str(exc.value) == f"rk4_step = {step!r}: allowed range is [1e-09, 0.001] s"
+    assert Simulator("er16k_healthy", solver="rk4", rk4_step=RK4_STEP_RANGE[1]).rk4_step == RK4_STEP_RANGE[1]
+
+
+def test_a_scene_path_with_a_nul_is_one_line():
+    """A NUL in a scene path given in Python was os.stat's ValueError ("embedded null byte")."""
+    from bearing_sim_ros import load_scene
+
+    with pytest.raises(UserError) as exc:
+        load_scene("scenes/a\0b.yaml")
+    assert str(exc.value).startswith("scene = 'scenes/a\\x00b.yaml': not a path: it holds a NUL character; "
+                                     "give a YAML path or one of "), str(exc.value)
+
+
 @pytest.mark.parametrize("call, message", [
     # a string or a list ended in ValueError/TypeError from float(), a wrong length in
     # "cannot reshape array"

@@ -806,3 +806,37 @@ def test_another_tools_channel_metadata_or_type_is_played_or_refused_in_one_line
         with pytest.raises(UserError, match=rf"^{re.escape(str(path))}: /x: message type 'std_srvs/srv/Empty' "
                                             r"is a service, not a message; expected 'package/msg/Type'$"):
             play(path, wait_for_subscribers=0.0, log=lambda text: None)
+
+
+@pytest.mark.parametrize("parameters", [json.dumps({"sample_rate": math.nan}), json.dumps({"sample_rate": -1.0}),
+                                        "[1, 2]"])
+def test_a_recorded_sample_rate_that_is_no_rate_is_played_as_a_recording_without_one(parameters, recording, ros_env,
+                                                                                     tmp_path):
+    """Metadata whose ``sample_rate`` is NaN or negative, or whose ``parameters`` are not a
+    mapping (a damaged or hand-edited file) was a traceback and "internal error", exit 1, before
+    anything was played ("nan s of signal", "'list' object has no attribute 'get'").  It is taken
+    as missing, as in another tool's recording: the start line gives the log times' span, and
+    every message is played."""
+    from mcap.reader import make_reader
+    from mcap.writer import Writer
+
+    from bearing_sim_ros.recording.play import play
+
+    path, counts, _accel = recording
+    odd = tmp_path / "odd.mcap"
+    with open(path, "rb") as f, open(odd, "wb") as g:
+        reader, writer = make_reader(f), Writer(g)
+        writer.start("ros2", "test")
+        for meta in reader.iter_metadata():
+            writer.add_metadata(meta.name, dict(meta.metadata, parameters=parameters))
+        ids = {}
+        for schema, channel, msg in reader.iter_messages():
+            if channel.id not in ids:
+                sid = writer.register_schema(schema.name, schema.encoding, schema.data)
+                ids[channel.id] = writer.register_channel(channel.topic, channel.message_encoding, sid,
+                                                          channel.metadata)
+            writer.add_message(ids[channel.id], msg.log_time, msg.data, msg.publish_time)
+        writer.finish()
+    said = []
+    assert play(odd, rate=100.0, wait_for_subscribers=0.0, log=said.append) == sum(counts.values())
+    assert said[0] == f"play {odd}: {sum(counts.values())} messages on 6 topics, 1.00 s of log time at 100x", said

@@ -1478,3 +1478,69 @@ def test_the_windows_take_the_scenes_resonator_into_their_band_as_the_whole_does
     whole = {fault: s["fault_lines"][line]["prominence"] for line, fault in (("bpfo", "outer"), ("bpfi", "inner"),
                                                                             ("2bsf", "ball"))}
     assert window["prominences"] == pytest.approx(whole, rel=1e-3), (window["prominences"], whole)
+
+
+def _with_parameters(parameters_json: str):
+    """``_copy_without``'s ``metadata``: the ``bearing_sim`` record's ``parameters`` replaced."""
+    return lambda m: dict(m, parameters=parameters_json) if "parameters" in m else m
+
+
+def _recorded_rate_cases() -> list:
+    """Metadata ``parameters`` that give no usable sample rate: a NaN, a negative and an absurd
+    ``sample_rate``, and parameters that are not a JSON mapping."""
+    return [json.dumps({"sample_rate": math.nan}), json.dumps({"sample_rate": -15000.0}),
+            json.dumps({"sample_rate": 1e300}), "[1, 2]", '"fast"']
+
+
+@pytest.mark.parametrize("parameters", _recorded_rate_cases())
+def test_a_recorded_sample_rate_that_is_no_rate_is_taken_from_the_stamps(parameters, outer, tmp_path, capsys):
+    """A recording whose metadata's ``sample_rate`` is NaN or negative (a damaged or hand-edited
+    file), or whose ``parameters`` are not a mapping, was a traceback and "internal error", exit 1
+    (NaN: "cannot convert float NaN to integer"; a list: "'list' object has no attribute 'get'"),
+    with an empty --out folder left behind; 1e300 gave a report of "0.00 s" analysed.  Such a
+    value is taken as missing, as in another tool's recording: the tables' stamps give the rate,
+    and the report is the original's."""
+    rec, _ = outer
+    odd = tmp_path / "odd.mcap"
+    _copy_without(rec, odd, lambda topic, k: False, metadata=_with_parameters(parameters))
+    assert cli.main(["report", str(rec), "--out", str(tmp_path / "a")]) == 0
+    assert cli.main(["report", str(odd), "--out", str(tmp_path / "b")]) == 0, capsys.readouterr().err
+    a, b = (json.loads((tmp_path / k / "summary.json").read_text()) for k in "ab")
+    assert b["sample_rate_hz"] == pytest.approx(15000.0) and b["waveform_gaps"] == 0
+    assert b["analysed_s"] == pytest.approx(a["analysed_s"]) and b["verdict"] == a["verdict"] == "outer"
+
+
+@pytest.mark.parametrize("value", [math.nan, math.inf])
+def test_a_waveform_with_non_finite_samples_is_one_line_not_a_verdict(value, outer, tmp_path, capsys):
+    """A recording whose waveform table holds NaN (or infinite) samples (a damaged file, another
+    writer's) went through the envelope analysis to a verdict of "healthy", exit status 0
+    (infinity with numpy's "invalid value" warning).  It is one line naming the file, the topic,
+    the table's log time and how many samples, exit status 2, and no --out folder."""
+    from rclpy.serialization import deserialize_message, serialize_message
+    from sensor_msgs.msg import PointCloud2
+
+    from bearing_sim_ros.waveform import to_pointcloud2
+
+    rec, _ = outer
+    tables = []
+
+    def spoil_the_fifth(topic, data):
+        if topic != "/accel":
+            return data
+        tables.append(topic)
+        if len(tables) != 5:
+            return data
+        msg = deserialize_message(data, PointCloud2)
+        stamp, names, arr = from_pointcloud2(msg)
+        arr = arr.copy()
+        arr[3:6, -1] = value
+        return serialize_message(to_pointcloud2(arr, names, stamp, msg.header.frame_id))
+
+    odd = tmp_path / "odd.mcap"
+    _copy_without(rec, odd, lambda topic, k: False, rewrite=spoil_the_fifth)
+    code = cli.main(["report", str(odd), "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1, err
+    assert err[0].startswith(f"error: {odd}: the table on /accel logged at ") and \
+        " s holds 3 non-finite samples (NaN or infinity) of " in err[0], err[0]
+    assert not (tmp_path / "o").exists()

@@ -871,3 +871,42 @@ def test_the_limit_a_refusal_names_is_a_value_the_bearing_takes(bearing):
     speed = float(re.search(r"\|speed\| <= (\d+) rad/s", check_speed(1e9, limits)[1]).group(1))
     load = float(re.search(r"C0 = (\d+) N", check_load(0.0, -1e7, 0.0, limits)[1]).group(1))
     assert check_speed(speed, limits) is None and check_load(0.0, -load, 0.0, limits) is None
+
+
+def _pedestal_least() -> float:
+    """The least pedestal stiffness (N/m) but 0 that an ER-16K takes: its 2 x C0, 16681 N, within 0.1 m."""
+    from bearing_sim_ros.limits import InputLimits
+
+    return InputLimits(load_scene("er16k_healthy").bearing).max_load / 0.1
+
+
+@pytest.mark.parametrize("stiffness", [1e-9, 0.5, 100.0, 0.999 * _pedestal_least()])
+def test_a_pedestal_spring_too_soft_to_hold_the_bearings_load_is_refused_in_one_line(stiffness, tmp_path):
+    """A pedestal spring of 1e-9 - 1 N/m under the ER-16K's 50 N put the outer race metres away;
+    the kinematic tier's samples were NaN from the first (render wrote them and said exit status
+    0), and at 100 N/m both tiers' clipped at the sensor's range from the start.  A pedestal
+    spring is 0 (none) or holds the pedestal within 0.1 m under the most load the bearing takes
+    (2 x C0, which the live node's inputs may reach); a YAML scene and one changed in Python
+    are refused in one line naming the key, the value and that bound."""
+    path = tmp_path / "soft.yaml"
+    path.write_text(GOOD.replace("stiffness: 1.51e7", f"stiffness: {stiffness!r}"))
+    allowed = ("N/m: allowed 0 (no pedestal spring) or at least 1.668e+05 N/m, which holds the pedestal within "
+               "0.1 m under 2 x C0 = 16681 N of bearing ER-16K")
+    with pytest.raises(SceneError) as exc:
+        load_scene(path)
+    assert str(exc.value) == f"scene soft.yaml: structure.pedestal.stiffness = {stiffness:g} {allowed}"
+    scene = load_scene("er16k_outer_race")
+    with pytest.raises(SceneError) as exc:
+        dataclasses.replace(scene, structure=dataclasses.replace(scene.structure, pedestal_stiffness=stiffness))
+    assert str(exc.value) == f"scene er16k_outer_race: structure.pedestal_stiffness = {stiffness:g} {allowed}"
+
+
+@pytest.mark.parametrize("stiffness", [0.0, _pedestal_least()])
+def test_no_pedestal_spring_or_one_at_the_bound_runs_finite(stiffness, tmp_path):
+    """0 (no pedestal spring: the shaft's support carries the load) and the least stiffness
+    allowed load, and run finite in both tiers."""
+    path = tmp_path / "ok.yaml"
+    path.write_text(GOOD.replace("stiffness: 1.51e7", f"stiffness: {stiffness!r}"))
+    scene = load_scene(path)
+    for fidelity in ("kinematic", "skidding"):
+        assert np.isfinite(Simulator(scene, fidelity=fidelity).advance(300).accel).all()

@@ -905,3 +905,31 @@ def test_fault_lines_too_close_to_nyquist_get_no_verdict_in_one_line():
     assert "(6750 Hz at 15000 Hz): no verdict (a sample rate of at least 15914 Hz gives one)" in d["no_band"]
     with pytest.raises(UserError, match="no envelope band"):
         env.fault_lines(y, fs, scene.fault_frequencies())
+
+
+def test_a_drive_end_channel_of_text_is_one_line(tmp_path, capsys):
+    """A .mat whose X<nnn>_DE_time holds text (another tool's file) was numpy's "could not
+    convert string to float" traceback and "internal error", exit 1."""
+    from scipy.io import savemat
+
+    path = tmp_path / "mat" / "12k_Drive_End_IR007_0_105.mat"
+    path.parent.mkdir()
+    savemat(str(path), {"X105_DE_time": "abc", "X105RPM": np.array([[1797]])})
+    err = _one_line_exit_2(capsys, ["validate", "--cwru", str(path.parent), "--out", str(tmp_path / "out")])
+    assert f"--cwru {str(path)!r}: X105_DE_time = " in err and "is not numbers; expected the drive-end" in err, err
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("rpm", ["fast", math.nan, math.inf, -1797.0])
+def test_an_rpm_that_is_no_speed_gives_the_nominal_one_and_says_so(rpm, tmp_path):
+    """An RPM variable of text was float()'s traceback, an infinite one a simulation at infinite
+    speed; like an RPM of 0, each gives the load's nominal speed, with a note naming the value."""
+    from scipy.io import savemat
+
+    path = tmp_path / "12k_Drive_End_IR007_2_98.mat"
+    t = np.arange(24000) / 12000.0
+    savemat(str(path), {"X098_DE_time": np.sin(2 * np.pi * 90 * t)[:, None],
+                        "X098RPM": rpm if isinstance(rpm, str) else np.array([[rpm]])})
+    rec = read_recording(path)
+    assert rec.rpm == 1750.0 and "X098RPM = " in rec.rpm_source and "is not a speed" in rec.rpm_source
+    assert any(note.startswith("X098RPM = ") and "nominal 1750 rpm for 2 hp used" in note for note in rec.notes)

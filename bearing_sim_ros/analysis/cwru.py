@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from ..catalog import G                       # m/s^2 per g
-from ..errors import UserError
+from ..errors import UserError, short_repr
 
 NORMAL_BASELINE_RATE = 48000.0                # Hz: CWRU normal baseline files (see module doc)
 # shaft speed of the CWRU rig by motor load (hp), when a file has no RPM variable (rpm)
@@ -152,6 +152,16 @@ def _pick(data: dict, suffix: str, number: str | None) -> str | None:
     return keys[0]
 
 
+def _speed(value) -> float | None:
+    """The first number of a .mat RPM variable where it is a finite speed > 0 (rpm), else None:
+    ``float()`` of a text one was a traceback, of an infinite one a run at infinite speed."""
+    try:
+        first = np.ravel(np.asarray(value, dtype=float))[:1]
+    except (TypeError, ValueError):
+        return None
+    return float(first[0]) if first.size and math.isfinite(first[0]) and first[0] > 0 else None
+
+
 def read_recording(path: str | Path, sample_rate: float | None = None) -> Recording:
     """Read one CWRU ``.mat`` file: the drive-end channel in m/s^2, the speed from its RPM
     variable (nominal speed for the load when it has none), the condition and sample rate from
@@ -170,7 +180,13 @@ def read_recording(path: str | Path, sample_rate: float | None = None) -> Record
         names = ", ".join(k for k in data if not k.startswith("__")) or "none"
         raise UserError(f"--cwru {str(path)!r}: no drive-end channel X<nnn>_DE_time "
                         f"(variables: {names})")
-    x = np.asarray(data[de], dtype=float).ravel()
+    try:
+        x = np.asarray(data[de], dtype=float).ravel()
+    except (TypeError, ValueError):
+        # text or a struct where the samples go (another tool's file): numpy's "could not convert
+        # string to float" was a traceback and "internal error"
+        raise UserError(f"--cwru {str(path)!r}: {de} = {short_repr(data[de])} is not numbers; expected the "
+                        f"drive-end accelerometer's samples (g)") from None
     if x.size < 1000 or not np.all(np.isfinite(x)):
         raise UserError(f"--cwru {str(path)!r}: {de} has {x.size} samples or non-finite values; "
                         f"expected a finite recording of at least 1000 samples")
@@ -179,9 +195,15 @@ def read_recording(path: str | Path, sample_rate: float | None = None) -> Record
         raise UserError(f"--cwru {str(path)!r}: file name does not say the condition; expected "
                         f"a CWRU name like normal_0_97.mat or 12k_Drive_End_IR007_0_105.mat")
     rpm_key = _pick(data, "RPM", number)
-    if rpm_key is not None and np.size(data[rpm_key]) >= 1 and float(np.ravel(data[rpm_key])[0]) > 0:
-        rpm = float(np.ravel(data[rpm_key])[0])
+    rpm = _speed(data[rpm_key]) if rpm_key is not None else None
+    if rpm is not None:
         rpm_source = rpm_key
+    elif rpm_key is not None:
+        # text, NaN, 0 or a negative number: not a speed to run the simulation at
+        rpm = NOMINAL_RPM.get(info.load_hp, 1797.0)
+        rpm_source = f"nominal for {info.load_hp} hp ({rpm_key} = {short_repr(data[rpm_key])} is not a speed)"
+        notes.append(f"{rpm_key} = {short_repr(data[rpm_key])} is not a speed: nominal {rpm:g} rpm for "
+                     f"{info.load_hp} hp used")
     else:
         rpm = NOMINAL_RPM.get(info.load_hp, 1797.0)
         rpm_source = f"nominal for {info.load_hp} hp (no RPM variable)"

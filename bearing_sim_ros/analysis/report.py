@@ -74,7 +74,7 @@ class _Data:
     leave them out) takes the envelope channel's samples past those held (``MAX_ANALYSIS_S``)."""
 
     def __init__(self, rec, spool=None):
-        from ..recording.reader import deserialize, get_message
+        from ..recording.reader import deserialize, get_message, recorded_sample_rate
 
         topics = rec.topics()
         self.topics = {t: {"type": c.msg_type, "messages": c.count} for t, c in topics.items()}
@@ -104,11 +104,7 @@ class _Data:
         frequency_messages, frequency_key_counts = 0, dict.fromkeys(RECORDED_KEYS, 0)
         self.named_scenes = []          # (scene, bearing) the /diagnostics name, in order of appearance
         samples = 0
-        fs_meta = None
-        try:
-            fs_meta = float(rec.parameters().get("sample_rate") or 0) or None
-        except (TypeError, ValueError):
-            fs_meta = None
+        fs_meta = recorded_sample_rate(rec)
         held_rate = fs_meta             # Hz: the rate that tells when MAX_ANALYSIS_S are held
         for topic, _type, log_ns, data in rec.messages(topics=wanted):
             # another writer's bytes or tables were a traceback and "internal error"
@@ -119,6 +115,13 @@ class _Data:
                 except ValueError as exc:     # another tool's point cloud (a lidar's) on .../accel
                     raise UserError(f"{rec.path}: the table on {topic} logged at {log_ns / NS:.9f} s: {exc}; "
                                     "expected the node's waveform tables (README, \"Consuming a waveform table\")") from None
+                bad = int(arr.size - np.count_nonzero(np.isfinite(arr)))
+                if bad:
+                    # NaN samples went through the envelope analysis to a verdict of "healthy"
+                    # (infinite ones too, with numpy's "invalid value" warning), exit status 0
+                    raise UserError(f"{rec.path}: the table on {topic} logged at {log_ns / NS:.9f} s holds {bad} "
+                                    f"non-finite sample{'s' if bad > 1 else ''} (NaN or infinity) of {arr.size}; "
+                                    "a waveform is finite numbers, m/s^2: a damaged recording or another writer's")
                 if self.channels and tuple(names) != self.channels:
                     # the columns are concatenated: numpy's error was a traceback
                     raise UserError(f"{rec.path}: {topic}: a table's channels ({', '.join(names)}) are not "
@@ -248,7 +251,7 @@ class _Data:
                    f"{self.stamps.size} tables whose stamps do not increase ({self.stamps[0]} ns .. "
                    f"{self.stamps[-1]} ns)")
             raise UserError(f"{path}: cannot tell the sample rate from the waveform tables on {self.accel_topic} "
-                            f"({why}) and the metadata has no sample_rate parameter")
+                            f"({why}) and the metadata has no usable sample_rate parameter")
         return rate
 
     def _gaps(self) -> int:

@@ -48,7 +48,7 @@ from ..messages import DISCOVERY_GRACE_S, END_DELIVERY_GRACE_S, deliver_the_end
 from ..stale_dds_ports import clear_before_start
 from ..teardown import say, say_on_stderr, teardown_watchdog
 from ..waveform import NS
-from .reader import deserialize, get_message, open_recording
+from .reader import deserialize, get_message, open_recording, recorded_sample_rate
 from .schemas import qos_from_yaml
 
 WAIT_FOR_SUBSCRIBERS = 5.0    # s, the default of --wait: one missed 3 s announcement period and margin
@@ -143,11 +143,7 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
                 classes[t] = get_message(c.msg_type)
             except UserError as exc:        # which file and topic: another tool's type
                 raise UserError(f"{path}: {t}: {exc}") from None
-        sample_rate = None
-        try:
-            sample_rate = float(rec.parameters().get("sample_rate") or 0) or None
-        except (TypeError, ValueError):
-            sample_rate = None
+        sample_rate = recorded_sample_rate(rec)
         played = [c for t, c in topics.items() if not (clock and t == "/clock")]
         if not any(c.count for c in played):
             # --loop went round this empty loop at 100 % CPU forever

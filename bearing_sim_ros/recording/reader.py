@@ -216,12 +216,16 @@ class Recording:
                             f"{str(exc).splitlines()[0] if str(exc) else 'unreadable'})") from None
 
     def parameters(self) -> dict:
+        """The node's parameters from the ``bearing_sim`` metadata (JSON); {} where there are none
+        or they are not a JSON mapping (another writer's or a hand-edited file's: a list there was
+        an AttributeError traceback in ``report`` and ``play``)."""
         import json
 
         try:
-            return json.loads(self.metadata.get("parameters", "{}"))
+            parameters = json.loads(self.metadata.get("parameters", "{}"))
         except ValueError:
             return {}
+        return parameters if isinstance(parameters, dict) else {}
 
     def close(self) -> None:
         self._stream.close()
@@ -606,6 +610,25 @@ def _without_the_last_piece(piece) -> str:
 def _without_index(metadata: dict) -> dict:
     """A piece's ``bearing_sim`` metadata without its ``file_index``: the recording's."""
     return {k: v for k, v in metadata.items() if k != FILE_INDEX}
+
+
+def recorded_sample_rate(rec) -> float | None:
+    """The output sample rate (Hz) that ``rec``'s metadata gives (its ``sample_rate`` parameter)
+    where it is one the node can run at (a number in ``simulator.SAMPLE_RATE_RANGE``), else None,
+    as for a recording without it (another tool's): then its waveform tables' stamps tell the
+    rate.  A NaN or negative one (a damaged or hand-edited file) was a traceback in ``report``
+    and ``play``, and 1e300 a report of "0.00 s" analysed."""
+    from ..simulator import SAMPLE_RATE_RANGE
+
+    value = rec.parameters().get("sample_rate")
+    if isinstance(value, bool) or not isinstance(value, (int, float, str)):
+        return None
+    try:
+        rate = float(value)
+    except ValueError:
+        return None
+    lo, hi = SAMPLE_RATE_RANGE
+    return rate if lo <= rate <= hi else None      # NaN compares false: None
 
 
 def open_recording(path) -> Recording | SplitRecording:
