@@ -28,6 +28,7 @@ from numba import njit
 from . import physics  # noqa: F401 - sets numba's cache folder before _ramp below asks for it
 from .compile_notice import Notice
 from .errors import UserError
+from .physics.integrators import check_rk4_step
 from .scene import RPM, Scene, _load_and_weight_error, _operating_point_error, load_scene
 
 SOLVERS = ("default", "rk4", "reference")
@@ -268,15 +269,10 @@ class Simulator:
             if not (_real_number(tolerance) and lo <= tolerance <= hi):
                 raise UserError(f"tolerance = {tolerance!r}: allowed range is [{lo:g}, {hi:g}] "
                                 f"(a relative error, as the scene's fidelity.tolerance)")
-        if rk4_step is not None:
-            # here, not only in the skidding tier: where fidelity auto starts on the kinematic
-            # tier, a NaN or negative step was taken without a word and refused at the first
-            # switch to the skidding tier, in the middle of a run
-            from .physics.integrators import RK4_STEP_RANGE
-
-            lo, hi = RK4_STEP_RANGE
-            if not (_real_number(rk4_step) and lo <= rk4_step <= hi):
-                raise UserError(f"rk4_step = {rk4_step!r}: allowed range is [{lo:g}, {hi:g}] s")
+        # here, not only in the skidding tier: where fidelity auto starts on the kinematic tier, a
+        # NaN or negative step was taken without a word and refused at the first switch to the
+        # skidding tier, in the middle of a run
+        check_rk4_step(rk4_step)
         self.scene = scene
         self.bearing = scene.bearing
         self.sample_rate = float(sample_rate)

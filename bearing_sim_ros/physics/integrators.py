@@ -20,8 +20,11 @@ is generic.
 from __future__ import annotations
 
 import math
+import numbers
 
 import numpy as np
+
+from ..errors import UserError
 
 EXPLICIT = 0
 ROSENBROCK = 1
@@ -29,6 +32,16 @@ SPLIT = 2
 
 RK4_DEFAULT_STEP = 1.0e-5          # s, seed 000's fixed step
 RK4_STEP_RANGE = (1.0e-9, 1.0e-3)  # s, what ``rk4_step`` / ``--rk4-step`` accept
+
+
+def check_rk4_step(rk4_step) -> None:
+    """``rk4_step`` (s, or None: the method's own) within ``RK4_STEP_RANGE``, else one line
+    (``UserError``) naming it: the Simulator asks at once, whatever tier it starts on, and the
+    skidding tier again, as its own API."""
+    lo, hi = RK4_STEP_RANGE
+    if rk4_step is not None and not (isinstance(rk4_step, numbers.Real) and not isinstance(rk4_step, bool)
+                                     and lo <= rk4_step <= hi):
+        raise UserError(f"rk4_step = {rk4_step!r}: allowed range is [{lo:g}, {hi:g}] s")
 
 
 class Method:

@@ -83,7 +83,6 @@ sub-steps where a ball is inside a defect under a contact or a contact opens or 
 from __future__ import annotations
 
 import math
-import numbers
 import warnings
 
 import numpy as np
@@ -98,7 +97,7 @@ from .defects import (D_ANGLE, D_BALL, D_KIND, KIND_BALL, KIND_INNER, active_def
                       has_wandering_defect, interference_loss, interference_loss_slope, waviness_gain, waviness_table)
 from .film import (FILM_EXP_Q, FILM_EXP_U, FILM_LOAD_FLOOR, film_coefficient,
                    squeeze_film_coefficient, structural_damping_coefficient)
-from .integrators import EXPLICIT, RK4_STEP_RANGE, SPLIT, method_for
+from .integrators import EXPLICIT, SPLIT, check_rk4_step, method_for
 from .structure import secant_stiffness, structure_system
 
 # compile options of every kernel here: cached; FMA contraction (a * b + c may become one
@@ -1719,10 +1718,7 @@ class SkiddingModel:
         self.start_time = 0.0
         self.internal_rate = self.sample_rate * self.decimation
         self.hs = 1.0 / self.internal_rate
-        lo, hi = RK4_STEP_RANGE
-        if rk4_step is not None and not (isinstance(rk4_step, numbers.Real) and not isinstance(rk4_step, bool)
-                                         and lo <= rk4_step <= hi):
-            raise UserError(f"rk4_step = {rk4_step!r}: allowed range is [{lo:g}, {hi:g}] s")
+        check_rk4_step(rk4_step)
         self.solver = solver
         self.rk4_step = rk4_step
         given = int(oversample or DEFAULT_OVERSAMPLE)
