@@ -1320,8 +1320,8 @@ class KinematicModel:
         k_guess = self.geo[P_K] * 2.0
         dmag = (scale / k_guess) ** (2.0 / 3.0) + max(self.geo[P_CR], 0.0)
         direction = ext / scale if np.linalg.norm(ext) > 0 else np.array([0.0, -1.0])
-        kp = self.scene.structure.pedestal_stiffness
-        xp0 = ext / kp if kp > 0 else np.zeros(2)
+        # the pedestal spring (never 0: scene._pedestal_error) takes the load, the bearing in series
+        xp0 = ext / self.scene.structure.pedestal_stiffness
         return self._static_balance(load, self._mean_force, np.concatenate([xp0 + direction * dmag, xp0]))[0]
 
     def _static_balance(self, load: np.ndarray, bearing_force_of, guess: np.ndarray):

@@ -2017,7 +2017,7 @@ class SkiddingModel:
         k_guess = 2.0 * self.scene.bearing.combined_stiffness
         dmag = (scale / k_guess) ** (2.0 / 3.0) + max(p[P_CR], 0.0)
         direction = ext / scale if np.linalg.norm(ext) > 0 else np.array([0.0, -1.0])
-        xp0 = ext / kp if kp > 0 else np.zeros(2)
+        xp0 = ext / kp          # kp > 0: a scene without a pedestal spring is refused (scene._pedestal_error)
         z0 = np.concatenate([xp0 + direction * dmag, xp0]) * 1e6
         # at light loads the law is flat near the clearance and fsolve may stop short of xtol; a
         # start a fraction of a micron off equilibrium only costs a short settling transient
