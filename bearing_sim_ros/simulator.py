@@ -275,21 +275,22 @@ class Simulator:
             scene = load_scene(scene)
         lo, hi = SAMPLE_RATE_RANGE
         if not (_real_number(sample_rate) and lo <= sample_rate <= hi):
-            raise UserError(f"sample_rate = {sample_rate!r}: allowed range is [{lo:g}, {hi:g}] Hz")
-        if fidelity not in FIDELITIES:
-            raise UserError(f"fidelity = {fidelity!r}: allowed values are {', '.join(FIDELITIES)}")
-        if solver not in SOLVERS:
-            raise UserError(f"solver = {solver!r}: allowed values are {', '.join(SOLVERS)}")
+            raise UserError(f"sample_rate = {short_repr(sample_rate)}: allowed range is [{lo:g}, {hi:g}] Hz")
+        # a str first: `in` compares an array element-wise, numpy's 'truth value ... ambiguous'
+        if not (isinstance(fidelity, str) and fidelity in FIDELITIES):
+            raise UserError(f"fidelity = {short_repr(fidelity)}: allowed values are {', '.join(FIDELITIES)}")
+        if not (isinstance(solver, str) and solver in SOLVERS):
+            raise UserError(f"solver = {short_repr(solver)}: allowed values are {', '.join(SOLVERS)}")
         if oversample is not None and not oversample_allowed(oversample):
-            raise UserError(f"oversample = {oversample!r}: allowed values are {OVERSAMPLE_ALLOWED}")
+            raise UserError(f"oversample = {short_repr(oversample)}: allowed values are {OVERSAMPLE_ALLOWED}")
         if not (_whole_number(seed) and SEED_RANGE[0] <= seed <= SEED_RANGE[1]):
-            raise UserError(f"seed = {seed!r}: expected a whole number in [{SEED_RANGE[0]}, {SEED_RANGE[1]}]")
+            raise UserError(f"seed = {short_repr(seed)}: expected a whole number in [{SEED_RANGE[0]}, {SEED_RANGE[1]}]")
         if tolerance is not None:
             from .scene import TOLERANCE_RANGE
 
             lo, hi = TOLERANCE_RANGE
             if not (_real_number(tolerance) and lo <= tolerance <= hi):
-                raise UserError(f"tolerance = {tolerance!r}: allowed range is [{lo:g}, {hi:g}] "
+                raise UserError(f"tolerance = {short_repr(tolerance)}: allowed range is [{lo:g}, {hi:g}] "
                                 f"(a relative error, as the scene's fidelity.tolerance)")
         # here, not only in the skidding tier: where fidelity auto starts on the kinematic tier, a
         # NaN or negative step was taken without a word and refused at the first switch to the
@@ -320,7 +321,7 @@ class Simulator:
         if rk4_step is not None and solver != "rk4":
             raise UserError(f"rk4_step = {rk4_step!r}: applies to solver='rk4' only (given solver={solver!r})")
         if request == "kinematic" and solver != "default":
-            raise UserError(f"solver = {solver!r}: applies to the skidding tier only, and "
+            raise UserError(f"solver = {short_repr(solver)}: applies to the skidding tier only, and "
                             + ("fidelity='kinematic'" if fidelity == "kinematic"
                                else f"scene {scene.name}'s fidelity.tier: kinematic")
                             + " runs the kinematic tier")
@@ -652,7 +653,7 @@ class Simulator:
         negative one): what the signal holds there, e.g. at the last sample a node has published
         while it computes ahead."""
         if not _whole_number(sample):
-            raise UserError(f"sample = {sample!r}: expected a whole number (an output sample index)")
+            raise UserError(f"sample = {short_repr(sample)}: expected a whole number (an output sample index)")
         return self._defect_schedule.sizes(max(int(sample), 0))
 
     @property

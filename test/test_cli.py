@@ -412,6 +412,25 @@ def test_a_speed_or_load_beyond_floats_is_one_line_with_its_digits_cut(method):
         call(np.float64(167.0), load)
 
 
+@pytest.mark.parametrize("key", ["sample_rate", "seed", "oversample", "tolerance", "fidelity", "solver", "rk4_step"])
+@pytest.mark.parametrize("value", [np.array([[15000.0], [1.0]]), 10 ** 400, "x" * 5000],
+                         ids=["2-D array", "400 digits", "5000 characters"])
+def test_a_bad_setting_of_any_size_is_named_on_one_short_line(key, value):
+    """The constructor's refusals printed the value's full repr: numpy's for a 2-D array spans
+    lines, and 10**400 or a 5000-character string made a "one line" of thousands of characters."""
+    settings = {key: value}
+    if key == "rk4_step":
+        settings["solver"] = "rk4"
+    with pytest.raises(UserError) as exc:
+        Simulator("er16k_healthy", **settings)
+    text = str(exc.value)
+    assert text.startswith(f"{key} = ") and "\n" not in text and len(text) < 250, text
+    if not isinstance(value, int):         # a sample index may be any whole number
+        with pytest.raises(UserError) as exc:
+            Simulator("er16k_healthy", fidelity="kinematic").defect_sizes_at(value)
+        assert "\n" not in str(exc.value) and len(str(exc.value)) < 250
+
+
 @pytest.mark.parametrize("sample_rate, n", [(15000.0, 10 ** 12), (15000.0, 2 ** 20 + 1), (1000.0, 10 ** 9)])
 def test_an_advance_too_large_to_hold_in_memory_is_refused_in_one_line(sample_rate, n):
     """``advance(10**12)`` died with a MemoryError (a smaller huge one could meet the OOM killer
