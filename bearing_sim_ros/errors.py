@@ -1,7 +1,21 @@
 """Errors that reach the user as one line (exit status 2), never as a traceback."""
 import reprlib
 
-_SHORT = reprlib.Repr()
+
+
+class _ShortRepr(reprlib.Repr):
+    def repr_ndarray(self, x, level):
+        """A numpy array on one line: numpy's repr puts each row of a 2-D one on a line of its
+        own, and an error is one line (numpy itself cuts an array above 1000 entries)."""
+        text = " ".join(line.strip() for line in repr(x).splitlines())
+        if len(text) > self.maxother:          # as reprlib cuts any other object
+            i = max(0, (self.maxother - 3) // 2)
+            j = max(0, self.maxother - 3 - i)
+            text = text[:i] + "..." + text[len(text) - j:]
+        return text
+
+
+_SHORT = _ShortRepr()
 _SHORT.maxlevel = 3
 _SHORT.maxlist = _SHORT.maxtuple = 8
 _SHORT.maxdict = _SHORT.maxset = _SHORT.maxfrozenset = 6

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import stat
 import sys
@@ -195,6 +196,14 @@ def output_file(text, option: str = "--out", keep=(), check: bool = True) -> Pat
     if not str(text).strip():
         raise UserError(f"{where}: expected the path of an .mcap file")
     out = Path(text)
+    try:
+        os.stat(out)
+    except OSError as exc:
+        # a link that leads back to itself was pathlib's "RuntimeError: Symlink loop" as an
+        # internal error; a missing file (or a dangling link, whose target is written) is fine
+        if exc.errno == errno.ELOOP:
+            raise UserError(f"{where}: a symbolic link that loops (it leads back to itself); give another "
+                            "path or remove the link") from None
     if out.is_dir():
         raise UserError(f"{where}: is a folder; expected the path of an .mcap file")
     if check:

@@ -27,7 +27,7 @@ from numba import njit
 
 from . import physics  # noqa: F401 - sets numba's cache folder before _ramp below asks for it
 from .compile_notice import Notice
-from .errors import UserError
+from .errors import UserError, short_repr
 from .physics.integrators import check_rk4_step
 from .scene import RPM, Scene, _load_and_weight_error, _operating_point_error, load_scene
 
@@ -75,6 +75,22 @@ def _whole_number(value) -> bool:
 def _real_number(value) -> bool:
     """Whether ``value`` is a Python or numpy real number and not a bool or a string."""
     return isinstance(value, (numbers.Real, np.floating, np.integer)) and not isinstance(value, (bool, np.bool_))
+
+
+def _finite_float(value) -> float | None:
+    """``float(value)`` of a real number, None where that is no finite number: NaN, an infinity,
+    an int beyond float's range (10**400, whose float() is an OverflowError)."""
+    try:
+        f = float(value)
+    except OverflowError:
+        return None
+    return f if math.isfinite(f) else None
+
+
+def _plain(value) -> str:
+    """A number as an error line says it: a float's plain repr (not numpy's ``np.float64(nan)``),
+    an int shortened (``errors.short_repr``: 10**400 has 401 digits)."""
+    return short_repr(int(value)) if isinstance(value, (int, np.integer)) else repr(float(value))
 
 
 # integration steps per output sample that the API, ``bearing-sim render --oversample`` and the
@@ -244,6 +260,12 @@ class Simulator:
     smallest whole multiple of the output rate that reaches 15 kHz (``physics_per_sample`` physics
     samples per output sample), so that a lower output rate gets the same physics, decimated by
     the sensor chain, not a coarser one.
+
+    ``sample_rate`` is any real number in ``SAMPLE_RATE_RANGE`` (15001 Hz too), wider than the node's
+    ``sample_rate`` and ``bearing-sim render --sample-rate`` (multiples of 100 Hz at render's 10 ms
+    tables): their rule, ``messages.batching_error``, is that a published table (``batch_duration``
+    s) holds a whole number of samples, and here the caller chooses each batch's samples (``n`` of
+    ``advance``); a batch's times are ``(index0 + k) / sample_rate`` s, not stamps rounded to the ns.
     """
 
     def __init__(self, scene, sample_rate: float = 15000.0, fidelity: str = "auto", seed: int = 0,
@@ -253,21 +275,22 @@ class Simulator:
             scene = load_scene(scene)
         lo, hi = SAMPLE_RATE_RANGE
         if not (_real_number(sample_rate) and lo <= sample_rate <= hi):
-            raise UserError(f"sample_rate = {sample_rate!r}: allowed range is [{lo:g}, {hi:g}] Hz")
-        if fidelity not in FIDELITIES:
-            raise UserError(f"fidelity = {fidelity!r}: allowed values are {', '.join(FIDELITIES)}")
-        if solver not in SOLVERS:
-            raise UserError(f"solver = {solver!r}: allowed values are {', '.join(SOLVERS)}")
+            raise UserError(f"sample_rate = {short_repr(sample_rate)}: allowed range is [{lo:g}, {hi:g}] Hz")
+        # a str first: `in` compares an array element-wise, numpy's 'truth value ... ambiguous'
+        if not (isinstance(fidelity, str) and fidelity in FIDELITIES):
+            raise UserError(f"fidelity = {short_repr(fidelity)}: allowed values are {', '.join(FIDELITIES)}")
+        if not (isinstance(solver, str) and solver in SOLVERS):
+            raise UserError(f"solver = {short_repr(solver)}: allowed values are {', '.join(SOLVERS)}")
         if oversample is not None and not oversample_allowed(oversample):
-            raise UserError(f"oversample = {oversample!r}: allowed values are {OVERSAMPLE_ALLOWED}")
+            raise UserError(f"oversample = {short_repr(oversample)}: allowed values are {OVERSAMPLE_ALLOWED}")
         if not (_whole_number(seed) and SEED_RANGE[0] <= seed <= SEED_RANGE[1]):
-            raise UserError(f"seed = {seed!r}: expected a whole number in [{SEED_RANGE[0]}, {SEED_RANGE[1]}]")
+            raise UserError(f"seed = {short_repr(seed)}: expected a whole number in [{SEED_RANGE[0]}, {SEED_RANGE[1]}]")
         if tolerance is not None:
             from .scene import TOLERANCE_RANGE
 
             lo, hi = TOLERANCE_RANGE
             if not (_real_number(tolerance) and lo <= tolerance <= hi):
-                raise UserError(f"tolerance = {tolerance!r}: allowed range is [{lo:g}, {hi:g}] "
+                raise UserError(f"tolerance = {short_repr(tolerance)}: allowed range is [{lo:g}, {hi:g}] "
                                 f"(a relative error, as the scene's fidelity.tolerance)")
         # here, not only in the skidding tier: where fidelity auto starts on the kinematic tier, a
         # NaN or negative step was taken without a word and refused at the first switch to the
@@ -298,7 +321,7 @@ class Simulator:
         if rk4_step is not None and solver != "rk4":
             raise UserError(f"rk4_step = {rk4_step!r}: applies to solver='rk4' only (given solver={solver!r})")
         if request == "kinematic" and solver != "default":
-            raise UserError(f"solver = {solver!r}: applies to the skidding tier only, and "
+            raise UserError(f"solver = {short_repr(solver)}: applies to the skidding tier only, and "
                             + ("fidelity='kinematic'" if fidelity == "kinematic"
                                else f"scene {scene.name}'s fidelity.tier: kinematic")
                             + " runs the kinematic tier")
@@ -537,6 +560,44 @@ class Simulator:
         f = k / n
         return s0 + (s1 - s0) * f, (l0x + (l1x - l0x) * f, l0y + (l1y - l0y) * f)
 
+    def _command(self, shaft_speed, radial_load) -> tuple:
+        """The operating point that ``advance``, ``switch_ahead`` and ``maybe_switch_tier`` are
+        given, checked: (speed rad/s, (x, y) N) as floats, the latest command's where one is None;
+        else a one-line UserError naming the argument, its value and what is allowed."""
+        # numbers only: float('167') and float(True) would take a string or a bool for one
+        if shaft_speed is not None and not _real_number(shaft_speed):
+            raise UserError(f"shaft_speed = {short_repr(shaft_speed)}: expected a number, rad/s")
+        if radial_load is None:
+            lx, ly = (float(v) for v in self._radial_load)
+        else:
+            # exactly two numbers, not anything numpy makes two of: [[0, -50]] and a (2, 1) array
+            # were taken as (0, -50), and a ragged [[0], -50] was numpy's ValueError
+            if isinstance(radial_load, np.ndarray):
+                two = radial_load.shape == (2,) and radial_load.dtype.kind in "iuf"
+            else:
+                two = isinstance(radial_load, (list, tuple)) and len(radial_load) == 2 \
+                    and all(_real_number(v) for v in radial_load)
+            if not two:
+                raise UserError(f"radial_load = {short_repr(radial_load)}: expected two numbers (x, y), N")
+            lx, ly = radial_load
+        s = self._shaft_speed if shaft_speed is None else _finite_float(shaft_speed)
+        if s is None:
+            raise UserError(f"shaft_speed = {_plain(shaft_speed)} rad/s: must be a finite number")
+        if _finite_float(lx) is None or _finite_float(ly) is None:
+            raise UserError(f"radial_load = ({_plain(lx)}, {_plain(ly)}) N: must be finite numbers")
+        lx, ly = float(lx), float(ly)
+        # the bearing's own limits, as a scene's operating point and profile and the live node's
+        # inputs have them (InputLimits: n*dm and 2 x C0; never beyond 60 000 rpm and 1 MN, where
+        # the model's output is not a number); the model's pure rolling and elastic contacts do
+        # not hold beyond them (until 2026-11-29 only those wide bounds: 900 kN on an ER-16K ran)
+        error = _operating_point_error(self.bearing, s, (lx, ly), "shaft_speed",
+                                       f"{s:g} rad/s ({s / RPM:g} rpm)", "radial_load") or \
+            _load_and_weight_error(self.bearing, (lx, ly), "radial_load", self.scene.structure.shaft_mass,
+                                   self.scene.gravity, "the scene's structure.shaft_mass")
+        if error:
+            raise UserError(error)
+        return s, (lx, ly)
+
     def advance(self, n: int, shaft_speed: float | None = None, radial_load=None) -> Batch:
         """Advance by ``n`` output samples (1 - ``max_advance``) and return them as a :class:`Batch`.
         ``shaft_speed`` (rad/s, not rpm) and ``radial_load`` (N, (x, y), y up) replace the operating
@@ -546,42 +607,17 @@ class Simulator:
         over the call that gives it, so where it falls is part of the run).  A bad argument, or an
         operating point beyond the bearing's limits, is a one-line UserError."""
         if not (_whole_number(n) and n > 0):
-            raise UserError(f"n = {n!r}: expected a whole number of samples > 0")
+            raise UserError(f"n = {short_repr(n)}: expected a whole number of samples > 0")
         if n > self.max_advance:
-            raise UserError(f"n = {n!r}: at most {self.max_advance} samples ({self.max_advance / self.sample_rate:g} s) "
+            raise UserError(f"n = {short_repr(n)}: at most {self.max_advance} samples ({self.max_advance / self.sample_rate:g} s) "
                             f"per advance at {self.sample_rate:g} Hz ({MAX_ADVANCE_INTERNAL} internal samples, about "
                             f"2 GB of arrays); advance in chunks of up to sim.max_advance, which give the same samples")
         s0 = self._shaft_speed
         l0x, l0y = self._radial_load
-        # numbers only: float('167') and float(True) would take a string or a bool for one
-        if shaft_speed is not None and not _real_number(shaft_speed):
-            raise UserError(f"shaft_speed = {shaft_speed!r}: expected a number, rad/s")
-        s1 = s0 if shaft_speed is None else float(shaft_speed)
-        if radial_load is None:
-            l1x, l1y = l0x, l0y
-        else:
-            l1 = np.asarray(radial_load) if not isinstance(radial_load, (str, bytes)) else None
-            if l1 is None or l1.size != 2 or l1.dtype.kind not in "iuf":
-                raise UserError(f"radial_load = {radial_load!r}: expected two numbers (x, y), N")
-            l1x, l1y = (float(v) for v in l1.reshape(2))
-        # float(): the load in use is held as numpy scalars, whose repr is np.float64(...)
-        if not math.isfinite(s1):
-            raise UserError(f"shaft_speed = {float(s1)!r} rad/s: must be a finite number")
-        if not (math.isfinite(l1x) and math.isfinite(l1y)):
-            raise UserError(f"radial_load = ({float(l1x)!r}, {float(l1y)!r}) N: must be finite numbers")
-        # the bearing's own limits, as a scene's operating point and profile and the live node's
-        # inputs have them (InputLimits: n*dm and 2 x C0; never beyond 60 000 rpm and 1 MN, where
-        # the model's output is not a number); the model's pure rolling and elastic contacts do
-        # not hold beyond them (until 2026-11-29 only those wide bounds: 900 kN on an ER-16K ran)
-        error = _operating_point_error(self.bearing, s1, (l1x, l1y), "shaft_speed",
-                                       f"{s1:g} rad/s ({s1 / RPM:g} rpm)", "radial_load") or \
-            _load_and_weight_error(self.bearing, (l1x, l1y), "radial_load", self.scene.structure.shaft_mass,
-                                   self.scene.gravity, "the scene's structure.shaft_mass")
-        if error:
-            raise UserError(error)
+        s1, (l1x, l1y) = self._command(shaft_speed, radial_load)
         n = int(n)
         with self._compiling.within(self._tier_kernels):    # a switch's new tier too
-            self.maybe_switch_tier(s1, (l1x, l1y))
+            self._maybe_switch_tier(s1, (l1x, l1y))
             series, accel = self._run(n, s0, s1, l0x, l0y, l1x, l1y, self.index)
         self._compiling.finish()
         self._pending = {k: v[n:] for k, v in series.items()}
@@ -617,7 +653,7 @@ class Simulator:
         negative one): what the signal holds there, e.g. at the last sample a node has published
         while it computes ahead."""
         if not _whole_number(sample):
-            raise UserError(f"sample = {sample!r}: expected a whole number (an output sample index)")
+            raise UserError(f"sample = {short_repr(sample)}: expected a whole number (an output sample index)")
         return self._defect_schedule.sizes(max(int(sample), 0))
 
     @property
@@ -629,8 +665,13 @@ class Simulator:
 
     # ---- fidelity -----------------------------------------------------------------------------
     def maybe_switch_tier(self, shaft_speed: float, radial_load) -> bool:
-        """With ``fidelity="auto"``, re-select the tier for a new operating point and switch
-        without a discontinuity (the new tier starts from the old one's state)."""
+        """With ``fidelity="auto"``, re-select the tier for a new operating point (rad/s; (x, y) N,
+        checked as ``advance`` checks them) and switch without a discontinuity (the new tier
+        starts from the old one's state)."""
+        return self._maybe_switch_tier(*self._command(shaft_speed, radial_load))
+
+    def _maybe_switch_tier(self, shaft_speed: float, radial_load: tuple) -> bool:
+        """``maybe_switch_tier`` of an operating point already checked (``_command``)."""
         sel = reselect_tier(self.scene, self.requested_fidelity, self.selection,
                             (self._shaft_speed, self._radial_load), (shaft_speed, radial_load))
         if sel is None:
@@ -652,9 +693,10 @@ class Simulator:
     def switch_ahead(self, shaft_speed: float, radial_load) -> bool:
         """Whether advancing to this operating point (rad/s; (x, y) N) switches the tier: the
         live node then starts the batch where it has the most time before the next publication
-        (the new tier's set-up: about 8 ms to the skidding tier, several times a batch's work)."""
+        (the new tier's set-up: about 8 ms to the skidding tier, several times a batch's work).
+        The arguments are checked as ``advance`` checks them."""
         sel = reselect_tier(self.scene, self.requested_fidelity, self.selection,
-                            (self._shaft_speed, self._radial_load), (float(shaft_speed), tuple(radial_load)))
+                            (self._shaft_speed, self._radial_load), self._command(shaft_speed, radial_load))
         return sel is not None and sel.tier != self.tier
 
     @property

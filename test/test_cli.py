@@ -363,6 +363,74 @@ def test_advance_names_a_bad_speed_or_load_and_what_is_allowed(call, message):
     assert np.isfinite(inside.accel).all() and sim.index == 10
 
 
+@pytest.mark.parametrize("load, shown", [
+    ([[0, -50]], "[[0, -50]]"),                                  # nested: was taken as (0, -50)
+    (np.array([[0.0], [-50.0]]), "array([[  0.], [-50.]])"),     # a (2, 1) array: taken as well
+    (np.zeros((1, 1, 2)), "array([[[0., 0.]]])"),
+    ([[0], -50], "[[0], -50]"),                                  # ragged: numpy's ValueError
+    ([0, -50, 1], "[0, -50, 1]"),
+    ("0,-50", "'0,-50'"),
+    ({"x": 0, "y": -50}, "{'x': 0, 'y': -50}"),
+])
+@pytest.mark.parametrize("method", ["advance", "switch_ahead", "maybe_switch_tier"])
+def test_a_load_that_is_not_two_numbers_is_one_line_in_every_method_that_takes_one(method, load, shown):
+    """``radial_load`` is a pair of numbers: ``advance`` took anything numpy could reshape to two
+    ([[0, -50]], a column), ``switch_ahead`` and ``maybe_switch_tier`` (which the node calls) did
+    not check at all (numpy's "truth value of an array" or "could not convert")."""
+    sim = Simulator("er16k_healthy", fidelity="auto")
+    before = sim.radial_load
+    call = {"advance": lambda: sim.advance(10, radial_load=load),
+            "switch_ahead": lambda: sim.switch_ahead(167.0, load),
+            "maybe_switch_tier": lambda: sim.maybe_switch_tier(167.0, load)}[method]
+    with pytest.raises(UserError) as exc:
+        call()
+    assert str(exc.value) == f"radial_load = {shown}: expected two numbers (x, y), N"
+    assert sim.index == 0 and sim.radial_load == before
+
+
+@pytest.mark.parametrize("method", ["advance", "switch_ahead", "maybe_switch_tier"])
+def test_a_speed_or_load_beyond_floats_is_one_line_with_its_digits_cut(method):
+    """An int too large for a float (10**400) was float()'s OverflowError from ``advance``; the
+    other two took a string for a speed or ended in a TypeError on a list."""
+    sim = Simulator("er16k_healthy", fidelity="auto")
+    call = {"advance": lambda s, l: sim.advance(10, shaft_speed=s, radial_load=l),
+            "switch_ahead": sim.switch_ahead, "maybe_switch_tier": sim.maybe_switch_tier}[method]
+    cut = "100000000000000000...0000000000000000000"
+    for speed, load, message in [(10 ** 400, (0.0, -50.0), f"shaft_speed = {cut} rad/s: must be a finite number"),
+                                 (167.0, [10 ** 400, 0], f"radial_load = ({cut}, 0) N: must be finite numbers"),
+                                 ("167", (0.0, -50.0), "shaft_speed = '167': expected a number, rad/s"),
+                                 ([167.0], (0.0, -50.0), "shaft_speed = [167.0]: expected a number, rad/s"),
+                                 (math.nan, (0.0, -50.0), "shaft_speed = nan rad/s: must be a finite number"),
+                                 (1e9, (0.0, -50.0), "shaft_speed = 1e+09 rad/s (9.5493e+09 rpm): beyond what "
+                                  "bearing ER-16K takes (|speed| <= 25974 rpm, n*dm <= 1e+06 rpm mm)")]:
+        with pytest.raises(UserError) as exc:
+            call(speed, load)
+        assert str(exc.value) == message
+    assert sim.index == 0
+    # a pair in any of the usual forms, numpy's numbers too, is taken
+    for load in ((0.0, -50.0), [0, -50], np.array([0.0, -50.0]), (np.float32(0), np.int64(-50))):
+        call(np.float64(167.0), load)
+
+
+@pytest.mark.parametrize("key", ["sample_rate", "seed", "oversample", "tolerance", "fidelity", "solver", "rk4_step"])
+@pytest.mark.parametrize("value", [np.array([[15000.0], [1.0]]), 10 ** 400, "x" * 5000],
+                         ids=["2-D array", "400 digits", "5000 characters"])
+def test_a_bad_setting_of_any_size_is_named_on_one_short_line(key, value):
+    """The constructor's refusals printed the value's full repr: numpy's for a 2-D array spans
+    lines, and 10**400 or a 5000-character string made a "one line" of thousands of characters."""
+    settings = {key: value}
+    if key == "rk4_step":
+        settings["solver"] = "rk4"
+    with pytest.raises(UserError) as exc:
+        Simulator("er16k_healthy", **settings)
+    text = str(exc.value)
+    assert text.startswith(f"{key} = ") and "\n" not in text and len(text) < 250, text
+    if not isinstance(value, int):         # a sample index may be any whole number
+        with pytest.raises(UserError) as exc:
+            Simulator("er16k_healthy", fidelity="kinematic").defect_sizes_at(value)
+        assert "\n" not in str(exc.value) and len(str(exc.value)) < 250
+
+
 @pytest.mark.parametrize("sample_rate, n", [(15000.0, 10 ** 12), (15000.0, 2 ** 20 + 1), (1000.0, 10 ** 9)])
 def test_an_advance_too_large_to_hold_in_memory_is_refused_in_one_line(sample_rate, n):
     """``advance(10**12)`` died with a MemoryError (a smaller huge one could meet the OOM killer

@@ -626,6 +626,30 @@ def test_the_scene_file_and_other_files_that_are_not_recordings_are_not_replaced
             assert rec.topics()["/accel"].count == samples // 150
 
 
+def test_a_symbolic_link_at_out_is_written_through_and_a_loop_is_one_line(tmp_path, monkeypatch, capsys):
+    """``--out link.mcap``: the partial file was moved onto the link itself, which became a regular
+    file while its target (an earlier recording, or nothing where it dangled) stayed as it was.
+    Now the target is written (created where the link dangles) and the link stays, as a shell's
+    ``>`` does; a link that loops was pathlib's "RuntimeError: Symlink loop" as an internal error."""
+    monkeypatch.chdir(tmp_path)
+    Path("runs").mkdir()
+    os.symlink("runs/new.mcap", "dangling.mcap")
+    assert cli.main(["render", "er16k_healthy", "--duration", "0.05", "--out", "dangling.mcap"]) == 0
+    assert cli.main(["render", "er16k_healthy", "--duration", "0.05", "--out", "runs/old.mcap"]) == 0
+    os.symlink("runs/old.mcap", "live.mcap")
+    assert cli.main(["render", "er16k_healthy", "--duration", "0.1", "--out", "live.mcap"]) == 0   # replaces old
+    for link, target, samples in (("dangling.mcap", "runs/new.mcap", 750), ("live.mcap", "runs/old.mcap", 1500)):
+        assert Path(link).is_symlink() and os.readlink(link) == target
+        with open_recording(target) as rec:
+            assert rec.topics()["/accel"].count == samples // 150
+    assert sorted(p.name for p in Path("runs").iterdir()) == ["new.mcap", "old.mcap"]   # no partial file left
+    os.symlink("loop.mcap", "loop.mcap")
+    code, err = _one_line_error(capsys, ["render", "er16k_healthy", "--duration", "0.05", "--out", "loop.mcap"])
+    assert (code, err.strip()) == (2, "error: --out = 'loop.mcap': a symbolic link that loops (it leads back to "
+                                      "itself); give another path or remove the link")
+    assert os.readlink("loop.mcap") == "loop.mcap"
+
+
 @pytest.mark.parametrize("sig, status", [(2, 130), (15, 143), (1, 129)], ids=["SIGINT", "SIGTERM", "SIGHUP"])
 def test_a_render_stopped_by_a_signal_leaves_a_finalised_file_at_out_and_says_so(tmp_path, ros_env, sig, status):
     """SIGTERM killed a render (status 143, no word) and left a file without a footer at --out,

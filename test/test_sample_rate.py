@@ -87,3 +87,21 @@ def test_a_low_output_rates_skid_ratios_are_those_of_its_own_rows():
     b = sim.advance(100, shaft_speed=9000 * RPM)
     pure = 0.5 * b.shaft_speed * (1.0 - scene.bearing.diameter_ratio)
     np.testing.assert_allclose(b.extras["cage_skid"], 100.0 * (pure - b.cage_speed) / pure, rtol=0, atol=1e-6)
+
+
+def test_the_api_takes_a_rate_that_render_and_the_node_refuse_for_their_tables(tmp_path, monkeypatch, capsys):
+    """render and the node take multiples of 100 Hz (``messages.batching_error``: a 10 ms table of
+    whole samples); the API has no tables, so 15001 Hz runs, in batches of any width, its samples
+    contiguous in time.  Render refuses the same rate in one line."""
+    from bearing_sim_ros import cli
+    from bearing_sim_ros.messages import BATCH_DURATION, STATE_RATE, batching_error
+
+    assert batching_error(15001.0, BATCH_DURATION, STATE_RATE)
+    sim = Simulator("er16k_outer_race", sample_rate=15001)
+    a, b = sim.advance(150), sim.advance(151)
+    assert (a.index0, b.index0, sim.index) == (0, 150, 301)
+    assert b.t0 == 150 / 15001.0 and sim.time == 301 / 15001.0
+    assert np.isfinite(a.accel).all() and np.isfinite(b.accel).all()
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(["render", "er16k_outer_race", "--duration", "0.1", "--sample-rate", "15001", "--out", "x.mcap"]) == 2
+    assert "multiples of 100 Hz" in capsys.readouterr().err and not any(tmp_path.iterdir())

@@ -24,7 +24,7 @@ import numbers
 
 import numpy as np
 
-from ..errors import UserError
+from ..errors import UserError, short_repr
 
 EXPLICIT = 0
 ROSENBROCK = 1
@@ -41,7 +41,7 @@ def check_rk4_step(rk4_step) -> None:
     lo, hi = RK4_STEP_RANGE
     if rk4_step is not None and not (isinstance(rk4_step, numbers.Real) and not isinstance(rk4_step, bool)
                                      and lo <= rk4_step <= hi):
-        raise UserError(f"rk4_step = {rk4_step!r}: allowed range is [{lo:g}, {hi:g}] s")
+        raise UserError(f"rk4_step = {short_repr(rk4_step)}: allowed range is [{lo:g}, {hi:g}] s")
 
 
 class Method:

@@ -41,7 +41,8 @@ Pieces of an earlier split recording under the same name are not replaced: two r
 pieces would mix in one folder (``existing_pieces``).
 
 Replace when done (optional, ``replace_when_done``; what ``render`` uses): each file is written
-as ``<name>.<pid>.partial`` beside it and moved onto its name (``os.replace``) once finalised,
+as ``<name>.<pid>.partial`` beside it and moved onto its name (``os.replace``) once finalised
+(a name that is a symbolic link: beside and onto the file it points to),
 so the name only ever holds a complete file, and an earlier recording there stays until the new
 one is complete; ``discard`` (a failed render) removes the partial file and leaves the name
 alone.  A device or a pipe (/dev/null) is written directly.  Without it (the live node) the file
@@ -596,15 +597,21 @@ class Recorder:
 
         path = self._current_path()
         check_replaceable(path, self._where(path), self._keep)
-        written = path
-        if self._replace_when_done and (not path.exists() or path.is_file()):
-            written = path.with_name(f"{path.name}.{os.getpid()}.partial")
+        final = path
+        if self._replace_when_done and path.is_symlink():
+            # the file the link points to is the one replaced (created, where the link dangles),
+            # as a shell's > and paths.replacing (report's files) do: os.replace onto the link put
+            # a regular file in its place and left its target as it was
+            final = Path(os.path.realpath(path))
+        written = final
+        if self._replace_when_done and (not final.exists() or final.is_file()):
+            written = final.with_name(f"{final.name}.{os.getpid()}.partial")
         # rotating (the writer thread), a close ends a wait for a pipe's reader too: as a write error
-        stream = _open_held(written, self._where(path), final=path,
+        stream = _open_held(written, self._where(path), final=final,
                             stopped=lambda: self._closing or self._stopped())
         if not stream.seekable():
             stream = _Counted(stream)     # a pipe: the MCAP writer asks where each record starts
-        self._writing = (written, path)
+        self._writing = (written, final)
         self._written_at = written.absolute()    # the name checked against the open file (a chdir moves no file)
         try:
             writer = Writer(stream, chunk_size=self._chunk_bytes(), compression=CompressionType.ZSTD)
