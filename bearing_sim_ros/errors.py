@@ -2,8 +2,9 @@
 import reprlib
 
 
-
 class _ShortRepr(reprlib.Repr):
+    """``reprlib.Repr`` that keeps a numpy array on one line."""
+
     def repr_ndarray(self, x, level):
         """A numpy array on one line: numpy's repr puts each row of a 2-D one on a line of its
         own, and an error is one line (numpy itself cuts an array above 1000 entries)."""
