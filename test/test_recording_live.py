@@ -394,3 +394,64 @@ def test_a_recording_killed_hard_is_reported_and_played_up_to_its_last_complete_
     assert play.returncode == 0, play.stderr
     assert f"play {recovered}\n" in play.stderr and f"play {out}: published {count} messages" in play.stderr, \
         play.stderr
+
+
+def test_the_file_of_a_node_still_recording_is_reported_as_being_written_not_as_killed(
+        bearing_sim_exe, ros_env, tmp_path):
+    """A newcomer who reports the node's file while the node still records it (a second terminal,
+    "Record the live node") was told the file's "writer never finished, e.g. a hard kill or a
+    power cut" and looked for a crash that had not happened.  The writer holds the file: report
+    and play read it as far as it is written and say that it is still being written; once the
+    node ends, the same file is a finished one."""
+    out = tmp_path / "live.mcap"
+    proc = subprocess.Popen([bearing_sim_exe, "node", "--ros-args", "-p", "scene:=er16k_outer_race",
+                             "-p", "fidelity:=kinematic", "-p", f"record:={out}"],
+                            env=ros_env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    reports = []
+
+    def report_while_it_records():
+        if not (out.exists() and out.stat().st_size > 1_200_000):    # a few complete chunks
+            return False
+        report = subprocess.run([bearing_sim_exe, "report", str(out), "--out", str(tmp_path / "report")],
+                                env=ros_env, capture_output=True, text=True, timeout=120)
+        reports.append((report, json.loads((tmp_path / "report" / "summary.json").read_text())))
+        return True
+
+    _stdout, stderr = signal_when(proc, report_while_it_records, signal.SIGINT, 0.0,
+                                  "the node never wrote 1.2 MB of recording")
+    assert proc.returncode == 0, stderr
+    report, summary = reports[0]
+    line = (f"report: {out}: read as far as it is written: a recording still being written holds it (its "
+            "footer and summary come when its writer ends); read up to byte ")
+    assert report.returncode == 0 and report.stderr.startswith(line), report.stderr
+    assert "killed" not in report.stderr and "never finished" not in report.stderr
+    assert report.stderr.count("\n") == 1 and report.stderr.endswith("; the rest is not written yet\n")
+    assert summary["recovered"] == report.stderr[len("report: "):-1] and summary["verdict"] == "outer"
+    with open_recording(out) as rec:          # the node ended: its file is finished
+        assert rec.recovered is None and rec.message_count > summary["messages"]
+
+
+def test_a_file_held_by_its_writer_before_its_first_chunk_is_refused_as_not_written_yet(
+        bearing_sim_exe, ros_env, tmp_path):
+    """The first second of a node's recording holds no complete chunk: `report` on it said
+    "e.g. the last file of a recording killed hard (kill -9) as it began" while the recording ran
+    on.  A file its writer still holds is said to be one whose first chunk is not written yet,
+    one line, exit status 2, for `report` and `play` alike."""
+    from std_msgs.msg import Float64
+
+    from bearing_sim_ros.recording.recorder import Recorder
+
+    path = tmp_path / "starting.mcap"
+    with Recorder(path, {"scene": "starting"}, start_time_ns=0) as rec:
+        rec.add_topic("/x", "std_msgs/msg/Float64", 10)
+        rec.write("/x", Float64(data=1.0), 0)           # in the open chunk, not yet written
+        results = [subprocess.run(args, env=ros_env, capture_output=True, text=True, timeout=120) for args in
+                   ([bearing_sim_exe, "report", str(path), "--out", str(tmp_path / "report")],
+                    [bearing_sim_exe, "play", str(path), "--wait", "0"])]
+    for result in results:
+        assert result.returncode == 2, result.stderr
+        assert result.stderr.startswith(f"error: {path}: a recording still being written holds it, and it has "
+                                        "no complete chunk yet ("), result.stderr
+        assert result.stderr.count("\n") == 1 and "killed" not in result.stderr
+    with open_recording(path) as finished:           # written out as its writer ended
+        assert finished.recovered is None and finished.message_count == 1

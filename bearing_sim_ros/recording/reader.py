@@ -6,6 +6,8 @@
 A truncated file (no footer and no summary: its writer never finished, e.g. the process was
 killed hard or the machine lost power) is read as far as it goes, up to its last complete chunk,
 and says so in ``recovered`` (one line: what was read, what is lost), which the commands print.
+A file that a recording still being written holds (``recorder.being_written``: the node's file
+while it runs) is read the same way, and ``recovered`` says that it is still being written.
 
 Every problem with the file is a :class:`~bearing_sim_ros.errors.UserError` of one line: no such
 file, an empty file, not an MCAP file, a file cut before its first chunk ends, a corrupt chunk
@@ -22,7 +24,7 @@ from dataclasses import dataclass
 
 from ..errors import UserError
 from ..paths import input_file
-from .recorder import FILE_INDEX, existing_pieces
+from .recorder import FILE_INDEX, being_written, existing_pieces
 
 MAGIC = b"\x89MCAP0\r\n"
 
@@ -70,6 +72,14 @@ def deserialize(path, topic: str, msg_type: str, log_ns: int, data: bytes, cls):
                         "writer's") from None
 
 
+def _not_written_yet(name: str, size: int) -> UserError:
+    """The line for a file that a recording still being written holds (``being_written``) before
+    its first chunk is complete: said as such, not as the file of a writer killed as it began."""
+    return UserError(f"{name}: a recording still being written holds it, and it has no complete chunk yet "
+                     f"({size} bytes): no message to read yet; try again in a few seconds, or once its "
+                     "writer ends")
+
+
 class Recording:
     """An opened, checked MCAP recording.  Use as a context manager or call :meth:`close`.
 
@@ -91,6 +101,8 @@ class Recording:
             raise UserError(f"{name}: cannot read it ({exc.strerror})") from None
         try:
             head = self._stream.read(8)
+            if (size == 0 or head != MAGIC) and MAGIC.startswith(head) and being_written(self.path):
+                raise _not_written_yet(name, size)      # its writer's first bytes still in its buffer
             if size == 0:
                 # what a hard kill leaves of the file just begun (a split recording's last piece):
                 # "not an MCAP file ... expected a recording made by the node" said the opposite
@@ -120,13 +132,16 @@ class Recording:
                 scan = _scan(self._stream, size, name)
                 header, summary, metas, self.attachments = scan.header, scan.summary, scan.metas, scan.attachments
                 self._reader = _indexed_reader(self._stream, summary)
+                writing = not finished and being_written(self.path)    # a node or `run` recording to it now
                 if not finished and not summary.chunk_indexes:
                     # nothing to read, and perhaps not even the metadata that says what it is
+                    if writing:
+                        raise _not_written_yet(name, size)
                     raise UserError(f"{name}: truncated MCAP recording ({size} bytes, no footer) without a complete "
                                     "chunk: no message to read, e.g. the last file of a recording killed hard "
                                     "(kill -9) as it began")
                 if not finished:
-                    self.recovered = scan.recovered_text(name, size)
+                    self.recovered = scan.recovered_text(name, size, writing)
             if header.profile != "ros2":
                 raise UserError(f"{name}: MCAP profile {header.profile!r} is not 'ros2': not a ROS 2 recording")
             stats = summary.statistics
@@ -260,11 +275,18 @@ class _Scan:
         self.counts: dict = {}     # channel id -> messages
         self.first_ns = self.last_ns = None
 
-    def recovered_text(self, name: str, size: int) -> str:
-        """One line: what was read of the truncated file ``name`` (``size`` bytes) and what is lost."""
+    def recovered_text(self, name: str, size: int, writing: bool = False) -> str:
+        """One line: what was read of the truncated file ``name`` (``size`` bytes) and what is lost;
+        or, where a recording still being written holds it (``writing``), what was read so far."""
         chunks = len(self.summary.chunk_indexes)
         read = (f"{sum(self.counts.values())} messages in its {chunks} complete chunk{'s' if chunks > 1 else ''}, "
                 f"{(self.last_ns - self.first_ns) * 1e-9:.2f} s of log time")
+        if writing:
+            # not cut: "its writer never finished, e.g. a hard kill" sent a user who reported the
+            # node's file while it ran looking for a crash that had not happened
+            return (f"{name}: read as far as it is written: a recording still being written holds it (its "
+                    f"footer and summary come when its writer ends); read up to byte {self.end} of {size}: "
+                    f"{read}; the rest is not written yet")
         lost = ("its data section complete, only the summary lost" if self.ended == "data end" else
                 f"the last {size - self.end} bytes (zeros: never written, e.g. a power cut) lost" if self.zeros else
                 f"the last {size - self.end} bytes (an incomplete record) lost" if size > self.end else

@@ -223,9 +223,18 @@ def _writer_of(final: Path, mine: Path, where: str) -> UserError | None:
     return None
 
 
-def _held(path: Path) -> bool:
+def being_written(path) -> bool:
+    """Whether a recording still being written holds ``path`` (a node's or ``run``'s file, or a
+    piece of a split recording being written), for a reader: ``report`` and ``play`` read such a
+    file as far as it is written, and say so, not that its writer was killed."""
+    return _held(Path(path), shared=True)
+
+
+def _held(path: Path, shared: bool = False) -> bool:
     """Whether the regular file ``path`` is held by a writer (``_open_held``'s lock): tried with a
-    lock of our own, released at once.  A file that cannot be opened is not taken for held."""
+    lock of our own, released at once.  A file that cannot be opened is not taken for held.
+    ``shared``: tried with a shared lock (a reader's), which another reader's try does not block,
+    so that two readers at once do not take each other for a writer."""
     import fcntl
 
     try:
@@ -235,7 +244,7 @@ def _held(path: Path) -> bool:
     try:
         if not stat.S_ISREG(os.fstat(fd).st_mode):
             return False
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        fcntl.flock(fd, (fcntl.LOCK_SH if shared else fcntl.LOCK_EX) | fcntl.LOCK_NB)
         return False
     except BlockingIOError:
         return True
