@@ -4,6 +4,7 @@ disk; rotation; CDR padding zeroed without changing any value."""
 from __future__ import annotations
 
 import os
+import threading
 import time
 from pathlib import Path
 
@@ -147,6 +148,32 @@ def test_add_topic_takes_an_int_depth_like_rclpy(tmp_path):
     assert offered.depth == 10 and offered.history.name == "KEEP_LAST"
     assert offered.reliability.name == rclpy_default.reliability.name == "RELIABLE"
     assert offered.durability.name == rclpy_default.durability.name == "VOLATILE"
+
+
+def test_a_reader_looking_at_a_file_as_its_writer_starts_does_not_make_the_writer_refuse(tmp_path):
+    """`report` and `play` ask whether a writer still holds a file (``being_written``: a shared
+    lock tried for a moment).  A node that started its recording at that moment took the reader's
+    lock for another writer's and refused to record ("another recording is being written to this
+    file").  A writer tries its lock again for a while: a reader's 20 ms hold does not refuse it,
+    and a writer that holds the file throughout still refuses the next."""
+    import fcntl
+
+    path = tmp_path / "watched.mcap"
+    path.write_bytes(b"")
+    reader = os.open(path, os.O_RDONLY)
+    fcntl.flock(reader, fcntl.LOCK_SH | fcntl.LOCK_NB)      # what a reader holds for a moment
+    release = threading.Timer(0.02, os.close, (reader,))
+    release.start()
+    try:
+        writer = Recorder(path, {"a": "b"})
+    finally:
+        release.join()
+    with pytest.raises(UserError, match=r"record = .*watched.mcap.*another recording is being written to this file"):
+        Recorder(path, {"a": "b"})
+    writer.close()
+    assert writer.error == ""
+    with open_recording(path) as rec:
+        assert rec.message_count == 0
 
 
 def test_unwritable_path_is_a_user_error(tmp_path):

@@ -232,7 +232,8 @@ def being_written(path) -> bool:
 
 def _held(path: Path, shared: bool = False) -> bool:
     """Whether the regular file ``path`` is held by a writer (``_open_held``'s lock): tried with a
-    lock of our own, released at once.  A file that cannot be opened is not taken for held.
+    lock of our own (``_flock_soon``: held only where it stays held for about 40 ms), released at
+    once.  A file that cannot be opened is not taken for held.
     ``shared``: tried with a shared lock (a reader's), which another reader's try does not block,
     so that two readers at once do not take each other for a writer."""
     import fcntl
@@ -244,12 +245,32 @@ def _held(path: Path, shared: bool = False) -> bool:
     try:
         if not stat.S_ISREG(os.fstat(fd).st_mode):
             return False
-        fcntl.flock(fd, (fcntl.LOCK_SH if shared else fcntl.LOCK_EX) | fcntl.LOCK_NB)
-        return False
-    except BlockingIOError:
-        return True
+        return not _flock_soon(fd, fcntl.LOCK_SH if shared else fcntl.LOCK_EX)
     finally:
         os.close(fd)
+
+
+# A lock tried by ``_held`` lasts a moment, and a writer that tries its own just then must not take
+# it for another writer's (a reader's ``being_written`` while a node starts its file made the node
+# refuse to record): a lock is tried again for up to about 40 ms before it counts as held.
+# A writer's lock is held for the whole recording.
+LOCK_TRIES = 5
+LOCK_RETRY_S = 0.01
+
+
+def _flock_soon(fd: int, operation: int) -> bool:
+    """Whether ``flock(fd, operation)`` (``LOCK_EX`` or ``LOCK_SH``, without blocking) was taken,
+    tried ``LOCK_TRIES`` times ``LOCK_RETRY_S`` (s) apart; False where another holds it throughout."""
+    import fcntl
+
+    for attempt in range(LOCK_TRIES):
+        try:
+            fcntl.flock(fd, operation | fcntl.LOCK_NB)
+            return True
+        except BlockingIOError:
+            if attempt + 1 < LOCK_TRIES:
+                time.sleep(LOCK_RETRY_S)
+    return False
 
 
 def _gone(pid: int) -> bool:
@@ -355,10 +376,8 @@ def _open_held(path: Path, where: str, final: Path, stopped):
         if stat.S_ISREG(mode) or stat.S_ISFIFO(mode):
             # a named pipe too: two recordings into one interleave their bytes, and its reader
             # gets neither (both writers exited 0)
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except BlockingIOError:
-                raise _busy(where) from None
+            if not _flock_soon(fd, fcntl.LOCK_EX):
+                raise _busy(where)
         if stat.S_ISREG(mode):
             # a node's file moved aside by a render finishing meanwhile is not at its name any more
             refusal = _writer_of(final, path, where) or (_busy(where) if _replaced(path, fd) else None)
