@@ -2,7 +2,7 @@
 ER-16K's and the 6205's 7.94 mm (the custom 6000-size, 4.762 mm; 6-ball, 6.35 mm; 6220-size,
 25.4 mm: ``docs/probes/custom_bearings``), at small play (C_r / D about 0.002-0.003), large play
 (0.006-0.008) and preloaded (C_r 0 and -2 um), each at F_c / Q_max about 0.002 and 0.005, and a
-few small-play points at 0.0005-0.001; docs/fidelity_rms_gap.md, "Fresh bearings" (2026-12-01).
+few small-play points at 0.0004-0.001; docs/fidelity_rms_gap.md, "Fresh bearings" (2026-12-01).
 Run from the repository: ``python docs/probes/centrifugal_gate/fresh.py [--settle S]`` (the
 reference runs cached in $CENTRIFUGAL_GATE_CACHE as ``probe.py``'s); fresh.txt is its output
 (and, appended, its output with ``--settle 0.9``).
