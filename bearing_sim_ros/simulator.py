@@ -453,9 +453,11 @@ class Simulator:
     @property
     def centrifugal(self) -> bool | None:
         """Whether the kinematic tier's balls carry their centrifugal force (True) or are massless
-        (False), as decided at its last linearisation by F_c / Q_max against
-        ``physics.kinematic.CENTRIFUGAL_GATE`` (0.01; F_c = m_b (D_m / 2) w_c^2 in N, Q_max = 5 W /
-        Z); None for the skidding tier, whose balls always have their mass."""
+        (False), as decided at its last linearisation by F_c / Q_max
+        (``physics.kinematic.carries_centrifugal_force``: F_c = m_b (D_m / 2) w_c^2 in N, Q_max =
+        5 W / Z) against ``CENTRIFUGAL_GATE`` (0.01), and on a bearing of small radial play (0 <
+        C_r / D <= ``CENTRIFUGAL_SMALL_PLAY``, 0.005) against ``CENTRIFUGAL_SMALL_PLAY_GATE``
+        (0.0012); None for the skidding tier, whose balls always have their mass."""
         if self.tier == "skidding":
             return None
         return self._model.centrifugal

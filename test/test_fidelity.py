@@ -68,7 +68,8 @@ def test_at_a_small_bearings_speed_limit_the_kinematic_tier_auto_keeps_matches_t
     """Where the tiers' RMS looked 72 % apart (kinematic 33.9 m/s^2 against the skidding tier's
     default solver's 19.7), the default solver was off: the skidding reference (RK4 at 1e-6 and
     4e-7 s agree with it to four digits) gives 34.3, within 5 % of the kinematic tier that ``auto``
-    picks there (docs/fidelity_rms_gap.md)."""
+    picks there (docs/fidelity_rms_gap.md): 34.5 with its balls' centrifugal force, which its
+    small play (C_r / D 0.0008) gives it at F_c / Q_max 0.0056, 33.9 massless."""
     scene = _6000_size_at_its_limits()
     sel = select_tier(scene, "auto", scene.shaft_speed, scene.radial_load, scene.fidelity_tolerance)
     assert sel.tier == "kinematic", sel
@@ -108,6 +109,29 @@ def test_a_small_bearing_at_light_load_and_high_speed_kinematic_rms_is_near_the_
 
     rms = _rms_against_reference(scene_from_dict(small_bearing(55555, 93.0)), int(0.15 * 15000), int(0.05 * 15000))
     assert abs(rms["kinematic"] / rms["skidding"] - 1.0) < 0.10, rms
+
+
+def test_a_small_play_bearing_below_the_gate_carries_the_force_near_the_reference():
+    """A 6220-size bearing (10 balls of 25.4 mm; docs/probes/custom_bearings) with 74 um of radial
+    play (C_r / D 0.0029) at 1000 rpm under 8000 N: F_c / Q_max 0.005, under ``CENTRIFUGAL_GATE``
+    (0.01) but on the small play's gate (``CENTRIFUGAL_SMALL_PLAY_GATE``), so its kinematic balls
+    carry their centrifugal force, and its accel_y RMS is 1.9 % below the reference's (noise off,
+    0.15 s after 0.05 s) where the massless balls were 11.9 % below (12 % over 0.6 s after 0.3 s:
+    docs/fidelity_rms_gap.md, "Fresh bearings").  5 %."""
+    from bearing_sim_ros.scene import scene_from_dict
+
+    part = lambda m, k, c: {"mass": m, "stiffness": k, "damping": c}  # noqa: E731
+    scene = scene_from_dict({
+        "name": "6220-size",
+        "bearing": {"name": "6220-size", "balls": 10, "ball_diameter_mm": 25.4, "pitch_diameter_mm": 140.0,
+                    "radial_clearance_um": 74.0, "width_mm": 34.0},
+        "structure": {"shaft": part(60.0, 5e7, 2e4), "pedestal": part(150.0, 2e9, 1e5),
+                      "resonator": {"mass": 0.05, "frequency_hz": 3500, "damping_ratio": 0.04}},
+        "operating_point": {"shaft_speed_rpm": 1000, "radial_load": [0.0, -8000.0]},
+        "lubrication": {"viscosity": 0.04, "pressure_viscosity": 2.0e-8}, "sensor": {"noise_density": 0.0}})
+    rms = _rms_against_reference(scene, int(0.2 * 15000), int(0.05 * 15000))
+    assert abs(rms["kinematic"] / rms["skidding"] - 1.0) < 0.05, rms
+    assert Simulator(scene, fidelity="kinematic").centrifugal is True
 
 
 def test_light_load_high_speed_gets_skidding():

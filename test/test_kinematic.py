@@ -979,6 +979,39 @@ def test_shipped_er16k_and_6205_scenes_keep_massless_balls_and_the_light_ones_ca
     assert Simulator("er16k_skidding", fidelity="skidding").centrifugal is None
 
 
+def test_below_the_centrifugal_gate_small_radial_play_carries_the_force_and_large_play_does_not():
+    """Below ``CENTRIFUGAL_GATE`` the balls carry their centrifugal force where the radial play is
+    small (0 < C_r / D <= ``CENTRIFUGAL_SMALL_PLAY``, 0.005) and F_c / Q_max is at least
+    ``CENTRIFUGAL_SMALL_PLAY_GATE`` (0.0012): the 6000-size (4.762 mm balls) with 10 um (C_r / D
+    0.0021) at 0.005 does, at 0.0007 does not, and takes the force when the speed moves up to
+    0.005; with 33 um (0.0069) or preloaded (-2 um) at 0.005 the balls stay massless, and from
+    0.01 on every play carries it (docs/fidelity_rms_gap.md, "Fresh bearings")."""
+    from conftest import small_bearing
+
+    from bearing_sim_ros.physics.kinematic import centrifugal_ratio
+    from bearing_sim_ros.scene import scene_from_dict
+
+    def at(clearance_um, rpm, load, ratio_range):
+        scene = scene_from_dict(small_bearing(rpm, load))
+        scene = replace(scene, bearing=scene.bearing.with_clearance(clearance_um * 1e-6))
+        ratio = centrifugal_ratio(scene, scene.radial_load, scene.shaft_speed)
+        assert ratio_range[0] < ratio < ratio_range[1], (clearance_um, rpm, ratio)
+        return scene
+
+    for clearance_um, rpm, load, ratio_range, held in (
+            (10.0, 10070, 200.0, (0.004, 0.006), True), (10.0, 3770, 200.0, (0.0005, 0.0009), False),
+            (33.0, 10080, 250.0, (0.004, 0.006), False), (-2.0, 10840, 200.0, (0.004, 0.006), False),
+            (33.0, 15000, 250.0, (0.01, 0.02), True), (-2.0, 15500, 200.0, (0.01, 0.02), True)):
+        sim = Simulator(at(clearance_um, rpm, load, ratio_range), fidelity="kinematic")
+        assert sim.centrifugal is held, (clearance_um, rpm, load)
+    # the speed moved (more than 10 %) from 0.0007 to 0.005 on the small play: decided again
+    sim = Simulator(at(10.0, 3770, 200.0, (0.0005, 0.0009)), fidelity="kinematic")
+    sim.advance(150)
+    assert sim.centrifugal is False
+    sim.advance(150, shaft_speed=10070 * RPM)
+    assert sim.centrifugal is True
+
+
 def test_a_speed_ramp_across_the_centrifugal_gate_changes_the_law_without_a_seam():
     """ER-16K under 200 N ramped from 3500 to 5000 rpm (20 batches of 10 ms): F_c / Q_max goes
     from 0.007 to 0.014, and the balls take their centrifugal force at a relinearisation (the gate

@@ -811,10 +811,12 @@ def test_a_command_across_the_tier_boundary_switches_tiers_and_says_so(started, 
 
 def test_diagnostics_follow_the_centrifugal_gate_as_the_speed_moves(started, listener):
     """b6307_seed001 at 1500 rpm / 50 N: its kinematic balls carry their centrifugal force (F_c /
-    Q_max 0.025, above ``CENTRIFUGAL_GATE``), and /diagnostics say ``centrifugal: true``.  At 750
-    rpm F_c is a quarter (0.006): the tier re-decides its gate as the speed moves, and the node's
-    /diagnostics say ``false`` (the node caches the tier's keys, so the cache must follow the gate,
-    not only the tier); back at 1500 rpm, ``true`` again.  The stream stays contiguous through."""
+    Q_max 0.025, above ``CENTRIFUGAL_GATE``), and /diagnostics say ``centrifugal: true``.  At 300
+    rpm F_c is a 25th (0.0010, under the 0.0012 of ``CENTRIFUGAL_SMALL_PLAY_GATE`` that its small
+    play, C_r / D 0.0004, is held to): the tier re-decides its gate as the speed moves, and the
+    node's /diagnostics say ``false`` (the node caches the tier's keys, so the cache must follow the
+    gate, not only the tier); back at 1500 rpm, ``true`` again.  The stream stays contiguous
+    through."""
     node = started({"scene": "b6307_seed001", "fidelity": "kinematic"})
     listener.wait_matched()
 
@@ -825,7 +827,7 @@ def test_diagnostics_follow_the_centrifugal_gate_as_the_speed_moves(started, lis
 
     first = said("true", 0)
     assert first[3]["tier"] == "kinematic"
-    for rpm, value in ((750.0, "false"), (1500.0, "true")):
+    for rpm, value in ((300.0, "false"), (1500.0, "true")):
         t_command = listener.node.get_clock().now().nanoseconds
         listener.publish_speed(rpm * 2 * math.pi / 60)
         d = said(value, t_command)

@@ -93,17 +93,21 @@ def build(which, rpm, load):
 
 def run(s, tier, gate=None, seed=SEED, **kwargs):
     """(accel x, accel y RMS in m/s^2, mean cage speed in rad/s, whether the balls carried F_c)
-    over SECONDS after SETTLE; ``gate`` replaces ``CENTRIFUGAL_GATE`` for this run."""
-    saved = kinematic.CENTRIFUGAL_GATE
+    over SECONDS after SETTLE; ``gate`` replaces ``CENTRIFUGAL_GATE`` and the small-play gate
+    ``CENTRIFUGAL_SMALL_PLAY_GATE`` for this run (inf: massless balls, 0: the force everywhere)."""
+    names = ("CENTRIFUGAL_GATE", "CENTRIFUGAL_SMALL_PLAY_GATE")
+    saved = {n: getattr(kinematic, n) for n in names}
     if gate is not None:
-        kinematic.CENTRIFUGAL_GATE = gate
+        for n in names:
+            setattr(kinematic, n, gate)
     try:
         sim = Simulator(s, sample_rate=FS, fidelity=tier, seed=seed, **kwargs)
         sim.advance(int(SETTLE * FS))
         batch = sim.advance(int(SECONDS * FS))
         held = sim.centrifugal
     finally:
-        kinematic.CENTRIFUGAL_GATE = saved
+        for n, v in saved.items():
+            setattr(kinematic, n, v)
     a = batch.accel
     return (float(np.sqrt(np.mean(a[:, 0] ** 2))), float(np.sqrt(np.mean(a[:, -1] ** 2))),
             float(np.mean(batch.cage_speed)), held)
