@@ -101,12 +101,7 @@ def main():
     rows = []
     for which, load, target, group in POINTS + PRELOAD_MORE:
         rpm, s = point(which, load, target)
-        rx, ry, _rc = gate.reference(s)
-        err = {}
-        for label, g in (("massless", math.inf), ("force", 0.0)):
-            kx, ky, _kc, held = gate.run(s, "kinematic", g)
-            assert held == (label == "force"), (which, rpm, label, held)
-            err[label] = (ky / ry - 1.0, kx / rx - 1.0)
+        rx, ry, err = errors(s)
         cr_d, rat = clearance_ratio(s), ratio(s)
         stated = (cr_d <= X0 and rat >= R0) or rat >= kinematic_gate()
         rule = kinematic.carries_centrifugal_force(s, s.radial_load, s.shaft_speed)
@@ -119,6 +114,18 @@ def main():
               f"| {err['massless'][1]:+.2%} -> {err['force'][1]:+.2%} | {closer} | {'force' if rule else 'massless'} |",
               flush=True)
     summary(rows[:len(POINTS)])
+
+
+def errors(s):
+    """The reference's accel_x and accel_y RMS (m/s^2) at scene ``s`` and the kinematic tier's
+    relative errors on them, {"massless" | "force": (accel_y, accel_x)}."""
+    rx, ry, _rc = gate.reference(s)
+    err = {}
+    for label, g in (("massless", math.inf), ("force", 0.0)):
+        kx, ky, _kc, held = gate.run(s, "kinematic", g)
+        assert held == (label == "force"), (s.name, s.shaft_speed, label, held)
+        err[label] = (ky / ry - 1.0, kx / rx - 1.0)
+    return rx, ry, err
 
 
 def kinematic_gate():
