@@ -153,10 +153,8 @@ CENTRIFUGAL_GATE = 0.01
 # (its calibration point, its shipped scenes) was further off, so those stay massless.  Preloaded
 # bearings (C_r <= 0) are left to CENTRIFUGAL_GATE alone: the force was closer at 3 of 4 fresh
 # points but 885 points further off at the fourth (a quiet 6000-size at -2 um, reference RMS a few
-# mm/s^2, ten times too loud with the force).  That was ``_ball_state``'s two-pass law, since made
-# exact ("Light preload: which tier was wrong" there): with it the force is closer at 9 of 10
-# preloaded points below and above 0.01 (-32 to +4.3 %, massless -98 to -1.5 %); the gate is
-# not re-decided on them here (no shipped scene is preloaded below 0.01: the CWRU ones are at 0.022).
+# mm/s^2, ten times too loud with the force from 0.0035 to just under 0.01; above, where this gate
+# gives it the force, +28 % against -36 % massless).
 CENTRIFUGAL_SMALL_PLAY = 0.005
 CENTRIFUGAL_SMALL_PLAY_GATE = 0.0012
 # the speed (relative) by which the shaft must move from the last decision before the gate is
@@ -166,7 +164,6 @@ CENTRIFUGAL_SPEED_STEP = 0.1
 # the film law (module ``film``): lambda^(1 + a) = C |w|^0.68 K^-0.073
 FILM_W_EXP = FILM_EXP_U / (1.0 + FILM_LAW_A)
 FILM_TABLE = film_law_table()       # a global array: numba compiles it in as a constant
-LOG_FILM_LOAD_FLOOR = math.log(FILM_LOAD_FLOOR)
 # ``_film_law``'s entries from delta_c on for massless balls (no force), and its whole tuple
 # without a film for them
 NO_FORCE = (0.0, 0.0, math.inf, 0.0, 0.0, 0.0, math.inf, 0.0, 0.0)
@@ -414,17 +411,15 @@ def _ball_state(geo, kc, law, base):
     Without a film: ``inner_contact_load`` of the interference, d = interference - delta_c (the
     inner contact's share of it).  With the films, each contact's follows its own load (the outer
     contact's Q_i + F_c, as in the skidding tier), which makes the balance two-parametric; it is
-    solved in three passes instead of an open iteration: (1) the films of a massless ball (the
+    solved in two cheap passes instead of an iteration: (1) the films of a massless ball (the
     outer one at most F_c's) and ``inner_contact_load`` give Q_i; (2) the outer contact's
     deflection and film at Q_i + F_c from it, and the inner contact's own film law (module
     ``film``, in units of its lambda_i) gives its interference g and load K_i g^1.5 (exact for a
-    given outer contact); (3) a Newton step on that map and pass 2 once more.  The quasi-static
-    law of ``docs/probes/fidelity_rms/probe.py`` (each contact's film at its own load, bisection)
-    is met within 0.1 % of each ball's own load (passes 1-2: 25-31 % off where Q_i < F_c, 0.02-
-    0.06 % on loaded balls, which took a quiet preloaded bearing's RMS ten times too high:
-    docs/fidelity_rms_gap.md, "Light preload: which tier was wrong"), and the ball touches where
-    that law says (pass 1 alone: 0.3-2.6 % of the most loaded ball's load, and the ball touched
-    up to 0.9 um late, which took b6307_seed001's RMS 22 % above the reference).  d = g / a_i in
+    given outer contact).  The quasi-static law of
+    ``docs/probes/fidelity_rms/probe.py`` (each contact's film at its own load, bisection) is met
+    within 0.1-0.9 % of the most loaded ball's load on the bearings of docs/fidelity_rms_gap.md,
+    and the ball touches where that law says (pass 1 alone: 0.3-2.6 %, and the ball touched up
+    to 0.9 um late, which took b6307_seed001's RMS 22 % above the reference).  d = g / a_i in
     contact (a_i the inner contact's share of a massless ball's deflection: the series law's
     deflection as F_c -> 0), g across a gap (all of it the inner contact's).  Without F_c the
     two passes give the massless ball's law (its films follow one load)."""
@@ -453,38 +448,6 @@ def _ball_state(geo, kc, law, base):
     hz = 0.0
     if g > 0.0:
         hz = geo[P_KI] * g * math.sqrt(g)
-    if fc > 0.0 and (hz > 0.0 or delta > dc):
-        # (3) One Newton step on Q_i = G(Q_i), G the load that pass 2 gives for an outer contact
-        # at Q_i + F_c, then G once more at its result: within 0.1 % of the quasi-static law
-        # where passes 1-2 were 25-31 % off it (a ball whose inner contact carries less than F_c:
-        # the top balls of a preloaded bearing, whose loads make its ball-pass force) and 0.02-0.06
-        # % off on the loaded balls, of the order of that force on a quiet preloaded bearing (the
-        # force is 1e-3 of the load on the 6000-size at -2 um).  The step alone left 0.3-1 % and
-        # the step on the light balls alone 27 % on that bearing's RMS.  Pass 2 with delta <= dc
-        # was exact at Q_i = 0: a ball it leaves apart from the inner race is.
-        qo = hz + fc
-        lq = math.log(qo)
-        do = geo[P_KO] * math.exp(2.0 / 3.0 * lq)
-        ho3 = c_o * math.exp(FILM_EXP_Q * max(lq, LOG_FILM_LOAD_FLOOR))
-        u3 = (base + ho3 - do) * inv_lin
-        phi3 = _film_factor(u3, phi_fi, u_fi)
-        t3 = u3 + phi3
-        q3 = 0.0
-        if t3 > 0.0:
-            gq = geo[P_KI] * lin * t3 * math.sqrt(lin * t3)
-            # dG/dQ_i: the outer contact's deflection and film move against the inner's
-            dtdu = 1.0 if u3 < u_fi else 1.0 / (1.0 + FILM_LAW_A * phi3 / t3)
-            dho = FILM_EXP_Q * ho3 if lq > LOG_FILM_LOAD_FLOOR else 0.0
-            slope = 1.5 * gq / t3 * dtdu * (dho - 2.0 / 3.0 * do) / (qo * lin)
-            q3 = max(hz + (gq - hz) / (1.0 - slope), 0.0)
-        lq = math.log(q3 + fc)
-        do = geo[P_KO] * math.exp(2.0 / 3.0 * lq)
-        ho3 = c_o * math.exp(FILM_EXP_Q * max(lq, LOG_FILM_LOAD_FLOOR))
-        u3 = (base + ho3 - do) * inv_lin
-        phi3 = _film_factor(u3, phi_fi, u_fi)
-        g3 = lin * (u3 + phi3)
-        hz3 = geo[P_KI] * g3 * math.sqrt(g3) if g3 > 0.0 else 0.0
-        g, hz, phi_i, ho = g3, hz3, phi3, ho3
     # in contact, the series law's deflection; across a gap the whole gap is the inner contact's
     # (``contact_damping``), as it was for the massless ball
     return (g * geo[P_INV_AI] if g > 0.0 else g), hz, lin * phi_i, ho

@@ -1,10 +1,13 @@
-"""The kinematic tier's centrifugal law on preloaded and small-play bearings after its ball state
-was made exact for lightly loaded balls (``physics.kinematic._ball_state``: a Newton step on
-the inner contact's load and one more pass, where two passes were 25-31 % off the quasi-static
-law for balls whose inner contact carries less than F_c); docs/fidelity_rms_gap.md, "Light
-preload: which tier was wrong".  Run from the repository: ``python
-docs/probes/centrifugal_gate/preload.py`` (the reference runs cached in
-$CENTRIFUGAL_GATE_CACHE as ``probe.py``'s); preload.txt is its output.
+"""The kinematic tier's centrifugal law on preloaded and small-play bearings with its ball state
+made exact for lightly loaded balls (``physics.kinematic._ball_state``: a Newton step on the
+inner contact's load and one more pass, where two passes were 25-31 % off the quasi-static law
+for balls whose inner contact carries less than F_c); docs/fidelity_rms_gap.md, "Light preload:
+which tier was wrong".  That change is not on ``main`` (its cost: same section): apply
+``exact_ball_state.patch`` beside this file first (``git apply
+docs/probes/centrifugal_gate/exact_ball_state.patch``), then run from the repository: ``python
+docs/probes/centrifugal_gate/preload.py`` (the reference runs cached in $CENTRIFUGAL_GATE_CACHE as
+``probe.py``'s); preload.txt is its output with the patch.  Without it, it gives fresh.txt's
+two-pass figures.
 
 The points are ``fresh.py``'s where the force was measured against the reference below 0.01
 (preloaded, ``PRELOAD_MORE``, small play and the lower end), measured as there (healthy, noise
