@@ -1197,8 +1197,9 @@ class KinematicModel:
         all at full size (``set_defect_sizes``); ``ellipse_ball_load`` (N): the ball load that sizes
         a wandering ball defect's contact ellipse, None = the most loaded ball's static load at the
         set-up (a tier switch passes the old tier's on); ``centrifugal``: None = the balls carry
-        their centrifugal force where ``CENTRIFUGAL_GATE`` says (``centrifugal_ratio``), True or
-        False = always or never (for measuring the gate)."""
+        their centrifugal force where ``carries_centrifugal_force`` says (``CENTRIFUGAL_GATE``, and
+        on small radial play ``CENTRIFUGAL_SMALL_PLAY_GATE``), True or False = always or never (for
+        measuring the gate)."""
         self.scene = scene
         self.output_rate = float(output_rate)
         self.auto_oversample = oversample is None
@@ -1382,7 +1383,7 @@ class KinematicModel:
 
     def centrifugal_ratio(self, load, speed: float) -> float:
         """F_c / Q_max of this scene at ``load`` (N) and ``speed`` (rad/s): ``centrifugal_ratio``,
-        compared with ``CENTRIFUGAL_GATE``."""
+        what ``carries_centrifugal_force`` compares with its gates."""
         return centrifugal_ratio(self.scene, load, speed)
 
     def _decide_centrifugal(self, load, speed: float) -> bool:
@@ -1569,7 +1570,7 @@ class KinematicModel:
 
     def _needs_relinearising(self, lx: float, ly: float, speed: float) -> bool:
         """Has the load (N) moved by more than 20 % of the one linearised at (10 N at least), or
-        the balls' law to take changed (``CENTRIFUGAL_GATE``)?  The gate is decided again only
+        the balls' law to take changed (``carries_centrifugal_force``)?  The gate is decided again only
         where the speed (rad/s) moved by more than ``CENTRIFUGAL_SPEED_STEP`` of the one it was
         last decided at (F_c goes as its square; a load that moves the ratio relinearises
         anyway), so that a speed that wanders about the gate does not relinearise at every
