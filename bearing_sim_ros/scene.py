@@ -250,7 +250,7 @@ class Scene:
                       tier, _number_error("fidelity_tolerance", self.fidelity_tolerance, *TOLERANCE_RANGE),
                       # and its structure, lubrication and sensor (a shaft_mass of 0 was a
                       # ZeroDivisionError inside the physics)
-                      _structure_error(self.structure), _lubrication_error(self.lubrication),
+                      _structure_error(self.structure, self.bearing), _lubrication_error(self.lubrication),
                       _sensor_error(self.sensor),
                       # a string "no" was a gravity that acts
                       "" if isinstance(self.gravity, bool) else
@@ -264,8 +264,8 @@ class Scene:
         object.__setattr__(self, "profile", tuple(knots))
         for name in ("defects", "waviness", "outputs"):
             object.__setattr__(self, name, tuple(getattr(self, name)))
-        error = (_pedestal_error(self.bearing, self.structure.pedestal_stiffness, "structure.pedestal_stiffness")
-                 or _shaft_weight_error(self.bearing, self.structure.shaft_mass, self.gravity, "structure.shaft_mass"))
+        # (the pedestal's spring was held to ``_pedestal_error`` with the structure, above)
+        error = _shaft_weight_error(self.bearing, self.structure.shaft_mass, self.gravity, "structure.shaft_mass")
         for prefix, load in [("", self.radial_load), *((f"profile[{i}].", p.radial_load)
                                                       for i, p in enumerate(self.profile))]:
             error = error or _load_and_weight_error(self.bearing, load, f"{prefix}radial_load",
@@ -496,13 +496,24 @@ def _shaft_weight_error(bearing: Bearing, shaft_mass: float, gravity: bool, key:
 PEDESTAL_SAG_MAX = 0.1
 
 
-def _pedestal_error(bearing: Bearing, stiffness: float, key: str) -> str:
+def _pedestal_least(bearing: Bearing) -> float:
+    """The least pedestal stiffness (N/m) that ``_pedestal_error`` lets through for ``bearing``."""
+    return InputLimits(bearing).max_load / PEDESTAL_SAG_MAX
+
+
+def _pedestal_error(bearing: Bearing, stiffness, key: str) -> str:
     """"" when a pedestal spring of ``stiffness`` (N/m) holds the pedestal within PEDESTAL_SAG_MAX
     under the most load ``bearing`` takes (InputLimits.max_load, what a radial load and the
     shaft's weight together are held to), else the line naming ``key``: the live node's inputs
-    may go that far, a scene's own load too.  0 (no spring) is refused as well: the balls would
-    carry no load."""
-    least = InputLimits(bearing).max_load / PEDESTAL_SAG_MAX
+    may go that far, a scene's own load too.  0 (no spring), negatives and NaN are refused with
+    the same line and its reason: asked ahead of the generic range of STRUCTURE_BOUNDS, whose
+    lower bound 0 it refuses anyway (a NaN or -5 N/m was told "allowed range is [0, 1e+12]" and
+    0 then "allowed at least 1.668e+05 N/m").  What is not a number, or too stiff, is left to
+    that range (with this rule's bound as its lower end)."""
+    if (isinstance(stiffness, bool) or not isinstance(stiffness, numbers.Real)
+            or stiffness > STRUCTURE_BOUNDS["stiffness"][1]):
+        return ""
+    least = _pedestal_least(bearing)
     if stiffness >= least:
         return ""
     return (f"{key} = {stiffness:g} N/m: allowed at least {least:.4g} N/m, which holds the pedestal within "
@@ -639,14 +650,20 @@ def _waviness_error(waviness, key: str) -> str:
             or _number_error(f"{key}.phase", waviness.phase, -2 * math.pi, 2 * math.pi, "rad"))
 
 
-def _structure_error(structure) -> str:
+def _structure_error(structure, bearing: Bearing) -> str:
     """"" when ``structure`` (a :class:`Structure` made in Python) keeps to the bounds of the YAML's
-    ``structure`` keys (STRUCTURE_BOUNDS, RESONATOR_BOUNDS), else the line naming the field: a
-    shaft_mass of 0 was a ZeroDivisionError deep in the physics, a NaN stiffness a LinAlgError."""
+    ``structure`` keys (STRUCTURE_BOUNDS, RESONATOR_BOUNDS; the pedestal's stiffness to the rule of
+    ``_pedestal_error`` for ``bearing``), else the line naming the field: a shaft_mass of 0 was a
+    ZeroDivisionError deep in the physics, a NaN stiffness a LinAlgError."""
     if not isinstance(structure, Structure):
         return f"structure = {short_repr(structure)}: expected a bearing_sim_ros.scene.Structure"
+    error = _pedestal_error(bearing, structure.pedestal_stiffness, "structure.pedestal_stiffness")
+    if error:
+        return error
     for part in ("shaft", "pedestal"):
         for key, (lo, hi, unit) in STRUCTURE_BOUNDS.items():
+            if (part, key) == ("pedestal", "stiffness"):
+                lo = _pedestal_least(bearing)
             error = _number_error(f"structure.{part}_{key}", getattr(structure, f"{part}_{key}"), lo, hi, unit)
             if error:
                 return error
@@ -782,12 +799,20 @@ def _bearing(top: _Section) -> Bearing:
     return bearing
 
 
-def _structure(top: _Section) -> Structure:
+def _structure(top: _Section, bearing: Bearing) -> Structure:
     s = top.section("structure", ("shaft", "pedestal", "resonator"), required=("shaft", "pedestal"))
     parts = {}
     for part in ("shaft", "pedestal"):
         p = s.section(part, tuple(STRUCTURE_BOUNDS), required=tuple(STRUCTURE_BOUNDS))
-        parts[part] = tuple(p.number(key, lo=lo, hi=hi) for key, (lo, hi, _unit) in STRUCTURE_BOUNDS.items())
+        bounds = dict(STRUCTURE_BOUNDS)
+        if part == "pedestal":
+            # the pedestal rule's bound and its reason for a spring too soft; its bound in the range
+            # that the other messages (not a number, too stiff) give
+            error = _pedestal_error(bearing, p.data["stiffness"], p.key("stiffness"))
+            if error:
+                raise SceneError(error)
+            bounds["stiffness"] = (_pedestal_least(bearing), *STRUCTURE_BOUNDS["stiffness"][1:])
+        parts[part] = tuple(p.number(key, lo=lo, hi=hi) for key, (lo, hi, _unit) in bounds.items())
     res = (0.0, 0.0, 0.0)
     if s.has("resonator") and s.data["resonator"] is not None:
         r = s.section("resonator", tuple(RESONATOR_BOUNDS), required=tuple(RESONATOR_BOUNDS))
@@ -906,10 +931,9 @@ def scene_from_dict(data: Any, name: str = "scene", source_text: str = "", sourc
     outputs = fid.data.get("outputs", ["accel", "contact_forces", "cage_speed"])
     if not isinstance(outputs, list) or any(o not in OUTPUTS for o in outputs):
         raise SceneError(f"fidelity.outputs = {short_repr(outputs)}: expected a list from {', '.join(OUTPUTS)}")
-    structure = _structure(top)
+    structure = _structure(top, bearing)
     gravity = top.boolean("gravity", True)
-    error = (_pedestal_error(bearing, structure.pedestal_stiffness, "structure.pedestal.stiffness")
-             or _shaft_weight_error(bearing, structure.shaft_mass, gravity, "structure.shaft.mass"))
+    error = _shaft_weight_error(bearing, structure.shaft_mass, gravity, "structure.shaft.mass")
     profile = _profile(top, speed, load, bearing)
     for key, knot_load in [(op.key("radial_load"), load),
                            *((f"profile[{i}].radial_load", p.radial_load) for i, p in enumerate(profile))]:

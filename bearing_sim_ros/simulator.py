@@ -319,7 +319,7 @@ class Simulator:
             raise OversampleForAuto(oversample)
         # as `bearing-sim render` says them: settings that would silently do nothing
         if rk4_step is not None and solver != "rk4":
-            raise UserError(f"rk4_step = {rk4_step!r}: applies to solver='rk4' only (given solver={solver!r})")
+            raise UserError(f"rk4_step = {short_repr(rk4_step)}: applies to solver='rk4' only (given solver={solver!r})")
         if request == "kinematic" and solver != "default":
             raise UserError(f"solver = {short_repr(solver)}: applies to the skidding tier only, and "
                             + ("fidelity='kinematic'" if fidelity == "kinematic"

@@ -540,8 +540,9 @@ def test_a_clearance_at_the_edges_of_its_bounds_written_in_m_is_taken():
 
 @pytest.mark.parametrize("section, change, line", [
     ("structure", {"shaft_mass": 0.0}, "structure.shaft_mass = 0 kg: allowed range is [0.001, 100000] kg"),
-    ("structure", {"pedestal_stiffness": float("nan")},
-     "structure.pedestal_stiffness = nan N/m: allowed range is [0, 1e+12] N/m"),
+    # the generic range's lower end is the pedestal rule's (below it: the next test)
+    ("structure", {"pedestal_stiffness": 2e12},
+     "structure.pedestal_stiffness = 2e+12 N/m: allowed range is [166813, 1e+12] N/m"),
     ("structure", {"shaft_damping": "1376"}, "structure.shaft_damping = '1376': expected a number in [0, 1e+08] N s/m"),
     ("structure", {"resonator_mass": 1e-6},
      "structure.resonator_mass = 1e-06 kg: allowed 0 (no resonator) or [0.0001, 1000] kg"),
@@ -880,7 +881,7 @@ def _pedestal_least() -> float:
     return InputLimits(load_scene("er16k_healthy").bearing).max_load / 0.1
 
 
-@pytest.mark.parametrize("stiffness", [0.0, 1e-9, 0.5, 100.0, 0.999 * _pedestal_least()])
+@pytest.mark.parametrize("stiffness", [0.0, 1e-9, 0.5, 100.0, 0.999 * _pedestal_least(), -5.0, math.nan])
 def test_a_pedestal_spring_too_soft_to_hold_the_bearings_load_is_refused_in_one_line(stiffness, tmp_path):
     """A pedestal spring of 1e-9 - 1 N/m under the ER-16K's 50 N put the outer race metres away;
     the kinematic tier's samples were NaN from the first (render wrote them and said exit status
@@ -889,9 +890,10 @@ def test_a_pedestal_spring_too_soft_to_hold_the_bearings_load_is_refused_in_one_
     quarter of a second while the pedestal fell with the shaft.  A pedestal spring holds the
     pedestal within 0.1 m under the most load the bearing takes (2 x C0, which the live node's
     inputs may reach); a YAML scene and one changed in Python are refused in one line naming the
-    key, the value and that bound."""
+    key, the value and that bound.  A negative or NaN spring gets the same line: it was told the
+    generic range, [0, 1e+12], whose 0 this rule refuses."""
     path = tmp_path / "soft.yaml"
-    path.write_text(GOOD.replace("stiffness: 1.51e7", f"stiffness: {stiffness!r}"))
+    path.write_text(GOOD.replace("stiffness: 1.51e7", f"stiffness: {'.nan' if math.isnan(stiffness) else repr(stiffness)}"))
     allowed = ("N/m: allowed at least 1.668e+05 N/m, which holds the pedestal within 0.1 m under "
                "2 x C0 = 16681 N of bearing ER-16K (0, no spring, would leave the balls without load)")
     with pytest.raises(SceneError) as exc:
