@@ -227,15 +227,33 @@ def _commit(buf, nvalid, n, bq_b, bq_a, bq_z, tail, taps2, m, first, out, index0
 
 def design_antialias(oversample: int) -> np.ndarray:
     """Kaiser low-pass taps at the internal rate for decimation by ``oversample``; odd length
-    2D+1 with D a multiple of ``oversample`` (so the delay is a whole number of output samples)."""
-    from scipy.signal import firwin, kaiserord
+    2D+1 with D a multiple of ``oversample`` (so the delay is a whole number of output samples).
+
+    ``scipy.signal.kaiserord`` and ``firwin(2D + 1, cutoff, window=("kaiser", beta))`` written out
+    in their own arithmetic, bit for bit (``test_sensor.py`` compares them for every oversample
+    from 1 to 128): importing ``scipy.signal`` took 0.4-1.7 s of every node's, render's and
+    test process's start (scipy 1.17 parses the docstrings of its functions as it imports them),
+    a third of a ``Simulator``'s construction with its kernels cached.  ``scipy.special`` is
+    imported by ``scipy.optimize`` anyway, which the tiers' static balance takes."""
+    from scipy.special import i0
 
     m = oversample
     width = (AA_STOP - AA_PASS) / m                # transition, as a fraction of the internal rate
-    numtaps, beta = kaiserord(AA_ATTEN_DB, 2.0 * width)
+    # kaiserord(AA_ATTEN_DB, 2 width): Kaiser's order formula (+1: taps) and, above 50 dB, his beta
+    numtaps = int(math.ceil((AA_ATTEN_DB - 7.95) / 2.285 / (np.pi * (2.0 * width)) + 1))
+    beta = 0.1102 * (AA_ATTEN_DB - 8.7)
     d = int(math.ceil((numtaps - 1) / 2 / m)) * m
     cutoff = 0.5 * (AA_PASS + AA_STOP) / m          # cycles per internal sample
-    return firwin(2 * d + 1, 2.0 * cutoff, window=("kaiser", beta))
+    # firwin: the ideal low-pass's sinc (cutoff 2 * cutoff in units of the Nyquist frequency), the
+    # symmetric Kaiser window, then unit gain at DC
+    n = 2 * d + 1
+    k = np.arange(0, n, dtype=float) - 0.5 * (n - 1)
+    right = 2.0 * cutoff
+    taps = right * np.sinc(right * k)
+    half = (n - 1) / 2.0
+    taps *= i0(beta * np.sqrt(1 - ((np.arange(0, n) - half) / half) ** 2.0)) / i0(beta)
+    taps /= np.sum(taps)
+    return taps
 
 
 RESONANCE_TAPS_REACH = 3     # internal samples each side of the band-fitted resonance FIR
