@@ -72,9 +72,14 @@ TESTS ?= test
 # The node's kernels (both tiers, as auto may switch) are compiled before the tests, so that no
 # test's wait for a node includes a cold compilation: 30 s on the bench's AMD host, 70-160 s on a
 # 2-core Intel Xeon with other work on it, where the tests give a node 60-90 s to its first table.
-# About 3 s once compiled.
+# About 3 s once compiled.  On a cold cache the two tiers compile in two processes at once, one
+# per core (numba compiles on one thread: 100 + 49 s one after the other on the busy Intel Xeon,
+# 134 s side by side under the same load), then one process loads both and compiles whatever
+# else a switch needs; a failure there stops the target with the compiler's message.
+WARM_TIER = from bearing_sim_ros import Simulator; Simulator("er16k_outer_race", fidelity="$(1)").advance(150)
 WARM_KERNELS := from bearing_sim_ros import Simulator; sim = Simulator("er16k_outer_race"); sim.prepare_switches(); sim.advance(150)
 test: $(VENV)/.installed
+	@$(PY) -c '$(call WARM_TIER,skidding)' & $(PY) -c '$(call WARM_TIER,kinematic)'; wait
 	@$(PY) -c '$(WARM_KERNELS)'
 	@parallel=0; alone=0; \
 	$(PY) -m pytest -q -n $(TEST_WORKERS) --dist worksteal -m "not wall_clock" $(PYTEST_ARGS) $(TESTS) || parallel=$$?; \
