@@ -4,7 +4,8 @@ shutdown) in every command that runs a node: ``play``, ``node``, ``run`` and ``m
 Twice it hung: once (CI, clean clone, 2026-11-24) ``play`` logged its last line and did not exit
 within 60 s; once (a full suite, 2026-11-30) a ``monitor`` gave its verdicts and then stayed 30 s
 in rclpy's ``Node.destroy_node`` (``destroy_when_not_in_use``: rcl's and Fast DDS's node
-teardown); neither came back in isolated runs.  A command's work is done by then: its lines said,
+teardown); neither came back since (the monitor's test: 8 runs alone, 20 more, 10 of them beside a
+CPU hog, and twice with test_monitor.py and test_play.py in 2 workers, 2026-12-01).  A command's work is done by then: its lines said,
 its recording closed, its exit status decided.  So the teardown comes last (``teardown_watchdog``)
 and a hang there costs time, never the outcome: past ``TEARDOWN_TIMEOUT`` one line on stderr says
 what hung and that the work is complete, the Python stacks of all threads follow (where it hung),
