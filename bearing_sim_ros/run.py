@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 import shlex
+import sys
 from collections import deque
 from pathlib import Path
 
@@ -286,7 +287,7 @@ def run_command(args) -> int:
     from rclpy.signals import SignalHandlerOptions
 
     from .nodes.bearing_sim_node import (DEFAULT_SAMPLE_RATE, BearingSimNode, build_node, close_node,
-                                         failure_recording_text, say_held, spin_node, stop_reason)
+                                         log_the_end, say_held, spin_node, stop_reason)
     from .messages import BATCH_DURATION, duration_error
     from .recording.recorder import files_text, sizes_text, split_error
     from .recording.render import tier_values
@@ -331,6 +332,7 @@ def run_command(args) -> int:
             error = node.error
         figures = None
         if node is not None:
+            log_the_end(node)
             rs = node.recorder.status
             # the signal published (and recorded), not the simulator's time: after a Ctrl-C
             # that holds the batches computed ahead, which were never published
@@ -342,18 +344,31 @@ def run_command(args) -> int:
                        "dropped": rs["dropped"], "ok": rs["ok"], "error": rs["error"],
                        "path": rs["path"], "paths": rs["files"], "files": files_text(rs),
                        "sizes": sizes_text(rs)}
-        close_node(node)
+        try:
+            # the outcome (a UserError, or the summary) before the middleware's teardown, which
+            # may hang (close_node: it exits with the status decided here)
+            if error is None and sys.exc_info()[1] is None and node is not None:
+                _say_the_end(scene, node, figures, out, split)
+        finally:
+            close_node(node, 1 if error is not None else 0,
+                       [f"internal error: {error.__class__.__name__}: {error}"] if error is not None else [])
     if error is not None:
         raise error
-    if node is not None and node.failure is not None:
+    return 0
+
+
+def _say_the_end(scene, node, figures: dict, out: str, split) -> None:
+    """``run``'s last line, its summary (``summarise``) of the recording ``out``, once the node
+    stopped and closed it; a UserError where the run failed (the solver diverged) or the recording
+    did (``figures``: the node's, taken as it stopped)."""
+    from .nodes.bearing_sim_node import failure_recording_text
+
+    if node.failure is not None:
         # the skidding solver diverged: the recording is finalised, the summary is not the run's
         raise UserError(f"{node.failure.worded(RUN_SETTINGS)}{failure_recording_text(node)}")
-    if figures is None:
-        return 0
     if not figures["ok"]:
         raise UserError(f"--out = {out!r}: {figures['error']}")
     # the recording is complete.  A second Ctrl-C while its tail is read for the summary (about a
     # second) surfaced inside rclpy's deserialiser as a TypeError traceback: it is held (130)
     tail = _record_tail(figures["paths"], ANALYSIS_MAX_S)
     say(summarise(scene, tail, figures, recording_argument(out, any(split)), out))
-    return 0

@@ -1,12 +1,17 @@
-"""A bound on the middleware's teardown (``destroy_node``, ``rclpy`` shutdown) in every command
-that runs a node: ``play``, ``node``, ``run`` and ``monitor``.
+"""A bound on the middleware's teardown (``executor.shutdown``, ``destroy_node``, ``rclpy``
+shutdown) in every command that runs a node: ``play``, ``node``, ``run`` and ``monitor``.
 
-Once (CI, clean clone, 2026-11-24) ``play`` logged its last line and then did not exit within
-60 s; where it hung is not known (it did not come back in 50 runs since).  A command must not
-hang forever there: its work is done by then (the recording closed, the messages sent), so past
-``TEARDOWN_TIMEOUT`` the Python stacks of all threads go to stderr, which says where it hung, and
-the process exits with status 1.  faulthandler's watchdog is a C thread: it fires even if the hang
-holds the GIL.
+Twice it hung: once (CI, clean clone, 2026-11-24) ``play`` logged its last line and did not exit
+within 60 s; once (a full suite, 2026-11-30) a ``monitor`` gave its verdicts and then stayed 30 s
+in rclpy's ``Node.destroy_node`` (``destroy_when_not_in_use``: rcl's and Fast DDS's node
+teardown); neither came back since (the monitor's test: 8 runs alone, 20 more, 10 of them beside a
+CPU hog, and twice with test_monitor.py and test_play.py in 2 workers, 2026-12-01).  A command's work is done by then: its lines said,
+its recording closed, its exit status decided.  So the teardown comes last (``teardown_watchdog``)
+and a hang there costs time, never the outcome: past ``TEARDOWN_TIMEOUT`` one line on stderr says
+what hung and that the work is complete, the Python stacks of all threads follow (where it hung),
+and the process exits with the status the command had decided (0, 3, 4, 130, ...), not 1.  All of
+that runs in C threads (POSIX timers, faulthandler): the hang in ``destroy_when_not_in_use`` holds
+the GIL (rclpy does not release it there), and no Python thread runs until it returns.
 
 And ``signal_handlers``: handlers for a block of a command's shutdown (``render`` finishing at a
 batch's end, ``render`` and ``run`` holding Ctrl-C while a recording is finalised or read);
@@ -25,28 +30,168 @@ import errno
 import faulthandler
 import os
 import select
+import shlex
 import signal
 import stat
 import sys
 import threading
+import time
 from contextlib import contextmanager
 
 TEARDOWN_TIMEOUT = 30.0      # s: the longest the teardown may take
+# after TEARDOWN_TIMEOUT's line, s: the stacks, then the exit (apart, so that each has ended before
+# the next begins: each runs on a C thread of its own); the backstop (SIGKILL, 137) only where the
+# exit's thread could not be started
+_STACKS_AFTER_S, _EXIT_AFTER_S, _BACKSTOP_AFTER_S = 0.5, 1.0, 10.0
 # 128 + the signal, as the shell says.  SIGHUP: the terminal closed or the SSH session dropped under
 # a node that records; Python's default killed it there (129) and the file had no footer
 EXIT_INTERRUPTED = {signal.SIGINT: 130, signal.SIGTERM: 143, signal.SIGHUP: 129}
 SIGNAL_NAMES = {signal.SIGINT: "Ctrl-C", signal.SIGTERM: "SIGTERM", signal.SIGHUP: "SIGHUP"}
 
 
+class _SigEvent(ctypes.Structure):
+    """glibc's ``struct sigevent`` (64 bytes): the value, the signal, how to notify, then a union
+    whose SIGEV_THREAD member is the function to call and its thread's attributes."""
+    _fields_ = [("value", ctypes.c_void_p), ("signo", ctypes.c_int), ("notify", ctypes.c_int),
+                ("function", ctypes.c_void_p), ("attributes", ctypes.c_void_p), ("pad", ctypes.c_int * 8)]
+
+
+class _TimeSpec(ctypes.Structure):
+    _fields_ = [("sec", ctypes.c_long), ("nsec", ctypes.c_long)]
+
+
+class _ITimerSpec(ctypes.Structure):
+    _fields_ = [("interval", _TimeSpec), ("value", _TimeSpec)]
+
+
+_SIGEV_SIGNAL, _SIGEV_THREAD, _CLOCK_MONOTONIC = 0, 2, 1
+_LIBC = None
+
+
+def _libc():
+    global _LIBC
+    if _LIBC is None:
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.timer_create.argtypes = [ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p]
+        libc.timer_settime.argtypes = [ctypes.c_void_p, ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p]
+        libc.timer_delete.argtypes = [ctypes.c_void_p]
+        _LIBC = libc
+    return _LIBC
+
+
+def _c_timer(seconds: float, function=None, argument: int = 0, signo: int = 0):
+    """A one-shot POSIX timer: ``seconds`` (s) from now, the C ``function(argument)`` runs on a
+    thread of its own (``argument``: an int or a pointer, as C's ``union sigval`` passes it), or
+    without a function, ``signo`` is sent to the process.  Neither needs the GIL.  Its id, for
+    ``timer_delete``; OSError where it cannot be made."""
+    libc = _libc()
+    event = _SigEvent(value=argument, signo=signo, notify=_SIGEV_THREAD if function else _SIGEV_SIGNAL,
+                      function=ctypes.cast(function, ctypes.c_void_p).value if function else None)
+    timer = ctypes.c_void_p()
+    if libc.timer_create(_CLOCK_MONOTONIC, ctypes.byref(event), ctypes.byref(timer)) != 0:
+        raise OSError(ctypes.get_errno(), "timer_create failed")
+    whole = int(seconds)
+    spec = _ITimerSpec(value=_TimeSpec(whole, max(1, int((seconds - whole) * 1e9))))
+    if libc.timer_settime(timer, 0, ctypes.byref(spec), None) != 0:
+        libc.timer_delete(timer)
+        raise OSError(ctypes.get_errno(), "timer_settime failed")
+    return timer
+
+
+class _Watchdog:
+    """The C side of ``teardown_watchdog``: at ``TEARDOWN_TIMEOUT`` the line (``/bin/sh``, started
+    by C's ``system``), ``_STACKS_AFTER_S`` later the stacks (faulthandler's timer thread),
+    ``_EXIT_AFTER_S`` later C's ``_exit`` with the status.  Not a signal for the stacks (to a
+    handler of faulthandler's): it interrupts the hung call (EINTR: a hung ``sleep`` returned),
+    and a teardown that hangs is left alone, not pushed into half an end.  The backstop,
+    ``_BACKSTOP_AFTER_S`` later, is a SIGKILL from the kernel: the timers' calls each need a new
+    thread, which a process at its limit of threads may not get; it must end all the same."""
+
+    def __init__(self, who: str, status: int, said):
+        self.who, self.status, self.said = who, status, list(said)
+        self.deadline = time.monotonic() + TEARDOWN_TIMEOUT
+        self._timers = {}           # name: timer id
+        self._texts = {}            # the line's shell command (C keeps a pointer to it) and the status
+
+    def code(self) -> int:
+        """The status, or where it is 0, the 130 / 143 of a signal held during the shutdown."""
+        return _COMMAND_SIGNALS.code(self.status) if _COMMAND_SIGNALS is not None else self.status
+
+    def arm(self) -> None:
+        faulthandler.dump_traceback_later(TEARDOWN_TIMEOUT + _STACKS_AFTER_S, exit=False)
+        try:
+            self._arm_line_and_exit()
+            self._timers["backstop"] = _c_timer(TEARDOWN_TIMEOUT + _BACKSTOP_AFTER_S, signo=signal.SIGKILL)
+        except (OSError, AttributeError):       # no POSIX timers (not glibc): faulthandler's exit, 1
+            self.disarm()
+            faulthandler.dump_traceback_later(TEARDOWN_TIMEOUT, exit=True)
+
+    def _arm_line_and_exit(self) -> None:
+        code = self.code()
+        line = (f"{self.who}: the middleware's teardown (destroy_node, rclpy shutdown) has not ended after "
+                f"{TEARDOWN_TIMEOUT:g} s; the command's work is complete (its lines above, a recording "
+                f"closed), so it exits with its status {code} without it; where it hung: the stacks below")
+        command = ctypes.create_string_buffer(
+            ("printf '%s\\n' " + " ".join(shlex.quote(text) for text in [*self.said, line]) + " >&2").encode())
+        left = max(0.001, self.deadline - time.monotonic())
+        self._timers["line"] = _c_timer(left, _libc().system, ctypes.addressof(command))
+        self._timers["exit"] = _c_timer(left + _EXIT_AFTER_S, _libc()._exit, code)
+        self._texts = {"command": command, "code": code}
+
+    def rearm(self) -> None:
+        """Once a signal was held: the status it gives (``code``), if it changed."""
+        if self._texts.get("code") in (None, self.code()):
+            return
+        for name in ("line", "exit"):
+            _libc().timer_delete(self._timers.pop(name))
+        self._arm_line_and_exit()
+
+    def disarm(self) -> None:
+        faulthandler.cancel_dump_traceback_later()
+        for timer in self._timers.values():
+            _libc().timer_delete(timer)
+        self._timers = {}
+
+
+_WATCHDOG = None
+
+
 @contextmanager
-def teardown_watchdog():
-    """Run the block (the teardown) under the watchdog: if it lasts more than
-    ``TEARDOWN_TIMEOUT`` s, dump every thread's stack to stderr and exit with status 1."""
-    faulthandler.dump_traceback_later(TEARDOWN_TIMEOUT, exit=True)
+def teardown_watchdog(who: str, status: int = 0, said=()):
+    """Run the block, the middleware's teardown and nothing else, as the last thing a command
+    does: where it lasts more than ``TEARDOWN_TIMEOUT`` s, the lines ``said`` (what the command
+    would say after it) and one line (``who`` hung in the teardown, the work is complete) go to
+    stderr, then every thread's stack, and the process exits with ``status`` (or, 0 with a
+    signal held, 130 / 143) as the command would have.  Where an exception is on its way through
+    the block (the command failed before it), the status is the command line's for it: 2 with its
+    ``error:`` line for a UserError, 141 for a closed standard output, else 1.  A block that raises
+    raises (exit 1 with a traceback: a defect).  Standard output and error are flushed first:
+    ``_exit`` drops what is buffered."""
+    global _WATCHDOG
+    from .cli import EXIT_INTERNAL, EXIT_STDOUT_CLOSED, EXIT_USER      # cli imports this module
+    from .errors import UserError
+
+    failing = sys.exc_info()[1]
+    if isinstance(failing, UserError):
+        status, said = EXIT_USER, [*said, f"error: {failing}"]
+    elif isinstance(failing, BrokenPipeError):
+        status = EXIT_STDOUT_CLOSED
+    elif failing is not None and not isinstance(failing, KeyboardInterrupt):
+        status, said = EXIT_INTERNAL, [*said, f"internal error: {failing.__class__.__name__}: {failing}"]
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):   # closed, or its reader gone: nothing to keep
+            pass
+    _libc().fflush(None)            # C's: rcutils' log lines
+    watchdog = _Watchdog(who, status, said)
+    watchdog.arm()
+    _WATCHDOG = watchdog
     try:
         yield
     finally:
-        faulthandler.cancel_dump_traceback_later()
+        _WATCHDOG = None
+        watchdog.disarm()
 
 
 def drop_a_closed_terminal() -> None:
@@ -181,6 +326,8 @@ class CommandSignals:
             self.stopped.set()
             return
         self.held.append(signum)
+        if _WATCHDOG is not None:
+            _WATCHDOG.rearm()       # a teardown that hangs now exits 130 / 143, as one that ends
         if self.on_held is not None:
             self.on_held(signum, self._status is not None)
         if self._status is not None:

@@ -15,13 +15,15 @@ import os
 import re
 import signal
 import subprocess
+import sys
 import threading
 import time
 
 import numpy as np
 import pytest
 
-from test_node_support import NS, NodeProcess, assert_one_error_line, read_recording
+from test_node_support import (HANG_HOLDING_THE_GIL, NS, NodeProcess, assert_hung_teardown_said,
+                               assert_one_error_line, hung_teardown_script, read_recording)
 
 import bearing_sim_ros
 from bearing_sim_ros import ground_truth, load_scene
@@ -561,6 +563,35 @@ def test_a_monitor_with_a_count_ends_when_the_run_ends_before_it(ros_env, bearin
     assert ("monitor: 1 of --count 5 verdicts: the run of bearing_sim ended and no table came in the 5 s since "
             "(exit status 3)") in out, out
     assert "monitor: 1 verdicts from 150 tables, 0 gaps" in out and waited < 15, (waited, out)
+
+
+def test_a_monitor_whose_teardown_hangs_still_says_its_lines_and_exits_with_its_verdict_status(
+        ros_env, bearing_sim_exe, tmp_path):
+    """A monitor whose middleware teardown hangs (``Node.destroy_node`` in a C call that holds the
+    GIL, as rclpy's ``destroy_when_not_in_use`` does: once for 30 s in a full suite) lost its
+    summary lines (said after ``destroy_node``) and exited 1, a failure of a monitor whose work was
+    done.  Now its lines come first and it exits with its verdict's status, 3 here (its count not
+    reached), after the watchdog's line and the stacks (timeout cut to 1 s)."""
+    recording = tmp_path / "short.mcap"
+    render("er16k_outer_race", 1.0, recording, fidelity="kinematic", seed=3, progress=False)
+    script = tmp_path / "hung.py"
+    script.write_text(hung_teardown_script("from bearing_sim_ros.cli import main; sys.exit(main(sys.argv[1:]))",
+                                           HANG_HOLDING_THE_GIL))
+    monitor = NodeProcess(sys.executable, ros_env, None, tmp_path / "monitor.log",
+                          command=(str(script), "monitor", "--window", "1", "--count", "5", "--end-wait", "0.5"))
+    try:
+        monitor.wait_for_output("envelope analysis every")
+        play = subprocess.run([bearing_sim_exe, "play", str(recording), "--wait", "15"], env=ros_env,
+                              capture_output=True, text=True, timeout=60)
+        assert play.returncode == 0, play.stderr
+        assert monitor.wait(30) == 3, monitor.output()
+        out = monitor.output()
+    finally:
+        monitor.close()
+    summary = "monitor: 1 verdicts from 100 tables, 0 gaps"
+    assert "monitor: 1 of --count 5 verdicts: the run of bearing_sim ended" in out and summary in out, out
+    assert out.index(summary) < out.index("the middleware's teardown"), out
+    assert_hung_teardown_said(out, "monitor", 3)
 
 
 def test_a_monitor_with_a_count_goes_on_across_the_seams_of_play_loop(ros_env, bearing_sim_exe, tmp_path):

@@ -21,19 +21,37 @@ NS = 1_000_000_000
 FIRST_TABLE_S = 60.0
 
 
-def hung_teardown_script(call: str) -> str:
+# a C call that holds the GIL while it waits, as rclpy's destroy_when_not_in_use does (ctypes.PyDLL
+# does not release it), so that no Python thread runs until it returns
+HANG_HOLDING_THE_GIL = "ctypes.PyDLL(None).sleep(600)"
+
+
+def hung_teardown_script(call: str, hang: str = "time.sleep(600)") -> str:
     """A Python script that runs ``call`` (an expression that ends the process with its exit
-    status, sys.argv available) with ``Node.destroy_node`` hanging for 600 s and the teardown
-    watchdog's timeout (``teardown.TEARDOWN_TIMEOUT``) at 1 s."""
+    status, sys.argv available) with ``Node.destroy_node`` hanging for 600 s in ``hang``
+    (``HANG_HOLDING_THE_GIL``: without a Python thread running) and the teardown watchdog's
+    timeout (``teardown.TEARDOWN_TIMEOUT``) at 1 s."""
     return "\n".join([
-        "import sys, time",
+        "import ctypes, sys, time",
         "from rclpy.node import Node",
         "from bearing_sim_ros import teardown",
         "teardown.TEARDOWN_TIMEOUT = 1.0",
-        "Node.destroy_node = lambda self: time.sleep(600)      # a teardown that never returns",
+        f"Node.destroy_node = lambda self: {hang}      # a teardown that never returns",
         call,
         "",
     ])
+
+
+def assert_hung_teardown_said(err: str, who: str, status: int) -> None:
+    """``err`` (a process's standard error) holds the watchdog's line for ``who``, saying that it
+    exits with ``status``, and after it the stacks, which show the hanging call (a lambda)."""
+    line = (f"{who}: the middleware's teardown (destroy_node, rclpy shutdown) has not ended after 1 s; the "
+            f"command's work is complete (its lines above, a recording closed), so it exits with its status "
+            f"{status} without it; where it hung: the stacks below")
+    assert line in err.splitlines(), err
+    stacks = err.split(line)[1]
+    assert "Current thread" in stacks or "Thread 0x" in stacks, err
+    assert "<lambda>" in stacks, err
 
 
 def assert_one_error_line(result, words) -> None:

@@ -1249,7 +1249,7 @@ def log_end(node) -> None:
     of signal (450000 samples) published``) at its level: a run without a recording that reached
     its ``duration`` left no line at all in the log.  None for a run stopped before its first
     table (no end status) or one whose solver diverged (its error was logged when it happened).
-    Call after ``destroy_node``, like :func:`log_recording`, under the node's own logger name.
+    Under the node's own logger name, like :func:`log_recording`, by :func:`log_the_end`.
     First the input rejections that a reason's throttle still held back (``_log_held_rejections``)."""
     log = rclpy.logging.get_logger(node.get_logger().name)
     node._log_held_rejections(log, at_end=True)
@@ -1260,8 +1260,7 @@ def log_end(node) -> None:
 
 
 def log_recording(node) -> None:
-    """Log where the node's closed recording went.  Call after ``destroy_node``: after a signal
-    the node's context is gone, and its logger's /rosout publisher with it.  Under the node's own
+    """Log where the node's closed recording went, by :func:`log_the_end`.  Under the node's own
     logger name (``rig1.bearing_sim`` in namespace rig1), like its other lines: with nodes in
     several namespaces, ``bearing_sim`` did not say which one's recording it was."""
     from ..recording.recorder import files_text, sizes_text
@@ -1281,16 +1280,31 @@ def log_recording(node) -> None:
         log.info(text)
 
 
-def close_node(node) -> None:
-    """The end of a command that ran ``node`` (None: it was not built), once it stopped: the node
-    destroyed, its end status and its recording's whereabouts logged (``log_end``,
-    ``log_recording``: after ``destroy_node``), rclpy shut down; under the teardown watchdog, so
-    that a hang in DDS's teardown cannot keep the process from its exit."""
-    with teardown_watchdog():
+def log_the_end(node) -> None:
+    """The node's last log lines, once it stopped (``node.stop``: its recording closed): its end
+    status (``log_end``) and where its recording went (``log_recording``).  Before the
+    middleware's teardown (``close_node``), which may hang: a hang there lost them.  The node's
+    logger still has its /rosout publisher then, so they go to /rosout too; where the context is
+    already shut down, rcl would say "Failed to publish log message to rosout" for each: then
+    after ``destroy_node``, by ``close_node``."""
+    if node is not None and node.context.ok():
+        log_end(node)
+        log_recording(node)
+        node.end_logged = True
+
+
+def close_node(node, status: int = 0, said=()) -> None:
+    """The end of a command that ran ``node`` (None: it was not built), once it stopped and said
+    its last lines (``log_the_end``, its ``error:`` line): the node destroyed, rclpy shut down,
+    under the teardown watchdog, so that a hang in DDS's teardown can neither keep the process
+    from its exit nor change its exit ``status`` (``teardown.teardown_watchdog``: ``said``, the
+    lines the command says after this)."""
+    with teardown_watchdog(node.get_logger().name if node is not None else NODE_NAME, status, said):
         if node is not None:
             node.destroy_node()
-            log_end(node)
-            log_recording(node)
+            if not getattr(node, "end_logged", False):
+                log_end(node)
+                log_recording(node)
         rclpy.try_shutdown()
 
 
@@ -1448,20 +1462,27 @@ def main(argv=None, params_files_given_as=None) -> int:
         status = 2
     finally:
         signals.shutting_down()         # a signal from here on is held, said, and exits 130 / 143
+        said = []
         if node is not None:
             node.stop(reason=stop_reason(signals))      # the recording is closed here, before anything can hang
             error = node.error
-        close_node(node)
+            log_the_end(node)
+        # the command's outcome before the middleware's teardown, which may hang (close_node)
+        if error is not None:
+            status, said = 1, [f"internal error: {error.__class__.__name__}: {error}"]
+        elif sys.exc_info()[1] is not None:
+            pass                        # on its way out (an internal error): close_node takes its status
+        elif status == 0 and node is not None and node.failure is not None:
+            # said in the log as it happened; here the line a script sees, and where the file stands
+            say_on_stderr(f"error: {node.failure.worded(node._settings)}{failure_recording_text(node)}")
+            status = 2
+        elif status == 0 and node is not None and node.recorder is not None and node.recorder.error:
+            # published in full, but the file is not: a script that checks the status must know
+            say_on_stderr(f"error: {node.recorder.error}")
+            status = 2
+        close_node(node, status, said)
     if error is not None:
         raise error
-    if status == 0 and node is not None and node.failure is not None:
-        # said in the log as it happened; here the line a script sees, and where the file stands
-        say_on_stderr(f"error: {node.failure.worded(node._settings)}{failure_recording_text(node)}")
-        status = 2
-    if status == 0 and node is not None and node.recorder is not None and node.recorder.error:
-        # published in full, but the file is not: a script that checks the status must know
-        say_on_stderr(f"error: {node.recorder.error}")
-        status = 2
     # where the user insisted (a second Ctrl-C), 130 as the shell says; the recording is complete
     # all the same.  Ends the process: a signal until its very end is not lost
     signals.exit(status)

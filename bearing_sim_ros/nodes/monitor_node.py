@@ -1017,9 +1017,14 @@ class MonitorNode(Node):
                 f"one signal; give each simulator its own namespace and watch one (--ros-args -r __ns:=/rig1)",
                 self.out)
 
-    def destroy_node(self):
-        # the window being analysed finishes; queued ones are dropped (Ctrl-C means stop)
+    def finish(self) -> None:
+        """The window being analysed finishes, its verdict said; queued ones are dropped (Ctrl-C
+        means stop).  Before the exit lines, which count its verdict, and before the middleware's
+        teardown, which may hang (``teardown_watchdog``)."""
         self._analysis.shutdown(wait=True, cancel_futures=True)
+
+    def destroy_node(self):
+        self.finish()
         return super().destroy_node()
 
 
@@ -1108,17 +1113,22 @@ def main(args, ros_args=()) -> int:
         pass
     finally:
         signals.shutting_down()         # a signal from here on is held: exit 130 / 143 after the lines
-        with teardown_watchdog():
-            if executor is not None:
-                executor.shutdown(timeout_sec=0)
+        try:
+            # the lines first: a hang in the middleware's teardown below once lost them (and
+            # turned the verdicts' exit status into 1)
             if node is not None:
-                node.destroy_node()
+                node.finish()
                 say(f"monitor: {len(node.verdicts)} verdicts from {node.tables} tables, "
                     f"{node.window.gaps} gaps (lost tables or a restarted source), "
                     f"{node.rejected} rejected")
                 for line in node.exit_lines():
                     say(line)
-            rclpy.try_shutdown()
-    if node is not None:
-        node.raise_output_failure()     # the last window's, analysed as the loop ended (--count)
+                node.raise_output_failure()     # the last window's, analysed as the loop ended (--count)
+        finally:
+            with teardown_watchdog("monitor", status):
+                if executor is not None:
+                    executor.shutdown(timeout_sec=0)
+                if node is not None:
+                    node.destroy_node()
+                rclpy.try_shutdown()
     return status

@@ -237,7 +237,8 @@ def play(path, rate: float = 1.0, loop: bool = False, clock: bool = False,
             log(f"play {path}: {'stopped after' if stop.is_set() else 'published'} {published} messages")
             return published
         finally:
-            with teardown_watchdog():
+            # the last thing: its lines are said, every message published (teardown_watchdog)
+            with teardown_watchdog(f"play {path}"):
                 node.destroy_node()
                 if rclpy.ok():
                     rclpy.shutdown()
