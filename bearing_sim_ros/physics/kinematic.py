@@ -119,14 +119,27 @@ CHAIN_OVERSAMPLE = 4   # accelerometer chain rate / output rate at least (the sk
 # speed|^FILM_W_EXP (m; 0 without film) and its Hertz deflection at the load floor (m); the outer
 # contact's film coefficient per |shaft speed|^0.68 (m N^0.073); 1 / a_i (``contact_damping``);
 # 1 where the balls carry their centrifugal force, 0 where they are massless (``CENTRIFUGAL_GATE``,
-# decided at each linearisation); after NGEO, the
-# inner contact's law under the centrifugal force (``centrifugal_law_table``)
+# decided at each linearisation); the shaft speed (rad/s, > 0; 0 = not built) at which the held
+# balls' law (``held_ball_table``) was tabulated; after NGEO, the
+# inner contact's law under the centrifugal force (``centrifugal_law_table``), then that table
 (P_NB, P_K, P_CR, P_RB, P_RI, P_RO, P_CAGE, P_SPIN, P_SLIP, P_GRAV,
  P_CDW, P_AI, P_AO, P_SQI, P_SQO, P_SQIO, P_LAM, P_SHI, P_DFLOOR, P_ROUGH,
- P_FCW, P_DCW, P_DKW, P_KI, P_KO, P_LAMI, P_DFLOORI, P_CO, P_INV_AI, P_CFON, NGEO) = range(31)
+ P_FCW, P_DCW, P_DKW, P_KI, P_KO, P_LAMI, P_DFLOORI, P_CO, P_INV_AI, P_CFON, P_XW, NGEO) = range(32)
 P_CTAB = NGEO
 CTAB_CELLS = 1024     # cells of the inner contact's law over v = sqrt(1 - delta_c / delta), 0..1
                       # (four values per node: 4 (CTAB_CELLS + 1) entries)
+P_XTAB = P_CTAB + 4 * (CTAB_CELLS + 1)
+XTAB_CELLS = 8192     # cells of a held ball's law above its inner contact's load floor, over y =
+                      # s / (1 + s), s the interference past the floor's in units of delta_c (nine
+                      # values per node, ``held_ball_table``).  Linear: 1024 cells left 3e-5 of a
+                      # loaded ball's load, a ripple as the balls cross the cells that took the
+                      # quiet preloaded 6000-size to +33 % (8192: 4e-7, -2.6 %)
+P_YTAB = P_XTAB + 9 * (XTAB_CELLS + 1)
+YTAB_CELLS = 512      # cells of it from the inner contact's touch to its load floor (six values)
+XTAB_DSPEED = 0.01    # the relative speed step of the table's speed slopes (central differences)
+XTAB_REACH = 0.25     # |ln(speed / the table's)| up to which the table is followed (quadratic in
+                      # it: 1e-4 of a ball's load at 10 %); beyond, the two passes (``_ball_state``)
+GEO_SIZE = P_YTAB + 6 * (YTAB_CELLS + 1)
 # The balls carry their centrifugal force F_c = m_b (D_m / 2) w_c^2 (``_ball_state``) only where
 # F_c / Q_max (Q_max = 5 W / Z, W ``fidelity.bearing_load``) is at least this at the operating
 # point; below it they stay massless (the code before the force, kept as it was).  Against the
@@ -164,9 +177,10 @@ CENTRIFUGAL_SPEED_STEP = 0.1
 # the film law (module ``film``): lambda^(1 + a) = C |w|^0.68 K^-0.073
 FILM_W_EXP = FILM_EXP_U / (1.0 + FILM_LAW_A)
 FILM_TABLE = film_law_table()       # a global array: numba compiles it in as a constant
+LOG_FILM_LOAD_FLOOR = math.log(FILM_LOAD_FLOOR)
 # ``_film_law``'s entries from delta_c on for massless balls (no force), and its whole tuple
 # without a film for them
-NO_FORCE = (0.0, 0.0, math.inf, 0.0, 0.0, 0.0, math.inf, 0.0, 0.0)
+NO_FORCE = (0.0, 0.0, math.inf, 0.0, 0.0, 0.0, math.inf, 0.0, 0.0) + (0.0,) * 7
 NO_FILM = (0.0, 0.0, 0.0, math.inf, 0.0, 0.0) + NO_FORCE
 
 
@@ -302,7 +316,11 @@ def _film_law(geo, w):
     under it delta_c (m), the force F_c (N), and the outer contact's film under F_c (m; inf
     without a film or a force); the inner contact's own film law, lambda_i (m), 1 / lambda_i, its
     phi and u at the load floor; the outer contact's film coefficient (m N^0.073) and its film (m)
-    under F_c alone (``_ball_state``).
+    under F_c alone; the interferences (m) at which the inner contact touches and at which it
+    carries the load floor, 1 / delta_c (1/m; 0 without a force, or where ``held_ball_table`` is
+    not built or |ln(|w| / its speed)| is above XTAB_REACH) and 1 / their difference (1/m), the
+    inner film there and the outer one (m), and ln(|w| / the table's speed) (0 at that speed or
+    without the table) (``_ball_state``).
     A few logs and exps: per speed, not per ball.  Massless balls (``geo[P_CFON]`` 0,
     ``CENTRIFUGAL_GATE``): the massless film law alone, two logs and two exps as before the force,
     and no force (0, 0, inf, ...: ``NO_FORCE``)."""
@@ -321,7 +339,8 @@ def _film_law(geo, w):
         dc = geo[P_DCW] * math.exp(4.0 / 3.0 * math.log(abs(w)))
     lam = geo[P_LAM]
     if lam <= 0.0 or w == 0.0:
-        return 0.0, 0.0, 0.0, math.inf, 0.0, 0.0, dc, fc, math.inf, 0.0, 0.0, 0.0, math.inf, 0.0, 0.0
+        return (0.0, 0.0, 0.0, math.inf, 0.0, 0.0, dc, fc, math.inf, 0.0, 0.0, 0.0, math.inf, 0.0, 0.0,
+                0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     lw = math.log(abs(w))
     lam *= math.exp(FILM_W_EXP * lw)
     t_f = geo[P_DFLOOR] / lam
@@ -340,8 +359,23 @@ def _film_law(geo, w):
     # the outer contact's film under F_c alone (at the load floor at least, as every film) for a
     # ball whose inner contact carries nothing; its deflection there is delta_c
     lf = math.log(max(fc, FILM_LOAD_FLOOR))
+    ho_f = c_o * math.exp(FILM_EXP_Q * lf)
+    # ``held_ball_table``'s two breaks: where the inner contact touches (its film at the load
+    # floor, the outer contact under F_c alone) and where it carries the load floor (its
+    # deflection there and the outer contact's at the floor + F_c); the table's speed offset, 0
+    # at its own speed (no look-up of the slopes there)
+    hi_fl = lin * phi_fi
+    b0 = dc - ho_f - hi_fl
+    lq = math.log(FILM_LOAD_FLOOR + fc)
+    ho_fl = c_o * math.exp(FILM_EXP_Q * lq)
+    b_fl = geo[P_DFLOORI] + geo[P_KO] * math.exp(2.0 / 3.0 * lq) - hi_fl - ho_fl
+    xw = geo[P_XW]
+    ell = lw - math.log(xw) if xw > 0.0 and abs(w) != xw else 0.0
+    # 1 / delta_c 0 says: no table here (not built, or the speed beyond its reach): two passes
+    inv_dc = 1.0 / dc if dc > 0.0 and xw > 0.0 and abs(ell) <= XTAB_REACH else 0.0
     return (lam, 1.0 / lam, phi_f, t_f - phi_f, lam_i, lam - lam_i, dc, fc, ho_c,
-            lin, 1.0 / lin, phi_fi, t_fi - phi_fi, c_o, c_o * math.exp(FILM_EXP_Q * lf))
+            lin, 1.0 / lin, phi_fi, t_fi - phi_fi, c_o, ho_f, b0, b_fl, inv_dc, 1.0 / (b_fl - b0),
+            hi_fl, ho_fl, ell)
 
 
 @njit(cache=True, inline="always")
@@ -410,23 +444,96 @@ def _ball_state(geo, kc, law, base):
 
     Without a film: ``inner_contact_load`` of the interference, d = interference - delta_c (the
     inner contact's share of it).  With the films, each contact's follows its own load (the outer
-    contact's Q_i + F_c, as in the skidding tier), which makes the balance two-parametric; it is
-    solved in two cheap passes instead of an iteration: (1) the films of a massless ball (the
-    outer one at most F_c's) and ``inner_contact_load`` give Q_i; (2) the outer contact's
-    deflection and film at Q_i + F_c from it, and the inner contact's own film law (module
-    ``film``, in units of its lambda_i) gives its interference g and load K_i g^1.5 (exact for a
-    given outer contact).  The quasi-static law of
-    ``docs/probes/fidelity_rms/probe.py`` (each contact's film at its own load, bisection) is met
-    within 0.1-0.9 % of the most loaded ball's load on the bearings of docs/fidelity_rms_gap.md,
-    and the ball touches where that law says (pass 1 alone: 0.3-2.6 %, and the ball touched up
-    to 0.9 um late, which took b6307_seed001's RMS 22 % above the reference).  d = g / a_i in
-    contact (a_i the inner contact's share of a massless ball's deflection: the series law's
-    deflection as F_c -> 0), g across a gap (all of it the inner contact's).  Without F_c the
-    two passes give the massless ball's law (its films follow one load)."""
-    lam, inv_lam, phi_f, u_f, lam_i, lam_o, dc, fc, ho_c, lin, inv_lin, phi_fi, u_fi, c_o, ho_f = law
-    if lam == 0.0:
-        d = base - dc
-        return d, inner_contact_load(geo, kc, base, dc), 0.0, 0.0
+    contact's Q_i + F_c, as in the skidding tier): the quasi-static balance (each contact's film
+    at its own load) tabulated per bearing and speed (``held_ball_table``) and looked up, no
+    iteration: across a gap (short of b_0, where the inner contact touches with its film at the
+    load floor and the outer one carries F_c alone) it is explicit, the gap b_0 - base; from b_0
+    to b_fl (where the inner contact carries the load floor) and above, the inner interference g
+    and both films are interpolated linearly (YTAB_CELLS and XTAB_CELLS cells; one division
+    above b_fl), off the table's speed followed to second order in ln(speed).  At the table's
+    speed within 4e-5 of each ball's load from 0.01 F_c up (4e-7 on balls above F_c) and at 10 %
+    from it within 1e-4, where two passes (``_two_passes``, the law before the table) were 25-62
+    % off on balls whose inner contact carries less than F_c and 0.2 % on loaded ones (which took
+    a quiet preloaded bearing's RMS ten times too high: docs/fidelity_rms_gap.md, "Light preload:
+    which tier was wrong"); and the kernel takes 0.4-0.8x the time it took with the two passes
+    (whose film laws take logs and exps on loaded balls).  Without the table (no force, not built, or the speed beyond
+    XTAB_REACH of it) the two passes, which give the massless ball's law without a force (its
+    films follow one load).  d = g / a_i in contact (a_i the inner contact's share of a
+    massless ball's deflection: the series law's deflection as F_c -> 0), g across a gap (all of
+    it the inner contact's)."""
+    dc = law[6]
+    if law[0] == 0.0:
+        return base - dc, inner_contact_load(geo, kc, base, dc), 0.0, 0.0
+    b0 = law[15]
+    b_fl = law[16]
+    inv_dc = law[17]
+    ell = law[21]
+    if inv_dc == 0.0:
+        g, hi, ho = _two_passes(geo, law, base)
+    elif base > b_fl:
+        # above the inner contact's load floor: g - g_fl over (base - b_fl), both films' change
+        # over delta_c, on y = s / (1 + s), s = (base - b_fl) / delta_c
+        s = (base - b_fl) * inv_dc
+        x = s / (1.0 + s) * XTAB_CELLS
+        k = min(int(x), XTAB_CELLS - 1)
+        f = x - k
+        i = P_XTAB + 9 * k
+        a = _held_entry(geo, i, 9, 3, f, ell)
+        b = _held_entry(geo, i + 1, 9, 3, f, ell)
+        c = _held_entry(geo, i + 2, 9, 3, f, ell)
+        g = geo[P_DFLOORI] + (base - b_fl) * a
+        hi = law[19] + dc * b
+        ho = law[20] + dc * c
+    elif base > b0:
+        # touching, under the load floor: the inner film is the floor's; g over (base - b_0) and
+        # the outer film's change over delta_c, linear in base
+        x = (base - b0) * law[18] * YTAB_CELLS
+        k = min(int(x), YTAB_CELLS - 1)
+        f = x - k
+        i = P_YTAB + 6 * k
+        a = _held_entry(geo, i, 6, 2, f, ell)
+        c = _held_entry(geo, i + 1, 6, 2, f, ell)
+        g = (base - b0) * a
+        hi = law[9] * law[11]
+        ho = law[14] + dc * c
+    else:
+        # apart from the inner race: the inner film at the load floor, the outer under F_c alone
+        return base - b0, 0.0, law[9] * law[11], law[14]
+    hz = 0.0
+    if g > 0.0:
+        hz = geo[P_KI] * g * math.sqrt(g)
+    # in contact, the series law's deflection; across a gap the whole gap is the inner contact's
+    # (``contact_damping``), as it was for the massless ball
+    return (g * geo[P_INV_AI] if g > 0.0 else g), hz, hi, ho
+
+
+@njit(cache=True, inline="always")
+def _held_entry(geo, i, stride, cols, f, ell):
+    """One column of ``held_ball_table`` at f (0-1) of the way through the cell whose entry is
+    geo[i] (``stride`` values per node, ``cols`` columns each of value, slope and half curvature
+    in ell = ln(|w| / the table's speed)): linear in f, to second order in ell (not read at ell 0)."""
+    v = geo[i] + f * (geo[i + stride] - geo[i])
+    if ell != 0.0:
+        j = i + cols
+        k = j + cols
+        v += ell * (geo[j] + f * (geo[j + stride] - geo[j]) + ell * (geo[k] + f * (geo[k + stride] - geo[k])))
+    return v
+
+
+@njit(cache=True, inline="always")
+def _two_passes(geo, law, base):
+    """A held ball's inner-contact interference g (m, negative across a gap) and its inner and
+    outer films (m) at interference ``base`` (m) in two cheap passes instead of an iteration
+    (``_ball_state``): (1) the films of a massless ball (the outer one at most F_c's) and
+    ``inner_contact_load`` give Q_i; (2) the outer contact's deflection and film at Q_i + F_c
+    from it, and the inner contact's own film law (module ``film``, in units of its lambda_i)
+    gives its interference g (exact for a given outer contact).  Within 0.1-0.9 % of the most
+    loaded ball's load of the quasi-static law on the bearings of docs/fidelity_rms_gap.md, and
+    the ball touches where that law says (pass 1 alone: 0.3-2.6 %, and the ball touched up to
+    0.9 um late, which took b6307_seed001's RMS 22 % above the reference), but 25-62 % off on a
+    ball whose inner contact carries less than F_c: the law only where ``held_ball_table`` is not,
+    and the start of ``_quasi_static_ball``'s Newton steps."""
+    lam, inv_lam, phi_f, u_f, lam_i, lam_o, dc, fc, ho_c, lin, inv_lin, phi_fi, u_fi, c_o, ho_f = law[:15]
     phi = _film_factor(base * inv_lam, phi_f, u_f)
     ho = lam_o * phi
     capped = ho > ho_c
@@ -444,13 +551,76 @@ def _ball_state(geo, kc, law, base):
         ho = ho_f * pq if capped else ho * ehat
     u = (base + ho - do) * inv_lin
     phi_i = _film_factor(u, phi_fi, u_fi)
-    g = lin * (u + phi_i)
-    hz = 0.0
-    if g > 0.0:
-        hz = geo[P_KI] * g * math.sqrt(g)
-    # in contact, the series law's deflection; across a gap the whole gap is the inner contact's
-    # (``contact_damping``), as it was for the massless ball
-    return (g * geo[P_INV_AI] if g > 0.0 else g), hz, lin * phi_i, ho
+    return lin * (u + phi_i), lin * phi_i, ho
+
+
+@njit(cache=True)
+def _quasi_static_ball(geo, law, base):
+    """A held ball's inner-contact interference g (m), inner and outer films (m) at interference
+    ``base`` (m, past the inner contact's touch) at the quasi-static balance, each contact's film
+    at its own load (Q_o = Q_i + F_c): from the two passes, Newton steps on Q_i = G(Q_i), G the
+    inner load that pass 2 gives for an outer contact at Q_i + F_c, each followed by G at its
+    result, until Q_i moves by less than 1e-14 of Q_i + F_c (3-5 steps; the films' own law,
+    ``_film_factor``, as the kernel's).  For ``held_ball_table`` only: two logs and four exps a
+    step, which in the kernel cost it 3.2-4.7x (docs/fidelity_rms_gap.md, "Light preload")."""
+    fc, lin, inv_lin, phi_fi, u_fi, c_o = law[7], law[9], law[10], law[11], law[12], law[13]
+    g, hi, ho = _two_passes(geo, law, base)
+    hz = geo[P_KI] * g * math.sqrt(g) if g > 0.0 else 0.0
+    for _ in range(60):
+        qo = hz + fc
+        lq = math.log(qo)
+        do = geo[P_KO] * math.exp(2.0 / 3.0 * lq)
+        h3 = c_o * math.exp(FILM_EXP_Q * max(lq, LOG_FILM_LOAD_FLOOR))
+        u3 = (base + h3 - do) * inv_lin
+        phi3 = _film_factor(u3, phi_fi, u_fi)
+        t3 = u3 + phi3
+        q3 = 0.0
+        if t3 > 0.0:
+            gq = geo[P_KI] * lin * t3 * math.sqrt(lin * t3)
+            # dG/dQ_i: the outer contact's deflection and film move against the inner's
+            dtdu = 1.0 if u3 < u_fi else 1.0 / (1.0 + FILM_LAW_A * phi3 / t3)
+            dho = FILM_EXP_Q * h3 if lq > LOG_FILM_LOAD_FLOOR else 0.0
+            slope = 1.5 * gq / t3 * dtdu * (dho - 2.0 / 3.0 * do) / (qo * lin)
+            q3 = max(hz + (gq - hz) / (1.0 - slope), 0.0)
+        lq = math.log(q3 + fc)
+        do = geo[P_KO] * math.exp(2.0 / 3.0 * lq)
+        ho = c_o * math.exp(FILM_EXP_Q * max(lq, LOG_FILM_LOAD_FLOOR))
+        u3 = (base + ho - do) * inv_lin
+        phi3 = _film_factor(u3, phi_fi, u_fi)
+        g = lin * (u3 + phi3)
+        hi = lin * phi3
+        last = hz
+        hz = geo[P_KI] * g * math.sqrt(g) if g > 0.0 else 0.0
+        if abs(hz - last) <= 1e-14 * (hz + fc):
+            break
+    return g, hi, ho
+
+
+@njit(cache=True)
+def _held_ball_columns(geo, w, above, below):
+    """``held_ball_table``'s values at shaft speed ``w`` (rad/s) on its nodes: into above
+    (XTAB_CELLS + 1, 3) the inner interference's excess over the floor's per (base - b_fl) and
+    both films' change from the floor's over delta_c, at y = k / XTAB_CELLS; into below
+    (YTAB_CELLS + 1, 2) the inner interference per (base - b_0) and the outer film's change from
+    F_c's over delta_c, at k / YTAB_CELLS of the way from b_0 to b_fl (``_ball_state``)."""
+    law = _film_law(geo, w)
+    dc, b0, b_fl, hi_fl, ho_fl, ho_f = law[6], law[15], law[16], law[19], law[20], law[14]
+    for k in range(XTAB_CELLS + 1):
+        # the far end stands for y = 1, s = inf (the loaded balls' limit)
+        y = max(k, 0.01) / XTAB_CELLS if k < XTAB_CELLS else 1.0 - 0.25 / XTAB_CELLS
+        s = y / (1.0 - y)
+        g, hi, ho = _quasi_static_ball(geo, law, b_fl + s * dc)
+        above[k, 0] = (g - geo[P_DFLOORI]) / (s * dc)
+        above[k, 1] = (hi - hi_fl) / dc
+        above[k, 2] = (ho - ho_fl) / dc
+    # node 0's interference slope from nodes 1 and 2: at a few 1e-13 m from the floor, what the
+    # film law's table leaves of the difference (1e-6 of a film: 6e-13 m) is not the slope
+    above[0, 0] = 2.0 * above[1, 0] - above[2, 0]
+    for k in range(YTAB_CELLS + 1):
+        t = max(k, 0.01) / YTAB_CELLS
+        g, hi, ho = _quasi_static_ball(geo, law, b0 + t * (b_fl - b0))
+        below[k, 0] = g / (t * (b_fl - b0))
+        below[k, 1] = (ho - ho_f) / dc
 
 
 @njit(cache=True, inline="always")
@@ -1108,6 +1278,37 @@ def centrifugal_law(scene) -> np.ndarray:
                            centrifugal_law_table((ko / ki) ** (2.0 / 3.0))])
 
 
+def held_ball_table(geo: np.ndarray, speed: float) -> None:
+    """Tabulate in ``geo`` (from P_XTAB on, and P_XW) a held ball's quasi-static balance (each
+    contact's film at its own load, Q_o = Q_i + F_c: ``_quasi_static_ball``, converged Newton
+    steps) at shaft speed ``speed`` (rad/s), for ``_ball_state`` to look up.  The balance is one
+    ball's, so the table is per bearing and speed (not load), as ``centrifugal_law_table``.  Its
+    pieces break where the law does, at the inner contact's touch b_0 and its load floor b_fl
+    (the inner film's law changes there; both from ``_film_law`` at any speed); each holds
+    dimensionless values that stay bounded, then their slopes and half curvatures in ln |w| (from
+    tables at +-XTAB_DSPEED), with which the kernel follows the speed between rebuilds
+    (``KinematicModel._follow_held_table``: at a linearisation or an ``advance`` whose speed has
+    moved by more than ``CENTRIFUGAL_SPEED_STEP`` of the table's).  3 x 8706 balances, 20-40 ms (a load's
+    relinearisation does not rebuild it).  Nothing without films or without a force
+    (``_ball_state`` takes its two passes there)."""
+    w = abs(float(speed))
+    geo[P_XW] = 0.0
+    geo[P_XTAB:] = 0.0
+    if w == 0.0 or geo[P_LAM] <= 0.0 or geo[P_FCW] <= 0.0:
+        return
+    above = np.empty((3, XTAB_CELLS + 1, 3))
+    below = np.empty((3, YTAB_CELLS + 1, 2))
+    for j, f in enumerate((1.0, 1.0 + XTAB_DSPEED, 1.0 - XTAB_DSPEED)):
+        _held_ball_columns(geo, w * f, above[j], below[j])
+    # value, slope and half the curvature in ell = ln(|w| / speed) from the three speeds
+    lp, lm = math.log1p(XTAB_DSPEED), math.log1p(-XTAB_DSPEED)
+    for cols, lo, hi in ((above, P_XTAB, P_YTAB), (below, P_YTAB, geo.size)):
+        dp, dm = cols[1] - cols[0], cols[2] - cols[0]
+        curv = (dp / lp - dm / lm) / (lp - lm)
+        geo[lo:hi] = np.concatenate([cols[0], dp / lp - curv * lp, curv], axis=1).ravel()
+    geo[P_XW] = w
+
+
 @njit(cache=True)
 def _ball_films(geo, geom, dx, dy, shaft_speed):
     """Each ball's film (m, inner and outer contact) at the shaft-pedestal offset (dx, dy) m,
@@ -1215,7 +1416,7 @@ class KinematicModel:
         b = scene.bearing
         st = scene.structure
         nb = b.balls
-        self.geo = np.zeros(NGEO + 4 * (CTAB_CELLS + 1))
+        self.geo = np.zeros(GEO_SIZE)
         self.geo[P_NB] = nb
         self.geo[P_K] = b.combined_stiffness
         self.geo[P_CR] = b.radial_clearance
@@ -1229,7 +1430,7 @@ class KinematicModel:
         self.geo[P_LAM:P_FCW] = film_law(scene)       # the damping entries: at the linearisation
         law = centrifugal_law(scene)
         self.geo[P_FCW:P_CFON] = law[:P_CFON - P_FCW]
-        self.geo[P_CTAB:] = law[P_CFON - P_FCW:]
+        self.geo[P_CTAB:P_XTAB] = law[P_CFON - P_FCW:]
         # whether the balls carry their centrifugal force (CENTRIFUGAL_GATE): decided at each
         # linearisation, and again where the speed moves (``_needs_relinearising``)
         self.centrifugal = False
@@ -1399,6 +1600,7 @@ class KinematicModel:
         self.centrifugal = self._decide_centrifugal((float(load[0]), float(load[1])), speed)
         self.geo[P_CFON] = 1.0 if self.centrifugal else 0.0
         self._gate_speed = abs(speed)
+        self._follow_held_table(speed)
         eq = self._equilibrium(load)
         d0 = eq[:2] - eq[2:]
         q = np.zeros(int(self.geo[P_NB]))
@@ -1568,6 +1770,21 @@ class KinematicModel:
         dc = geo[P_DCW] * abs(shaft_speed) ** (4.0 / 3.0)
         return dc * ((1.0 + q) ** (2.0 / 3.0) + r * q ** (2.0 / 3.0) - 1.0)
 
+    def _follow_held_table(self, speed: float) -> None:
+        """Tabulate the held balls' law (``held_ball_table``) at ``speed`` (rad/s) where they carry
+        F_c and it is not built or the speed has moved by more than ``CENTRIFUGAL_SPEED_STEP`` of
+        the table's (in between, the kernel follows the speed by the table's slopes; the table
+        depends on the speed alone, so a load's relinearisation keeps it); dropped for massless
+        balls (not read)."""
+        geo, w = self.geo, abs(float(speed))
+        if not self.centrifugal:
+            if geo[P_XW] != 0.0:
+                held_ball_table(geo, 0.0)
+            return
+        xw = geo[P_XW]
+        if xw == 0.0 or (w > 0.0 and abs(w - xw) > CENTRIFUGAL_SPEED_STEP * xw):
+            held_ball_table(geo, w)
+
     def _needs_relinearising(self, lx: float, ly: float, speed: float) -> bool:
         """Has the load (N) moved by more than 20 % of the one linearised at (10 N at least), or
         the balls' law to take changed (``carries_centrifugal_force``)?  The gate is decided again only
@@ -1602,6 +1819,8 @@ class KinematicModel:
         l1x, l1y = float(load1[0]), float(load1[1])
         if self._needs_relinearising(l1x, l1y, float(speed1)):
             self._linearise(np.array([l1x, l1y]), float(speed1))
+        else:
+            self._follow_held_table(float(speed1))
         d = self.dense
         fine_speed, r_fine = self.fine_speed, self.fine_events
         if self.event_substeps and d > 1 and max(abs(speed0), abs(speed1)) > fine_speed:

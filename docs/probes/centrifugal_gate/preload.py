@@ -1,19 +1,17 @@
 """The kinematic tier's centrifugal law on preloaded and small-play bearings with its ball state
-made exact for lightly loaded balls (``physics.kinematic._ball_state``: a Newton step on the
-inner contact's load and one more pass, where two passes were 25-31 % off the quasi-static law
-for balls whose inner contact carries less than F_c); docs/fidelity_rms_gap.md, "Light preload:
-which tier was wrong".  That change is not on ``main`` (its cost: same section): apply
-``exact_ball_state.patch`` beside this file first (``git apply
-docs/probes/centrifugal_gate/exact_ball_state.patch``), then run from the repository: ``python
+exact for lightly loaded balls (``physics.kinematic._ball_state``, where two passes were 25-31 %
+off the quasi-static law for balls whose inner contact carries less than F_c); docs/fidelity_rms_gap.md,
+"Light preload: which tier was wrong".  Run from the repository: ``python
 docs/probes/centrifugal_gate/preload.py`` (the reference runs cached in $CENTRIFUGAL_GATE_CACHE as
-``probe.py``'s); preload.txt is its output with the patch.  Without it, it gives fresh.txt's
-two-pass figures.
+``probe.py``'s).  preload.txt is its output with the law first measured, a Newton step and a third
+pass (the patch of 98417ff, not kept); preload_table.txt with the law as taken, a table per bearing
+and speed (``held_ball_table``), against the same references read from preload.txt's four digits.
+fresh.txt has the same points with the two-pass law.
 
 The points are ``fresh.py``'s where the force was measured against the reference below 0.01
 (preloaded, ``PRELOAD_MORE``, small play and the lower end), measured as there (healthy, noise
 off, 0.6 s after 0.3 s at 15 kHz; the skidding tier's ``solver="reference"`` against the
-kinematic tier with massless balls and with the force); fresh.txt has the same points with the
-two-pass law, against the same references (the skidding tier did not change).
+kinematic tier with massless balls and with the force); the skidding tier did not change.
 """
 import importlib.util
 
