@@ -58,6 +58,7 @@ multiply-adds), so the chain runs at the skidding tier's rate whatever the step.
 """
 from __future__ import annotations
 
+import contextlib
 import functools
 import math
 
@@ -1527,10 +1528,27 @@ class KinematicModel:
                                            self._lin_speed, 12))
 
     def _static_geo(self) -> np.ndarray:
-        """The geometry vector without slip."""
+        """The geometry vector without slip: itself inside ``_without_slip`` (the linearisation's
+        static laws), else a copy."""
+        if self.geo[P_SLIP] == 0.0:
+            return self.geo
         geo = self.geo.copy()
         geo[P_SLIP] = 0.0
         return geo
+
+    @contextlib.contextmanager
+    def _without_slip(self):
+        """The balls' random slip at 0 in the geometry vector itself for the block, put back
+        after: the linearisation's static laws take none (``_static_geo``), and a copy of the
+        vector for each of their 20-70 evaluations cost 0.4-0.5 ms per linearisation once the
+        held balls' table (``held_ball_table``, 650 KB) lived in it; a load that moves by 20 %
+        every batch relinearises at every one."""
+        slip = self.geo[P_SLIP]
+        self.geo[P_SLIP] = 0.0
+        try:
+            yield
+        finally:
+            self.geo[P_SLIP] = slip
 
     def ball_films(self, shaft_speed: float) -> np.ndarray:
         """(Nb, 2): each ball's film thickness (m) at its inner and outer contact, at the
@@ -1601,14 +1619,15 @@ class KinematicModel:
         self.geo[P_CFON] = 1.0 if self.centrifugal else 0.0
         self._gate_speed = abs(speed)
         self._follow_held_table(speed)
-        eq = self._equilibrium(load)
-        d0 = eq[:2] - eq[2:]
-        q = np.zeros(int(self.geo[P_NB]))
-        bearing_force(self._static_geo(), self.cj, self.sj, np.zeros((0, DEFECT_COLUMNS)),
-                      np.zeros((0, 4)), 0, d0[0], d0[1], 0.0, 0.0, 0.0, q, speed)
-        self.static_ball_load = float(q.max())      # N, most loaded ball at the equilibrium
-        self.geo[P_CDW:P_LAM] = contact_damping(self.scene, self.static_ball_load)
-        kb = secant_stiffness(self._mean_force, d0)       # of the averaged load-deflection law
+        with self._without_slip():
+            eq = self._equilibrium(load)
+            d0 = eq[:2] - eq[2:]
+            q = np.zeros(int(self.geo[P_NB]))
+            bearing_force(self._static_geo(), self.cj, self.sj, np.zeros((0, DEFECT_COLUMNS)),
+                          np.zeros((0, 4)), 0, d0[0], d0[1], 0.0, 0.0, 0.0, q, speed)
+            self.static_ball_load = float(q.max())      # N, most loaded ball at the equilibrium
+            self.geo[P_CDW:P_LAM] = contact_damping(self.scene, self.static_ball_load)
+            kb = secant_stiffness(self._mean_force, d0)       # of the averaged load-deflection law
         self.kb = kb
         # linearised bearing between shaft and pedestal: force on pedestal kb (s - p).  Only its
         # diagonal goes into the linear part (the residual takes the rest, so the model is the
