@@ -153,7 +153,7 @@ GEO_SIZE = P_YTAB + 6 * (YTAB_CELLS + 1)
 # play, not the ratio (small play: closer at 29 of 30 points from 0.0012 up; the ER-16K's: on
 # either side up to 0.025), so no value of this is better supported than 0.01.
 CENTRIFUGAL_GATE = 0.01
-# ... and on a bearing of small radial play (0 < C_r / D <= CENTRIFUGAL_SMALL_PLAY) from
+# ... and on a bearing of small radial play (C_r / D <= CENTRIFUGAL_SMALL_PLAY) from
 # F_c / Q_max CENTRIFUGAL_SMALL_PLAY_GATE up: there the massless balls were 0.3-40 % low on
 # accel_y and the force closer at 56 of 60 points on the ER-16K and the 6205 up to C_r / D 0.0043,
 # at 4 of 12 at 0.0057 (docs/fidelity_rms_gap.md, "Where in the play"), and, checked on fresh
@@ -164,11 +164,13 @@ CENTRIFUGAL_GATE = 0.01
 # massless); 0.0012 is the lowest ratio at which the force had been measured closer on small play
 # before the fresh points (the 6000-size at 3500 rpm / 100 N), the upper end of the bracket they
 # were to place it in: at 0.0004-0.001 they were mixed (closer at 2 of 4), and at 0.0002 the 6205
-# (its calibration point, its shipped scenes) was further off, so those stay massless.  Preloaded
-# bearings (C_r <= 0) are left to CENTRIFUGAL_GATE alone: the force was closer at 3 of 4 fresh
-# points but 885 points further off at the fourth (a quiet 6000-size at -2 um, reference RMS a few
-# mm/s^2, ten times too loud with the force from 0.0035 to just under 0.01; above, where this gate
-# gives it the force, +28 % against -36 % massless).
+# (its calibration point, its shipped scenes) was further off, so those stay massless.  No play
+# or a preload (C_r <= 0) counts as small play: with the held balls' law exact (``held_ball_table``)
+# the force was closer at all 8 preloaded and zero-play points from 0.002 to 0.005 (the 6000-size
+# at -2 and 0 um, the 6-ball at -2 and 0 um; docs/probes/centrifugal_gate/preload_table.txt):
+# accel_y -70 to -1.5 % massless against -33 to +4.3 % (the 6000-size at 0 um the one further off
+# on accel_y, -1.55 -> +4.33 %, where its accel_x went -31 -> -1.9 %).  Left to CENTRIFUGAL_GATE
+# alone before, as the two-pass law made a quiet preloaded 6000-size ten times too loud.
 CENTRIFUGAL_SMALL_PLAY = 0.005
 CENTRIFUGAL_SMALL_PLAY_GATE = 0.0012
 # the speed (relative) by which the shaft must move from the last decision before the gate is
@@ -1248,10 +1250,10 @@ def carries_centrifugal_force(scene, load, speed: float) -> bool:
     """Whether the kinematic tier's balls carry their centrifugal force at the radial ``load`` (N,
     x and y) and shaft ``speed`` (rad/s): F_c / Q_max (``centrifugal_ratio``) at least
     ``CENTRIFUGAL_GATE``, or at least ``CENTRIFUGAL_SMALL_PLAY_GATE`` on a bearing whose radial
-    play over its ball diameter is above 0 and at most ``CENTRIFUGAL_SMALL_PLAY``."""
+    play over its ball diameter is at most ``CENTRIFUGAL_SMALL_PLAY`` (none or a preload too)."""
     ratio = centrifugal_ratio(scene, load, speed)
     b = scene.bearing
-    small_play = 0.0 < b.radial_clearance <= CENTRIFUGAL_SMALL_PLAY * b.ball_diameter
+    small_play = b.radial_clearance <= CENTRIFUGAL_SMALL_PLAY * b.ball_diameter
     return bool(ratio >= CENTRIFUGAL_GATE or (small_play and ratio >= CENTRIFUGAL_SMALL_PLAY_GATE))
 
 
