@@ -1278,3 +1278,39 @@ def test_a_file_whose_folder_moved_as_it_was_opened_is_no_other_writers(tmp_path
         assert _replaced(path, fd)
     finally:
         os.close(fd)
+
+
+def test_a_piece_of_a_split_recording_that_rotates_as_it_is_looked_at_is_still_refused(tmp_path):
+    """A render or a node given a finished piece (``run_001.mcap``) of a split recording still
+    running is refused (``_later_piece_held``: a later piece is held).  The writer rotates as it
+    is looked at: it closes its piece (the lock goes) and then makes and holds the next one, and a
+    held piece is tried for about 40 ms, so a look that began on ``run_002`` found it free and
+    missed ``run_003``: a CI run's node replaced ``run_001.mcap`` of a recording that split every
+    0.5 s.  Here the writer (a thread with its own locks) rotates 15 ms into the look."""
+    import fcntl
+
+    from bearing_sim_ros.recording.recorder import _later_piece_held
+
+    for i in range(3):
+        (tmp_path / f"run_{i:03d}.mcap").write_bytes(b"")
+    held = os.open(tmp_path / "run_002.mcap", os.O_RDONLY)
+    fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    fds = [held]
+
+    def rotate():
+        fd = os.open(tmp_path / "run_003.mcap", os.O_RDWR | os.O_CREAT)
+        os.close(held)                                  # the old piece closed first, as _maybe_rotate
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        fds.append(fd)
+
+    timer = threading.Timer(0.015, rotate)
+    timer.start()
+    try:
+        found = _later_piece_held(tmp_path / "run_001.mcap")
+    finally:
+        timer.join()
+        for fd in fds[1:]:
+            os.close(fd)
+    assert found is not None and found.name in ("run_002.mcap", "run_003.mcap"), found
+    # the recording over (nothing held): a finished piece may be replaced, as any recording
+    assert _later_piece_held(tmp_path / "run_001.mcap") is None

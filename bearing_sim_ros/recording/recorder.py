@@ -206,11 +206,28 @@ def _later_piece_held(final: Path) -> Path | None:
         return None
     index = int(match.group(2))
     base = final.with_name(match.group(1) + (match.group(3) or ""))
-    for piece in existing_pieces(base):
-        later = _PIECE_NAME.fullmatch(piece.name)
-        if int(later.group(2)) > index and _held(piece):
-            return piece
-    return None
+    # The writer rotates as we look: it closes its piece (its lock goes) and then makes and holds
+    # the next (``_maybe_rotate``), and a held piece is tried for about 40 ms (``_flock_soon``),
+    # so a look that began on run_002 found it free and missed run_003 (a CI run: a node given
+    # run_001.mcap of a recording that split every 0.5 s replaced it).  So the newest pieces are
+    # looked at first, the pieces listed again after each look until no new one comes, and once
+    # more after a rotation's pause (where there was a later piece).
+    checked = set()
+    paused = False
+    while True:
+        later = [piece for piece in existing_pieces(base)
+                 if int(_PIECE_NAME.fullmatch(piece.name).group(2)) > index and piece not in checked]
+        if not later:
+            if paused or not checked:       # no later piece at all: no recording of it runs on
+                return None
+            time.sleep(LOCK_TRIES * LOCK_RETRY_S)
+            paused = True
+            continue
+        paused = False
+        for piece in reversed(later):
+            if _held(piece):
+                return piece
+            checked.add(piece)
 
 
 def _writer_of(final: Path, mine: Path, where: str) -> UserError | None:
