@@ -231,6 +231,7 @@ class BearingSimNode(Node):
         self._record_argument = record_argument
         self._settings = settings
         self.recorder = None
+        self.end_logged = False                  # log_the_end said its last lines (close_node then does not)
         try:
             self._declare_all()
             # a misspelt `-p name:=value` is otherwise ignored without a word (not an error: a
@@ -1302,7 +1303,7 @@ def close_node(node, status: int = 0, said=()) -> None:
     with teardown_watchdog(node.get_logger().name if node is not None else NODE_NAME, status, said):
         if node is not None:
             node.destroy_node()
-            if not getattr(node, "end_logged", False):
+            if not node.end_logged:
                 log_end(node)
                 log_recording(node)
         rclpy.try_shutdown()
