@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 
 from test_node_support import (HANG_HOLDING_THE_GIL, NS, NodeProcess, assert_hung_teardown_said,
-                               assert_one_error_line, hung_teardown_script, read_recording)
+                               assert_one_error_line, hung_teardown_script, read_recording, with_short_lease)
 
 import bearing_sim_ros
 from bearing_sim_ros import ground_truth, load_scene
@@ -616,10 +616,10 @@ def test_a_monitor_with_a_count_goes_on_across_the_seams_of_play_loop(ros_env, b
 def test_a_monitor_with_a_count_ends_when_its_node_is_killed(ros_env, bearing_sim_exe, tmp_path):
     """A node killed (SIGKILL: a crash, its machine off) sends no end status, and ``monitor
     --count N`` waited forever: a CI script running both hung.  Now the monitor sees no publisher
-    left on ``accel`` (DDS drops a dead one when its lease runs out, about 20 s with Fast DDS),
+    left on ``accel`` (DDS drops a dead one when its lease runs out: 20 s with Fast DDS, 4 s here),
     says so, waits ``--end-wait`` for one to come back, and exits with status 4 and one line that
     says how many verdicts it got of N."""
-    with _monitor_subscribed(ros_env, bearing_sim_exe, tmp_path,
+    with _monitor_subscribed(with_short_lease(ros_env, tmp_path), bearing_sim_exe, tmp_path,
                              "--window", "1", "--count", "50", "--end-wait", "1") as (monitor, start):
         node = start({"fidelity": "kinematic", "wait_for_subscribers": 1}, "node.log")
         monitor.wait_for_output("t=1.00s", timeout=90)
@@ -683,7 +683,7 @@ def test_a_node_started_again_after_an_end_or_a_kill_starts_a_new_run(ros_env, b
         while monitor.output().count("run ended") < 2 and time.monotonic() < deadline:
             time.sleep(0.1)
 
-    out = _monitor_beside_nodes_in_turn(ros_env, bearing_sim_exe, tmp_path, turns)
+    out = _monitor_beside_nodes_in_turn(with_short_lease(ros_env, tmp_path), bearing_sim_exe, tmp_path, turns)
     runs = re.findall(r"^monitor: run (\d): a (?:table|/diagnostics) stamped [\d.]+ s not continuing the run "
                       r"before, after (its end status|its publisher was gone): a node started again; t= and the "
                       r"ground truth start afresh$", out, re.M)
