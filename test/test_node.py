@@ -329,6 +329,65 @@ def test_the_end_of_a_run_without_a_recording_is_logged(ros_env, bearing_sim_exe
                         r"0\.100000 s of signal \(1500 samples\) published", lines[-1]), r.stderr
 
 
+@pytest.mark.parametrize("how", ["duration", "SIGINT"])
+def test_the_nodes_log_lines_reach_rosout_its_last_ones_too(ros_env, bearing_sim_exe, tmp_path, how):
+    """One who watches the node's log on ``/rosout`` (``ros2 topic echo /rosout``, rqt_console, a
+    rig's log collector) must get its last lines too: how the run ended and where its recording
+    went.  They were said after the middleware's teardown (``destroy_node``), when the node had
+    no ``/rosout`` publisher left, so they reached the console only; now they are said before it
+    (``log_the_end``).  Each line comes once, from the node's logger, at its level."""
+    import rclpy
+    from rcl_interfaces.msg import Log
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+    from sensor_msgs.msg import PointCloud2
+
+    from bearing_sim_ros.messages import waveform_qos
+
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx)
+    watcher = rclpy.create_node("rosout_watcher", context=ctx)
+    lines = []
+    # rcl's /rosout publisher keeps its last lines for late joiners (transient local): a line
+    # said before discovery matched is still received
+    qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    watcher.create_subscription(Log, "/rosout", lambda m: lines.append((m.name, m.level, m.msg)), qos)
+    # ... but not where the node ends before it discovered the watcher (its 1 s run, once in
+    # three): the node holds its run until this consumer of accel, in the watcher's participant,
+    # matched (wait_for_subscribers)
+    tables = []
+    watcher.create_subscription(PointCloud2, "accel", tables.append, waveform_qos(0.01))
+    executor = SingleThreadedExecutor(context=ctx)
+    executor.add_node(watcher)
+    out = tmp_path / "run.mcap"
+    params = {"fidelity": "kinematic", "record": str(out), "wait_for_subscribers": 1,
+              **({"duration": 1.0} if how == "duration" else {})}
+    node = NodeProcess(bearing_sim_exe, ros_env, params, tmp_path / "node.log")
+    try:
+        deadline = time.monotonic() + FIRST_TABLE_S
+        while not (tables and any(m.startswith("scene ") for _n, _l, m in lines)) and time.monotonic() < deadline:
+            executor.spin_once(timeout_sec=0.1)
+        assert tables and any(m.startswith("scene ") for _n, _l, m in lines), (lines, node.output())
+        if how == "SIGINT":
+            node.send(signal.SIGINT)
+        assert node.wait(30) == 0, node.output()
+        deadline = time.monotonic() + 5.0
+        while not any(m.startswith(f"recording {out}: ") for _n, _l, m in lines) and time.monotonic() < deadline:
+            executor.spin_once(timeout_sec=0.1)
+        said = node.output()
+    finally:
+        node.close()
+        executor.shutdown()
+        watcher.destroy_node()
+        rclpy.shutdown(context=ctx)
+    ended = "run ended: duration 1 s reached" if how == "duration" else "run ended by SIGINT"
+    assert [m for _n, _l, m in lines if m.startswith("run ended")] == \
+        [m for m in (ln.split("]: ", 1)[-1] for ln in said.splitlines()) if m.startswith("run ended")], (lines, said)
+    last = [(n, lv, m) for n, lv, m in lines if m.startswith("run ended") or m.startswith(f"recording {out}: ")]
+    assert len(last) == 2 and last[0][2].startswith(ended) and last[1][2].startswith(f"recording {out}: "), lines
+    assert all(n == "bearing_sim" and lv in (Log.INFO, Log.WARN) for n, lv, _m in last), last
+
+
 def test_a_misspelt_parameter_is_named_in_a_warning(ros_env, bearing_sim_exe):
     """``-p sampel_rate:=1000.0`` was ignored without a word; it is still ignored (a parameters
     file may hold other nodes' parameters), with a warning that names it and the node's own."""
