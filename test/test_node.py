@@ -382,7 +382,8 @@ def test_the_nodes_log_lines_reach_rosout_its_last_ones_too(ros_env, bearing_sim
         rclpy.shutdown(context=ctx)
     ended = "run ended: duration 1 s reached" if how == "duration" else "run ended by SIGINT"
     assert [m for _n, _l, m in lines if m.startswith("run ended")] == \
-        [m for m in (ln.split("]: ", 1)[-1] for ln in said.splitlines()) if m.startswith("run ended")], (lines, said)
+        [m for m in (ln.split("]: ", 1)[-1] for ln in said.splitlines()) if m.startswith("run ended")], \
+        " | ".join(m[:30] for _n, _l, m in lines)
     last = [(n, lv, m) for n, lv, m in lines if m.startswith("run ended") or m.startswith(f"recording {out}: ")]
     assert len(last) == 2 and last[0][2].startswith(ended) and last[1][2].startswith(f"recording {out}: "), lines
     assert all(n == "bearing_sim" and lv in (Log.INFO, Log.WARN) for n, lv, _m in last), last
