@@ -34,7 +34,7 @@ SHARED = REPO.parent / "shared"
 
 
 def pytest_configure(config):
-    # `make test` runs the suite in two workers (pytest-xdist) and then these tests alone: with
+    # `make test` runs the suite in workers (pytest-xdist, TEST_WORKERS) and then these tests alone: with
     # another test's processes on the other core, a play paced to 10 % over 0.2 s arrived 10 %
     # late and a process sent SIGTERM 0.1 s after launch had not reached its first line yet
     config.addinivalue_line("markers", "wall_clock: measures against the steady clock (pacing, a signal "
