@@ -24,7 +24,8 @@ from test_node_support import (FIRST_TABLE_S, HANG_HOLDING_THE_GIL, NS, Listener
 
 from bearing_sim_ros.analysis.envelope import DETECTION_THRESHOLD, envelope_spectrum, fault_lines, line_at
 from bearing_sim_ros.catalog import get_bearing
-from bearing_sim_ros.nodes.bearing_sim_node import InputLimits, check_frame, check_load, check_speed, check_stamp
+from bearing_sim_ros.nodes.bearing_sim_node import (InputLimits, check_frame, check_load, check_speed, check_stamp,
+                                                    strangers_to_name)
 from bearing_sim_ros.scene import load_scene
 
 FS = 15000.0
@@ -150,6 +151,34 @@ def test_frame_checks():
         assert check_frame(frame, "bearing_accel") is None, frame
     for frame in ("base_link", "map", "bearing_accel_2", "/base_link"):
         assert check_frame(frame, "bearing_accel")[0] == "wrong_frame", frame
+
+
+def test_a_publisher_of_another_type_is_named_once_also_where_its_name_comes_a_look_later():
+    """Discovery may give a publisher before its participant's node list: the graph then says its
+    node is ``_NODE_NAME_UNKNOWN_`` and, two seconds later, ``/wrong_types``.  Keyed by the name,
+    the node named it twice (a CI run: the unknown name, then the real one).  Keyed by its
+    endpoint and held one look while unnamed, it is named once, by its name; one that never gets a
+    name (no ROS node) is named as such a look later; a publisher that comes back is new."""
+    float32, wrench = "std_msgs/msg/Float32", "geometry_msgs/msg/Wrench"
+    said, to_name, gone = strangers_to_name({}, [(b"a", None, float32)])
+    assert to_name == [] and not gone                                   # held one look
+    said, to_name, gone = strangers_to_name(said, [(b"a", "/wrong_types", float32)])
+    assert to_name == [("/wrong_types", float32)] and not gone
+    said, to_name, gone = strangers_to_name(said, [(b"a", "/wrong_types", float32), (b"b", "/w", wrench)])
+    assert to_name == [("/w", wrench)] and not gone                     # a named one at once
+    said, to_name, gone = strangers_to_name(said, [(b"b", "/w", wrench)])
+    assert to_name == [] and not gone                                   # one left
+    said, to_name, gone = strangers_to_name(said, [])
+    assert to_name == [] and gone and said == {}
+
+    said, to_name, gone = strangers_to_name({}, [(b"c", None, float32)])
+    said, to_name, gone = strangers_to_name(said, [(b"c", None, float32)])
+    assert to_name == [("a node the ROS graph has no name for", float32)]
+    said, to_name, gone = strangers_to_name(said, [(b"c", "/late", float32)])
+    assert to_name == [] and not gone                                   # its name, late: said already
+    said, to_name, gone = strangers_to_name({}, [(b"d", None, float32)])
+    said, to_name, gone = strangers_to_name(said, [])
+    assert to_name == [] and not gone                                   # gone before it was named
 
 
 def test_stamp_checks():

@@ -63,6 +63,9 @@ TIME_LINE_JUMP = 1.0           # s: a load stamp further back than this behind t
                                # restarted with other stamps); closer, it is out of order
 WAIT_FOR_SUBSCRIBERS_MAX = 1000    # the parameter's range: 0 - this many subscribers
 PEER_CHECK_S = 2.0             # s between looks at the graph (another publisher on accel, inputs of another type)
+# rmw_dds_common's node name for an endpoint whose participant has not (yet) said which node holds
+# it: a publisher is discovered before its participant's node list, now and then by a look
+UNKNOWN_NODE_NAME = "_NODE_NAME_UNKNOWN_"
 SWITCH_COST_GUESS_S = 0.02     # s: a tier switch's batch before the first is measured (8 ms for
                                # kinematic -> skidding on the AMD host; more on a loaded machine)
 # A node that cannot keep up with real time falls further behind for ever (each batch an overrun,
@@ -73,6 +76,32 @@ SWITCH_COST_GUESS_S = 0.02     # s: a tier switch's batch before the first is me
 FALLING_BEHIND_PERIODS = 5
 FALLING_BEHIND_MIN_S = 0.5     # s behind the schedule: not a stall of a few batches
 FALLING_BEHIND_LOG_S = 60.0    # s between the log's warnings while it goes on falling behind
+
+
+def strangers_to_name(said: dict, publishers) -> tuple[dict, list[tuple[str, str]], bool]:
+    """One look at the publishers of another type on an input topic: which to name in the log.
+
+    ``publishers``: ``(endpoint_gid, node, topic_type)`` of each, ``node`` the node's full name or
+    None where the graph does not know it yet.  ``said``: what the last look returned, endpoint
+    gid -> True where named in the log, False where seen once without a node name.  Each
+    publisher is named once, keyed by its endpoint (not by its name, which may arrive a look
+    later: a node named both ``_NODE_NAME_UNKNOWN_`` and ``/wrong_types``); one seen without a
+    name is held for one look, then named as unknown (a DDS participant that is no ROS node never
+    gets a name).
+
+    Returns the new ``said``, the ``(node text, topic type)`` pairs to log now, and whether none
+    of the publishers named before is left."""
+    now, to_name = {}, []
+    for gid, node, kind in sorted(publishers, key=lambda p: (p[1] or "", p[2], p[0])):
+        if said.get(gid):
+            now[gid] = True
+        elif node is not None or gid in said:
+            now[gid] = True
+            to_name.append((node or "a node the ROS graph has no name for", kind))
+        else:
+            now[gid] = False
+    gone = any(said.values()) and not any(now.values())
+    return now, to_name, gone
 
 
 def check_speed(value: float, limits: InputLimits):
@@ -402,7 +431,7 @@ class BearingSimNode(Node):
         self.failure = None
         self.accel_peers = 0                     # other publishers on accel: _check_peers
         self.clock_peers = 0                     # other publishers on this node's /clock: _check_peers
-        self.input_strangers = {}                # input topic -> {(publisher node, type)} of another type
+        self.input_strangers = {}                # input topic -> its strangers_to_name state
         self.stats = _Stats(self.sim.sample_rate, self.sim.bearing, self.scene.sensor.range)
         self._behind = _FallingBehind()
         self._thread = threading.Thread(target=self._run, name="bearing-sim", daemon=True)
@@ -565,16 +594,18 @@ class BearingSimNode(Node):
 
         for role, sub in ((TOPIC_SHAFT_SPEED, self.sub_speed), (TOPIC_LOAD, self.sub_load)):
             topic, want = sub.topic_name, TYPES[role]
-            seen = {(f"{info.node_namespace.rstrip('/')}/{info.node_name}", info.topic_type)
-                    for info in self.get_publishers_info_by_topic(topic) if info.topic_type != want}
-            known = self.input_strangers.get(topic, set())
-            for node, kind in sorted(seen - known):
+            publishers = [(bytes(info.endpoint_gid),
+                           None if info.node_name == UNKNOWN_NODE_NAME
+                           else f"{info.node_namespace.rstrip('/')}/{info.node_name}", info.topic_type)
+                          for info in self.get_publishers_info_by_topic(topic) if info.topic_type != want]
+            self.input_strangers[topic], to_name, gone = strangers_to_name(
+                self.input_strangers.get(topic, {}), publishers)
+            for node, kind in to_name:
                 self.get_logger().warning(
                     f"{node} publishes {kind} on {topic}, which takes {want}: its messages never reach "
                     f"this node")
-            if known and not seen:
+            if gone:
                 self.get_logger().info(f"no publisher of another type on {topic} any more")
-            self.input_strangers[topic] = seen
 
     def _other_publishers(self, topic: str, known: int, advice: str) -> int:
         """The number of publishers on ``topic`` besides this node's, logged (with ``advice``)
