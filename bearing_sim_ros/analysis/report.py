@@ -650,7 +650,7 @@ def score_windows(windows, sample_rate_hz: float, times_s: list, frequencies: li
     step or ramp in it smeared them, and its verdict was "healthy", or "ball" where 2xBSF of one
     speed fell on BPFO of the other.  Those are scored in orders of the shaft instead where
     ``track`` (``track(samples, times_s)``: ``order_tracked``'s (result, why)) gives a result; their
-    rows have ``order_tracked``: True.  ``resonance_hz``: the scene's resonator (Hz, None: not
+    rows have ``order_tracked``: True, every other row False.  ``resonance_hz``: the scene's resonator (Hz, None: not
     known), for the detector's band (``envelope.detector_band``), as for the whole recording.
     One dict per window: start_s, end_s, shaft_speed_rpm, line_spread, verdict, prominences
     ({fault: line height over local median}; {} unscored), envelope_band_hz (the band the
@@ -681,7 +681,7 @@ def score_windows(windows, sample_rate_hz: float, times_s: list, frequencies: li
                      "faults_present": list(faults) if faults is not None else None,
                      "defect_sizes": list(sizes.sizes) if sizes else None,
                      "truth_t_s": sizes.t if sizes else None,
-                     **({"order_tracked": True} if tracked else {})})
+                     "order_tracked": bool(tracked)})
     return rows
 
 
@@ -1503,7 +1503,7 @@ MAX_TIMELINE_ROWS = 40
 
 
 def _run_key(window: dict) -> tuple:
-    return window["verdict"], window["faults_present"], window.get("order_tracked", False)
+    return window["verdict"], window["faults_present"], window["order_tracked"]
 
 
 def _timeline_runs(timeline: list) -> list:
@@ -1599,7 +1599,7 @@ def _timeline_markdown(s: dict) -> list:
         tops = [max((w["prominences"].get(fault, float("nan")) for w in run), default=float("nan"))
                 for fault, _ in TIMELINE_LINES]
         lines.append(f"| {run[0]['start_s']:.2f}-{run[-1]['end_s']:.2f} | {len(run)} | {run[0]['verdict']}"
-                     f"{' (in orders)' if run[0].get('order_tracked') else ''} | "
+                     f"{' (in orders)' if run[0]['order_tracked'] else ''} | "
                      f"{_faults_text(run[0]['faults_present'])} | {_sizes_text(run, kinds)} | "
                      f"{' / '.join(_num(v) for v in tops)} |")
     if len(runs) > MAX_TIMELINE_ROWS:
@@ -1607,7 +1607,7 @@ def _timeline_markdown(s: dict) -> list:
                      f"{len(runs) - MAX_TIMELINE_ROWS} more runs: `summary.json` | | | | |")
     lines += ["", "A row is a run of consecutive windows with the same verdict and faults present."
               + (" \"(in orders)\": the window's lines move, and its verdict is that of its envelope spectrum in orders "
-                 "of the shaft (order tracking)." if any(w.get("order_tracked") for w in timeline) else "")]
+                 "of the shaft (order tracking)." if any(w["order_tracked"] for w in timeline) else "")]
     if s["fault_onset_s"] is not None:
         t1, t0 = s["fault_onset_s"], s["fault_onset_s"] - s["fault_onset_resolution_s"]
         pending = [w for w in timeline if t0 + 1e-6 < w["end_s"] < t1 - 1e-6]
